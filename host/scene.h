@@ -1,0 +1,112 @@
+// The scene description: what a JSON scene file says, validated, in SI units (see docs/scene-format.md).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "host/backend.h"
+#include "physics/vec3.h"
+
+namespace inc {
+
+struct GeometrySpec {
+  enum class Kind { Box, Beam, Sphere, Ellipsoid, Mesh };
+  Kind kind = Kind::Beam;
+  Vec3d center{0, 0, 0};       // m
+  Vec3d size{0.1, 0.02, 0.02}; // m, full extents (box, beam: beam is a box whose long axis is x)
+  double radius = 0.05;        // m (sphere)
+  Vec3d radii{0.05, 0.03, 0.02}; // m (ellipsoid semi-axes)
+  std::string mesh_path;       // resolved against the scene file's folder (mesh)
+  double mesh_scale = 1.0;     // multiplies mesh coordinates to get metres
+  double spacing = 0.005;      // m, particle spacing for meshfree sampling; > 0
+  double jitter = 0.0;         // fraction of spacing, [0, 0.5): random offset of the sample lattice
+  unsigned seed = 1;           // for jitter and every random choice of the scene
+};
+
+struct MaterialSpec {
+  double youngs_modulus = 3.0e3;  // Pa, > 0 (liver ~ 1-10 kPa)
+  double poisson_ratio = 0.45;    // (-1, 0.5)
+  double density = 1060.0;        // kg/m^3, > 0
+  double damping = 1.0;           // 1/s, mass-proportional damping coefficient, >= 0
+};
+
+// Which models the scene switches on; a scene pays only for those.
+struct ModelsSpec {
+  bool mls = false;            // meshfree MLS elasticity (issue 4)
+  bool pbd_metaballs = false;  // metaball organ driven by PBD/XPBD (issue 5)
+  bool cutting = false;        // dissection (issue 6)
+  bool tearing = false;        // Tresca tearing (issue 7)
+  bool haptics = false;        // haptic thread and force models (issue 8)
+};
+
+struct MlsSpec {
+  double support_factor = 2.0;       // h = support_factor * spacing; [1.2, 4]
+  bool volume_preservation = true;   // penalty on det F - 1
+  double volume_stiffness = 1.0;     // penalty modulus as a multiple of the bulk modulus, >= 0
+  double condition_limit = 1.0e6;    // A_i with a larger condition number gets a regularised inverse
+};
+
+struct PbdSpec {
+  int iterations = 10;              // >= 1
+  bool xpbd = true;                 // false: plain PBD (stiffness depends on iterations/dt)
+  std::string solver = "jacobi";    // "jacobi" | "gauss_seidel"
+  double stretch_compliance = 0.0;  // m/N (XPBD alpha), >= 0
+  double laplacian_compliance = 0.0;
+  bool volume_preservation = true;
+  int target_spheres = 0;           // 0: choose from the mesh size
+};
+
+struct SolverSpec {
+  double frame_dt = 1.0 / 60.0;  // s, > 0: one frame of output/rendering
+  int substeps = 0;              // 0: as many as stability needs; > 0: exactly this many (refused if unstable)
+  double safety = 0.5;           // fraction of the stable explicit step to use, (0, 1]
+  Precision precision = Precision::Float32;
+  BackendKind backend = BackendKind::Auto;
+  Vec3d gravity{0, 0, -9.81};     // m/s^2
+  double energy_bound = 1.0e3;   // blow-up guard: stop if total energy exceeds this factor times its reference
+};
+
+// Particles whose rest position lies inside are held fixed (Dirichlet).
+struct FixedRegion {
+  Vec3d min{0, 0, 0}, max{0, 0, 0};  // axis-aligned box, m
+};
+
+struct ToolKeyframe {
+  double t = 0.0;        // s
+  Vec3d position;        // m (tool tip / blade centre)
+  Vec3d direction{0, 0, -1};  // unit: blade edge direction or grasp axis
+};
+
+struct ToolSpec {
+  std::string name;
+  std::string kind = "probe";  // "probe" | "grasper" | "scalpel"
+  double radius = 0.002;       // m, capsule radius around the tool
+  double length = 0.02;        // m, blade length (scalpel)
+  std::vector<ToolKeyframe> path;  // piecewise-linear in time, sorted by t
+};
+
+struct OutputSpec {
+  int every_frames = 0;         // 0: final state only; N: also every N frames
+  bool particles_ply = true;
+  bool mesh_obj = true;
+  bool vtk = false;             // legacy VTK point/mesh files for ParaView
+  bool metrics_csv = true;
+};
+
+struct Scene {
+  std::string file;        // where it came from ("<embedded:name>" for built-in scenes)
+  std::string name;
+  std::string description;
+  double duration = 1.0;   // s, default run length when neither --steps nor --seconds is given
+  GeometrySpec geometry;
+  MaterialSpec material;
+  ModelsSpec models;
+  MlsSpec mls;
+  PbdSpec pbd;
+  SolverSpec solver;
+  std::vector<FixedRegion> fixed;
+  std::vector<ToolSpec> tools;
+  OutputSpec output;
+};
+
+}  // namespace inc
