@@ -1,0 +1,242 @@
+// CPU uniform-grid neighbour search: counting sort by bucket, shared traversal, one pass into per-block lists.
+#include "cpu_fallback/neighbor_search_cpu.h"
+
+#include <algorithm>
+#include <limits>
+#include <new>
+#include <sstream>
+#include <string>
+
+#include "cpu_fallback/parallel.h"
+#include "host/input_error.h"
+
+namespace inc::cpu {
+namespace {
+
+constexpr std::size_t kMaxPoints = std::size_t(1) << 30;  // keeps the bucket count (2^31) and int32 indices safe
+
+template <typename T>
+std::string describe(const Vec3<T>& x) {
+  std::ostringstream s;
+  s << "(" << x.x << ", " << x.y << ", " << x.z << ")";
+  return s.str();
+}
+
+template <typename T>
+void checkCellSize(T h) {
+  if (!(h > T(0)) || !neighborRadiusValid(h) || !neighborRadiusValid(T(1) / h))
+    throw InputError("", "cell_size", "must be finite and > 0 with a finite inverse, got " + std::to_string(double(h)));
+}
+
+// Stable counting sort of `order` by keys[order[i]] < bucket_count; start gets bucket_count + 1 entries.
+void countingSortByKey(const std::vector<std::uint32_t>& keys, std::uint32_t bucket_count,
+                       std::vector<std::int32_t>& sorted, std::vector<std::int32_t>& start) {
+  const std::size_t n = keys.size();
+  start.assign(std::size_t(bucket_count) + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) ++start[keys[i] + 1];
+  for (std::size_t b = 0; b < bucket_count; ++b) start[b + 1] += start[b];
+  sorted.resize(n);
+  // Fill back to front from each bucket's end: stable, and afterwards start[b + 1] == begin(b).
+  for (std::size_t i = n; i-- > 0;) sorted[std::size_t(--start[keys[i] + 1])] = std::int32_t(i);
+  std::copy(start.begin() + 1, start.end(), start.begin());
+  start[bucket_count] = std::int32_t(n);
+}
+
+// Stable LSD radix sort of indices 0..n-1 by 30-bit keys (three 10-bit passes).
+std::vector<std::int32_t> radixSortIndices(const std::vector<std::uint32_t>& keys) {
+  const std::size_t n = keys.size();
+  std::vector<std::int32_t> idx(n), tmp(n);
+  for (std::size_t i = 0; i < n; ++i) idx[i] = std::int32_t(i);
+  std::vector<std::int32_t> count(1025);
+  for (int shift = 0; shift < 30; shift += 10) {
+    std::fill(count.begin(), count.end(), 0);
+    for (std::size_t i = 0; i < n; ++i) ++count[((keys[std::size_t(idx[i])] >> shift) & 1023u) + 1];
+    for (int d = 0; d < 1024; ++d) count[std::size_t(d) + 1] += count[std::size_t(d)];
+    for (std::size_t i = 0; i < n; ++i) tmp[std::size_t(count[(keys[std::size_t(idx[i])] >> shift) & 1023u]++)] = idx[i];
+    idx.swap(tmp);
+  }
+  return idx;
+}
+
+// Lists are short (tens of entries): insertion sort beats std::sort's set-up there.
+void sortList(std::int32_t* a, std::size_t k) {
+  if (k > 32) {
+    std::sort(a, a + k);
+    return;
+  }
+  for (std::size_t i = 1; i < k; ++i) {
+    const std::int32_t v = a[i];
+    std::size_t j = i;
+    for (; j > 0 && a[j - 1] > v; --j) a[j] = a[j - 1];
+    a[j] = v;
+  }
+}
+
+struct AppendOriginal {
+  std::vector<std::int32_t>* out;
+  const std::int32_t* perm;
+  void operator()(std::int32_t j) { out->push_back(perm[j]); }
+};
+
+}  // namespace
+
+template <typename T>
+void GridNeighborSearch<T>::build(const std::vector<Vec3<T>>& points, T cell_size, bool morton_order) {
+  checkCellSize(cell_size);
+  const std::size_t n = points.size();
+  if (n > kMaxPoints)
+    throw InputError("", "points", "too many points for the grid search (" + std::to_string(n) + " > 2^30)");
+  for (std::size_t i = 0; i < n; ++i)
+    if (!neighborPointFinite(points[i]))
+      throw InputError("", "points[" + std::to_string(i) + "]", "position " + describe(points[i]) + " is not finite");
+  cell_size_ = cell_size;
+  morton_ = morton_order;
+
+  Vec3<T> lo, hi;
+  if (n > 0) lo = hi = points[0];
+  for (const Vec3<T>& x : points)
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], x[a]);
+      hi[a] = std::max(hi[a], x[a]);
+    }
+  const std::uint32_t buckets = neighborBucketCount(n);
+  params_ = makeNeighborGridParams(lo, hi, cell_size, buckets, std::int64_t(n), n > 0);
+  const NeighborGridParams<T> p = params_;
+  auto cellOf = [&p](const Vec3<T>& x, std::int32_t c[3]) {
+    for (int a = 0; a < 3; ++a) c[a] = neighborCellCoord(x[a], p.origin[a], p.inv_cell);
+  };
+
+  std::vector<std::uint32_t> keys(n);
+  if (morton_order) {
+    // Z order first (stable), then a stable bucket sort of the storage slots gives the lookup table.
+    parallelFor(std::int64_t(n), [&](std::int64_t i) {
+      std::int32_t c[3];
+      cellOf(points[std::size_t(i)], c);
+      keys[std::size_t(i)] = neighborMortonKey(p, c[0], c[1], c[2]);
+    });
+    perm_ = radixSortIndices(keys);
+  }
+  sorted_.resize(n);
+  if (morton_order) parallelFor(std::int64_t(n), [&](std::int64_t s) { sorted_[std::size_t(s)] = points[std::size_t(perm_[std::size_t(s)])]; });
+  const std::vector<Vec3<T>>& keyed = morton_order ? sorted_ : points;
+  parallelFor(std::int64_t(n), [&](std::int64_t i) {
+    std::int32_t c[3];
+    cellOf(keyed[std::size_t(i)], c);
+    keys[std::size_t(i)] = neighborBucket(p, c[0], c[1], c[2]);
+  });
+  if (morton_order) {
+    countingSortByKey(keys, buckets, entries_, bucket_start_);
+  } else {
+    countingSortByKey(keys, buckets, perm_, bucket_start_);
+    entries_.clear();
+    parallelFor(std::int64_t(n), [&](std::int64_t s) { sorted_[std::size_t(s)] = points[std::size_t(perm_[std::size_t(s)])]; });
+  }
+  inv_perm_.resize(n);
+  parallelFor(std::int64_t(n), [&](std::int64_t s) { inv_perm_[std::size_t(perm_[std::size_t(s)])] = std::int32_t(s); });
+}
+
+template <typename T>
+NeighborGridView<T> GridNeighborSearch<T>::view() const {
+  NeighborGridView<T> g;
+  g.p = params_;
+  g.points = sorted_.data();
+  g.bucket_start = bucket_start_.data();
+  g.entries = entries_.empty() ? nullptr : entries_.data();
+  g.n = std::int32_t(sorted_.size());
+  return g;
+}
+
+template <typename T>
+NeighborLists GridNeighborSearch<T>::querySelf(T radius) const {
+  return run(nullptr, size(), std::vector<T>{radius}, true);
+}
+
+template <typename T>
+NeighborLists GridNeighborSearch<T>::querySelf(const std::vector<T>& radii) const {
+  return run(nullptr, size(), radii, true);
+}
+
+template <typename T>
+NeighborLists GridNeighborSearch<T>::query(const std::vector<Vec3<T>>& queries, const std::vector<T>& radii) const {
+  return run(queries.data(), queries.size(), radii, false);
+}
+
+template <typename T>
+NeighborLists GridNeighborSearch<T>::query(const std::vector<Vec3<T>>& queries, T radius) const {
+  return run(queries.data(), queries.size(), std::vector<T>{radius}, false);
+}
+
+template <typename T>
+NeighborLists GridNeighborSearch<T>::run(const Vec3<T>* queries, std::size_t nq, const std::vector<T>& radii,
+                                         bool self) const {
+  if (radii.size() != 1 && radii.size() != nq)
+    throw InputError("", "radii", "expected 1 radius or one per query (" + std::to_string(nq) + "), got " +
+                                      std::to_string(radii.size()));
+  if (nq > kMaxPoints)
+    throw InputError("", "queries", "too many queries (" + std::to_string(nq) + " > 2^30)");
+  for (std::size_t i = 0; i < radii.size(); ++i)
+    if (!neighborRadiusValid(radii[i]))
+      throw InputError("", radii.size() == 1 ? std::string("radius") : "radii[" + std::to_string(i) + "]",
+                       "must be finite and >= 0, got " + std::to_string(double(radii[i])));
+  if (!self)
+    for (std::size_t i = 0; i < nq; ++i)
+      if (!neighborPointFinite(queries[i]))
+        throw InputError("", "queries[" + std::to_string(i) + "]", "position " + describe(queries[i]) + " is not finite");
+
+  const bool per_query = radii.size() == nq && nq > 1;
+  const NeighborGridView<T> g = view();
+  NeighborLists out;
+  out.offsets.assign(nq + 1, 0);
+  // One pass: each block of queries (in storage order for self-queries, for locality) appends its sorted
+  // lists to its own buffer and records the counts; a prefix sum places the buffers. The GPU counts first
+  // instead, because it cannot grow buffers; the lists are the same.
+  const std::int64_t blocks = std::max<std::int64_t>(1, std::min<std::int64_t>(std::int64_t(nq), 4 * threadCount()));
+  std::vector<std::vector<std::int32_t>> buffers(std::size_t(blocks), std::vector<std::int32_t>{});
+  std::vector<char> out_of_memory(std::size_t(blocks), 0);  // exceptions must not leave the OpenMP region
+  auto blockBegin = [&](std::int64_t b) { return std::size_t(b * std::int64_t(nq) / blocks); };
+  parallelFor(blocks, [&](std::int64_t b) {
+    std::vector<std::int32_t>& buf = buffers[std::size_t(b)];
+    AppendOriginal visit{&buf, perm_.data()};
+    try {
+      for (std::size_t i = blockBegin(b); i < blockBegin(b + 1); ++i) {
+        const std::size_t q = self ? std::size_t(perm_[i]) : i;
+        const Vec3<T>& x = self ? sorted_[i] : queries[i];
+        const T r = per_query ? radii[q] : radii[0];
+        const std::size_t first = buf.size();
+        forEachGridNeighbor(g, x, r, self ? std::int32_t(i) : -1, visit);
+        sortList(buf.data() + first, buf.size() - first);
+        out.offsets[q + 1] = std::int64_t(buf.size() - first);
+      }
+    } catch (const std::bad_alloc&) {
+      out_of_memory[std::size_t(b)] = 1;
+      std::vector<std::int32_t>().swap(buf);
+    }
+  });
+  bool failed = std::find(out_of_memory.begin(), out_of_memory.end(), 1) != out_of_memory.end();
+  if (!failed) {
+    for (std::size_t q = 0; q < nq; ++q) out.offsets[q + 1] += out.offsets[q];
+    try {
+      out.indices.resize(std::size_t(out.offsets[nq]));
+    } catch (const std::bad_alloc&) {
+      failed = true;
+    }
+  }
+  if (failed)  // never truncate: either every list is complete or the caller gets an error
+    throw InputError("", "radius", "the neighbour lists of " + std::to_string(nq) +
+                                       " queries do not fit in memory; use a smaller radius");
+  parallelFor(blocks, [&](std::int64_t b) {
+    const std::int32_t* src = buffers[std::size_t(b)].data();
+    for (std::size_t i = blockBegin(b); i < blockBegin(b + 1); ++i) {
+      const std::size_t q = self ? std::size_t(perm_[i]) : i;
+      const std::size_t k = std::size_t(out.offsets[q + 1] - out.offsets[q]);
+      std::copy(src, src + k, out.indices.begin() + out.offsets[q]);
+      src += k;
+    }
+  });
+  return out;
+}
+
+template class GridNeighborSearch<float>;
+template class GridNeighborSearch<double>;
+
+}  // namespace inc::cpu

@@ -1,0 +1,60 @@
+// CPU uniform-grid fixed-radius neighbour search (the CUDA search's algorithm, looped with parallelFor).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "host/neighbor_lists.h"
+#include "physics/neighbor_grid.h"
+#include "physics/vec3.h"
+
+namespace inc::cpu {
+
+// Build once per point configuration, query many times. Lists follow host/neighbor_lists.h: per query,
+// ascending original point index, closed ball (d^2 <= r^2 via distance2Exact), self-queries leave q out.
+// Bad input (non-finite point, query or radius; cell size <= 0) throws InputError naming the entry.
+template <typename T>
+class GridNeighborSearch {
+ public:
+  GridNeighborSearch() = default;
+  GridNeighborSearch(const std::vector<Vec3<T>>& points, T cell_size, bool morton_order = false) {
+    build(points, cell_size, morton_order);
+  }
+
+  // cell_size: edge of a grid cell; the usual choice is the (largest) query radius. Any radius works with
+  // any cell size (larger radii search more cells). morton_order: store the points in Z order of their cells.
+  void build(const std::vector<Vec3<T>>& points, T cell_size, bool morton_order = false);
+
+  // Every point against every other point, one radius for all, or radii[i] for point i (size 1 or n).
+  NeighborLists querySelf(T radius) const;
+  NeighborLists querySelf(const std::vector<T>& radii) const;
+  // Another point set (e.g. tool samples) against the built points; radii of size 1 or queries.size().
+  NeighborLists query(const std::vector<Vec3<T>>& queries, const std::vector<T>& radii) const;
+  NeighborLists query(const std::vector<Vec3<T>>& queries, T radius) const;
+
+  std::size_t size() const { return sorted_.size(); }
+  T cellSize() const { return cell_size_; }
+  bool mortonOrder() const { return morton_; }
+  bool hashed() const { return !sorted_.empty() && params_.dense == 0; }
+  const NeighborGridParams<T>& params() const { return params_; }
+  // Storage order: slot s holds original point sortedToOriginal()[s]; originalToSorted() is its inverse.
+  // With morton_order the storage order is the Z order of the cells (use it to reorder particle arrays).
+  const std::vector<std::int32_t>& sortedToOriginal() const { return perm_; }
+  const std::vector<std::int32_t>& originalToSorted() const { return inv_perm_; }
+  const std::vector<Vec3<T>>& sortedPoints() const { return sorted_; }
+
+ private:
+  NeighborLists run(const Vec3<T>* queries, std::size_t nq, const std::vector<T>& radii, bool self) const;
+  NeighborGridView<T> view() const;
+
+  T cell_size_ = T(0);
+  bool morton_ = false;
+  NeighborGridParams<T> params_{};
+  std::vector<Vec3<T>> sorted_;             // points in storage order
+  std::vector<std::int32_t> perm_;          // storage slot -> original index
+  std::vector<std::int32_t> inv_perm_;      // original index -> storage slot
+  std::vector<std::int32_t> bucket_start_;  // bucket count + 1
+  std::vector<std::int32_t> entries_;       // Morton mode: storage index per bucket slot (else empty)
+};
+
+}  // namespace inc::cpu

@@ -1,0 +1,47 @@
+// Assembles PBD models: a metaball organ (links, Laplacian coordinates, shape matching) and a triangle sheet (stretch + dihedral bending).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "host/metaball_model.h"
+#include "host/pbd_model.h"
+#include "host/scene.h"
+
+namespace inc {
+
+struct MetaballPbdOptions {
+  double youngs_modulus = 3.0e3;     // Pa: sets the compliances below that are left at 0
+  double stretch_compliance = 0.0;   // m/N per link; 0: d_ij / (E pi rbar^2) (a rod of the spheres' mean radius)
+  double laplacian_compliance = 0.0; // m/N per sphere; 0: 1 / (E r_i)
+  double shape_compliance = 0.0;     // m/N per cluster member; 0: n_j / (E r_j), n_j = clusters holding j
+  double pbd_stiffness = 1.0;        // plain PBD k of every block
+  bool laplacian = true;
+  bool shape_matching = true;        // false: clusters kept only for the rotations skinning needs
+  std::vector<FixedRegion> fixed;    // spheres whose rest centre lies inside are fixed
+  int volume_samples = 64;           // per sphere, for the power-cell volumes (0: no volume preservation)
+};
+
+// Throws InputError("metaball model", key, reason) on inconsistent or non-physical input.
+template <typename T>
+PbdModel<T> buildMetaballPbdModel(const MetaballModel& mb, const MetaballPbdOptions& opt);
+
+// Spheres on a cubic lattice of `spacing` filling [lo, hi], radius radius_factor * spacing, linked when they
+// overlap, mass = density * spacing^3. A stand-in organ for tests and benchmarks (beams, boxes).
+MetaballModel makeLatticeMetaballs(const Vec3d& lo, const Vec3d& hi, double spacing, double radius_factor,
+                                   double density);
+
+struct SheetPbdOptions {
+  double stretch_compliance = 0.0;  // m/N per edge
+  double bending_compliance = 0.0;  // rad/(N m) per interior edge
+  double pbd_stiffness = 1.0;
+};
+
+// Triangle mesh -> Distance block on the unique edges and Bending block on every edge shared by exactly two
+// triangles (rest angles from `vertices`). Masses per vertex as given. Throws InputError on bad indices.
+template <typename T>
+PbdModel<T> buildSheetPbdModel(const std::vector<Vec3d>& vertices, const std::vector<std::array<std::int32_t, 3>>& triangles,
+                               const std::vector<double>& masses, const SheetPbdOptions& opt);
+
+}  // namespace inc

@@ -1,0 +1,180 @@
+// PBD/XPBD model (constraint blocks, colliders), state, per-frame inputs and the backend interface both solvers implement.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "host/backend.h"
+#include "host/graph_coloring.h"
+#include "host/input_error.h"
+#include "host/simulation_model.h"
+#include "physics/pbd_collision.h"
+#include "physics/pbd_rotation.h"
+#include "physics/vec3.h"
+
+namespace inc {
+
+enum class PbdConstraintKind : int { Distance = 0, Bending = 1, TetVolume = 2, Laplacian = 3, ShapeMatching = 4 };
+enum class PbdSolverKind : int { Jacobi = 0, GaussSeidel = 1 };
+
+const char* pbdConstraintKindName(PbdConstraintKind k);
+// "jacobi" | "gauss_seidel"; throws InputError naming `key` otherwise.
+PbdSolverKind parsePbdSolver(const std::string& text, const std::string& file, const std::string& key);
+
+// One kind of constraint. Constraint c touches particles ids[offsets[c] .. offsets[c+1]) (a "slot" is an index
+// into ids). Distance: 2 ids; Bending: 4 (edge p0-p1, wings p2, p3); TetVolume: 4; Laplacian: centre then its
+// neighbours; ShapeMatching: a cluster, centre sphere first then the other members.
+template <typename T>
+struct PbdConstraintBlock {
+  PbdConstraintKind kind = PbdConstraintKind::Distance;
+  bool solve = true;            // false: a ShapeMatching block kept only to estimate rotations
+  T stiffness = T(1);           // plain PBD k in [0, 1]
+  std::vector<std::int32_t> offsets{0};
+  std::vector<std::int32_t> ids;
+  std::vector<T> rest;            // Distance: d (m); Bending: psi0 (rad); TetVolume: V0 (m^3); per constraint
+  std::vector<Vec3<T>> rest_vec;  // Laplacian: delta0 per constraint (m); ShapeMatching: q per slot (m)
+  std::vector<T> compliance;      // XPBD alpha per multiplier (per slot for ShapeMatching, else per constraint)
+
+  // Derived by finalizePbdModel (topology changes only):
+  std::vector<std::int32_t> particle_offsets;  // particle p's slots: particle_slots[particle_offsets[p]..[p+1])
+  std::vector<std::int32_t> particle_slots;
+  std::vector<T> jacobi_scale;                 // per slot: 1 / (constraints of this block on the busiest movable
+                                               // participant); uniform within a constraint except ShapeMatching
+  ConstraintColoring coloring;
+
+  std::size_t count() const { return offsets.empty() ? 0 : offsets.size() - 1; }
+  std::size_t slotCount() const { return ids.size(); }
+  bool perSlotMultiplier() const { return kind == PbdConstraintKind::ShapeMatching; }
+  bool vectorMultiplier() const {
+    return kind == PbdConstraintKind::Laplacian || kind == PbdConstraintKind::ShapeMatching;
+  }
+  std::size_t multiplierCount() const { return perSlotMultiplier() ? slotCount() : count(); }
+};
+
+template <typename T>
+struct PbdModel {
+  std::vector<Vec3<T>> rest_positions;  // m
+  std::vector<T> masses;                // kg
+  std::vector<T> inv_mass;              // 1/kg; 0 = fixed (Dirichlet)
+  std::vector<T> rest_radii;            // m; contact radius (0 for mesh vertices)
+  std::vector<PbdConstraintBlock<T>> blocks;  // solved in this order each iteration
+  int rotation_block = -1;              // ShapeMatching block whose clusters give per-particle rotations
+
+  // Local volume preservation (physics/pbd_volume.h): spheres that may overlap each sphere, the rest
+  // power-cell volumes, and the fixed unit-ball samples both backends use.
+  std::vector<std::int32_t> overlap_offsets{0};
+  std::vector<std::int32_t> overlap_ids;
+  std::vector<T> rest_cell_volume;      // m^3
+  std::vector<Vec3<T>> ball_samples;
+
+  std::vector<pbd::PlaneCollider<T>> planes;
+  std::vector<pbd::BoxCollider<T>> boxes;
+
+  std::size_t size() const { return rest_positions.size(); }
+};
+
+template <typename T>
+struct PbdStepParams {
+  T frame_dt = T(1.0 / 60.0);   // s
+  int substeps = 4;             // >= 1; small steps, few iterations (Macklin et al. 2019)
+  int iterations = 5;           // >= 1 per substep
+  bool xpbd = true;             // false: plain PBD, block stiffness k per projection, no multipliers
+  PbdSolverKind solver = PbdSolverKind::Jacobi;
+  T jacobi_omega = T(1.5);      // over-relaxation of the averaged Jacobi step, (0, 2)
+  Vec3<T> gravity{T(0), T(0), T(-9.81)};  // m/s^2
+  T damping = T(1);             // 1/s, velocities scaled by exp(-damping dt) each substep
+  int rotation_iterations = 4;  // polar-decomposition steps per cluster per projection (warm-started)
+  bool volume_preservation = true;
+  T volume_influence = T(0);    // m: spheres within this distance of a tool's surface adjust radii; < 0: all
+  T max_radius_growth = T(1.5); // radius stays in [r0, growth * r0]
+  int volume_passes = 3;        // Jacobi passes of the radius solve per frame
+  int bisection_steps = 12;
+  bool use_graph = true;        // CUDA backend: capture the frame in a CUDA graph
+  bool profile_stages = false;  // CUDA backend: time each stage with events (no graph)
+};
+
+// What the host prescribes for one frame: kinematic (grasped) particles move linearly from `from` to `to`
+// over the frame's substeps; tools are capsules moving linearly likewise.
+template <typename T>
+struct PbdFrameInput {
+  std::vector<std::int32_t> kinematic_ids;
+  std::vector<Vec3<T>> kinematic_from, kinematic_to;
+  std::vector<pbd::CapsuleCollider<T>> tools_from, tools_to;
+};
+
+template <typename T>
+struct PbdState {
+  std::vector<Vec3<T>> positions;      // m
+  std::vector<Vec3<T>> velocities;     // m/s
+  std::vector<T> radii;                // m (volume preservation changes them)
+  std::vector<pbd::Quat<T>> rotations; // per particle, from its shape-matching cluster (identity if none)
+};
+
+struct PbdFrameStats {
+  std::vector<StageTime> stages;
+  double residual_max = 0.0;   // max |C + alpha~ lambda| over Distance constraints after the last substep (m)
+  double residual_rms = 0.0;
+  int colors = 0;              // Gauss-Seidel: total colours over the solved blocks (0 for Jacobi)
+  int iterations = 0;          // constraint iterations this frame (substeps * iterations)
+  int volume_active = 0;       // spheres whose radius was solved this frame
+  double max_radius_ratio = 1.0;
+  bool finite = true;
+  std::int64_t failure_particle = -1;
+};
+
+template <typename T>
+class PbdBackend {
+ public:
+  virtual ~PbdBackend() = default;
+  virtual BackendKind kind() const = 0;
+  // Takes the topology (after finalizePbdModel); state := rest, zero velocity, rest radii, identity rotations.
+  virtual void setModel(const PbdModel<T>& model) = 0;
+  virtual void setState(const PbdState<T>& state) = 0;
+  virtual void getState(PbdState<T>& state) const = 0;
+  virtual PbdFrameStats advanceFrame(const PbdStepParams<T>& params, const PbdFrameInput<T>& input) = 0;
+  virtual MemoryReport memory() const = 0;
+};
+
+// Checks a frame's inputs against a model of n particles (unique in-range kinematic ids, matching sizes,
+// finite values, params in range); throws InputError("pbd frame", key, reason).
+template <typename T>
+inline void validateFrameInput(std::size_t n, const PbdStepParams<T>& p, const PbdFrameInput<T>& in) {
+  const char* f = "pbd frame";
+  if (!(p.frame_dt > T(0))) throw InputError(f, "frame_dt", "must be > 0");
+  if (p.substeps < 1) throw InputError(f, "substeps", "must be >= 1");
+  if (p.iterations < 1) throw InputError(f, "iterations", "must be >= 1");
+  if (!(p.jacobi_omega > T(0) && p.jacobi_omega < T(2))) throw InputError(f, "jacobi_omega", "must be in (0, 2)");
+  if (!(p.damping >= T(0))) throw InputError(f, "damping", "must be >= 0");
+  if (!(p.max_radius_growth >= T(1))) throw InputError(f, "max_radius_growth", "must be >= 1");
+  if (in.kinematic_from.size() != in.kinematic_ids.size() || in.kinematic_to.size() != in.kinematic_ids.size())
+    throw InputError(f, "kinematic", "ids, from and to must have equal sizes");
+  std::vector<std::uint8_t> seen(n, 0);
+  for (std::size_t k = 0; k < in.kinematic_ids.size(); ++k) {
+    const std::int32_t id = in.kinematic_ids[k];
+    if (id < 0 || std::size_t(id) >= n) throw InputError(f, "kinematic_ids", "index out of range");
+    if (seen[id]) throw InputError(f, "kinematic_ids", "duplicate index " + std::to_string(id));
+    seen[id] = 1;
+    if (!isFinite(in.kinematic_from[k]) || !isFinite(in.kinematic_to[k])) throw InputError(f, "kinematic", "not finite");
+  }
+  if (in.tools_from.size() != in.tools_to.size()) throw InputError(f, "tools", "from and to must have equal sizes");
+  for (std::size_t k = 0; k < in.tools_from.size(); ++k)
+    if (!(in.tools_from[k].radius >= T(0)) || !isFinite(in.tools_from[k].a) || !isFinite(in.tools_to[k].b))
+      throw InputError(f, "tools", "capsule not finite or negative radius");
+}
+
+// Fills the derived data of every block (particle->slot CSR, Jacobi scales, colouring) and validates the
+// model; throws InputError(file "pbd model", key, reason) on inconsistent sizes or indices.
+template <typename T>
+void finalizePbdModel(PbdModel<T>& model);
+
+// Rest power-cell volumes and ball samples for volume preservation (needs overlap lists and rest radii).
+template <typename T>
+void computeRestCellVolumes(PbdModel<T>& model, int sample_count);
+
+// CPU or CUDA per `kind` (Auto resolves as resolveBackend does).
+template <typename T>
+std::unique_ptr<PbdBackend<T>> makePbdBackend(BackendKind kind);
+
+}  // namespace inc

@@ -1,0 +1,220 @@
+// Uniform-grid cell keys, bucket hashing, Morton keys and the per-query cell traversal shared by the CPU and CUDA neighbour searches.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "physics/distance.h"
+#include "physics/hd.h"
+#include "physics/vec3.h"
+
+namespace inc {
+
+// Cells per axis are clamped to [0, kNeighborGridMaxCells): 21 bits, so a cell packs into a 63-bit key.
+constexpr std::int32_t kNeighborGridMaxCells = 1 << 21;
+// Morton keys use 10 bits per axis (a 30-bit key); finer grids are coarsened by a shift (see neighborMortonKey).
+constexpr std::int32_t kNeighborMortonBits = 10;
+
+// Machine constants written out so that device code needs no std::numeric_limits.
+template <typename T> struct NeighborFloatTraits;
+template <> struct NeighborFloatTraits<float> {
+  static constexpr float epsilon = 1.1920928955078125e-7f;   // 2^-23
+  static constexpr float sqrt_min_normal = 1.0842021724855044e-19f;  // sqrt(2^-126) = 2^-63
+};
+template <> struct NeighborFloatTraits<double> {
+  static constexpr double epsilon = 2.220446049250313e-16;  // 2^-52
+  static constexpr double sqrt_min_normal = 1.4916681462400413e-154;  // sqrt(2^-1022) = 2^-511
+};
+
+// Everything a query needs to know about the grid. Built by makeNeighborGridParams from the bounding box of
+// the finite points (on the device this happens in a one-thread kernel, so the host never needs the box).
+template <typename T>
+struct NeighborGridParams {
+  Vec3<T> origin;               // lower corner of the points' bounding box (cell (0,0,0) starts here)
+  T inv_cell;                   // 1 / cell size
+  std::int32_t dims[3];         // occupied cells per axis (after clamping); 0 when there are no finite points
+  std::uint32_t bucket_mask;    // bucket count - 1 (the bucket count is a power of two, about 2 n)
+  std::int32_t dense;           // 1: bucket = row-major cell index (no collisions); 0: bucket = hash & mask
+  std::int32_t morton_shift;    // Morton keys use (cell >> morton_shift), 10 bits per axis
+  std::int64_t first_bad;       // index of the first non-finite point, or n when all are finite
+};
+
+// Bucket count for n points: the power of two >= 2 n (at least 2). Host only: it sizes the start table.
+inline std::uint32_t neighborBucketCount(std::size_t n) {
+  std::uint64_t m = 2;
+  while (m < 2 * std::uint64_t(n)) m <<= 1;
+  return std::uint32_t(m);  // n <= 2^30 is checked by the callers, so m <= 2^31
+}
+
+// The cell coordinate of x along one axis: floor((x - origin) / h), clamped to [0, kNeighborGridMaxCells).
+// It is monotone non-decreasing in x (rounding is monotone, so is the clamp), which is all the traversal's
+// exactness argument needs; NaN maps to 0 so that unvalidated input cannot cause undefined conversions.
+template <typename T>
+INC_HD std::int32_t neighborCellCoord(T x, T origin, T inv_cell) {
+  const T v = (x - origin) * inv_cell;
+  if (!(v >= T(0))) return 0;
+  if (v >= T(kNeighborGridMaxCells - 1)) return kNeighborGridMaxCells - 1;
+  return std::int32_t(v);  // v >= 0, so truncation is floor
+}
+
+// Integer mixer (a 64-bit finaliser: xor-shift / odd multiply rounds) so that every key bit reaches the low
+// bits that the bucket mask keeps; plain products of coordinates would collide for cells a power of two apart.
+INC_HD std::uint32_t neighborCellHash(std::int32_t cx, std::int32_t cy, std::int32_t cz) {
+  std::uint64_t k = std::uint64_t(cx) | (std::uint64_t(cy) << 21) | (std::uint64_t(cz) << 42);
+  k ^= k >> 31;
+  k *= 0x7fb5d329728ea185ULL;
+  k ^= k >> 27;
+  k *= 0x81dadef4bc2dd44dULL;
+  k ^= k >> 33;
+  return std::uint32_t(k);
+}
+
+template <typename T>
+INC_HD std::uint32_t neighborBucket(const NeighborGridParams<T>& p, std::int32_t cx, std::int32_t cy,
+                                    std::int32_t cz) {
+  if (p.dense)  // dims[0] * dims[1] * dims[2] <= bucket count <= 2^31, so this cannot overflow
+    return std::uint32_t(cx) + std::uint32_t(p.dims[0]) * (std::uint32_t(cy) + std::uint32_t(p.dims[1]) * std::uint32_t(cz));
+  return neighborCellHash(cx, cy, cz) & p.bucket_mask;
+}
+
+// Spreads the low 10 bits of v so that two zero bits follow each one (for interleaving three axes).
+INC_HD std::uint32_t neighborSpreadBits10(std::uint32_t v) {
+  v &= 0x3ffu;
+  v = (v | (v << 16)) & 0x030000ffu;
+  v = (v | (v << 8)) & 0x0300f00fu;
+  v = (v | (v << 4)) & 0x030c30c3u;
+  v = (v | (v << 2)) & 0x09249249u;
+  return v;
+}
+
+// Z-order key of a cell: exact cell order when every axis has <= 1024 cells, else the order of blocks of
+// 2^morton_shift cells per axis (points inside one block keep their previous relative order).
+template <typename T>
+INC_HD std::uint32_t neighborMortonKey(const NeighborGridParams<T>& p, std::int32_t cx, std::int32_t cy,
+                                       std::int32_t cz) {
+  const int s = p.morton_shift;
+  return neighborSpreadBits10(std::uint32_t(cx) >> s) | (neighborSpreadBits10(std::uint32_t(cy) >> s) << 1) |
+         (neighborSpreadBits10(std::uint32_t(cz) >> s) << 2);
+}
+
+template <typename T>
+INC_HD bool neighborPointFinite(const Vec3<T>& x) {
+  // x - x is 0 for finite values and NaN for NaN and +-inf (no <cmath> needed on the device)
+  return (x.x - x.x) == T(0) && (x.y - x.y) == T(0) && (x.z - x.z) == T(0);
+}
+
+// A radius is usable when finite and >= 0.
+template <typename T>
+INC_HD bool neighborRadiusValid(T r) {
+  return r >= T(0) && (r - r) == T(0);
+}
+
+// Grid parameters from the bounding box [lo, hi] of the finite points. n_finite == 0 gives an empty grid.
+template <typename T>
+INC_HD NeighborGridParams<T> makeNeighborGridParams(const Vec3<T>& lo, const Vec3<T>& hi, T cell_size,
+                                                    std::uint32_t bucket_count, std::int64_t first_bad,
+                                                    bool any_finite) {
+  NeighborGridParams<T> p;
+  p.origin = lo;
+  p.inv_cell = T(1) / cell_size;
+  p.bucket_mask = bucket_count - 1u;
+  p.first_bad = first_bad;
+  std::int32_t max_dim = 0;
+  std::uint64_t cells = 1;
+  for (int a = 0; a < 3; ++a) {
+    p.dims[a] = any_finite ? neighborCellCoord(hi[a], lo[a], p.inv_cell) + 1 : 0;
+    max_dim = p.dims[a] > max_dim ? p.dims[a] : max_dim;
+    cells *= std::uint64_t(p.dims[a]);  // each <= 2^21, so the product fits in 64 bits
+  }
+  p.dense = cells <= std::uint64_t(bucket_count) ? 1 : 0;
+  int bits = 0;
+  while (bits < 21 && (std::int32_t(1) << bits) < max_dim) ++bits;
+  p.morton_shift = bits > kNeighborMortonBits ? bits - kNeighborMortonBits : 0;
+  return p;
+}
+
+// Read-only view of a built grid: points in storage order, the bucket start table (bucket count + 1 entries)
+// and, when the storage order is not the bucket order (Morton mode), the storage index of each bucket slot.
+template <typename T>
+struct NeighborGridView {
+  NeighborGridParams<T> p;
+  const Vec3<T>* points;             // storage order
+  const std::int32_t* bucket_start;  // slots of bucket b: [bucket_start[b], bucket_start[b + 1])
+  const std::int32_t* entries;       // storage index of each slot; nullptr means slot == storage index
+  std::int32_t n;
+};
+
+// Half-width of the per-axis cell range searched for radius r. Any pair accepted by
+// distance2Exact(x, y) <= fl(r * r) has |x_a - y_a| <= r (1 + 2 eps) + sqrt(min normal) in exact arithmetic
+// (each of the 5 roundings is relative <= eps/2 on non-negative terms; underflow adds at most sqrt(min));
+// 16 eps leaves room for the rounding of this expression itself. See docs/neighbor-search.md.
+template <typename T>
+INC_HD T neighborSearchReach(T r) {
+  return r * (T(1) + T(16) * NeighborFloatTraits<T>::epsilon) + NeighborFloatTraits<T>::sqrt_min_normal;
+}
+
+namespace detail {
+template <typename T, typename Visit>
+INC_HD void neighborTest(const NeighborGridView<T>& g, const Vec3<T>& x, T r2, std::int32_t j, std::int32_t skip,
+                         Visit& visit) {
+  if (j != skip && distance2Exact(x, g.points[j]) <= r2) visit(j);
+}
+}  // namespace detail
+
+// Calls visit(j) for every storage index j != skip with distance2Exact(x, points[j]) <= r * r, each exactly
+// once, in an order that depends only on the grid (not on threads). The cell range per axis is
+// [cell(x - reach), cell(x + reach)] with the same monotone cell function that placed the points, so no
+// accepted point can lie outside it, whatever r is relative to the cell size.
+//  - dense grids: buckets are cells; one (y, z) row of cells is one contiguous run of slots.
+//  - hashed grids: two cells of the range can share a bucket; a slot is only taken when its point's own
+//    cell is the cell being visited, so a point is never listed twice.
+//  - when the range has more cells than there are points, every point is scanned instead.
+template <typename T, typename Visit>
+INC_HD void forEachGridNeighbor(const NeighborGridView<T>& g, const Vec3<T>& x, T r, std::int32_t skip,
+                                Visit& visit) {
+  if (g.n <= 0) return;
+  const NeighborGridParams<T>& p = g.p;
+  const T r2 = r * r;
+  const T reach = neighborSearchReach(r);
+  std::int32_t lo[3], hi[3];
+  std::uint64_t cells = 1;
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = neighborCellCoord(x[a] - reach, p.origin[a], p.inv_cell);
+    const std::int32_t h = neighborCellCoord(x[a] + reach, p.origin[a], p.inv_cell);
+    hi[a] = h < p.dims[a] - 1 ? h : p.dims[a] - 1;
+    if (lo[a] > hi[a]) return;  // the range misses every occupied cell
+    cells *= std::uint64_t(hi[a] - lo[a] + 1);
+  }
+  if (cells > std::uint64_t(g.n)) {
+    for (std::int32_t j = 0; j < g.n; ++j) detail::neighborTest(g, x, r2, j, skip, visit);
+    return;
+  }
+  if (p.dense) {
+    for (std::int32_t cz = lo[2]; cz <= hi[2]; ++cz)
+      for (std::int32_t cy = lo[1]; cy <= hi[1]; ++cy) {
+        const std::uint32_t b0 = neighborBucket(p, lo[0], cy, cz);
+        const std::uint32_t b1 = b0 + std::uint32_t(hi[0] - lo[0]) + 1u;
+        const std::int32_t e1 = g.bucket_start[b1];
+        for (std::int32_t e = g.bucket_start[b0]; e < e1; ++e)
+          detail::neighborTest(g, x, r2, g.entries ? g.entries[e] : e, skip, visit);
+      }
+    return;
+  }
+  for (std::int32_t cz = lo[2]; cz <= hi[2]; ++cz)
+    for (std::int32_t cy = lo[1]; cy <= hi[1]; ++cy)
+      for (std::int32_t cx = lo[0]; cx <= hi[0]; ++cx) {
+        const std::uint32_t b = neighborBucket(p, cx, cy, cz);
+        const std::int32_t e1 = g.bucket_start[b + 1u];
+        for (std::int32_t e = g.bucket_start[b]; e < e1; ++e) {
+          const std::int32_t j = g.entries ? g.entries[e] : e;
+          const Vec3<T>& y = g.points[j];
+          if (neighborCellCoord(y.x, p.origin.x, p.inv_cell) != cx ||
+              neighborCellCoord(y.y, p.origin.y, p.inv_cell) != cy ||
+              neighborCellCoord(y.z, p.origin.z, p.inv_cell) != cz)
+            continue;  // another cell that shares this bucket: it is visited (or not) on its own
+          detail::neighborTest(g, x, r2, j, skip, visit);
+        }
+      }
+}
+
+}  // namespace inc

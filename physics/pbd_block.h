@@ -1,0 +1,196 @@
+// One constraint of a block projected from raw arrays (Jacobi slot output or in-place Gauss-Seidel), and the per-particle substep steps.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+
+#include "physics/hd.h"
+#include "physics/pbd_collision.h"
+#include "physics/pbd_constraints.h"
+#include "physics/pbd_rotation.h"
+#include "physics/vec3.h"
+
+namespace inc::pbd {
+
+enum : int { kDistance = 0, kBending = 1, kTetVolume = 2, kLaplacian = 3, kShapeMatching = 4 };
+
+// Raw view of one constraint block (host or device pointers); see host/pbd_model.h for the meaning.
+template <typename T>
+struct BlockView {
+  int kind = kDistance;
+  int count = 0;
+  T stiffness = T(1);
+  const std::int32_t* offsets = nullptr;
+  const std::int32_t* ids = nullptr;
+  const T* rest = nullptr;
+  const Vec3<T>* rest_vec = nullptr;
+  const T* compliance = nullptr;
+  const T* jacobi_scale = nullptr;
+  const std::int32_t* particle_offsets = nullptr;
+  const std::int32_t* particle_slots = nullptr;
+  Vec3<T>* lambda = nullptr;     // multipliers; scalar kinds use .x
+  Vec3<T>* slot_corr = nullptr;  // Jacobi: correction of each slot's particle
+};
+
+// What every projection reads besides its block.
+template <typename T>
+struct SolveContext {
+  Vec3<T>* x = nullptr;          // positions (read; written in place by Gauss-Seidel)
+  const T* w = nullptr;          // inverse masses of this frame (kinematic particles 0)
+  const T* mass = nullptr;       // masses (shape-matching centre of mass)
+  Quat<T>* rotation = nullptr;   // per-particle rotation, updated by the particle's own cluster
+  bool xpbd = true;
+  T dt = T(0);
+  bool jacobi = true;
+  T omega = T(1);                // Jacobi over-relaxation
+  int rotation_iterations = 4;
+};
+
+template <typename T>
+INC_HD void emitCorrection(const BlockView<T>& b, const SolveContext<T>& ctx, std::int32_t slot, const Vec3<T>& d,
+                           T scale) {
+  if (ctx.jacobi)
+    b.slot_corr[slot] = d * scale;
+  else
+    ctx.x[b.ids[slot]] += d;
+}
+
+// Projects constraint c once. Jacobi: corrections (scaled by omega * jacobi_scale) go to slot_corr and the
+// multiplier advances by the same scaled amount, so lambda always matches the displacement actually applied
+// and XPBD's equilibrium is kept; Gauss-Seidel: positions move in place (the colouring makes that race-free).
+template <typename T>
+INC_HD void projectConstraint(const BlockView<T>& b, int c, const SolveContext<T>& ctx) {
+  const std::int32_t s0 = b.offsets[c], s1 = b.offsets[c + 1];
+  const T scale = ctx.jacobi ? ctx.omega * b.jacobi_scale[s0] : T(1);
+  const Vec3<T>* x = ctx.x;
+  const T* w = ctx.w;
+  switch (b.kind) {
+    case kDistance: {
+      const std::int32_t i = b.ids[s0], j = b.ids[s0 + 1];
+      const XpbdTerm<T> term = xpbdTerm(ctx.xpbd, b.compliance[c], b.stiffness, ctx.dt);
+      const DistanceCorrection<T> r = projectDistance(x[i], x[j], w[i], w[j], b.rest[c], term, b.lambda[c].x);
+      emitCorrection(b, ctx, s0, r.dp0, scale);
+      emitCorrection(b, ctx, s0 + 1, r.dp1, scale);
+      b.lambda[c].x += r.dlambda * scale;
+      break;
+    }
+    case kBending:
+    case kTetVolume: {
+      const std::int32_t* id = b.ids + s0;
+      const XpbdTerm<T> term = xpbdTerm(ctx.xpbd, b.compliance[c], b.stiffness, ctx.dt);
+      Vec3<T> dp[4];
+      T dl;
+      if (b.kind == kBending) {
+        const BendingCorrection<T> r = projectBending(x[id[0]], x[id[1]], x[id[2]], x[id[3]], w[id[0]], w[id[1]],
+                                                      w[id[2]], w[id[3]], b.rest[c], term, b.lambda[c].x);
+        for (int k = 0; k < 4; ++k) dp[k] = r.dp[k];
+        dl = r.dlambda;
+      } else {
+        const TetVolumeCorrection<T> r = projectTetVolume(x[id[0]], x[id[1]], x[id[2]], x[id[3]], w[id[0]], w[id[1]],
+                                                          w[id[2]], w[id[3]], b.rest[c], term, b.lambda[c].x);
+        for (int k = 0; k < 4; ++k) dp[k] = r.dp[k];
+        dl = r.dlambda;
+      }
+      for (int k = 0; k < 4; ++k) emitCorrection(b, ctx, s0 + k, dp[k], scale);
+      b.lambda[c].x += dl * scale;
+      break;
+    }
+    case kLaplacian: {
+      const std::int32_t centre = b.ids[s0];
+      const Vec3<T> rest = ctx.rotation ? quatToMatrix(ctx.rotation[centre]) * b.rest_vec[c] : b.rest_vec[c];
+      const XpbdTerm<T> term = xpbdTerm(ctx.xpbd, b.compliance[c], b.stiffness, ctx.dt);
+      const LaplacianCorrection<T> r = projectLaplacian(x, w, b.ids + s0, s1 - s0, rest, term, b.lambda[c]);
+      emitCorrection(b, ctx, s0, r.d_center, scale);
+      for (std::int32_t s = s0 + 1; s < s1; ++s) emitCorrection(b, ctx, s, r.dlambda * (-w[b.ids[s]] * r.inv_n), scale);
+      b.lambda[c] += r.dlambda * scale;
+      break;
+    }
+    case kShapeMatching: {
+      const std::int32_t centre = b.ids[s0];
+      const ClusterFrame<T> f = clusterFrame(x, ctx.mass, b.ids + s0, b.rest_vec + s0, s1 - s0);
+      const Quat<T> q = extractRotation(f.a_pq, ctx.rotation[centre], ctx.rotation_iterations);
+      ctx.rotation[centre] = q;
+      const Mat3<T> rot = quatToMatrix(q);
+      // Goals from positions read before any member moves (Gauss-Seidel writes only after all are computed
+      // for the member itself; the goal of a member does not depend on its own update).
+      for (std::int32_t s = s0; s < s1; ++s) {
+        const std::int32_t p = b.ids[s];
+        const Vec3<T> goal = rot * b.rest_vec[s] + f.x_cm;
+        const T sc = ctx.jacobi ? ctx.omega * b.jacobi_scale[s] : T(1);
+        const XpbdTerm<T> term = xpbdTerm(ctx.xpbd, b.compliance[s], b.stiffness, ctx.dt);
+        const GoalCorrection<T> r = projectGoal(x[p], w[p], goal, term, b.lambda[s]);
+        emitCorrection(b, ctx, s, r.dp, sc);
+        b.lambda[s] += r.dlambda * sc;
+      }
+      break;
+    }
+    default:
+      break;
+  }
+}
+
+// Rotation of one cluster without applying its goals (for skinning when shape matching is not solved).
+template <typename T>
+INC_HD void updateClusterRotation(const BlockView<T>& b, int c, const SolveContext<T>& ctx) {
+  const std::int32_t s0 = b.offsets[c], s1 = b.offsets[c + 1];
+  const ClusterFrame<T> f = clusterFrame(ctx.x, ctx.mass, b.ids + s0, b.rest_vec + s0, s1 - s0);
+  ctx.rotation[b.ids[s0]] = extractRotation(f.a_pq, ctx.rotation[b.ids[s0]], ctx.rotation_iterations);
+}
+
+// Jacobi gather: the sum of the (already scaled) corrections of particle p's slots, in ascending slot order.
+template <typename T>
+INC_HD Vec3<T> gatherCorrection(const BlockView<T>& b, std::int32_t p) {
+  Vec3<T> sum;
+  for (std::int32_t k = b.particle_offsets[p]; k < b.particle_offsets[p + 1]; ++k) sum += b.slot_corr[b.particle_slots[k]];
+  return sum;
+}
+
+// XPBD residual |C + alpha~ lambda| of distance constraint c (m): zero when the substep's solve converged.
+template <typename T>
+INC_HD T distanceResidual(const BlockView<T>& b, int c, const Vec3<T>* x, bool xpbd, T dt) {
+  const std::int32_t i = b.ids[b.offsets[c]], j = b.ids[b.offsets[c] + 1];
+  const T cval = norm(x[i] - x[j]) - b.rest[c];
+  const T at = xpbd ? b.compliance[c] / (dt * dt) : T(0);
+  return std::fabs(cval + at * b.lambda[c].x);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Per-particle substep steps.
+
+// Symplectic Euler prediction with mass-proportional damping: v <- v exp(-damping dt) + dt g; x <- x + dt v.
+template <typename T>
+INC_HD void predictParticle(Vec3<T>& x, Vec3<T>& v, Vec3<T>& x_prev, T w, const Vec3<T>& g, T damping_factor, T dt) {
+  x_prev = x;
+  if (w > T(0)) {
+    v = v * damping_factor + g * dt;
+    x += v * dt;
+  }
+}
+
+template <typename T>
+INC_HD Vec3<T> lerp(const Vec3<T>& a, const Vec3<T>& b, T t) {
+  return a + (b - a) * t;
+}
+
+template <typename T>
+INC_HD CapsuleCollider<T> lerpCapsule(const CapsuleCollider<T>& a, const CapsuleCollider<T>& b, T t) {
+  CapsuleCollider<T> c;
+  c.a = lerp(a.a, b.a, t);
+  c.b = lerp(a.b, b.b, t);
+  c.radius = a.radius + (b.radius - a.radius) * t;
+  return c;
+}
+
+// All contacts of one sphere, resolved one after another (Gauss-Seidel over its own contacts). Tools are
+// interpolated to the substep's end time t in [0, 1] of the frame.
+template <typename T>
+INC_HD Vec3<T> resolveContacts(Vec3<T> x, T r, const PlaneCollider<T>* planes, int np, const BoxCollider<T>* boxes,
+                               int nb, const CapsuleCollider<T>* tools_from, const CapsuleCollider<T>* tools_to,
+                               int nt, T t) {
+  for (int k = 0; k < np; ++k) x += planeContact(x, r, planes[k]);
+  for (int k = 0; k < nb; ++k) x += boxContact(x, r, boxes[k]);
+  for (int k = 0; k < nt; ++k) x += capsuleContact(x, r, lerpCapsule(tools_from[k], tools_to[k], t));
+  return x;
+}
+
+}  // namespace inc::pbd

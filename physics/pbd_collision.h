@@ -1,0 +1,99 @@
+// Sphere-vs-collider contacts as unilateral position constraints: static planes and boxes, moving tool capsules.
+#pragma once
+
+#include <cmath>
+
+#include "physics/hd.h"
+#include "physics/vec3.h"
+
+namespace inc::pbd {
+
+// Half-space n . x >= offset is free; the body side is below it (n unit).
+template <typename T>
+struct PlaneCollider {
+  Vec3<T> normal{T(0), T(0), T(1)};
+  T offset = T(0);  // m
+};
+
+// Solid axis-aligned box the organ must stay out of.
+template <typename T>
+struct BoxCollider {
+  Vec3<T> min, max;  // m
+};
+
+// A tool: the segment a-b swept by a ball of `radius` (m).
+template <typename T>
+struct CapsuleCollider {
+  Vec3<T> a, b;
+  T radius = T(0);
+};
+
+// Each contact is C(x) = signed distance between the sphere (centre x, radius r) and the collider >= 0,
+// a unilateral constraint with zero compliance: when violated, the centre is moved along the contact
+// normal by -C (the single-particle XPBD step with alpha = 0 does not depend on its inverse mass).
+// Returns the correction (zero when not in contact).
+template <typename T>
+INC_HD Vec3<T> planeContact(const Vec3<T>& x, T r, const PlaneCollider<T>& p) {
+  const T c = dot(p.normal, x) - p.offset - r;
+  return c < T(0) ? p.normal * (-c) : Vec3<T>();
+}
+
+template <typename T>
+INC_HD Vec3<T> boxContact(const Vec3<T>& x, T r, const BoxCollider<T>& b) {
+  Vec3<T> q;
+  bool inside = true;
+  for (int k = 0; k < 3; ++k) {
+    T v = x[k];
+    if (v < b.min[k]) { v = b.min[k]; inside = false; }
+    if (v > b.max[k]) { v = b.max[k]; inside = false; }
+    q[k] = v;
+  }
+  if (!inside) {
+    const Vec3<T> d = x - q;
+    const T dist = norm(d);
+    if (dist >= r || !(dist > T(0))) return Vec3<T>();
+    return d * ((r - dist) / dist);
+  }
+  // Centre inside the box: leave through the nearest face (ties: lowest axis, min side first).
+  int axis = 0;
+  T best = x[0] - b.min[0], sign = T(-1);
+  for (int k = 0; k < 3; ++k) {
+    const T to_min = x[k] - b.min[k], to_max = b.max[k] - x[k];
+    if (to_min < best) { best = to_min; axis = k; sign = T(-1); }
+    if (to_max < best) { best = to_max; axis = k; sign = T(1); }
+  }
+  Vec3<T> out;
+  out[axis] = sign * (best + r);
+  return out;
+}
+
+template <typename T>
+INC_HD Vec3<T> closestPointOnSegment(const Vec3<T>& x, const Vec3<T>& a, const Vec3<T>& b) {
+  const Vec3<T> ab = b - a;
+  const T l2 = norm2(ab);
+  T t = l2 > T(0) ? dot(x - a, ab) / l2 : T(0);
+  t = t < T(0) ? T(0) : (t > T(1) ? T(1) : t);
+  return a + ab * t;
+}
+
+template <typename T>
+INC_HD T capsuleDistance(const Vec3<T>& x, const CapsuleCollider<T>& c) {
+  return norm(x - closestPointOnSegment(x, c.a, c.b)) - c.radius;
+}
+
+template <typename T>
+INC_HD Vec3<T> capsuleContact(const Vec3<T>& x, T r, const CapsuleCollider<T>& c) {
+  const Vec3<T> q = closestPointOnSegment(x, c.a, c.b);
+  const Vec3<T> d = x - q;
+  const T dist = norm(d), reach = c.radius + r;
+  if (dist >= reach) return Vec3<T>();
+  if (dist > T(0)) return d * ((reach - dist) / dist);
+  // Centre exactly on the axis: push along a fixed direction perpendicular to the axis (deterministic).
+  Vec3<T> axis = c.b - c.a;
+  Vec3<T> perp = cross(axis, Vec3<T>(T(1), T(0), T(0)));
+  if (!(norm2(perp) > T(0))) perp = cross(axis, Vec3<T>(T(0), T(1), T(0)));
+  if (!(norm2(perp) > T(0))) perp = Vec3<T>(T(0), T(0), T(1));
+  return perp * (reach / norm(perp));
+}
+
+}  // namespace inc::pbd
