@@ -39,6 +39,15 @@ __global__ void kinematicKernel(int k, Vec3<T>* x, const std::int32_t* ids, cons
 }
 
 template <typename T>
+__global__ void attachKernel(int k, Vec3<T>* x, const T* w, const std::int32_t* ids, const Vec3<T>* from,
+                             const Vec3<T>* to, const T* compliance, Vec3<T>* lambda, bool xpbd, T dt, T t) {
+  const int q = blockIdx.x * blockDim.x + threadIdx.x;
+  if (q >= k) return;
+  const std::int32_t id = ids[q];
+  pbd::projectAttachment(x[id], w[id], pbd::lerp(from[q], to[q], t), compliance[q], xpbd, dt, lambda[q]);
+}
+
+template <typename T>
 __global__ void projectAllKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx) {
   const int c = blockIdx.x * blockDim.x + threadIdx.x;
   if (c >= b.count) return;
@@ -206,7 +215,8 @@ template <typename T>
 struct GraphKey {
   PbdStepParams<T> p;
   std::size_t kinematic = 0, tools = 0;
-  const void* ptrs[6] = {nullptr, nullptr, nullptr, nullptr, nullptr, nullptr};  // frame-input buffers
+  std::size_t attached = 0;
+  const void* ptrs[11] = {};  // frame-input buffers
 };
 
 template <typename T>
@@ -218,7 +228,7 @@ bool sameKey(const GraphKey<T>& a, const GraphKey<T>& b) {
          x.rotation_iterations == y.rotation_iterations && x.volume_preservation == y.volume_preservation &&
          x.volume_influence == y.volume_influence && x.max_radius_growth == y.max_radius_growth &&
          x.volume_passes == y.volume_passes && x.bisection_steps == y.bisection_steps && a.kinematic == b.kinematic &&
-         a.tools == b.tools && std::equal(a.ptrs, a.ptrs + 6, b.ptrs);
+         a.tools == b.tools && a.attached == b.attached && std::equal(a.ptrs, a.ptrs + 11, b.ptrs);
 }
 
 template <typename T>
@@ -372,9 +382,11 @@ class PbdCudaBackend final : public PbdBackend<T> {
         key.p = p;
         key.kinematic = in.kinematic_ids.size();
         key.tools = in.tools_from.size();
-        const void* ptrs[6] = {kin_ids_.data(), kin_from_.data(), kin_to_.data(), tools_from_.data(), tools_to_.data(),
-                               w_.data()};
-        std::copy(ptrs, ptrs + 6, key.ptrs);
+        key.attached = in.attach_ids.size();
+        const void* ptrs[11] = {kin_ids_.data(),    kin_from_.data(),  kin_to_.data(),      tools_from_.data(),
+                                tools_to_.data(),   w_.data(),         att_ids_.data(),     att_from_.data(),
+                                att_to_.data(),     att_comp_.data(),  att_lambda_.data()};
+        std::copy(ptrs, ptrs + 11, key.ptrs);
         if (!graph_exec_ || !sameKey(key, graph_key_)) {
           destroyGraph();
           INC_CUDA(cudaStreamBeginCapture(stream_, cudaStreamCaptureModeThreadLocal));
@@ -442,6 +454,12 @@ class PbdCudaBackend final : public PbdBackend<T> {
     kin_to_.upload(in.kinematic_to);
     tools_from_.upload(in.tools_from);
     tools_to_.upload(in.tools_to);
+    att_ids_.upload(in.attach_ids);
+    att_from_.upload(in.attach_from);
+    att_to_.upload(in.attach_to);
+    att_comp_.upload(in.attach_compliance);
+    att_lambda_.resize(in.attach_ids.size());
+    n_att_ = int(in.attach_ids.size());
     n_kin_ = int(in.kinematic_ids.size());
     n_tools_ = int(in.tools_from.size());
   }
@@ -495,6 +513,7 @@ class PbdCudaBackend final : public PbdBackend<T> {
       }
       for (DeviceBlock<T>& d : blocks_)
         if (d.lambda.size()) INC_CUDA(cudaMemsetAsync(d.lambda.data(), 0, d.lambda.bytes(), stream_));
+      if (n_att_ > 0) INC_CUDA(cudaMemsetAsync(att_lambda_.data(), 0, att_lambda_.bytes(), stream_));
       stageEnd(0, ev);
 
       for (int it = 0; it < p.iterations; ++it) {
@@ -515,6 +534,13 @@ class PbdCudaBackend final : public PbdBackend<T> {
               INC_CUDA_LAUNCH("pbd project (colour)");
             }
           }
+        }
+        if (n_att_ > 0) {
+          attachKernel<T><<<blocksFor(n_att_), kThreads, 0, stream_>>>(n_att_, x_.data(), w_.data(), att_ids_.data(),
+                                                                       att_from_.data(), att_to_.data(),
+                                                                       att_comp_.data(), att_lambda_.data(), p.xpbd,
+                                                                       dt, t_end);
+          INC_CUDA_LAUNCH("pbd attachments");
         }
         stageEnd(1, ev);
         ev = stageBegin();
@@ -617,14 +643,14 @@ class PbdCudaBackend final : public PbdBackend<T> {
   std::vector<ProfRecord> prof_;
   bool profile_ = false;
 
-  int n_ = 0, n_planes_ = 0, n_boxes_ = 0, n_kin_ = 0, n_tools_ = 0, rotation_block_ = -1;
+  int n_ = 0, n_planes_ = 0, n_boxes_ = 0, n_kin_ = 0, n_att_ = 0, n_tools_ = 0, rotation_block_ = -1;
   bool have_volume_data_ = false;
   std::vector<T> host_rest_radii_, inv_mass_h_, w_h_;
-  DeviceBuffer<Vec3<T>> rest_positions_, x_, v_, x_prev_, kin_from_, kin_to_, samples_;
-  DeviceBuffer<T> masses_, inv_mass_, w_, rest_radii_, radii_, radii_next_, rest_cell_;
+  DeviceBuffer<Vec3<T>> rest_positions_, x_, v_, x_prev_, kin_from_, kin_to_, samples_, att_from_, att_to_, att_lambda_;
+  DeviceBuffer<T> masses_, inv_mass_, w_, rest_radii_, radii_, radii_next_, rest_cell_, att_comp_;
   DeviceBuffer<pbd::Quat<T>> rotations_;
   DeviceBuffer<std::uint8_t> active_;
-  DeviceBuffer<std::int32_t> kin_ids_, ov_off_, ov_ids_;
+  DeviceBuffer<std::int32_t> kin_ids_, ov_off_, ov_ids_, att_ids_;
   DeviceBuffer<pbd::PlaneCollider<T>> planes_;
   DeviceBuffer<pbd::BoxCollider<T>> boxes_;
   DeviceBuffer<pbd::CapsuleCollider<T>> tools_from_, tools_to_;
