@@ -262,6 +262,15 @@ std::string indexPath(const std::string& parent, std::size_t index) {
 }
 
 double numberAt(const json& v, const std::string& file, const std::string& path) {
+  if (v.is_string()) {
+    // "nan", "inf", "-Infinity": a way to smuggle a non-finite number into JSON; say so plainly.
+    std::string w = lower(v.get<std::string>());
+    if (!w.empty() && (w[0] == '-' || w[0] == '+')) w = w.substr(1);
+    if (w.rfind("nan", 0) == 0 || w.rfind("inf", 0) == 0) {
+      throw InputError(file, path, "expected a finite number, got " + describeValue(v) +
+                                       ": NaN and infinity are not allowed");
+    }
+  }
   if (!v.is_number()) throw InputError(file, path, "expected a number, got " + describeValue(v));
   const double d = v.get<double>();
   if (!std::isfinite(d)) throw InputError(file, path, "is not a finite number");
