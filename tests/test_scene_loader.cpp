@@ -5,6 +5,7 @@
 #include <fstream>
 #include <string>
 #include <unistd.h>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -615,6 +616,34 @@ TEST_F(SceneLoader, MeshScaleMustBePositiveAndSpacingMustFit) {
   expectError(j.dump(), "geometry.mesh_scale", "must be > 0", dir_.string());
   j["geometry"]["mesh_scale"] = 0.001;  // a 1 mm cube with 1 cm spacing holds no particle
   expectError(j.dump(), "geometry.spacing_m", "not smaller than the thinnest extent", dir_.string());
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// The examples in docs/scene-format.md are valid scenes
+
+TEST_F(SceneLoader, DocumentedExamplesLoad) {
+  const fs::path doc = fs::path(__FILE__).parent_path().parent_path() / "docs" / "scene-format.md";
+  if (!fs::exists(doc)) GTEST_SKIP() << doc << " is absent (tests built away from the source tree)";
+  std::ifstream in(doc);
+  std::string line, block;
+  std::vector<std::string> blocks;
+  bool inside = false;
+  while (std::getline(in, line)) {
+    if (line.rfind("```", 0) == 0) {
+      if (inside) blocks.push_back(block);
+      inside = !inside && line == "```json";
+      block.clear();
+    } else if (inside) {
+      block += line + "\n";
+    }
+  }
+  ASSERT_EQ(blocks.size(), 2u);
+  write("organs/liver.obj", cubeObj());  // stands in for the organ the second example names
+  for (const std::string& b : blocks) {
+    SCOPED_TRACE(b);
+    const Scene s = parseScene(b, kLabel, dir_.string());
+    expectSceneEq(s, parseScene(sceneToJson(s), kLabel, dir_.string()));
+  }
 }
 
 // ---------------------------------------------------------------------------------------------------------
