@@ -345,6 +345,46 @@ OutputSpec readOutput(const ObjectReader& top) {
   return o;
 }
 
+// nlohmann's indented dump puts each element of an array on its own line; a vec3 reads better as
+// [x, y, z]. Joins every array whose elements are all scalars. Safe on strings: a dumped string never
+// holds a raw newline, and the scan only acts on '[' that ends a line.
+std::string compactScalarArrays(const std::string& text) {
+  std::string out;
+  std::size_t i = 0;
+  while (i < text.size()) {
+    const std::size_t open = text.find("[\n", i);
+    if (open == std::string::npos) break;
+    out.append(text, i, open + 1 - i);
+    std::size_t pos = open + 2;
+    std::vector<std::string> items;
+    bool scalar = true;
+    std::size_t close = std::string::npos;
+    while (pos < text.size()) {
+      const std::size_t eol = text.find('\n', pos);
+      std::string line = text.substr(pos, eol == std::string::npos ? std::string::npos : eol - pos);
+      const std::size_t first = line.find_first_not_of(' ');
+      line = first == std::string::npos ? "" : line.substr(first);
+      if (line == "]" || line == "]," ) {
+        close = pos + first;
+        break;
+      }
+      if (line.find_first_of("[]{}") != std::string::npos && line.front() != '"') scalar = false;
+      if (!line.empty() && line.back() == ',') line.pop_back();
+      items.push_back(line);
+      if (eol == std::string::npos) break;
+      pos = eol + 1;
+    }
+    if (!scalar || close == std::string::npos) {
+      i = open + 1;
+      continue;
+    }
+    for (std::size_t k = 0; k < items.size(); ++k) out += (k ? ", " : "") + items[k];
+    i = close;  // continues with the ']' itself
+  }
+  out.append(text, i, std::string::npos);
+  return out;
+}
+
 }  // namespace
 
 Scene parseScene(const std::string& json_text, const std::string& file_label, const std::string& base_dir) {
@@ -464,7 +504,7 @@ std::string sceneToJson(const Scene& s) {
                   {"mesh_obj", s.output.mesh_obj},
                   {"vtk", s.output.vtk},
                   {"metrics_csv", s.output.metrics_csv}};
-  return j.dump(2) + "\n";
+  return compactScalarArrays(j.dump(2)) + "\n";
 }
 
 }  // namespace inc

@@ -533,6 +533,18 @@ TEST(SceneLoaderRoundTrip, EveryPrimitiveKindAndDefaults) {
   }
 }
 
+TEST(SceneLoaderRoundTrip, WriterKeepsVectorsOnOneLineAndStringsIntact) {
+  json j = json::parse(kFullScene);
+  j["name"] = "odd [\n  1,\n  2\n] {name}";
+  j["description"] = "[";
+  const Scene a = parseScene(j.dump(), kLabel, ".");
+  const std::string text = sceneToJson(a);
+  EXPECT_NE(text.find("\"radii_m\": [0.06, 0.04, 0.025]"), std::string::npos) << text;
+  const Scene b = parseScene(text, kLabel, ".");
+  EXPECT_EQ(b.name, "odd [\n  1,\n  2\n] {name}");
+  expectSceneEq(a, b);
+}
+
 TEST(SceneLoaderRoundTrip, AwkwardNumbersAreExact) {
   json j = minimal();
   j["material"] = {{"youngs_modulus_pa", 1.0 / 3.0 * 1e4}, {"poisson_ratio", 0.49999999999999994}};
