@@ -190,10 +190,6 @@ __global__ void gatherKernel(const Vec3<T>* pts, const std::int32_t* perm, int n
   inv[o] = s;
 }
 
-__global__ void setStartEndKernel(std::int32_t* counts, std::size_t used) {
-  if (blockIdx.x == 0 && threadIdx.x == 0) counts[used] = 0;  // the scan's last entry becomes n
-}
-
 // ---- queries ----
 
 // First invalid query point and radius (atomicMin on integers: the smallest index wins whatever the order).
@@ -422,9 +418,8 @@ void GridNeighborSearch<T>::build(const Vec3<T>* d_points, std::size_t n, T cell
     INC_CUDA_LAUNCH("gatherKernel");
   }
 
-  // 3. Cell table: start[b] = number of points in buckets < b (exclusive scan of the histogram).
-  setStartEndKernel<<<1, 1>>>(cell_count_.data(), used_buckets_);
-  INC_CUDA_LAUNCH("setStartEndKernel");
+  // 3. Cell table: start[b] = number of points in buckets < b (exclusive scan of the histogram; its last
+  // entry, zeroed by the memset, makes start[used] = n).
   std::size_t bytes = 0;
   INC_CUDA(cub::DeviceScan::ExclusiveScan(nullptr, bytes, cell_count_.data(), bucket_start_.data(),
                                           ::cuda::std::plus<std::int32_t>{}, std::int32_t(0), used_buckets_ + 1));
