@@ -34,6 +34,8 @@ constexpr double kH100PeakGbs = 3350.0;
 constexpr double kRadius = 1.95;
 
 // n particles on a unit lattice (x fastest), each moved by up to +-0.25 per axis: density 1, no voids.
+// shuffle: list them in random order (the storage order then differs from the input order everywhere).
+bool g_shuffle = false;
 template <typename T>
 std::vector<Vec3<T>> jitteredLattice(std::size_t n, unsigned seed) {
   const std::size_t m = std::size_t(std::ceil(std::cbrt(double(n)) - 1e-9));
@@ -45,6 +47,7 @@ std::vector<Vec3<T>> jitteredLattice(std::size_t n, unsigned seed) {
     for (std::size_t j = 0; j < m && p.size() < n; ++j)
       for (std::size_t i = 0; i < m && p.size() < n; ++i)
         p.emplace_back(T(double(i) + u(rng)), T(double(j) + u(rng)), T(double(k) + u(rng)));
+  if (g_shuffle) std::shuffle(p.begin(), p.end(), rng);
   return p;
 }
 
@@ -102,7 +105,7 @@ double targetMs(bool gpu, std::size_t n) {
 }
 
 template <typename T>
-Row runCpu(std::size_t n, int repeats, bool morton) {
+Row runCpu(std::size_t n, int repeats, bool morton, double cell_factor) {
   const auto pts = jitteredLattice<T>(n, 1234);
   const T r = T(kRadius);
   cpu::GridNeighborSearch<T> s;
@@ -110,7 +113,7 @@ Row runCpu(std::size_t n, int repeats, bool morton) {
   std::vector<double> tb, tq, tt;
   for (int rep = -1; rep < repeats; ++rep) {  // rep -1: warm-up
     const auto t0 = std::chrono::steady_clock::now();
-    s.build(pts, r, morton);
+    s.build(pts, T(kRadius * cell_factor), morton);
     const auto t1 = std::chrono::steady_clock::now();
     l = s.querySelf(r);
     const auto t2 = std::chrono::steady_clock::now();
@@ -139,7 +142,7 @@ Row runCpu(std::size_t n, int repeats, bool morton) {
 
 #if INCISION_HAVE_CUDA
 template <typename T>
-Row runCuda(std::size_t n, int repeats, bool morton, double peak_gbs) {
+Row runCuda(std::size_t n, int repeats, bool morton, double cell_factor, double peak_gbs) {
   const auto pts = jitteredLattice<T>(n, 1234);
   const T r = T(kRadius);
   cuda::DeviceBuffer<Vec3<T>> d_pts;
@@ -153,7 +156,7 @@ Row runCuda(std::size_t n, int repeats, bool morton, double peak_gbs) {
   std::vector<double> tb, tq, tt;
   for (int rep = -2; rep < repeats; ++rep) {  // two warm-ups: allocations happen there, not in the timings
     INC_CUDA(cudaEventRecord(e0));
-    s.build(d_pts.data(), n, r, morton);
+    s.build(d_pts.data(), n, T(kRadius * cell_factor), morton);
     INC_CUDA(cudaEventRecord(e1));
     s.querySelf(r, out);
     INC_CUDA(cudaEventRecord(e2));
@@ -223,6 +226,7 @@ int main(int argc, char** argv) {
   std::size_t lo = 10000, hi = 1000000, cpu_max = 0;
   int repeats = 0, cpu_threads = 0;
   bool quick = false, morton = false;
+  double cell_factor = 1.0;
   app.add_option("--backend", backend_text, "cpu | cuda | auto");
   app.add_option("--min", lo, "smallest particle count");
   app.add_option("--max", hi, "largest particle count");
@@ -231,7 +235,9 @@ int main(int argc, char** argv) {
   app.add_option("--repeats", repeats, "timed repeats per size after warm-up (default 10 GPU, 5 CPU)");
   app.add_option("--cpu-threads", cpu_threads, "OpenMP threads for the CPU runs (0: OMP_NUM_THREADS or all cores;"
                                               " 2 matches the issue's 2-core target)");
+  app.add_option("--cell-factor", cell_factor, "grid cell edge / radius")->check(CLI::Range(0.05, 10.0));
   app.add_flag("--morton", morton, "store the grid in Z order");
+  app.add_flag("--shuffle", g_shuffle, "list the particles in random order instead of lattice order");
   app.add_option("--csv", csv, "write the rows as CSV here");
   app.add_flag("--quick", quick, "a short run: at most three sizes, three repeats");
   CLI11_PARSE(app, argc, argv);
@@ -249,9 +255,9 @@ int main(int argc, char** argv) {
       peak = dev.peak_bandwidth_gbs > 0 ? dev.peak_bandwidth_gbs : kH100PeakGbs;
       peak_note = dev.peak_bandwidth_gbs > 0 ? "memory clock x bus width" : "H100 SXM5 datasheet (attribute unavailable)";
     }
-    std::printf("# %s; device: %s; peak %.0f GB/s (%s); cpu threads %d; radius %.2f at unit density; %s order\n",
+    std::printf("# %s; device: %s; peak %.0f GB/s (%s); cpu threads %d; radius %.2f at unit density; %s order; %s input\n",
                 choice.note.c_str(), dev.device_count ? dev.name.c_str() : "none", peak, peak_note.c_str(),
-                cpu::threadCount(), kRadius, morton ? "Morton" : "bucket");
+                cpu::threadCount(), kRadius, morton ? "Morton" : "bucket", g_shuffle ? "shuffled" : "lattice-order");
     std::printf("%-5s %-6s %10s %7s %11s %11s %11s %9s %8s %8s %8s %10s\n", "back", "prec", "n", "nbr/p", "build_ms",
                 "query_ms", "total_ms", "ns/p", "B/p", "GB/s", "peak", "target_ms");
     std::vector<Row> rows;
@@ -260,9 +266,11 @@ int main(int argc, char** argv) {
       Row r;
 #if INCISION_HAVE_CUDA
       if (on_gpu)
-        r = precision == "double" ? runCuda<double>(n, reps, morton, peak) : runCuda<float>(n, reps, morton, peak);
+        r = precision == "double" ? runCuda<double>(n, reps, morton, cell_factor, peak)
+                                    : runCuda<float>(n, reps, morton, cell_factor, peak);
 #endif
-      if (!on_gpu) r = precision == "double" ? runCpu<double>(n, reps, morton) : runCpu<float>(n, reps, morton);
+      if (!on_gpu) r = precision == "double" ? runCpu<double>(n, reps, morton, cell_factor)
+                                        : runCpu<float>(n, reps, morton, cell_factor);
       r.precision = precision;
       printRow(r);
       std::fflush(stdout);
