@@ -18,6 +18,19 @@ double msSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
+// Below this many particles a pass runs serially: an OpenMP region costs more than the work (and far more
+// on a loaded machine). Gather passes give identical results either way.
+constexpr std::int64_t kSerialBelow = 2048;
+
+template <typename Body>
+void forEachParticle(std::int64_t n, Body&& body) {
+  if (n < kSerialBelow) {
+    for (std::int64_t i = 0; i < n; ++i) body(i);
+  } else {
+    parallelFor(n, body);
+  }
+}
+
 template <typename T>
 void checkSize(const std::vector<T>& v, std::size_t n, const char* what) {
   if (v.size() != n)
@@ -43,8 +56,8 @@ std::vector<Vec3d> MlsCpuSolver<T>::restPositions() const {
 template <typename T>
 void MlsCpuSolver<T>::computeForces() {
   const MlsView<T> s = makeMlsView(model_, state_);
-  parallelFor(s.n, [&](std::int64_t i) { mlsStressPass(s, i); });
-  parallelFor(s.n, [&](std::int64_t k) { mlsForcePass(s, k, T(0), false); });
+  forEachParticle(s.n, [&](std::int64_t i) { mlsStressPass(s, i); });
+  forEachParticle(s.n, [&](std::int64_t k) { mlsForcePass(s, k, T(0), false); });
   forces_valid_ = true;
 }
 
@@ -56,13 +69,13 @@ void MlsCpuSolver<T>::substeps(T dt, int n, MlsFrameStats* stats) {
   for (int step = 0; step < n; ++step) {
     auto t0 = std::chrono::steady_clock::now();
     const int remaining = n - step;
-    parallelFor(s.n, [&](std::int64_t k) { mlsDriftPass(s, k, dt, remaining); });
+    forEachParticle(s.n, [&](std::int64_t k) { mlsDriftPass(s, k, dt, remaining); });
     if (stats) stats->ms_integrate += msSince(t0);
     t0 = std::chrono::steady_clock::now();
-    parallelFor(s.n, [&](std::int64_t i) { mlsStressPass(s, i); });
+    forEachParticle(s.n, [&](std::int64_t i) { mlsStressPass(s, i); });
     if (stats) stats->ms_stress += msSince(t0);
     t0 = std::chrono::steady_clock::now();
-    parallelFor(s.n, [&](std::int64_t k) { mlsForcePass(s, k, half, true); });
+    forEachParticle(s.n, [&](std::int64_t k) { mlsForcePass(s, k, half, true); });
     if (stats) stats->ms_forces += msSince(t0);
   }
 }
