@@ -2,6 +2,9 @@
 #include "host/mls_solver.h"
 
 #include "cpu_fallback/mls_solver_cpu.h"
+#if INCISION_HAVE_CUDA
+#include "kernels/mls_solver_cuda.h"
+#endif
 
 namespace inc {
 
@@ -15,9 +18,9 @@ std::unique_ptr<MlsSolver> makeMlsSolver(const MlsBuildInput& input, BackendKind
   const BackendChoice choice = resolveBackend(backend);
   const bool f64 = precision == Precision::Float64;
   if (choice.kind == BackendKind::Cuda) {
-    // The CUDA MLS solver is not written yet: refuse rather than silently run on the CPU.
-    if (backend == BackendKind::Cuda)
-      throw InputError(input.source, "solver.backend", "the MLS solver has no CUDA backend yet; use \"cpu\"");
+#if INCISION_HAVE_CUDA
+    return f64 ? cuda::makeMlsSolverCuda(buildMlsModel<double>(input)) : cuda::makeMlsSolverCuda(buildMlsModel<float>(input));
+#endif
   }
   return f64 ? cpu::makeMlsSolverCpu(buildMlsModel<double>(input)) : cpu::makeMlsSolverCpu(buildMlsModel<float>(input));
 }
