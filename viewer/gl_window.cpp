@@ -5,7 +5,9 @@
 
 #include <GLFW/glfw3.h>
 
+#include <chrono>
 #include <mutex>
+#include <thread>
 
 namespace inc::viewer {
 
@@ -22,7 +24,14 @@ void onGlfwError(int code, const char* text) { g_last_error = "GLFW error " + st
 std::unique_ptr<GlWindow> GlWindow::open(const GlWindowOptions& opt, std::string* why) {
   std::lock_guard<std::mutex> lock(g_glfw_mutex);
   glfwSetErrorCallback(onGlfwError);
-  if (g_glfw_users == 0 && !glfwInit()) {
+  // An X server that resets when its last client leaves (Xvfb without -noreset, as xvfb-run starts it)
+  // refuses connections for a moment after a previous window closed: retry briefly before giving up.
+  bool ok = g_glfw_users > 0;
+  for (int attempt = 0; !ok && attempt < 5; ++attempt) {
+    if (attempt > 0) std::this_thread::sleep_for(std::chrono::milliseconds(50 << attempt));
+    ok = glfwInit() == GLFW_TRUE;
+  }
+  if (!ok) {
     if (why) *why = "no display could be opened (" + g_last_error + ")";
     return nullptr;
   }

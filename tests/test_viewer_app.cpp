@@ -1,0 +1,161 @@
+// The whole viewer in a real window (xvfb-run -a with Mesa): scripted frames, screenshot contents, recording.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+#include <stb_image.h>
+
+#include "host/input_error.h"
+#include "tests/viewer_test_model.h"
+#include "viewer/gl_window.h"
+#include "viewer/viewer_app.h"
+
+namespace inc::viewer {
+namespace {
+
+using testing::SaggingBall;
+
+bool displayAvailable(std::string& why) {
+  GlWindowOptions o;
+  o.width = o.height = 32;
+  o.visible = false;
+  return GlWindow::open(o, &why) != nullptr;
+}
+
+struct Png {
+  int w = 0, h = 0;
+  std::vector<unsigned char> rgb;
+};
+
+Png loadPng(const std::string& path) {
+  Png p;
+  int n = 0;
+  unsigned char* data = stbi_load(path.c_str(), &p.w, &p.h, &n, 3);
+  if (data) {
+    p.rgb.assign(data, data + std::size_t(p.w) * p.h * 3);
+    stbi_image_free(data);
+  }
+  return p;
+}
+
+// Tissue colour: clearly red (the Phong-lit front colour is (0.80, 0.36, 0.33) times the light).
+double tissueFraction(const Png& p) {
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < p.rgb.size(); i += 3)
+    if (p.rgb[i] > p.rgb[i + 1] + 25 && p.rgb[i] > p.rgb[i + 2] + 25) ++n;
+  return double(n) / (double(p.w) * p.h);
+}
+
+std::string outPath(const std::string& name) { return std::string(INCISION_BINARY_DIR) + "/" + name; }
+
+class ViewerApp : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    std::string why;
+    if (!displayAvailable(why)) GTEST_SKIP() << "no display (run under xvfb-run -a): " << why;
+  }
+};
+
+// The organ (a ball of radius R framed by its bounding box) covers its analytic share of the picture.
+TEST_F(ViewerApp, ScriptedCaptureShowsTheOrganAtPlausibleSize) {
+  ViewerOptions o;
+  o.model = std::make_unique<SaggingBall>();
+  o.width = 400;
+  o.height = 300;
+  o.frames = 10;
+  o.show_ui = false;
+  o.layers.tool = false;
+  o.screenshot_path = outPath("viewer_test_capture.png");
+  std::filesystem::remove(o.screenshot_path);
+  ASSERT_EQ(runViewer(o), 0);
+  const Png p = loadPng(o.screenshot_path);
+  ASSERT_EQ(p.w, 400);
+  ASSERT_EQ(p.h, 300);
+  // OrbitCamera::frameBox: distance = 1.2 r_box / sin(fovy/2), r_box = sqrt(3) R (the ball's bounding box);
+  // the ball subtends asin(R / distance); on screen its radius is tan(that) / tan(fovy/2) * (H/2).
+  const double fovy = 0.8, dist = 1.2 * std::sqrt(3.0) * 0.1 / std::sin(fovy / 2);
+  const double r_px = std::tan(std::asin(0.1 / dist)) / std::tan(fovy / 2) * 150.0;
+  const double expected = M_PI * r_px * r_px / (400.0 * 300.0);
+  // 8 %: the silhouette's darker rim (grazing light) falls below the colour threshold; level-3 icosphere.
+  EXPECT_NEAR(tissueFraction(p), expected, 0.08 * expected);
+  // Not a single-colour frame: the headlight makes the centre brighter than the rim.
+  const unsigned char* centre = &p.rgb[3 * (std::size_t(150) * 400 + 200)];
+  const unsigned char* edge = &p.rgb[3 * (std::size_t(150) * 400 + 200 + int(0.9 * r_px))];
+  EXPECT_GT(int(centre[0]), int(edge[0]) + 20);
+}
+
+// With the panels and the splat layer on, the frame is still mostly background with the organ in it,
+// and a recording writes one PNG per frame.
+TEST_F(ViewerApp, SplatLayerWithPanelsAndRecording) {
+  namespace fs = std::filesystem;
+  ViewerOptions o;
+  o.factory = [] { return std::unique_ptr<SimulationModel>(std::make_unique<SaggingBall>()); };
+  o.width = 640;
+  o.height = 480;
+  o.frames = 4;
+  o.layers.surface = false;
+  o.layers.splats = true;
+  o.record_dir = outPath("viewer_test_record");
+  fs::remove_all(o.record_dir);
+  fs::create_directories(o.record_dir);
+  o.screenshot_path = outPath("viewer_test_splats.png");
+  ASSERT_EQ(runViewer(o), 0);
+  int files = 0;
+  for (const auto& e : fs::directory_iterator(o.record_dir)) files += e.path().extension() == ".png" ? 1 : 0;
+  EXPECT_EQ(files, 4);
+  const Png p = loadPng(o.screenshot_path);
+  ASSERT_EQ(p.w, 640);
+  const double frac = tissueFraction(p);
+  EXPECT_GT(frac, 0.02);  // the organ is there (some of it may be under the panel)
+  EXPECT_LT(frac, 0.5);
+}
+
+// A model without a surface is drawn as particle splats.
+TEST_F(ViewerApp, ParticleOnlyModelIsVisible) {
+  class Points : public SaggingBall {
+   public:
+    bool currentSurface(TriangleMesh&) const override { return false; }
+  };
+  ViewerOptions o;
+  o.model = std::make_unique<Points>();
+  o.width = 320;
+  o.height = 240;
+  o.frames = 3;
+  o.show_ui = false;
+  o.screenshot_path = outPath("viewer_test_points.png");
+  ASSERT_EQ(runViewer(o), 0);
+  const Png p = loadPng(o.screenshot_path);
+  ASSERT_EQ(p.w, 320);
+  std::size_t blue = 0;
+  for (std::size_t i = 0; i < p.rgb.size(); i += 3) blue += (p.rgb[i + 2] > p.rgb[i] + 30) ? 1 : 0;
+  EXPECT_GT(double(blue) / (320.0 * 240.0), 0.03);
+}
+
+TEST(ViewerAppNoDisplay, SaysSoAndReturnsOne) {
+  const char* old = std::getenv("DISPLAY");
+  const std::string saved = old ? old : "";
+  setenv("DISPLAY", ":4099", 1);  // no server there
+  ViewerOptions o;
+  o.model = std::make_unique<SaggingBall>();
+  o.frames = 1;
+  ::testing::internal::CaptureStderr();
+  const int rc = runViewer(o);
+  const std::string err = ::testing::internal::GetCapturedStderr();
+  if (old) setenv("DISPLAY", saved.c_str(), 1); else unsetenv("DISPLAY");
+  EXPECT_EQ(rc, 1);
+  EXPECT_NE(err.find("incision run"), std::string::npos) << err;
+}
+
+TEST(ViewerAppOptions, BadOptionsAreInputErrors) {
+  ViewerOptions o;
+  EXPECT_THROW(runViewer(o), InputError);  // no model
+  o.model = std::make_unique<SaggingBall>();
+  o.frames = -1;
+  EXPECT_THROW(runViewer(o), InputError);
+}
+
+}  // namespace
+}  // namespace inc::viewer
