@@ -59,6 +59,39 @@ class ViewerApp : public ::testing::Test {
   }
 };
 
+// Cut-wall colour: the back-face colour (0.55, 0.10, 0.12) has red/green 5.5; the tissue's lit colour at most
+// 0.80 / 0.36 = 2.2 (specular only lowers it). Count clearly cut-wall pixels.
+double cutWallFraction(const Png& p) {
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < p.rgb.size(); i += 3)
+    if (p.rgb[i] > 50 && p.rgb[i] >= 3.5 * p.rgb[i + 1]) ++n;
+  return double(n) / (double(p.w) * p.h);
+}
+
+// A cut scene shows the cut wall colour through the opening; the intact organ shows none.
+TEST_F(ViewerApp, CutSceneShowsCutWallColour) {
+  for (bool cut : {false, true}) {
+    ViewerOptions o;
+    if (cut)
+      o.model = std::make_unique<testing::CutBall>(0.05);
+    else
+      o.model = std::make_unique<SaggingBall>();
+    o.width = 960;
+    o.height = 600;
+    o.frames = 6;
+    o.screenshot_path = outPath(cut ? "viewer_test_cut.png" : "viewer_test_uncut.png");
+    ASSERT_EQ(runViewer(o), 0);
+    const Png p = loadPng(o.screenshot_path);
+    ASSERT_EQ(p.w, 960);
+    if (cut) {
+      EXPECT_GT(cutWallFraction(p), 0.01);
+    } else {
+      EXPECT_LT(cutWallFraction(p), 1e-4);
+    }
+    EXPECT_GT(tissueFraction(p), 0.03);
+  }
+}
+
 // The organ (a ball of radius R framed by its bounding box) covers its analytic share of the picture.
 TEST_F(ViewerApp, ScriptedCaptureShowsTheOrganAtPlausibleSize) {
   ViewerOptions o;

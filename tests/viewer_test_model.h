@@ -81,4 +81,24 @@ class SaggingBall : public SimulationModel {
   int frames_ = 0;
 };
 
+// The same ball opened by a cut: triangles whose centroid lies above y = cut_y are removed, so the inside
+// (the cut wall, drawn in the back-face colour) shows through the opening.
+class CutBall : public SaggingBall {
+ public:
+  explicit CutBall(double cut_y) : cut_y_(cut_y) {}
+  std::string name() const override { return "cut ball (test double)"; }
+  bool currentSurface(TriangleMesh& out) const override {
+    TriangleMesh full;
+    SaggingBall::currentSurface(full);
+    out.vertices = full.vertices;
+    out.triangles.clear();
+    for (const auto& t : full.triangles)
+      if ((full.vertices[t[0]].y + full.vertices[t[1]].y + full.vertices[t[2]].y) / 3.0 < cut_y_) out.triangles.push_back(t);
+    return true;
+  }
+
+ private:
+  double cut_y_;
+};
+
 }  // namespace inc::viewer::testing

@@ -309,7 +309,7 @@ int runViewer(const ViewerOptions& opt) {
       // --- panels ---
       if (opt.show_ui) {
         ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
-        ImGui::SetNextWindowSize(ImVec2(340, 0), ImGuiCond_FirstUseEver);
+        ImGui::SetNextWindowSize(ImVec2(320, 0), ImGuiCond_FirstUseEver);
         ImGui::Begin("Incision");
         ImGui::Text("%s", snap.name.c_str());
         ImGui::Text("backend: %s   particles: %zu", viewerBackendName(snap.backend), snap.particles);
@@ -319,8 +319,10 @@ int runViewer(const ViewerOptions& opt) {
         if (ImGui::Checkbox("pause (space)", &paused)) runner.setPaused(paused);
         ImGui::SameLine();
         if (ImGui::Button("step (N)")) runner.stepOnce();
-        ImGui::SameLine();
-        if (runner.canReset() && ImGui::Button("reset (R)")) runner.reset();
+        if (runner.canReset()) {
+          ImGui::SameLine();
+          if (ImGui::Button("reset (R)")) runner.reset();
+        }
         float slow = float(runner.timeScale());
         if (ImGui::SliderFloat("time scale", &slow, 0.01f, 1.0f, "%.2f", ImGuiSliderFlags_Logarithmic))
           runner.setTimeScale(slow);
@@ -358,7 +360,7 @@ int runViewer(const ViewerOptions& opt) {
           disp_hist.plot("max |u|", "m");
           for (const auto& [k, v] : snap.report.counters) ImGui::Text("%s: %.6g", k.c_str(), v);
         }
-        if (ImGui::CollapsingHeader("Layers", ImGuiTreeNodeFlags_DefaultOpen)) {
+        if (ImGui::CollapsingHeader("Layers")) {
           ImGui::Checkbox("surface (1)", &layers.surface);
           ImGui::SameLine();
           ImGui::Checkbox("splats (2)", &layers.splats);
