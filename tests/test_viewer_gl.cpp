@@ -12,6 +12,7 @@
 #include "viewer/screenshot.h"
 #include "viewer/splat_renderer.h"
 #include "viewer/surface_renderer.h"
+#include "viewer/zbuffer_collision_gl.h"
 
 namespace inc::viewer {
 namespace {
@@ -165,6 +166,46 @@ TEST_F(ViewerGl, SurfaceIsLitFromTheViewerAndCutWallsDiffer) {
   EXPECT_NEAR(wall[0] / 255.0, std::min(1.0, double(style.back[0]) + style.specular), 0.03);
   EXPECT_NEAR(wall[1] / 255.0, double(style.back[1]) + style.specular, 0.03);
   OffscreenTarget::bindDefault(64, 64);
+}
+
+// The GPU split depth passes give the CPU reference's answer and the analytic one (sphere, two lobes).
+TEST_F(ViewerGl, ZBufferCollisionMatchesCpuAndGeometry) {
+  const double R = 0.1;
+  SplatCloud cloud = fibonacciSphere(3000, R, {0, 0, 0});
+  const SplatCloud lobe = fibonacciSphere(1500, 0.05, {0, 0, -0.3});  // a second body behind, on the ray
+  cloud.centers.insert(cloud.centers.end(), lobe.centers.begin(), lobe.centers.end());
+  cloud.normals.insert(cloud.normals.end(), lobe.normals.begin(), lobe.normals.end());
+  cloud.radii.insert(cloud.radii.end(), lobe.radii.begin(), lobe.radii.end());
+  cloud.colours.insert(cloud.colours.end(), lobe.colours.begin(), lobe.colours.end());
+  SplatRenderer splats;
+  splats.upload(cloud);
+  ZBufferCollider gpu;
+  const Vec3d eye{0, 0, 1};
+  struct Case {
+    double z;      // tip on the z axis
+    bool inside;
+    double pen;    // analytic penetration along the ray, m
+  };
+  const Case cases[] = {{0.12, false, 0}, {0.09, true, 0.01}, {0.0, true, 0.1},   {-0.05, true, 0.15},
+                        {-0.2, false, 0}, {-0.27, true, 0.02}, {-0.33, true, 0.08}, {-0.4, false, 0}};
+  for (const Case& c : cases) {
+    const Vec3d tip{0, 0, c.z};
+    const ViewCamera cam = cameraRayDepthCamera(eye, tip, 0.01, 5.0, 33);
+    const ZContact g = gpu.collide(cam, splats, tip);
+    const ZContact r = zbufferCollideCpu(cam, cloud, tip);
+    EXPECT_EQ(g.inside, c.inside) << c.z;
+    EXPECT_EQ(r.inside, c.inside) << c.z;
+    if (c.inside) {
+      // float32 view depths on the GPU: 1e-5 m against the CPU; tangent discs: 1 mm against the geometry.
+      EXPECT_NEAR(g.penetration_m, r.penetration_m, 1e-5) << c.z;
+      EXPECT_NEAR(g.penetration_m, c.pen, 1e-3) << c.z;
+      EXPECT_GT(g.normal.z, 0.98) << c.z;  // outward normal of the entry surface faces the eye
+    }
+  }
+  // The caller's framebuffer binding survives.
+  GLint bound = -1;
+  glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &bound);
+  EXPECT_EQ(bound, 0);
 }
 
 }  // namespace

@@ -105,6 +105,15 @@ void main() {
 
 }  // namespace
 
+const char* splatVertexSource() { return kSplatVertex; }
+
+void SplatRenderer::drawInstances() const {
+  if (count_ == 0) return;
+  glBindVertexArray(vao_);
+  glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, GLsizei(count_));
+  glBindVertexArray(0);
+}
+
 SplatRenderer::SplatRenderer() {
   splat_program_ = buildProgram(kSplatVertex, kSplatFragment, "splat");
   resolve_program_ = buildProgram(kResolveVertex, kResolveFragment, "splat resolve");

@@ -9,6 +9,10 @@
 
 namespace inc::viewer {
 
+// The instanced disc vertex shader (GLSL 330): uniforms u_proj, u_view, u_eye, u_forward, u_ortho; outputs
+// v_st (disc coordinates / r), v_pos_view, v_normal_view (the splat's normal), v_colour.
+const char* splatVertexSource();
+
 class SplatRenderer {
  public:
   SplatRenderer();  // needs a current GL context
@@ -23,6 +27,8 @@ class SplatRenderer {
   // Gaussian weights exp(-rho^2 / 2 sigma^2) summed over splats within depth_epsilon_m of it.
   void draw(const ViewCamera& cam, const SplatParams& params);
   std::size_t size() const { return count_; }
+  // Issues the instanced quads (attributes 0-3 as in splatVertexSource) with whatever program is bound.
+  void drawInstances() const;
 
  private:
   void ensureTargets(int w, int h);

@@ -22,6 +22,7 @@
 #include "viewer/splat_sources.h"
 #include "viewer/surface_renderer.h"
 #include "viewer/zbuffer_collision.h"
+#include "viewer/zbuffer_collision_gl.h"
 
 namespace inc::viewer {
 
@@ -124,6 +125,7 @@ int runViewer(const ViewerOptions& opt) {
   try {
     SurfaceRenderer surface, tool;
     SplatRenderer surface_splats, particle_splats;
+    ZBufferCollider collider;
     ViewLayers layers = opt.layers;
     ToolCollision collision = opt.collision;
     SurfaceStyle style;
@@ -289,7 +291,7 @@ int runViewer(const ViewerOptions& opt) {
           tool_valid = true;
           if (collision == ToolCollision::SplatZBuffer) {
             const ViewCamera zc = cameraRayDepthCamera(f.cam.eye, tool_tip, 0.01 * scene_radius, f.cam.far_m, 33);
-            contact = zbufferCollideCpu(zc, particle_cloud, tool_tip);
+            contact = collider.collide(zc, particle_splats, tool_tip);  // the paper's GPU z-buffer test
           } else {
             contact = ZContact{};
             contact.inside = press_depth_m > 0.0;
