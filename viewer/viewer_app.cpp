@@ -179,7 +179,7 @@ int runViewer(const ViewerOptions& opt) {
     bool need_upload = true;
     std::map<std::string, History> stage_hist;
     History fps_hist, advance_hist, ke_hist, ee_hist, pe_hist, disp_hist;
-    double press_depth_m = 0.0;
+    double press_depth_m = opt.press_depth_m;
     bool show_help = false, recording = !opt.record_dir.empty();
     int shot_counter = 0, record_counter = 0, frame_index = 0;
     double last_x = 0, last_y = 0;
@@ -230,6 +230,11 @@ int runViewer(const ViewerOptions& opt) {
       // --- input: camera and shortcuts (unless ImGui has the mouse/keyboard) ---
       double mx, my;
       glfwGetCursorPos(win, &mx, &my);
+      const bool scripted_cursor = opt.cursor_x >= 0.0 && opt.cursor_y >= 0.0;
+      if (scripted_cursor) {
+        mx = opt.cursor_x * win_w;
+        my = opt.cursor_y * win_h;
+      }
       if (!io.WantCaptureMouse) {
         const double dx = mx - last_x, dy = my - last_y;
         const bool shift = glfwGetKey(win, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS;
@@ -280,8 +285,9 @@ int runViewer(const ViewerOptions& opt) {
 
       // --- the tool under the mouse: z-buffer depth under the cursor places it on the drawn surface ---
       tool_valid = false;
+      contact = ZContact{};
       const double cx = mx * px_scale, cy = f.fb_h - my * px_scale;  // GL pixels, origin bottom-left
-      if (layers.tool && !io.WantCaptureMouse && cx >= 0 && cy >= 0 && cx < f.fb_w && cy < f.fb_h) {
+      if (layers.tool && (scripted_cursor || !io.WantCaptureMouse) && cx >= 0 && cy >= 0 && cx < f.fb_w && cy < f.fb_h) {
         const std::vector<float> d = readDepth(int(cx), int(cy), 1, 1);
         Vec3d hit;
         if (pointFromWindowDepth(f.cam, std::floor(cx) + 0.5, std::floor(cy) + 0.5, d[0], hit)) {
@@ -291,7 +297,10 @@ int runViewer(const ViewerOptions& opt) {
           tool_valid = true;
           if (collision == ToolCollision::SplatZBuffer) {
             const ViewCamera zc = cameraRayDepthCamera(f.cam.eye, tool_tip, 0.01 * scene_radius, f.cam.far_m, 33);
-            contact = collider.collide(zc, particle_splats, tool_tip);  // the paper's GPU z-buffer test
+            // The paper's GPU z-buffer test needs oriented splats: the surface's (view-facing particle
+            // discs have no back side, so nothing would ever count as inside).
+            if (snap.has_surface) contact = collider.collide(zc, surface_splats, tool_tip);
+            else contact = ZContact{};
           } else {
             contact = ZContact{};
             contact.inside = press_depth_m > 0.0;
@@ -387,6 +396,8 @@ int runViewer(const ViewerOptions& opt) {
                         contact.inside ? "INSIDE" : "outside", contact.penetration_m * 1e3);
           else
             ImGui::TextDisabled("tip: no surface under the cursor");
+          if (collision == ToolCollision::SplatZBuffer && !snap.has_surface)
+            ImGui::TextDisabled("z-buffer mode needs oriented splats (a surface)");
         }
         if (ImGui::Button("screenshot (P)")) want_shot = true;
         ImGui::SameLine();
@@ -427,6 +438,16 @@ int runViewer(const ViewerOptions& opt) {
       ImGui::Render();
       ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
 
+      if (opt.on_frame) {
+        ViewerFrameInfo info;
+        info.index = frame_index;
+        info.sim_frame = snap.frame;
+        info.tool_on_surface = tool_valid;
+        info.tool_tip = tool_tip;
+        info.contact = contact;
+        info.camera = f.cam;
+        opt.on_frame(info);
+      }
       // --- captures read the back buffer before the swap ---
       ++frame_index;
       const bool last_scripted = scripted && frame_index == opt.frames;

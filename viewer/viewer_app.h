@@ -1,12 +1,14 @@
 // The interactive viewer: a GLFW window with ImGui panels showing a SimulationModel as it runs.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "host/simulation_model.h"
 #include "viewer/sim_runner.h"
+#include "viewer/zbuffer_collision.h"
 
 namespace inc::viewer {
 
@@ -21,6 +23,16 @@ struct ViewLayers {
 enum class ToolCollision {
   DepthBuffer,  // the tip sits on the drawn surface under the cursor (z-buffer read-back)
   SplatZBuffer, // the paper's z-buffer collision against the particle splats along the eye ray
+};
+
+// What a frame showed, for scripted runs and tests (ViewerOptions::on_frame).
+struct ViewerFrameInfo {
+  int index = 0;                 // displayed frames so far, from 0
+  std::uint64_t sim_frame = 0;   // the snapshot's simulation frame
+  bool tool_on_surface = false;  // the cursor is over drawn geometry
+  Vec3d tool_tip;                // m, world
+  ZContact contact;              // of the active collision mode
+  ViewCamera camera;
 };
 
 struct ViewerOptions {
@@ -43,6 +55,10 @@ struct ViewerOptions {
   double particle_radius_m = 0.0;  // 0: from the particles' mean spacing
   ViewLayers layers;
   ToolCollision collision = ToolCollision::DepthBuffer;
+  // Scripted cursor in window fractions (0, 0 top-left .. 1, 1 bottom-right); negative: the real mouse.
+  double cursor_x = -1.0, cursor_y = -1.0;
+  double press_depth_m = 0.0;      // m, the tool tip below the surface under the cursor (negative: above)
+  std::function<void(const ViewerFrameInfo&)> on_frame;  // called after each frame is drawn
   bool verbose = false;            // print the GL version and progress to stdout
 };
 
