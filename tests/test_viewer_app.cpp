@@ -9,6 +9,7 @@
 #include <stb_image.h>
 
 #include "host/input_error.h"
+#include "host/mesh.h"
 #include "tests/viewer_test_model.h"
 #include "viewer/gl_window.h"
 #include "viewer/viewer_app.h"
@@ -126,8 +127,8 @@ TEST_F(ViewerApp, SplatLayerWithPanelsAndRecording) {
   namespace fs = std::filesystem;
   ViewerOptions o;
   o.factory = [] { return std::unique_ptr<SimulationModel>(std::make_unique<SaggingBall>()); };
-  o.width = 640;
-  o.height = 480;
+  o.width = 960;
+  o.height = 600;
   o.frames = 4;
   o.layers.surface = false;
   o.layers.splats = true;
@@ -140,7 +141,7 @@ TEST_F(ViewerApp, SplatLayerWithPanelsAndRecording) {
   for (const auto& e : fs::directory_iterator(o.record_dir)) files += e.path().extension() == ".png" ? 1 : 0;
   EXPECT_EQ(files, 4);
   const Png p = loadPng(o.screenshot_path);
-  ASSERT_EQ(p.w, 640);
+  ASSERT_EQ(p.w, 960);
   const double frac = tissueFraction(p);
   EXPECT_GT(frac, 0.02);  // the organ is there (some of it may be under the panel)
   EXPECT_LT(frac, 0.5);
@@ -197,6 +198,43 @@ TEST_F(ViewerApp, ToolUnderCursorSitsOnSurfaceAndCollides) {
       }
     }
   }
+}
+
+// A real liver surface (../shared/organs, skipped when absent) with a cut slot: the picture shows tissue and
+// the cut walls. Set INCISION_DOC_SCREENSHOT=PATH to also write the picture there (docs/images/viewer.png).
+TEST_F(ViewerApp, CutLiverShowsTissueAndCutWalls) {
+  const std::string path = std::string(INCISION_SHARED_DIR) + "/organs/liver-smooth.obj";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << "organ mesh absent: " << path;
+  TriangleMesh liver = loadMesh(path);
+  for (auto& v : liver.vertices) v = v * 0.01;  // the file is in centimetres
+  Vec3d lo, hi;
+  lo = hi = liver.vertices[0];
+  for (const auto& v : liver.vertices)
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = std::min(lo[k], v[k]);
+      hi[k] = std::max(hi[k], v[k]);
+    }
+  const Vec3d mid = (lo + hi) * 0.5;
+  ViewerOptions o;
+  o.model = std::make_unique<testing::CutMeshModel>(liver, mid, Vec3d{0.8, 0.0, 0.6}, 0.004);
+  o.width = 1280;
+  o.height = 800;
+  o.frames = 4;
+  o.cursor_x = 0.62;
+  o.cursor_y = 0.45;
+  o.press_depth_m = 0.004;
+  o.collision = ToolCollision::SplatZBuffer;
+  o.screenshot_path = outPath("viewer_test_liver.png");
+  ViewerFrameInfo last;
+  o.on_frame = [&last](const ViewerFrameInfo& f) { last = f; };
+  ASSERT_EQ(runViewer(o), 0);
+  const Png p = loadPng(o.screenshot_path);
+  ASSERT_EQ(p.w, 1280);
+  EXPECT_GT(tissueFraction(p), 0.05);
+  EXPECT_GT(cutWallFraction(p), 0.002);
+  EXPECT_TRUE(last.tool_on_surface);
+  if (const char* doc = std::getenv("INCISION_DOC_SCREENSHOT")) std::filesystem::copy_file(o.screenshot_path, doc,
+      std::filesystem::copy_options::overwrite_existing);
 }
 
 TEST(ViewerAppNoDisplay, SaysSoAndReturnsOne) {

@@ -101,4 +101,45 @@ class CutBall : public SaggingBall {
   double cut_y_;
 };
 
+// A fixed surface (e.g. a real organ) opened by a planar cut: triangles with a vertex within half_width_m of
+// the plane dot(x - point, normal) = 0 are removed, leaving a slot whose walls show the inside.
+class CutMeshModel : public SimulationModel {
+ public:
+  CutMeshModel(TriangleMesh mesh, const Vec3d& point, const Vec3d& normal, double half_width_m)
+      : mesh_(std::move(mesh)) {
+    std::vector<std::array<int, 3>> kept;
+    for (const auto& t : mesh_.triangles) {
+      bool near_plane = false;
+      for (int k = 0; k < 3; ++k) near_plane |= std::fabs(dot(mesh_.vertices[t[k]] - point, normal)) < half_width_m;
+      if (!near_plane) kept.push_back(t);
+    }
+    removed_ = mesh_.triangles.size() - kept.size();
+    mesh_.triangles.swap(kept);
+  }
+  std::string name() const override { return "organ surface with a planar cut (test double)"; }
+  BackendKind backend() const override { return BackendKind::Cpu; }
+  std::size_t particleCount() const override { return mesh_.vertices.size(); }
+  FrameReport advance(double frame_dt) override {
+    FrameReport r;
+    r.substeps = 1;
+    r.dt = frame_dt;
+    r.stages = {{"static", 0.0}};
+    r.counters["removed_triangles"] = double(removed_);
+    return r;
+  }
+  void saveCheckpoint() override {}
+  void restoreCheckpoint() override {}
+  void scaleTimeStep(double) override {}
+  void currentPositions(std::vector<Vec3d>& out) const override { out = mesh_.vertices; }
+  bool currentSurface(TriangleMesh& out) const override {
+    out = mesh_;
+    return true;
+  }
+  MemoryReport memory() const override { return {0, mesh_.vertices.size() * sizeof(Vec3d)}; }
+
+ private:
+  TriangleMesh mesh_;
+  std::size_t removed_ = 0;
+};
+
 }  // namespace inc::viewer::testing

@@ -108,13 +108,14 @@ void SurfaceRenderer::draw(const ViewCamera& cam, const SurfaceStyle& style, con
   glUniform1f(uniform(program_, "u_specular"), style.specular);
   glUniform1f(uniform(program_, "u_shininess"), style.shininess);
   glEnable(GL_DEPTH_TEST);
-  glDepthFunc(GL_LESS);
+  glDepthFunc(style.on_top ? GL_ALWAYS : GL_LESS);
   glDisable(GL_CULL_FACE);
   glPolygonMode(GL_FRONT_AND_BACK, style.wireframe ? GL_LINE : GL_FILL);
   glBindVertexArray(vao_);
   glDrawElements(GL_TRIANGLES, index_count_, GL_UNSIGNED_INT, nullptr);
   glBindVertexArray(0);
   glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+  glDepthFunc(GL_LESS);
   checkGl("SurfaceRenderer::draw");
 }
 

@@ -20,6 +20,7 @@ struct SurfaceStyle {
   float specular = 0.25f;
   float shininess = 24.0f;
   bool wireframe = false;
+  bool on_top = false;  // no depth test: shown through what is in front (the tool tip inside tissue)
 };
 
 class SurfaceRenderer {

@@ -313,6 +313,7 @@ int runViewer(const ViewerOptions& opt) {
         const double r = 0.03 * scene_radius;
         tool_style.front = contact.inside ? std::array<float, 3>{0.3f, 0.85f, 0.4f} : std::array<float, 3>{0.75f, 0.78f, 0.82f};
         tool_style.back = tool_style.front;
+        tool_style.on_top = true;  // the tip stays visible when pressed into the tissue
         const Mat4f model = frameMatrix({r, 0, 0}, {0, r, 0}, {0, 0, r}, tool_tip);
         tool.draw(f.cam, tool_style, model);
       }
@@ -320,8 +321,9 @@ int runViewer(const ViewerOptions& opt) {
       // --- panels ---
       if (opt.show_ui) {
         ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
-        ImGui::SetNextWindowSize(ImVec2(320, 0), ImGuiCond_FirstUseEver);
+        ImGui::SetNextWindowSize(ImVec2(390, 0), ImGuiCond_FirstUseEver);
         ImGui::Begin("Incision");
+        ImGui::PushItemWidth(170);
         ImGui::Text("%s", snap.name.c_str());
         ImGui::Text("backend: %s   particles: %zu", viewerBackendName(snap.backend), snap.particles);
         ImGui::Text("frame %llu   t = %.3f s", static_cast<unsigned long long>(snap.frame), snap.sim_time_s);
@@ -405,6 +407,7 @@ int runViewer(const ViewerOptions& opt) {
         ImGui::SameLine();
         if (ImGui::Button("help (H)")) show_help = !show_help;
         if (!status.empty()) ImGui::TextDisabled("%s", status.c_str());
+        ImGui::PopItemWidth();
         ImGui::End();
 
         if (show_help) {
