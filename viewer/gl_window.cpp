@@ -6,6 +6,7 @@
 #include <GLFW/glfw3.h>
 
 #include <chrono>
+#include <cstdlib>
 #include <mutex>
 #include <thread>
 
@@ -27,7 +28,9 @@ std::unique_ptr<GlWindow> GlWindow::open(const GlWindowOptions& opt, std::string
   // An X server that resets when its last client leaves (Xvfb without -noreset, as xvfb-run starts it)
   // refuses connections for a moment after a previous window closed: retry briefly before giving up.
   bool ok = g_glfw_users > 0;
-  for (int attempt = 0; !ok && attempt < 5; ++attempt) {
+  const char* display = std::getenv("DISPLAY");
+  const int attempts = (display && *display) ? 5 : 1;  // no DISPLAY at all: nothing to wait for
+  for (int attempt = 0; !ok && attempt < attempts; ++attempt) {
     if (attempt > 0) std::this_thread::sleep_for(std::chrono::milliseconds(50 << attempt));
     ok = glfwInit() == GLFW_TRUE;
   }

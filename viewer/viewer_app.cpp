@@ -366,7 +366,7 @@ int runViewer(const ViewerOptions& opt) {
           advance_hist.plot("step", "ms");
           for (const auto& [name, h] : stage_hist) h.plot(name.c_str(), "ms");
         }
-        if (ImGui::CollapsingHeader("Energy")) {
+        if (ImGui::CollapsingHeader("Energy and counters")) {
           ke_hist.plot("kinetic", "J");
           ee_hist.plot("elastic", "J");
           pe_hist.plot("potential", "J");
