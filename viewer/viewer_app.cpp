@@ -177,7 +177,7 @@ int runViewer(const ViewerOptions& opt) {
 
     SplatCloud particle_cloud;
     bool need_upload = true;
-    std::map<std::string, History> stage_hist;
+    std::map<std::string, History> stage_hist, counter_hist;
     History fps_hist, advance_hist, ke_hist, ee_hist, pe_hist, disp_hist;
     double press_depth_m = opt.press_depth_m;
     bool show_help = false, recording = !opt.record_dir.empty();
@@ -200,6 +200,7 @@ int runViewer(const ViewerOptions& opt) {
         ee_hist.push(snap.report.elastic_energy);
         pe_hist.push(snap.report.potential_energy);
         disp_hist.push(snap.report.max_displacement);
+        for (const auto& [k, v] : snap.report.counters) counter_hist[k].push(v);
       }
       if (need_upload) {
         if (snap.has_surface) {
@@ -371,7 +372,8 @@ int runViewer(const ViewerOptions& opt) {
           ee_hist.plot("elastic", "J");
           pe_hist.plot("potential", "J");
           disp_hist.plot("max |u|", "m");
-          for (const auto& [k, v] : snap.report.counters) ImGui::Text("%s: %.6g", k.c_str(), v);
+          // Model counters (e.g. haptic_hz, haptic_p99_ms, broken_bonds) plotted over the last frames.
+          for (const auto& [k, h] : counter_hist) h.plot(k.c_str(), "");
         }
         if (ImGui::CollapsingHeader("Layers")) {
           ImGui::Checkbox("surface (1)", &layers.surface);
