@@ -308,8 +308,12 @@ int main(int argc, char** argv) {
         summary += buf;
       }
       if (big && big != mega) {
-        std::snprintf(buf, sizeof buf, " %s %zu %.3f ms, %.0f%% of peak;", b.c_str(), big->n, big->total_ms,
-                      100.0 * big->peak_fraction);
+        if (b == "cuda")
+          std::snprintf(buf, sizeof buf, " %s %zu %.3f ms, %.0f%% of peak;", b.c_str(), big->n, big->total_ms,
+                        100.0 * big->peak_fraction);
+        else
+          std::snprintf(buf, sizeof buf, " %s %zu %.3f ms, %.1f GB/s modelled;", b.c_str(), big->n, big->total_ms,
+                        big->gbs);
         summary += buf;
       }
     }
