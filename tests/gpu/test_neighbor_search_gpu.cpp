@@ -331,6 +331,10 @@ TYPED_TEST(NeighborSearchGpu, NonFiniteInputNamesTheEntry) {
   EXPECT_THROW(s.querySelf(d_r.data(), 3, out), InputError);  // neither 1 nor n radii
   EXPECT_THROW(s.querySelf(std::numeric_limits<T>::quiet_NaN()), InputError);
   EXPECT_THROW(s.querySelf(std::numeric_limits<T>::infinity()), InputError);
+  EXPECT_THROW(s.query(nullptr, 3, T(0.1)), InputError);
+  EXPECT_THROW(s.query(d_q.data(), q.size(), nullptr, 1, out), InputError);
+  EXPECT_THROW(s.build(nullptr, 10, T(0.1)), InputError);
+  s.build(pts, T(0.1));
   EXPECT_THROW(s.build(pts, T(0)), InputError);
   EXPECT_THROW(s.build(pts, std::numeric_limits<T>::denorm_min()), InputError);
   s.build(pts, T(0.1));
