@@ -283,10 +283,11 @@ int main(int argc, char** argv) {
     if (!csv.empty()) {
       std::ofstream f(csv);
       if (!f) throw InputError(csv, "--csv", "cannot write the file");
-      f << "backend,precision,order,n,neighbors_per_particle,build_ms,query_ms,total_ms,ns_per_particle,"
+      f << "backend,precision,order,input,cell_factor,n,neighbors_per_particle,build_ms,query_ms,total_ms,ns_per_particle,"
            "bytes_per_particle,achieved_gbs,peak_gbs,peak_fraction,target_ms\n";
       for (const Row& r : rows)
-        f << r.backend << ',' << r.precision << ',' << (morton ? "morton" : "bucket") << ',' << r.n << ','
+        f << r.backend << ',' << r.precision << ',' << (morton ? "morton" : "bucket") << ','
+          << (g_shuffle ? "shuffled" : "lattice") << ',' << cell_factor << ',' << r.n << ','
           << r.neighbours << ',' << r.build_ms << ',' << r.query_ms << ',' << r.total_ms << ','
           << r.total_ms * 1e6 / double(r.n) << ',' << r.bytes << ',' << r.gbs << ',' << (r.backend == "cuda" ? peak : 0.0)
           << ',' << r.peak_fraction << ',' << r.target_ms << '\n';
@@ -307,8 +308,12 @@ int main(int argc, char** argv) {
         summary += buf;
       }
       if (big && big != mega) {
-        std::snprintf(buf, sizeof buf, " %s %zu %.3f ms, %.0f%% of peak;", b.c_str(), big->n, big->total_ms,
-                      100.0 * big->peak_fraction);
+        if (b == "cuda")
+          std::snprintf(buf, sizeof buf, " %s %zu %.3f ms, %.0f%% of peak;", b.c_str(), big->n, big->total_ms,
+                        100.0 * big->peak_fraction);
+        else
+          std::snprintf(buf, sizeof buf, " %s %zu %.3f ms, %.1f GB/s modelled;", b.c_str(), big->n, big->total_ms,
+                        big->gbs);
         summary += buf;
       }
     }

@@ -337,6 +337,7 @@ void GridNeighborSearch<T>::build(const Vec3<T>* d_points, std::size_t n, T cell
   checkCellSize(cell_size);
   if (n > kMaxPoints)
     throw InputError("", "points", "too many points for the grid search (" + std::to_string(n) + " > 2^30)");
+  if (n > 0 && !d_points) throw InputError("", "points", "null device pointer for " + std::to_string(n) + " points");
   cell_size_ = cell_size;
   morton_ = morton_order;
   n_ = 0;
@@ -443,6 +444,7 @@ void GridNeighborSearch<T>::querySelf(T radius, DeviceNeighborLists& out) const 
 
 template <typename T>
 void GridNeighborSearch<T>::querySelf(const T* d_radii, std::size_t radii_count, DeviceNeighborLists& out) const {
+  if (!d_radii) throw InputError("", "radii", "null device pointer");
   run(nullptr, n_, T(0), d_radii, radii_count, true, out);
 }
 
@@ -461,6 +463,7 @@ void GridNeighborSearch<T>::query(const Vec3<T>* d_queries, std::size_t nq, T ra
 template <typename T>
 void GridNeighborSearch<T>::query(const Vec3<T>* d_queries, std::size_t nq, const T* d_radii, std::size_t radii_count,
                                   DeviceNeighborLists& out) const {
+  if (!d_radii) throw InputError("", "radii", "null device pointer");
   run(d_queries, nq, T(0), d_radii, radii_count, false, out);
 }
 
@@ -471,6 +474,7 @@ void GridNeighborSearch<T>::run(const Vec3<T>* d_queries, std::size_t nq, T radi
     throw InputError("", "radii", "expected 1 radius or one per query (" + std::to_string(nq) + "), got " +
                                       std::to_string(radii_count));
   if (nq > kMaxPoints) throw InputError("", "queries", "too many queries (" + std::to_string(nq) + " > 2^30)");
+  if (!self && nq > 0 && !d_queries) throw InputError("", "queries", "null device pointer for " + std::to_string(nq) + " queries");
   if (!d_radii && !neighborRadiusValid(radius))
     throw InputError("", "radius", "must be finite and >= 0, got " + std::to_string(double(radius)));
   out.offsets.resize(nq + 1);

@@ -117,6 +117,26 @@ TYPED_TEST(NeighborSearchGpu, PerPointDeviceRadii) {
     s.querySelf(d_radii.data(), radii.size(), out);
     expectSameLists(out.download(), want, "per-point radii");
     expectSameLists(out.download(), cpu::GridNeighborSearch<T>(pts, T(0.03), morton).querySelf(radii), "vs cpu");
+    // one radius given on the device (count 1): every query reads it
+    cuda::DeviceBuffer<T> d_one;
+    d_one.upload(std::vector<T>{T(0.07)});
+    s.querySelf(d_one.data(), 1, out);
+    expectSameLists(out.download(), s.querySelf(T(0.07)).download(), "one device radius");
+  }
+}
+
+TYPED_TEST(NeighborSearchGpu, LargeSparseHashedCloudEqualsCpu) {
+  SKIP_WITHOUT_GPU();
+  using T = TypeParam;
+  const auto pts = sparseCloud<T>(30000, 20);  // ~60k points, hashed into 2^17 buckets: many sort blocks
+  for (bool morton : {false, true}) {
+    cuda::GridNeighborSearch<T> s;
+    s.build(pts, T(1), morton);
+    ASSERT_TRUE(s.hashed());
+    const cpu::GridNeighborSearch<T> c(pts, T(1), morton);
+    EXPECT_EQ(downloadArray(s.sortedToOriginal(), pts.size()), c.sortedToOriginal());
+    expectSameLists(s.querySelf(T(1)).download(), c.querySelf(T(1)), "large sparse");
+    expectSameLists(s.querySelf(T(3)).download(), c.querySelf(T(3)), "large sparse, radius 3 cells");
   }
 }
 
@@ -311,6 +331,10 @@ TYPED_TEST(NeighborSearchGpu, NonFiniteInputNamesTheEntry) {
   EXPECT_THROW(s.querySelf(d_r.data(), 3, out), InputError);  // neither 1 nor n radii
   EXPECT_THROW(s.querySelf(std::numeric_limits<T>::quiet_NaN()), InputError);
   EXPECT_THROW(s.querySelf(std::numeric_limits<T>::infinity()), InputError);
+  EXPECT_THROW(s.query(nullptr, 3, T(0.1)), InputError);
+  EXPECT_THROW(s.query(d_q.data(), q.size(), nullptr, 1, out), InputError);
+  EXPECT_THROW(s.build(nullptr, 10, T(0.1)), InputError);
+  s.build(pts, T(0.1));
   EXPECT_THROW(s.build(pts, T(0)), InputError);
   EXPECT_THROW(s.build(pts, std::numeric_limits<T>::denorm_min()), InputError);
   s.build(pts, T(0.1));
