@@ -85,8 +85,9 @@ namespace {
 
 struct Frame {
   bool is_array = false;
-  long long index = -1;  // arrays: index of the element last started
-  std::string key;       // objects: key last read
+  long long index = -1;     // arrays: index of the element last started
+  std::string key;          // objects: key last read
+  bool value_done = false;  // objects: the value of `key` has been read completely
   std::set<std::string> seen;
 };
 
@@ -94,21 +95,22 @@ class PathSax : public nlohmann::json_sax<json> {
  public:
   explicit PathSax(const std::string& text) : text_(text) {}
 
-  bool null() override { return value(); }
-  bool boolean(bool) override { return value(); }
-  bool number_integer(number_integer_t) override { return value(); }
-  bool number_unsigned(number_unsigned_t) override { return value(); }
+  bool null() override { return scalar(); }
+  bool boolean(bool) override { return scalar(); }
+  bool number_integer(number_integer_t) override { return scalar(); }
+  bool number_unsigned(number_unsigned_t) override { return scalar(); }
   bool number_float(number_float_t v, const string_t& literal) override {
-    if (!value()) return false;
+    value();
     if (!std::isfinite(v)) {  // defensive: the lexer reports overflow itself (error 406)
       fail_path = path(false);
       fail_reason = literal + " is not a finite number (it overflows a double)";
       return false;
     }
+    done();
     return true;
   }
-  bool string(string_t&) override { return value(); }
-  bool binary(binary_t&) override { return value(); }
+  bool string(string_t&) override { return scalar(); }
+  bool binary(binary_t&) override { return scalar(); }
   bool start_object(std::size_t) override {
     if (!value()) return false;
     stack_.push_back(Frame{});
@@ -117,6 +119,7 @@ class PathSax : public nlohmann::json_sax<json> {
   bool key(string_t& k) override {
     Frame& f = stack_.back();
     f.key = k;
+    f.value_done = false;
     if (!f.seen.insert(k).second) {
       fail_path = path(false);
       fail_reason = "key '" + k + "' appears twice in the same object";
@@ -126,6 +129,7 @@ class PathSax : public nlohmann::json_sax<json> {
   }
   bool end_object() override {
     stack_.pop_back();
+    done();
     return true;
   }
   bool start_array(std::size_t) override {
@@ -137,6 +141,7 @@ class PathSax : public nlohmann::json_sax<json> {
   }
   bool end_array() override {
     stack_.pop_back();
+    done();
     return true;
   }
   bool parse_error(std::size_t position, const std::string&, const nlohmann::detail::exception& ex) override {
@@ -177,6 +182,15 @@ class PathSax : public nlohmann::json_sax<json> {
     if (!stack_.empty() && stack_.back().is_array) ++stack_.back().index;
     return true;
   }
+  // Marks the end of a value: an error after it is no longer "in" its key.
+  void done() {
+    if (!stack_.empty() && !stack_.back().is_array) stack_.back().value_done = true;
+  }
+  bool scalar() {
+    value();
+    done();
+    return true;
+  }
   // The key path of the value being read; at a parse error an array's next element is the one that failed.
   std::string path(bool at_error) const {
     std::string p;
@@ -186,7 +200,7 @@ class PathSax : public nlohmann::json_sax<json> {
         long long idx = f.index;
         if (at_error && i + 1 == stack_.size()) ++idx;
         if (idx >= 0) p = indexPath(p, static_cast<std::size_t>(idx));
-      } else if (!f.key.empty()) {
+      } else if (!f.key.empty() && !(at_error && i + 1 == stack_.size() && f.value_done)) {
         p = joinPath(p, f.key);
       }
     }
@@ -248,6 +262,15 @@ std::string indexPath(const std::string& parent, std::size_t index) {
 }
 
 double numberAt(const json& v, const std::string& file, const std::string& path) {
+  if (v.is_string()) {
+    // "nan", "inf", "-Infinity": a way to smuggle a non-finite number into JSON; say so plainly.
+    std::string w = lower(v.get<std::string>());
+    if (!w.empty() && (w[0] == '-' || w[0] == '+')) w = w.substr(1);
+    if (w.rfind("nan", 0) == 0 || w.rfind("inf", 0) == 0) {
+      throw InputError(file, path, "expected a finite number, got " + describeValue(v) +
+                                       ": NaN and infinity are not allowed");
+    }
+  }
   if (!v.is_number()) throw InputError(file, path, "expected a number, got " + describeValue(v));
   const double d = v.get<double>();
   if (!std::isfinite(d)) throw InputError(file, path, "is not a finite number");

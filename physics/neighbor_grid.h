@@ -170,8 +170,12 @@ INC_HD void neighborTest(const NeighborGridView<T>& g, const Vec3<T>& x, T r2, s
 //    cell is the cell being visited, so a point is never listed twice.
 //  - when the range has more cells than there are points, every point is scanned instead.
 template <typename T, typename Visit>
-INC_HD void forEachGridNeighbor(const NeighborGridView<T>& g, const Vec3<T>& x, T r, std::int32_t skip,
+INC_HD void forEachGridNeighbor(const NeighborGridView<T>& view, const Vec3<T>& query, T r, std::int32_t skip,
                                 Visit& visit) {
+  // Local copies: the visitor writes memory, and without them the compiler must assume that those writes
+  // may change the view or the query point, reloading them for every candidate.
+  const NeighborGridView<T> g = view;
+  const Vec3<T> x = query;
   if (g.n <= 0) return;
   const NeighborGridParams<T>& p = g.p;
   const T r2 = r * r;

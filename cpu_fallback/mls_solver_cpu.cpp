@@ -1,0 +1,221 @@
+// CPU MLS solver: drift, pass 1 (stress) and pass 2 (force gather + kick) as parallel loops, serial reductions.
+#include "cpu_fallback/mls_solver_cpu.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "cpu_fallback/parallel.h"
+#include "physics/mls_passes.h"
+
+namespace inc::cpu {
+
+namespace {
+
+double msSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// Below this many particles a pass runs serially: an OpenMP region costs more than the work (and far more
+// on a loaded machine). Gather passes give identical results either way.
+constexpr std::int64_t kSerialBelow = 2048;
+
+template <typename Body>
+void forEachParticle(std::int64_t n, Body&& body) {
+  if (n < kSerialBelow) {
+    for (std::int64_t i = 0; i < n; ++i) body(i);
+  } else {
+    parallelFor(n, body);
+  }
+}
+
+template <typename T>
+void checkSize(const std::vector<T>& v, std::size_t n, const char* what) {
+  if (v.size() != n)
+    throw std::invalid_argument(std::string("MlsSolver: ") + what + " has " + std::to_string(v.size()) +
+                                " entries for " + std::to_string(n) + " particles");
+}
+
+}  // namespace
+
+template <typename T>
+MlsCpuSolver<T>::MlsCpuSolver(MlsModel<T> model) : model_(std::move(model)) {
+  state_.resize(model_.size());
+  safety_ = model_.safety;
+}
+
+template <typename T>
+std::vector<Vec3d> MlsCpuSolver<T>::restPositions() const {
+  std::vector<Vec3d> out(model_.size());
+  for (std::size_t i = 0; i < out.size(); ++i) out[i] = model_.origin + Vec3d(model_.rest[i]);
+  return out;
+}
+
+template <typename T>
+void MlsCpuSolver<T>::computeForces() {
+  const MlsView<T> s = makeMlsView(model_, state_);
+  forEachParticle(s.n, [&](std::int64_t i) { mlsStressPass(s, i); });
+  forEachParticle(s.n, [&](std::int64_t k) { mlsForcePass(s, k, T(0), false); });
+  forces_valid_ = true;
+}
+
+template <typename T>
+void MlsCpuSolver<T>::substeps(T dt, int n, MlsFrameStats* stats) {
+  if (!forces_valid_) computeForces();
+  const MlsView<T> s = makeMlsView(model_, state_);
+  const T half = T(0.5) * dt;
+  for (int step = 0; step < n; ++step) {
+    auto t0 = std::chrono::steady_clock::now();
+    const int remaining = n - step;
+    forEachParticle(s.n, [&](std::int64_t k) { mlsDriftPass(s, k, dt, remaining); });
+    if (stats) stats->ms_integrate += msSince(t0);
+    t0 = std::chrono::steady_clock::now();
+    forEachParticle(s.n, [&](std::int64_t i) { mlsStressPass(s, i); });
+    if (stats) stats->ms_stress += msSince(t0);
+    t0 = std::chrono::steady_clock::now();
+    forEachParticle(s.n, [&](std::int64_t k) { mlsForcePass(s, k, half, true); });
+    if (stats) stats->ms_forces += msSince(t0);
+  }
+}
+
+template <typename T>
+void MlsCpuSolver<T>::step(double dt, int n) {
+  if (!(dt > 0) || !(dt <= stableTimeStep() * (1.0 + 1e-12)))
+    throw InputError(model_.source, "dt",
+                     "time step " + std::to_string(dt) + " s is outside (0, stable limit " +
+                         std::to_string(stableTimeStep()) + " s]; refused");
+  if (n <= 0) return;
+  substeps(T(dt), n, nullptr);
+}
+
+template <typename T>
+MlsFrameStats MlsCpuSolver<T>::advance(double frame_dt, int fixed_substeps) {
+  MlsFrameStats st;
+  st.substeps = planMlsSubsteps(frame_dt, stableTimeStep(), safety_, fixed_substeps, model_.source);
+  st.dt = frame_dt / st.substeps;
+  substeps(T(st.dt), st.substeps, &st);
+  const auto t0 = std::chrono::steady_clock::now();
+  st.totals = reduce();
+  st.ms_reduce = msSince(t0);
+  return st;
+}
+
+template <typename T>
+MlsReduction MlsCpuSolver<T>::reduce() {
+  if (!forces_valid_) computeForces();
+  MlsState<T>& st = state_;
+  const MlsView<T> s = makeMlsView(model_, st);
+  MlsReduction r;
+  double max_u2 = 0.0;
+  // Serial, in index order, in double: deterministic and independent of the thread count.
+  for (std::int64_t k = 0; k < s.n; ++k) {
+    if (!mlsParticleFinite(s, k)) {
+      if (r.finite) {
+        r.finite = false;
+        r.first_bad = k;
+        r.bad_stage = !(isFinite(st.displacement[std::size_t(k)]) && isFinite(st.velocity[std::size_t(k)])) ? "integrate"
+                      : !isFinite(st.force[std::size_t(k)])                                               ? "forces"
+                                                                                                          : "stress";
+      }
+      continue;
+    }
+    r.kinetic_energy += double(mlsKineticEnergy(s, k));
+    r.potential_energy += double(mlsGravityEnergy(s, k));
+    r.elastic_energy += double(st.energy[std::size_t(k)]);
+    max_u2 = std::max(max_u2, double(norm2(st.displacement[std::size_t(k)])));
+  }
+  r.max_displacement = std::sqrt(max_u2);
+  return r;
+}
+
+template <typename T>
+void MlsCpuSolver<T>::setDisplacements(const std::vector<Vec3d>& u) {
+  checkSize(u, size(), "displacements");
+  for (std::size_t i = 0; i < u.size(); ++i) state_.displacement[i] = Vec3<T>(u[i]);
+  forces_valid_ = false;
+}
+
+template <typename T>
+void MlsCpuSolver<T>::setVelocities(const std::vector<Vec3d>& v) {
+  checkSize(v, size(), "velocities");
+  for (std::size_t i = 0; i < v.size(); ++i) state_.velocity[i] = Vec3<T>(v[i]);
+}
+
+template <typename T>
+void MlsCpuSolver<T>::displacements(std::vector<Vec3d>& out) const {
+  out.resize(size());
+  for (std::size_t i = 0; i < out.size(); ++i) out[i] = Vec3d(state_.displacement[i]);
+}
+
+template <typename T>
+void MlsCpuSolver<T>::velocities(std::vector<Vec3d>& out) const {
+  out.resize(size());
+  for (std::size_t i = 0; i < out.size(); ++i) out[i] = Vec3d(state_.velocity[i]);
+}
+
+template <typename T>
+void MlsCpuSolver<T>::forces(std::vector<Vec3d>& out) const {
+  out.resize(size());
+  for (std::size_t i = 0; i < out.size(); ++i) out[i] = Vec3d(state_.force[i]);
+}
+
+template <typename T>
+void MlsCpuSolver<T>::energies(std::vector<double>& out) const {
+  out.resize(size());
+  for (std::size_t i = 0; i < out.size(); ++i) out[i] = double(state_.energy[i]);
+}
+
+template <typename T>
+void MlsCpuSolver<T>::setPrescribed(const std::vector<std::int32_t>& particles, const std::vector<Vec3d>& targets) {
+  checkSize(targets, particles.size(), "prescribed targets");
+  for (std::size_t p = 0; p < particles.size(); ++p) {
+    const std::int32_t i = particles[p];
+    if (i < 0 || std::size_t(i) >= size()) throw std::invalid_argument("MlsSolver: prescribed particle out of range");
+    if (model_.kind[std::size_t(i)] == kMlsFixed) continue;
+    model_.kind[std::size_t(i)] = kMlsPrescribed;
+    state_.target[std::size_t(i)] = Vec3<T>(targets[p]);
+  }
+}
+
+template <typename T>
+void MlsCpuSolver<T>::release(const std::vector<std::int32_t>& particles) {
+  for (const std::int32_t i : particles) {
+    if (i < 0 || std::size_t(i) >= size()) throw std::invalid_argument("MlsSolver: released particle out of range");
+    if (model_.kind[std::size_t(i)] == kMlsPrescribed) model_.kind[std::size_t(i)] = kMlsFree;
+  }
+}
+
+template <typename T>
+void MlsCpuSolver<T>::saveCheckpoint() {
+  saved_u_ = state_.displacement;
+  saved_v_ = state_.velocity;
+}
+
+template <typename T>
+void MlsCpuSolver<T>::restoreCheckpoint() {
+  if (saved_u_.size() != size()) return;  // nothing saved yet
+  state_.displacement = saved_u_;
+  state_.velocity = saved_v_;
+  forces_valid_ = false;
+}
+
+template <typename T>
+MemoryReport MlsCpuSolver<T>::memory() const {
+  MemoryReport m;
+  m.host_bytes = model_.bytes() + state_.bytes() + (saved_u_.size() + saved_v_.size()) * sizeof(Vec3<T>);
+  return m;
+}
+
+template class MlsCpuSolver<float>;
+template class MlsCpuSolver<double>;
+
+std::unique_ptr<MlsSolver> makeMlsSolverCpu(MlsModel<float> model) {
+  return std::make_unique<MlsCpuSolver<float>>(std::move(model));
+}
+std::unique_ptr<MlsSolver> makeMlsSolverCpu(MlsModel<double> model) {
+  return std::make_unique<MlsCpuSolver<double>>(std::move(model));
+}
+
+}  // namespace inc::cpu

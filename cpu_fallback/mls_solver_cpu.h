@@ -1,0 +1,55 @@
+// The MLS solver on the CPU: the passes of physics/mls_passes.h looped with parallelFor.
+#pragma once
+
+#include <memory>
+
+#include "host/mls_model.h"
+#include "host/mls_solver.h"
+
+namespace inc::cpu {
+
+template <typename T>
+class MlsCpuSolver final : public MlsSolver {
+ public:
+  explicit MlsCpuSolver(MlsModel<T> model);
+
+  BackendKind backend() const override { return BackendKind::Cpu; }
+  Precision precision() const override { return sizeof(T) == 8 ? Precision::Float64 : Precision::Float32; }
+  std::size_t size() const override { return model_.size(); }
+  const MlsModelStats& modelStats() const override { return model_.stats; }
+  Vec3d origin() const override { return model_.origin; }
+  std::vector<Vec3d> restPositions() const override;
+
+  MlsFrameStats advance(double frame_dt, int fixed_substeps = 0) override;
+  void step(double dt, int n) override;
+  void computeForces() override;
+  MlsReduction reduce() override;
+
+  void setDisplacements(const std::vector<Vec3d>& u) override;
+  void setVelocities(const std::vector<Vec3d>& v) override;
+  void displacements(std::vector<Vec3d>& out) const override;
+  void velocities(std::vector<Vec3d>& out) const override;
+  void forces(std::vector<Vec3d>& out) const override;
+  void energies(std::vector<double>& out) const override;
+  void setPrescribed(const std::vector<std::int32_t>& particles, const std::vector<Vec3d>& targets) override;
+  void release(const std::vector<std::int32_t>& particles) override;
+  void saveCheckpoint() override;
+  void restoreCheckpoint() override;
+  MemoryReport memory() const override;
+
+  const MlsModel<T>& model() const { return model_; }
+  const MlsState<T>& state() const { return state_; }
+
+ private:
+  // Runs n substeps of dt; stage times (ms) are added to `stats` when given.
+  void substeps(T dt, int n, MlsFrameStats* stats);
+  MlsModel<T> model_;
+  MlsState<T> state_;
+  std::vector<Vec3<T>> saved_u_, saved_v_;
+  bool forces_valid_ = false;
+};
+
+std::unique_ptr<MlsSolver> makeMlsSolverCpu(MlsModel<float> model);
+std::unique_ptr<MlsSolver> makeMlsSolverCpu(MlsModel<double> model);
+
+}  // namespace inc::cpu

@@ -1,0 +1,114 @@
+// The `incision` command line: run, validate, devices (and the subcommands of later modules).
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+#include "host/backend.h"
+#include "host/embedded_scenes.h"
+#include "host/input_error.h"
+#include "host/runner.h"
+#include "host/scene_loader.h"
+#include "kernels/device_info.h"
+
+namespace {
+
+// A scene argument is a file path, or the name of an embedded scene, or empty for the default.
+inc::Scene resolveScene(const std::string& arg) {
+  if (arg.empty()) {
+    const auto& d = inc::defaultEmbeddedScene();
+    return inc::parseScene(d.json, std::string("<embedded:") + d.name + ">", ".");
+  }
+  if (!std::filesystem::exists(arg)) {
+    if (const auto* e = inc::findEmbeddedScene(arg))
+      return inc::parseScene(e->json, std::string("<embedded:") + e->name + ">", ".");
+  }
+  return inc::loadSceneFile(arg);
+}
+
+int cmdDevices() {
+  const auto d = inc::cuda::queryDevices();
+  std::printf("CUDA backend compiled: %s\n", d.compiled ? "yes" : "no");
+  if (d.device_count == 0) {
+    std::printf("usable GPU: none (%s)\n", d.error.c_str());
+  } else {
+    std::printf("usable GPUs: %d; device 0: %s, sm_%d%d, %d SMs, %.1f GiB, peak %.0f GB/s\n", d.device_count,
+                d.name.c_str(), d.sm_major, d.sm_minor, d.multiprocessors, double(d.global_memory_bytes) / (1 << 30),
+                d.peak_bandwidth_gbs);
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Incision: GPU-first soft-tissue simulation for surgical training"};
+  app.require_subcommand(1);
+
+  std::string scene_arg, backend = "", precision = "", out_dir = "out";
+  long steps = -1;
+  double seconds = -1.0;
+  bool quiet = false;
+  auto* run = app.add_subcommand("run", "Run a scene headless and write its outputs");
+  run->add_option("scene", scene_arg, "Scene file (JSON) or embedded scene name; default: the embedded default");
+  auto* o_steps = run->add_option("--steps", steps, "Number of frames to run");
+  run->add_option("--seconds", seconds, "Simulated seconds to run")->excludes(o_steps);
+  run->add_option("--backend", backend, "auto | cuda | cpu (overrides the scene)");
+  run->add_option("--precision", precision, "float32 | float64 (overrides the scene)");
+  run->add_option("--out", out_dir, "Output folder (PLY/OBJ/VTK, metrics.csv, summary.txt)");
+  run->add_flag("--quiet", quiet, "No progress output");
+
+  std::string validate_arg;
+  auto* validate = app.add_subcommand("validate", "Load and check a scene file; print what it switches on");
+  validate->add_option("scene", validate_arg, "Scene file (JSON)")->required();
+
+  auto* scenes = app.add_subcommand("scenes", "List the embedded scenes");
+  auto* devices = app.add_subcommand("devices", "Report the CUDA devices this build can use");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : inc::kExitBadInput;
+  }
+
+  try {
+    if (*devices) return cmdDevices();
+    if (*scenes) {
+      for (const auto& e : inc::embeddedScenes())
+        std::printf("%-16s %s%s\n", e.name, e.summary,
+                    std::string(e.name) == inc::defaultEmbeddedScene().name ? " (default)" : "");
+      return 0;
+    }
+    if (*validate) {
+      const inc::Scene s = inc::loadSceneFile(validate_arg);
+      std::printf("%s: ok (%s)\n", validate_arg.c_str(), s.name.c_str());
+      return 0;
+    }
+    if (*run) {
+      const inc::Scene scene = resolveScene(scene_arg);
+      inc::RunOptions opt;
+      opt.frames = steps;
+      opt.seconds = seconds;
+      opt.out_dir = out_dir;
+      opt.quiet = quiet;
+      if (!backend.empty()) opt.backend = inc::parseBackend(backend);
+      if (!precision.empty()) {
+        if (precision == "float32") opt.precision = inc::Precision::Float32;
+        else if (precision == "float64") opt.precision = inc::Precision::Float64;
+        else throw inc::InputError("", "--precision", "unknown precision '" + precision + "' (float32 or float64)");
+      }
+      const inc::RunSummary sum = inc::runScene(scene, opt);
+      std::printf("incision: %s: %s\n", scene.name.c_str(), sum.line().c_str());
+      std::printf("incision: outputs in %s\n", out_dir.c_str());
+      return sum.failed ? inc::kExitSimulationFailed : 0;
+    }
+  } catch (const inc::InputError& e) {
+    std::fprintf(stderr, "incision: error: %s\n", e.what());
+    return inc::kExitBadInput;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "incision: internal error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

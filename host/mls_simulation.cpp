@@ -1,0 +1,127 @@
+// MlsSimulation: an MlsSolver behind the SimulationModel interface, assembled from a Scene.
+#include "host/mls_simulation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "host/input_error.h"
+#include "host/mesh.h"
+#include "host/mls_solver.h"
+#include "host/particle_sampling.h"
+
+namespace inc {
+
+namespace {
+
+bool insideBox(const Vec3d& p, const FixedRegion& r) {
+  return p.x >= r.min.x && p.x <= r.max.x && p.y >= r.min.y && p.y <= r.max.y && p.z >= r.min.z && p.z <= r.max.z;
+}
+
+class MlsSimulation final : public SimulationModel {
+ public:
+  MlsSimulation(std::unique_ptr<MlsSolver> solver, int fixed_substeps, double frame_dt, const std::string& file)
+      : solver_(std::move(solver)), fixed_substeps_(fixed_substeps) {
+    // Refuse an unstable fixed substep count now (bad input), not in the middle of a run.
+    planMlsSubsteps(frame_dt, solver_->stableTimeStep(), solver_->safety(), fixed_substeps_, file, "solver.substeps");
+  }
+
+  std::string name() const override { return "mls"; }
+  BackendKind backend() const override { return solver_->backend(); }
+  std::size_t particleCount() const override { return solver_->size(); }
+
+  FrameReport advance(double frame_dt) override {
+    const MlsFrameStats st = solver_->advance(frame_dt, fixed_substeps_);
+    FrameReport r;
+    r.substeps = st.substeps;
+    r.dt = st.dt;
+    r.stages = {{"integrate", st.ms_integrate}, {"stress", st.ms_stress}, {"forces", st.ms_forces}, {"reduce", st.ms_reduce}};
+    r.kinetic_energy = st.totals.kinetic_energy;
+    r.elastic_energy = st.totals.elastic_energy;
+    r.potential_energy = st.totals.potential_energy;
+    r.max_displacement = st.totals.max_displacement;
+    r.finite = st.totals.finite;
+    r.failure_stage = st.totals.bad_stage;
+    r.failure_particle = st.totals.first_bad;
+    const MlsModelStats& m = solver_->modelStats();
+    r.counters["stable_dt_s"] = solver_->stableTimeStep();
+    r.counters["regularised_particles"] = double(m.regularised);
+    r.counters["few_neighbours"] = double(m.few_neighbors);
+    r.counters["coplanar_neighbourhoods"] = double(m.coplanar);
+    r.counters["collinear_neighbourhoods"] = double(m.collinear);
+    r.counters["ill_conditioned"] = double(m.ill_conditioned);
+    r.counters["isolated_particles"] = double(m.isolated);
+    r.counters["min_neighbours"] = double(m.min_neighbors);
+    r.counters["mean_neighbours"] = m.mean_neighbors;
+    r.counters["max_condition"] = m.max_condition;
+    return r;
+  }
+
+  void saveCheckpoint() override { solver_->saveCheckpoint(); }
+  void restoreCheckpoint() override { solver_->restoreCheckpoint(); }
+
+  void scaleTimeStep(double factor) override {
+    if (!(factor > 0) || !std::isfinite(factor)) return;
+    solver_->setSafety(solver_->safety() * factor);
+    if (fixed_substeps_ > 0) fixed_substeps_ = int(std::ceil(double(fixed_substeps_) / factor));
+  }
+
+  void currentPositions(std::vector<Vec3d>& out) const override { solver_->positions(out); }
+  MemoryReport memory() const override { return solver_->memory(); }
+
+ private:
+  std::unique_ptr<MlsSolver> solver_;
+  int fixed_substeps_ = 0;
+};
+
+}  // namespace
+
+MlsBuildInput mlsBuildInputFromScene(const Scene& scene) {
+  MlsBuildInput in;
+  in.source = scene.file;
+  const GeometrySpec& g = scene.geometry;
+  if (g.kind == GeometrySpec::Kind::Mesh) {
+    if (!(std::isfinite(g.mesh_scale) && g.mesh_scale > 0))
+      throw InputError(scene.file, "geometry.mesh_scale", "must be a positive number");
+    if (!(std::isfinite(g.spacing) && g.spacing > 0))
+      throw InputError(scene.file, "geometry.spacing_m", "must be a positive number");
+    TriangleMesh mesh = loadMesh(g.mesh_path);
+    for (auto& v : mesh.vertices) v = v * g.mesh_scale;
+    in.rest_positions = sampleMesh(mesh, LatticeSpec{g.spacing, g.jitter, g.seed});
+    if (in.rest_positions.empty())
+      throw InputError(scene.file, "geometry.spacing_m", "the mesh sampled to no particle (spacing larger than the body?)");
+  } else {
+    in.rest_positions = sampleGeometry(g, scene.file);
+  }
+  in.spacing = g.spacing;
+  in.support_factor = scene.mls.support_factor;
+  in.condition_limit = scene.mls.condition_limit;
+  in.material.youngs_modulus = scene.material.youngs_modulus;
+  in.material.poisson_ratio = scene.material.poisson_ratio;
+  in.material.density = scene.material.density;
+  in.material.damping = scene.material.damping;
+  in.material.volume_preservation = scene.mls.volume_preservation;
+  in.material.volume_stiffness = scene.mls.volume_stiffness;
+  in.gravity = scene.solver.gravity;
+  in.safety = scene.solver.safety;
+  in.kinds.assign(in.rest_positions.size(), kMlsFree);
+  for (std::size_t f = 0; f < scene.fixed.size(); ++f) {
+    const FixedRegion& r = scene.fixed[f];
+    if (!isFinite(r.min) || !isFinite(r.max) || r.min.x > r.max.x || r.min.y > r.max.y || r.min.z > r.max.z)
+      throw InputError(scene.file, "fixed[" + std::to_string(f) + "]", "min_m must be finite and <= max_m per axis");
+    for (std::size_t i = 0; i < in.rest_positions.size(); ++i)
+      if (insideBox(in.rest_positions[i], r)) in.kinds[i] = kMlsFixed;
+  }
+  return in;
+}
+
+std::unique_ptr<SimulationModel> makeMlsSimulation(const Scene& scene, BackendKind resolved, Precision precision) {
+  if (resolved == BackendKind::Auto)
+    throw InputError(scene.file, "solver.backend", "makeMlsSimulation needs a resolved backend (cpu or cuda)");
+  if (scene.solver.substeps < 0) throw InputError(scene.file, "solver.substeps", "must be >= 0");
+  const MlsBuildInput in = mlsBuildInputFromScene(scene);
+  std::unique_ptr<MlsSolver> solver = makeMlsSolver(in, resolved, precision);
+  return std::make_unique<MlsSimulation>(std::move(solver), scene.solver.substeps, scene.solver.frame_dt, scene.file);
+}
+
+}  // namespace inc

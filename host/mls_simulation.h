@@ -1,0 +1,28 @@
+// The MLS elastic solid as a SimulationModel built from a scene (sampling, fixed regions, material, solver).
+#pragma once
+
+#include <memory>
+
+#include "host/backend.h"
+#include "host/mls_model.h"
+#include "host/scene.h"
+#include "host/simulation_model.h"
+
+namespace inc {
+
+// The solver input a scene describes: particles sampled from scene.geometry (box/beam/sphere/ellipsoid, or a
+// closed mesh scaled by mesh_scale), masses density * spacing^3, particles whose rest position lies in a
+// `fixed` box held (Dirichlet), material, mls and solver settings. Throws InputError(scene.file, key, reason).
+MlsBuildInput mlsBuildInputFromScene(const Scene& scene);
+
+// The MLS solid of `scene` on an already resolved backend (Cpu or Cuda, never Auto) in `precision`.
+// Throws InputError for bad input, including a fixed substep count (solver.substeps) that is above the
+// stable limit for the scene's frame_dt. advance() reports non-finite states (finite == false, stage
+// "integrate" | "stress" | "forces", lowest bad particle) instead of throwing.
+// FrameReport: stages integrate / stress / forces / reduce (ms, summed over substeps), kinetic, elastic
+// (strain + volume penalty) and gravity potential energy, max displacement; counters: stable_dt_s,
+// substeps, regularised / few_neighbours / coplanar / collinear / ill_conditioned / isolated particles,
+// min / mean neighbours, max_condition.
+std::unique_ptr<SimulationModel> makeMlsSimulation(const Scene& scene, BackendKind resolved, Precision precision);
+
+}  // namespace inc

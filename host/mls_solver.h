@@ -1,0 +1,111 @@
+// The backend-agnostic MLS elasticity solver interface (CPU and CUDA implementations) and its factory.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "host/backend.h"
+#include "host/input_error.h"
+#include "host/mls_model.h"
+#include "host/simulation_model.h"
+#include "physics/vec3.h"
+
+namespace inc {
+
+// Once-per-frame reductions (device reductions on the GPU; one small download).
+struct MlsReduction {
+  double kinetic_energy = 0.0;     // J, 1/2 sum m v^2
+  double elastic_energy = 0.0;     // J, sum v_i psi_i (eq. 8, with the volume penalty)
+  double potential_energy = 0.0;   // J, -sum m g . u (gravity, relative to rest)
+  double max_displacement = 0.0;   // m
+  bool finite = true;
+  std::int64_t first_bad = -1;     // lowest index with a non-finite u, v, f or energy
+  std::string bad_stage;           // "integrate" (u, v), "forces" (f) or "stress" (energy)
+  double total() const { return kinetic_energy + elastic_energy + potential_energy; }
+};
+
+struct MlsFrameStats {
+  int substeps = 0;
+  double dt = 0.0;                 // s
+  double ms_integrate = 0.0;       // first half kick + drift, summed over substeps
+  double ms_stress = 0.0;          // pass 1
+  double ms_forces = 0.0;          // pass 2 + second half kick
+  double ms_reduce = 0.0;
+  MlsReduction totals;
+};
+
+// Upper bound on substeps per frame: beyond it a frame would take minutes; refused as bad input.
+constexpr std::int64_t kMlsMaxSubsteps = 10000000;
+
+// Substeps for a frame: `fixed` > 0 is used as given unless its step exceeds the stable limit (refused);
+// 0 takes ceil(frame_dt / (safety * stable_dt)). Throws InputError naming `key` when refused.
+inline int planMlsSubsteps(double frame_dt, double stable_dt, double safety, int fixed, const std::string& file = "",
+                           const std::string& key = "solver.substeps") {
+  if (!(frame_dt > 0) || !std::isfinite(frame_dt)) throw InputError(file, "solver.frame_dt_s", "must be a positive number");
+  if (fixed > 0) {
+    const double dt = frame_dt / fixed;
+    if (dt > stable_dt * (1.0 + 1e-12))
+      throw InputError(file, key,
+                       std::to_string(fixed) + " substeps give dt = " + std::to_string(dt) + " s, above the stable limit " +
+                           std::to_string(stable_dt) + " s (needs at least " +
+                           std::to_string(std::int64_t(std::ceil(frame_dt / stable_dt))) + "); refused");
+    return fixed;
+  }
+  const double n = std::ceil(frame_dt / (safety * stable_dt) * (1.0 - 1e-12));
+  if (!(n <= double(kMlsMaxSubsteps)))
+    throw InputError(file, key, "the stable step " + std::to_string(stable_dt) + " s needs " + std::to_string(n) +
+                                    " substeps per frame; refused (stiffer than the frame rate can afford)");
+  return int(std::max(1.0, n));
+}
+
+class MlsSolver {
+ public:
+  virtual ~MlsSolver() = default;
+  virtual BackendKind backend() const = 0;
+  virtual Precision precision() const = 0;
+  virtual std::size_t size() const = 0;
+  virtual const MlsModelStats& modelStats() const = 0;
+  virtual Vec3d origin() const = 0;                 // rest positions are relative to this (m)
+  virtual std::vector<Vec3d> restPositions() const = 0;  // absolute (m)
+  double stableTimeStep() const { return modelStats().stable_dt; }  // s, safety 1
+  double safety() const { return safety_; }
+  void setSafety(double s) { safety_ = s; }
+
+  // One frame: the substeps stability needs (or exactly `fixed_substeps`, refused when unstable), then the
+  // frame reductions. Prescribed particles reach their targets at the end of the frame.
+  virtual MlsFrameStats advance(double frame_dt, int fixed_substeps = 0) = 0;
+  // Exactly n substeps of dt (tests, benchmarks); refuses dt above the stable limit (InputError "dt").
+  virtual void step(double dt, int n) = 0;
+  // Passes 1 and 2 at the current displacement (forces and per-particle energies), no integration.
+  virtual void computeForces() = 0;
+  virtual MlsReduction reduce() = 0;
+
+  virtual void setDisplacements(const std::vector<Vec3d>& u) = 0;   // m, one per particle
+  virtual void setVelocities(const std::vector<Vec3d>& v) = 0;      // m/s
+  virtual void displacements(std::vector<Vec3d>& out) const = 0;
+  virtual void velocities(std::vector<Vec3d>& out) const = 0;
+  virtual void forces(std::vector<Vec3d>& out) const = 0;           // elastic forces (N), current u
+  virtual void energies(std::vector<double>& out) const = 0;        // v_i psi_i (J), current u
+  void positions(std::vector<Vec3d>& out) const;                    // origin + X_i + u_i (m)
+
+  // Tools: the listed particles become prescribed, moving linearly to `targets` (displacements, m) over
+  // the next frame (or step() call); release() returns them to free dynamics. Fixed particles stay fixed.
+  virtual void setPrescribed(const std::vector<std::int32_t>& particles, const std::vector<Vec3d>& targets) = 0;
+  virtual void release(const std::vector<std::int32_t>& particles) = 0;
+
+  virtual void saveCheckpoint() = 0;
+  virtual void restoreCheckpoint() = 0;
+  virtual MemoryReport memory() const = 0;
+
+ protected:
+  double safety_ = 0.5;
+};
+
+// Builds the model in the requested precision and the solver on the requested backend (Auto resolves
+// to CUDA when usable). Throws InputError for bad input or an unavailable backend.
+std::unique_ptr<MlsSolver> makeMlsSolver(const MlsBuildInput& input, BackendKind backend, Precision precision);
+
+}  // namespace inc

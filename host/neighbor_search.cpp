@@ -1,0 +1,81 @@
+// Dispatches findNeighbors to the CPU grid search or (when compiled and a device is usable) the CUDA one.
+#include "host/neighbor_search.h"
+
+#include <string>
+
+#include "cpu_fallback/neighbor_search_cpu.h"
+#include "host/input_error.h"
+#include "physics/neighbor_grid.h"
+#if INCISION_HAVE_CUDA
+#include "kernels/neighbor_search_cuda.h"
+#endif
+
+namespace inc {
+namespace {
+
+// The cell size: the option when given, else the largest radius (one cell ring then covers the ball).
+template <typename T>
+T chooseCellSize(const std::vector<T>& radii, const NeighborSearchOptions& options) {
+  for (std::size_t i = 0; i < radii.size(); ++i)
+    if (!neighborRadiusValid(radii[i]))
+      throw InputError("", radii.size() == 1 ? std::string("radius") : "radii[" + std::to_string(i) + "]",
+                       "must be finite and >= 0, got " + std::to_string(double(radii[i])));
+  if (options.cell_size > 0.0) return T(options.cell_size);
+  T largest = T(0);
+  for (T r : radii) largest = r > largest ? r : largest;
+  return largest > T(0) ? largest : T(1);
+}
+
+}  // namespace
+
+template <typename T>
+NeighborLists findNeighbors(BackendKind backend, const std::vector<Vec3<T>>& points, T radius,
+                            const NeighborSearchOptions& options) {
+  const T cell = chooseCellSize(std::vector<T>{radius}, options);
+  const BackendChoice choice = resolveBackend(backend);
+  (void)choice;  // only read when the CUDA backend is compiled in
+#if INCISION_HAVE_CUDA
+  if (choice.kind == BackendKind::Cuda) {
+    cuda::GridNeighborSearch<T> s;
+    s.build(points, cell, options.morton_order);
+    return s.querySelf(radius).download();
+  }
+#endif
+  return cpu::GridNeighborSearch<T>(points, cell, options.morton_order).querySelf(radius);
+}
+
+template <typename T>
+NeighborLists findNeighbors(BackendKind backend, const std::vector<Vec3<T>>& queries,
+                            const std::vector<Vec3<T>>& points, const std::vector<T>& radii,
+                            const NeighborSearchOptions& options) {
+  if (radii.size() != 1 && radii.size() != queries.size())
+    throw InputError("", "radii", "expected 1 radius or one per query (" + std::to_string(queries.size()) +
+                                      "), got " + std::to_string(radii.size()));
+  const T cell = chooseCellSize(radii, options);
+  const BackendChoice choice = resolveBackend(backend);
+  (void)choice;  // only read when the CUDA backend is compiled in
+#if INCISION_HAVE_CUDA
+  if (choice.kind == BackendKind::Cuda) {
+    cuda::GridNeighborSearch<T> s;
+    s.build(points, cell, options.morton_order);
+    cuda::DeviceBuffer<Vec3<T>> q;
+    cuda::DeviceBuffer<T> r;
+    q.upload(queries);
+    r.upload(radii);
+    cuda::DeviceNeighborLists out;
+    s.query(q.data(), queries.size(), r.data(), radii.size(), out);
+    return out.download();
+  }
+#endif
+  return cpu::GridNeighborSearch<T>(points, cell, options.morton_order).query(queries, radii);
+}
+
+template NeighborLists findNeighbors<float>(BackendKind, const std::vector<Vec3f>&, float, const NeighborSearchOptions&);
+template NeighborLists findNeighbors<double>(BackendKind, const std::vector<Vec3d>&, double,
+                                             const NeighborSearchOptions&);
+template NeighborLists findNeighbors<float>(BackendKind, const std::vector<Vec3f>&, const std::vector<Vec3f>&,
+                                            const std::vector<float>&, const NeighborSearchOptions&);
+template NeighborLists findNeighbors<double>(BackendKind, const std::vector<Vec3d>&, const std::vector<Vec3d>&,
+                                             const std::vector<double>&, const NeighborSearchOptions&);
+
+}  // namespace inc

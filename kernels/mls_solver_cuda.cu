@@ -1,0 +1,367 @@
+// CUDA MLS solver: one thread per particle per pass, fixed-shape block reductions for the frame metrics.
+#include "kernels/mls_solver_cuda.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "kernels/cuda_check.h"
+#include "kernels/device_buffer.h"
+#include "physics/mls_passes.h"
+
+namespace inc::cuda {
+
+namespace {
+
+constexpr int kBlock = 256;
+// Reduction: a fixed grid of kReduceBlocks blocks, each a fixed shared-memory tree over a grid-stride
+// range, then the partials summed on the host in block order: deterministic run to run, no atomics.
+constexpr int kReduceBlocks = 256;
+
+int gridFor(std::int64_t n) { return int((n + kBlock - 1) / kBlock); }
+
+template <typename T>
+__global__ void driftKernel(MlsView<T> s, T dt, int remaining) {
+  const std::int64_t k = std::int64_t(blockIdx.x) * blockDim.x + threadIdx.x;
+  if (k < s.n) mlsDriftPass(s, k, dt, remaining);
+}
+
+template <typename T>
+__global__ void stressKernel(MlsView<T> s) {
+  const std::int64_t i = std::int64_t(blockIdx.x) * blockDim.x + threadIdx.x;
+  if (i < s.n) mlsStressPass(s, i);
+}
+
+template <typename T>
+__global__ void forceKernel(MlsView<T> s, T half_dt, bool kick) {
+  const std::int64_t k = std::int64_t(blockIdx.x) * blockDim.x + threadIdx.x;
+  if (k < s.n) mlsForcePass(s, k, half_dt, kick);
+}
+
+// Per block: kinetic, gravity potential, elastic energy sums, max |u|^2, and the lowest non-finite index
+// with its stage (0 integrate, 1 forces, 2 stress), packed as index * 4 + stage (n * 4 when none).
+struct Partial {
+  double kinetic, potential, elastic, max_u2;
+  long long bad;
+};
+
+template <typename T>
+__global__ void reduceKernel(MlsView<T> s, Partial* out) {
+  __shared__ double ke[kBlock], pe[kBlock], el[kBlock], mu[kBlock];
+  __shared__ long long bad[kBlock];
+  double k_sum = 0, p_sum = 0, e_sum = 0, m = 0;
+  long long b = s.n * 4;
+  for (std::int64_t i = std::int64_t(blockIdx.x) * blockDim.x + threadIdx.x; i < s.n;
+       i += std::int64_t(gridDim.x) * blockDim.x) {
+    if (!mlsParticleFinite(s, i)) {
+      const int stage = !(isFinite(s.displacement[i]) && isFinite(s.velocity[i])) ? 0 : (!isFinite(s.force[i]) ? 1 : 2);
+      const long long code = (long long)i * 4 + stage;
+      b = code < b ? code : b;
+      continue;
+    }
+    k_sum += double(mlsKineticEnergy(s, i));
+    p_sum += double(mlsGravityEnergy(s, i));
+    e_sum += double(s.energy[i]);
+    const double u2 = double(norm2(s.displacement[i]));
+    m = u2 > m ? u2 : m;
+  }
+  const int t = threadIdx.x;
+  ke[t] = k_sum;
+  pe[t] = p_sum;
+  el[t] = e_sum;
+  mu[t] = m;
+  bad[t] = b;
+  __syncthreads();
+  for (int w = kBlock / 2; w > 0; w /= 2) {
+    if (t < w) {
+      ke[t] += ke[t + w];
+      pe[t] += pe[t + w];
+      el[t] += el[t + w];
+      mu[t] = mu[t] > mu[t + w] ? mu[t] : mu[t + w];
+      bad[t] = bad[t] < bad[t + w] ? bad[t] : bad[t + w];
+    }
+    __syncthreads();
+  }
+  if (t == 0) out[blockIdx.x] = Partial{ke[0], pe[0], el[0], mu[0], bad[0]};
+}
+
+template <typename T>
+void uploadVec(DeviceBuffer<T>& d, const std::vector<T>& h) {
+  d.upload(h);
+}
+
+template <typename T>
+class MlsCudaSolver final : public MlsSolver {
+ public:
+  explicit MlsCudaSolver(MlsModel<T> model) : model_(std::move(model)) {
+    safety_ = model_.safety;
+    const std::size_t n = model_.size();
+    rest_.upload(model_.rest);
+    mass_.upload(model_.mass);
+    volume_.upload(model_.volume);
+    moment_inverse_.upload(model_.moment_inverse);
+    kind_.upload(model_.kind);
+    offsets_.upload(model_.neighbors.offsets);
+    indices_.upload(model_.neighbors.indices);
+    for (DeviceBuffer<Vec3<T>>* b : {&u_, &v_, &f_, &target_}) {
+      b->resize(n);
+      b->fillZero();
+    }
+    stress_moment_.resize(n);
+    stress_moment_.fillZero();
+    energy_.resize(n);
+    energy_.fillZero();
+    partials_.resize(kReduceBlocks);
+    INC_CUDA(cudaStreamCreateWithFlags(&stream_, cudaStreamNonBlocking));
+  }
+  ~MlsCudaSolver() override {
+    for (cudaEvent_t e : events_) cudaEventDestroy(e);
+    if (stream_) cudaStreamDestroy(stream_);
+  }
+
+  BackendKind backend() const override { return BackendKind::Cuda; }
+  Precision precision() const override { return sizeof(T) == 8 ? Precision::Float64 : Precision::Float32; }
+  std::size_t size() const override { return model_.size(); }
+  const MlsModelStats& modelStats() const override { return model_.stats; }
+  Vec3d origin() const override { return model_.origin; }
+  std::vector<Vec3d> restPositions() const override {
+    std::vector<Vec3d> out(model_.size());
+    for (std::size_t i = 0; i < out.size(); ++i) out[i] = model_.origin + Vec3d(model_.rest[i]);
+    return out;
+  }
+
+  void computeForces() override {
+    const MlsView<T> s = view();
+    if (s.n == 0) return;
+    stressKernel<T><<<gridFor(s.n), kBlock, 0, stream_>>>(s);
+    INC_CUDA_LAUNCH("mls stressKernel");
+    forceKernel<T><<<gridFor(s.n), kBlock, 0, stream_>>>(s, T(0), false);
+    INC_CUDA_LAUNCH("mls forceKernel");
+    forces_valid_ = true;
+  }
+
+  void step(double dt, int n) override {
+    if (!(dt > 0) || !(dt <= stableTimeStep() * (1.0 + 1e-12)))
+      throw InputError(model_.source, "dt",
+                       "time step " + std::to_string(dt) + " s is outside (0, stable limit " +
+                           std::to_string(stableTimeStep()) + " s]; refused");
+    if (n <= 0) return;
+    substeps(T(dt), n, false);
+    INC_CUDA(cudaStreamSynchronize(stream_));  // step() returns with the state final (tests, benchmarks)
+  }
+
+  MlsFrameStats advance(double frame_dt, int fixed_substeps) override {
+    MlsFrameStats st;
+    st.substeps = planMlsSubsteps(frame_dt, stableTimeStep(), safety_, fixed_substeps, model_.source);
+    st.dt = frame_dt / st.substeps;
+    substeps(T(st.dt), st.substeps, true);
+    const auto t0 = std::chrono::steady_clock::now();
+    st.totals = reduce();  // synchronises: the once-per-frame download
+    st.ms_reduce = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    // Stage times from the events recorded around each stage of each substep (the stream is idle now).
+    for (int k = 0; k < st.substeps; ++k) {
+      float a = 0, b = 0, c = 0;
+      INC_CUDA(cudaEventElapsedTime(&a, events_[4 * k], events_[4 * k + 1]));
+      INC_CUDA(cudaEventElapsedTime(&b, events_[4 * k + 1], events_[4 * k + 2]));
+      INC_CUDA(cudaEventElapsedTime(&c, events_[4 * k + 2], events_[4 * k + 3]));
+      st.ms_integrate += a;
+      st.ms_stress += b;
+      st.ms_forces += c;
+    }
+    return st;
+  }
+
+  MlsReduction reduce() override {
+    if (!forces_valid_) computeForces();
+    const MlsView<T> s = view();
+    MlsReduction r;
+    if (s.n == 0) return r;
+    reduceKernel<T><<<kReduceBlocks, kBlock, 0, stream_>>>(s, partials_.data());
+    INC_CUDA_LAUNCH("mls reduceKernel");
+    std::vector<Partial> p(kReduceBlocks);
+    INC_CUDA(cudaMemcpyAsync(p.data(), partials_.data(), kReduceBlocks * sizeof(Partial), cudaMemcpyDeviceToHost, stream_));
+    INC_CUDA(cudaStreamSynchronize(stream_));
+    double max_u2 = 0;
+    long long bad = s.n * 4;
+    for (const Partial& q : p) {  // block order: deterministic
+      r.kinetic_energy += q.kinetic;
+      r.potential_energy += q.potential;
+      r.elastic_energy += q.elastic;
+      max_u2 = std::max(max_u2, q.max_u2);
+      bad = std::min(bad, q.bad);
+    }
+    r.max_displacement = std::sqrt(max_u2);
+    if (bad < s.n * 4) {
+      r.finite = false;
+      r.first_bad = bad / 4;
+      const int stage = int(bad % 4);
+      r.bad_stage = stage == 0 ? "integrate" : (stage == 1 ? "forces" : "stress");
+    }
+    return r;
+  }
+
+  void setDisplacements(const std::vector<Vec3d>& u) override {
+    upload(u_, u, "displacements");
+    forces_valid_ = false;
+  }
+  void setVelocities(const std::vector<Vec3d>& v) override { upload(v_, v, "velocities"); }
+  void displacements(std::vector<Vec3d>& out) const override { download(u_, out); }
+  void velocities(std::vector<Vec3d>& out) const override { download(v_, out); }
+  void forces(std::vector<Vec3d>& out) const override { download(f_, out); }
+  void energies(std::vector<double>& out) const override {
+    INC_CUDA(cudaStreamSynchronize(stream_));
+    const std::vector<T> e = energy_.download();
+    out.assign(e.begin(), e.end());
+  }
+
+  void setPrescribed(const std::vector<std::int32_t>& particles, const std::vector<Vec3d>& targets) override {
+    if (targets.size() != particles.size()) throw std::invalid_argument("MlsSolver: one target per prescribed particle");
+    INC_CUDA(cudaStreamSynchronize(stream_));
+    std::vector<Vec3<T>> tgt = target_.download();
+    for (std::size_t p = 0; p < particles.size(); ++p) {
+      const std::int32_t i = particles[p];
+      if (i < 0 || std::size_t(i) >= size()) throw std::invalid_argument("MlsSolver: prescribed particle out of range");
+      if (model_.kind[std::size_t(i)] == kMlsFixed) continue;
+      model_.kind[std::size_t(i)] = kMlsPrescribed;
+      tgt[std::size_t(i)] = Vec3<T>(targets[p]);
+    }
+    target_.upload(tgt);
+    kind_.upload(model_.kind);
+  }
+  void release(const std::vector<std::int32_t>& particles) override {
+    for (const std::int32_t i : particles) {
+      if (i < 0 || std::size_t(i) >= size()) throw std::invalid_argument("MlsSolver: released particle out of range");
+      if (model_.kind[std::size_t(i)] == kMlsPrescribed) model_.kind[std::size_t(i)] = kMlsFree;
+    }
+    INC_CUDA(cudaStreamSynchronize(stream_));
+    kind_.upload(model_.kind);
+  }
+
+  void saveCheckpoint() override {
+    saved_u_.resize(size());
+    saved_v_.resize(size());
+    copy(saved_u_, u_);
+    copy(saved_v_, v_);
+    has_checkpoint_ = true;
+  }
+  void restoreCheckpoint() override {
+    if (!has_checkpoint_) return;
+    copy(u_, saved_u_);
+    copy(v_, saved_v_);
+    forces_valid_ = false;
+  }
+
+  MemoryReport memory() const override {
+    MemoryReport m;
+    m.device_bytes = rest_.capacityBytes() + mass_.capacityBytes() + volume_.capacityBytes() +
+                     moment_inverse_.capacityBytes() + kind_.capacityBytes() + offsets_.capacityBytes() +
+                     indices_.capacityBytes() + u_.capacityBytes() + v_.capacityBytes() + f_.capacityBytes() +
+                     target_.capacityBytes() + stress_moment_.capacityBytes() + energy_.capacityBytes() +
+                     partials_.capacityBytes() + saved_u_.capacityBytes() + saved_v_.capacityBytes();
+    m.host_bytes = model_.bytes();
+    return m;
+  }
+
+ private:
+  MlsView<T> view() {
+    MlsView<T> v;
+    v.n = std::int64_t(model_.size());
+    v.rest = rest_.data();
+    v.mass = mass_.data();
+    v.volume = volume_.data();
+    v.moment_inverse = moment_inverse_.data();
+    v.kind = kind_.data();
+    v.offsets = offsets_.data();
+    v.indices = indices_.data();
+    v.support = model_.support;
+    v.coeffs = model_.coeffs;
+    v.gravity = model_.gravity;
+    v.displacement = u_.data();
+    v.velocity = v_.data();
+    v.force = f_.data();
+    v.target = target_.data();
+    v.stress_moment = stress_moment_.data();
+    v.energy = energy_.data();
+    return v;
+  }
+
+  // n substeps of dt, all launched asynchronously on the stream; with `timed`, events around each stage.
+  void substeps(T dt, int n, bool timed) {
+    if (!forces_valid_) computeForces();
+    const MlsView<T> s = view();
+    if (s.n == 0) return;
+    if (timed) ensureEvents(std::size_t(4) * std::size_t(n));
+    const T half = T(0.5) * dt;
+    const int grid = gridFor(s.n);
+    for (int k = 0; k < n; ++k) {
+      if (timed) INC_CUDA(cudaEventRecord(events_[4 * k], stream_));
+      driftKernel<T><<<grid, kBlock, 0, stream_>>>(s, dt, n - k);
+      INC_CUDA_LAUNCH("mls driftKernel");
+      if (timed) INC_CUDA(cudaEventRecord(events_[4 * k + 1], stream_));
+      stressKernel<T><<<grid, kBlock, 0, stream_>>>(s);
+      INC_CUDA_LAUNCH("mls stressKernel");
+      if (timed) INC_CUDA(cudaEventRecord(events_[4 * k + 2], stream_));
+      forceKernel<T><<<grid, kBlock, 0, stream_>>>(s, half, true);
+      INC_CUDA_LAUNCH("mls forceKernel");
+      if (timed) INC_CUDA(cudaEventRecord(events_[4 * k + 3], stream_));
+    }
+  }
+
+  void ensureEvents(std::size_t count) {
+    while (events_.size() < count) {
+      cudaEvent_t e;
+      INC_CUDA(cudaEventCreate(&e));
+      events_.push_back(e);
+    }
+  }
+
+  void upload(DeviceBuffer<Vec3<T>>& d, const std::vector<Vec3d>& h, const char* what) {
+    if (h.size() != size())
+      throw std::invalid_argument(std::string("MlsSolver: ") + what + " has " + std::to_string(h.size()) +
+                                  " entries for " + std::to_string(size()) + " particles");
+    std::vector<Vec3<T>> t(h.size());
+    for (std::size_t i = 0; i < h.size(); ++i) t[i] = Vec3<T>(h[i]);
+    INC_CUDA(cudaStreamSynchronize(stream_));
+    d.upload(t);
+  }
+  void download(const DeviceBuffer<Vec3<T>>& d, std::vector<Vec3d>& out) const {
+    INC_CUDA(cudaStreamSynchronize(stream_));
+    const std::vector<Vec3<T>> t = d.download();
+    out.resize(t.size());
+    for (std::size_t i = 0; i < t.size(); ++i) out[i] = Vec3d(t[i]);
+  }
+  void copy(DeviceBuffer<Vec3<T>>& dst, const DeviceBuffer<Vec3<T>>& src) {
+    if (src.size())
+      INC_CUDA(cudaMemcpyAsync(dst.data(), src.data(), src.bytes(), cudaMemcpyDeviceToDevice, stream_));
+  }
+
+  MlsModel<T> model_;
+  DeviceBuffer<Vec3<T>> rest_;
+  DeviceBuffer<T> mass_, volume_;
+  DeviceBuffer<Mat3<T>> moment_inverse_;
+  DeviceBuffer<std::uint8_t> kind_;
+  DeviceBuffer<std::int64_t> offsets_;
+  DeviceBuffer<std::int32_t> indices_;
+  DeviceBuffer<Vec3<T>> u_, v_, f_, target_, saved_u_, saved_v_;
+  DeviceBuffer<Mat3<T>> stress_moment_;
+  DeviceBuffer<T> energy_;
+  DeviceBuffer<Partial> partials_;
+  cudaStream_t stream_ = nullptr;
+  std::vector<cudaEvent_t> events_;
+  bool forces_valid_ = false;
+  bool has_checkpoint_ = false;
+};
+
+}  // namespace
+
+std::unique_ptr<MlsSolver> makeMlsSolverCuda(MlsModel<float> model) {
+  return std::make_unique<MlsCudaSolver<float>>(std::move(model));
+}
+std::unique_ptr<MlsSolver> makeMlsSolverCuda(MlsModel<double> model) {
+  return std::make_unique<MlsCudaSolver<double>>(std::move(model));
+}
+
+}  // namespace inc::cuda

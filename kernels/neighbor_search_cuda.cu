@@ -1,0 +1,557 @@
+// CUDA grid neighbour search: device bounding box, radix sort by cell, cell table, count / scan / fill of CSR lists.
+#include "kernels/neighbor_search_cuda.h"
+
+#include <cub/device/device_radix_sort.cuh>
+#include <cub/device/device_scan.cuh>
+#include <cuda/std/functional>
+
+#include <algorithm>
+#include <limits>
+#include <sstream>
+#include <string>
+
+#include "host/input_error.h"
+#include "kernels/cuda_check.h"
+
+namespace inc::cuda {
+namespace {
+
+constexpr std::size_t kMaxPoints = std::size_t(1) << 30;  // same limit as the CPU search (int32 slots, 2^31 buckets)
+constexpr int kThreads = 256;
+constexpr int kReduceBlocks = 1024;  // bounding-box partials (stage 2 reduces them in one block)
+constexpr std::uint64_t kNone = ~std::uint64_t(0);
+
+unsigned blocksFor(std::size_t n) { return unsigned((n + kThreads - 1) / kThreads); }
+
+template <typename T>
+std::string describe(const Vec3<T>& x) {
+  std::ostringstream s;
+  s << "(" << x.x << ", " << x.y << ", " << x.z << ")";
+  return s.str();
+}
+
+// Bits needed for keys in [0, count): the radix sort only looks at those.
+int keyBits(std::uint64_t count) {
+  int b = 1;
+  while (b < 32 && (std::uint64_t(1) << b) < count) ++b;
+  return b;
+}
+
+// ---- bounding box of the finite points and the first non-finite index (min/max are exact: deterministic) ----
+
+template <typename T>
+struct BoxAcc {
+  T lo[3], hi[3];
+  long long bad;
+};
+
+template <typename T>
+__device__ void boxMerge(BoxAcc<T>& a, const BoxAcc<T>& b) {
+  for (int k = 0; k < 3; ++k) {
+    a.lo[k] = b.lo[k] < a.lo[k] ? b.lo[k] : a.lo[k];
+    a.hi[k] = b.hi[k] > a.hi[k] ? b.hi[k] : a.hi[k];
+  }
+  a.bad = b.bad < a.bad ? b.bad : a.bad;
+}
+
+template <typename T>
+__device__ BoxAcc<T> boxEmpty(long long n) {
+  BoxAcc<T> a;
+  for (int k = 0; k < 3; ++k) {
+    a.lo[k] = std::numeric_limits<T>::max();
+    a.hi[k] = std::numeric_limits<T>::lowest();
+  }
+  a.bad = n;
+  return a;
+}
+
+// Tree reduction of one BoxAcc per thread in shared memory; thread 0 returns the block's result.
+template <typename T>
+__device__ BoxAcc<T> blockReduceBox(BoxAcc<T> a) {
+  __shared__ T s_lo[3][kThreads], s_hi[3][kThreads];
+  __shared__ long long s_bad[kThreads];
+  const int t = threadIdx.x;
+  for (int k = 0; k < 3; ++k) {
+    s_lo[k][t] = a.lo[k];
+    s_hi[k][t] = a.hi[k];
+  }
+  s_bad[t] = a.bad;
+  __syncthreads();
+  for (int stride = kThreads / 2; stride > 0; stride >>= 1) {
+    if (t < stride) {
+      BoxAcc<T> b;
+      for (int k = 0; k < 3; ++k) {
+        b.lo[k] = s_lo[k][t + stride];
+        b.hi[k] = s_hi[k][t + stride];
+      }
+      b.bad = s_bad[t + stride];
+      BoxAcc<T> c;
+      for (int k = 0; k < 3; ++k) {
+        c.lo[k] = s_lo[k][t];
+        c.hi[k] = s_hi[k][t];
+      }
+      c.bad = s_bad[t];
+      boxMerge(c, b);
+      for (int k = 0; k < 3; ++k) {
+        s_lo[k][t] = c.lo[k];
+        s_hi[k][t] = c.hi[k];
+      }
+      s_bad[t] = c.bad;
+    }
+    __syncthreads();
+  }
+  BoxAcc<T> r;
+  for (int k = 0; k < 3; ++k) {
+    r.lo[k] = s_lo[k][0];
+    r.hi[k] = s_hi[k][0];
+  }
+  r.bad = s_bad[0];
+  return r;
+}
+
+template <typename T>
+__global__ void boxPartialKernel(const Vec3<T>* pts, long long n, Vec3<T>* part_lo, Vec3<T>* part_hi,
+                                 long long* part_bad) {
+  BoxAcc<T> a = boxEmpty<T>(n);
+  for (long long i = blockIdx.x * (long long)blockDim.x + threadIdx.x; i < n; i += (long long)gridDim.x * blockDim.x) {
+    const Vec3<T> x = pts[i];
+    if (!neighborPointFinite(x)) {
+      a.bad = i < a.bad ? i : a.bad;
+      continue;
+    }
+    for (int k = 0; k < 3; ++k) {
+      a.lo[k] = x[k] < a.lo[k] ? x[k] : a.lo[k];
+      a.hi[k] = x[k] > a.hi[k] ? x[k] : a.hi[k];
+    }
+  }
+  const BoxAcc<T> r = blockReduceBox(a);
+  if (threadIdx.x == 0) {
+    part_lo[blockIdx.x] = Vec3<T>(r.lo[0], r.lo[1], r.lo[2]);
+    part_hi[blockIdx.x] = Vec3<T>(r.hi[0], r.hi[1], r.hi[2]);
+    part_bad[blockIdx.x] = r.bad;
+  }
+}
+
+// One block: merges the partials and makes the grid parameters (the host never needs the box itself).
+template <typename T>
+__global__ void gridParamsKernel(const Vec3<T>* part_lo, const Vec3<T>* part_hi, const long long* part_bad, int parts,
+                                 long long n, T cell_size, std::uint32_t bucket_count, NeighborGridParams<T>* out) {
+  BoxAcc<T> a = boxEmpty<T>(n);
+  for (int b = threadIdx.x; b < parts; b += blockDim.x) {
+    BoxAcc<T> p;
+    for (int k = 0; k < 3; ++k) {
+      p.lo[k] = part_lo[b][k];
+      p.hi[k] = part_hi[b][k];
+    }
+    p.bad = part_bad[b];
+    boxMerge(a, p);
+  }
+  const BoxAcc<T> r = blockReduceBox(a);
+  if (threadIdx.x == 0) {
+    const bool any_finite = r.lo[0] <= r.hi[0];
+    const Vec3<T> lo = any_finite ? Vec3<T>(r.lo[0], r.lo[1], r.lo[2]) : Vec3<T>();
+    const Vec3<T> hi = any_finite ? Vec3<T>(r.hi[0], r.hi[1], r.hi[2]) : Vec3<T>();
+    *out = makeNeighborGridParams(lo, hi, cell_size, bucket_count, std::int64_t(r.bad), any_finite);
+  }
+}
+
+// ---- keys, sort, cell table ----
+
+template <typename T>
+__device__ void cellOf(const NeighborGridParams<T>& p, const Vec3<T>& x, std::int32_t c[3]) {
+  for (int a = 0; a < 3; ++a) c[a] = neighborCellCoord(x[a], p.origin[a], p.inv_cell);
+}
+
+// keys[i] = bucket of pts[i] (counted into the histogram) or its Morton key; iota[i] = i (the sort's values).
+template <typename T>
+__global__ void cellKeysKernel(NeighborGridParams<T> p, const Vec3<T>* pts, int n, bool morton, std::uint32_t* keys,
+                               std::int32_t* iota, std::int32_t* histogram) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= n) return;
+  std::int32_t c[3];
+  cellOf(p, pts[i], c);
+  if (morton) {
+    keys[i] = neighborMortonKey(p, c[0], c[1], c[2]);
+  } else {
+    const std::uint32_t b = neighborBucket(p, c[0], c[1], c[2]);
+    keys[i] = b;
+    atomicAdd(histogram + b, 1);  // integer counts: the result does not depend on the order
+  }
+  iota[i] = i;
+}
+
+// sorted[s] = pts[perm[s]]; inv[perm[s]] = s.
+template <typename T>
+__global__ void gatherKernel(const Vec3<T>* pts, const std::int32_t* perm, int n, Vec3<T>* sorted, std::int32_t* inv) {
+  const int s = blockIdx.x * blockDim.x + threadIdx.x;
+  if (s >= n) return;
+  const std::int32_t o = perm[s];
+  sorted[s] = pts[o];
+  inv[o] = s;
+}
+
+// ---- queries ----
+
+// First invalid query point and radius (atomicMin on integers: the smallest index wins whatever the order).
+template <typename T>
+__global__ void validateKernel(const Vec3<T>* queries, long long nq, const T* radii, long long nr,
+                               unsigned long long* status) {
+  const long long i = blockIdx.x * (long long)blockDim.x + threadIdx.x;
+  if (queries && i < nq && !neighborPointFinite(queries[i])) atomicMin(status + 0, (unsigned long long)i);
+  if (radii && i < nr && !neighborRadiusValid(radii[i])) atomicMin(status + 1, (unsigned long long)i);
+}
+
+struct CountVisit {
+  std::int32_t k;
+  __host__ __device__ void operator()(std::int32_t) { ++k; }
+};
+
+struct WriteVisit {
+  std::int32_t* row;
+  const std::int32_t* perm;
+  std::int32_t k;
+  __host__ __device__ void operator()(std::int32_t j) { row[k++] = perm[j]; }
+};
+
+// Which point and radius thread t handles: self-queries run in storage order (neighbouring threads read
+// neighbouring cells) and write to the query's original index.
+template <typename T>
+struct QuerySpec {
+  NeighborGridView<T> g;
+  const Vec3<T>* queries;  // nullptr: self-query
+  const std::int32_t* perm;
+  const T* radii;  // nullptr: `radius` for all; else radii[q * radii_stride]
+  int radii_stride;
+  T radius;
+  int nq;
+};
+
+template <typename T>
+__device__ void queryOf(const QuerySpec<T>& s, int t, int& q, Vec3<T>& x, T& r, std::int32_t& skip) {
+  if (s.queries) {
+    q = t;
+    x = s.queries[t];
+    skip = -1;
+  } else {
+    q = s.perm[t];
+    x = s.g.points[t];
+    skip = t;
+  }
+  r = s.radii ? s.radii[q * s.radii_stride] : s.radius;
+}
+
+template <typename T>
+__global__ void countKernel(QuerySpec<T> s, std::int32_t* counts) {
+  const int t = blockIdx.x * blockDim.x + threadIdx.x;
+  if (t >= s.nq) return;
+  int q;
+  Vec3<T> x;
+  T r;
+  std::int32_t skip;
+  queryOf(s, t, q, x, r, skip);
+  CountVisit v{0};
+  forEachGridNeighbor(s.g, x, r, skip, v);
+  counts[q] = v.k;
+}
+
+__global__ void totalKernel(const std::int64_t* offsets, std::size_t nq, unsigned long long* status) {
+  if (blockIdx.x == 0 && threadIdx.x == 0) status[2] = (unsigned long long)offsets[nq];
+}
+
+// In-place ascending sort of one row: insertion sort for the usual short rows, heap sort (O(k log k), no extra
+// memory) for long ones. Indices in a row are distinct, so any correct sort gives the CPU's order.
+__device__ void sortRow(std::int32_t* a, std::int32_t k) {
+  if (k <= 32) {
+    for (std::int32_t i = 1; i < k; ++i) {
+      const std::int32_t v = a[i];
+      std::int32_t j = i;
+      for (; j > 0 && a[j - 1] > v; --j) a[j] = a[j - 1];
+      a[j] = v;
+    }
+    return;
+  }
+  auto siftDown = [a](std::int32_t root, std::int32_t end) {
+    while (2 * root + 1 < end) {
+      std::int32_t child = 2 * root + 1;
+      if (child + 1 < end && a[child] < a[child + 1]) ++child;
+      if (!(a[root] < a[child])) return;
+      const std::int32_t tmp = a[root];
+      a[root] = a[child];
+      a[child] = tmp;
+      root = child;
+    }
+  };
+  for (std::int32_t start = k / 2 - 1; start >= 0; --start) siftDown(start, k);
+  for (std::int32_t end = k - 1; end > 0; --end) {
+    const std::int32_t tmp = a[0];
+    a[0] = a[end];
+    a[end] = tmp;
+    siftDown(0, end);
+  }
+}
+
+template <typename T>
+__global__ void fillKernel(QuerySpec<T> s, const std::int64_t* offsets, std::int32_t* indices) {
+  const int t = blockIdx.x * blockDim.x + threadIdx.x;
+  if (t >= s.nq) return;
+  int q;
+  Vec3<T> x;
+  T r;
+  std::int32_t skip;
+  queryOf(s, t, q, x, r, skip);
+  WriteVisit v{indices + offsets[q], s.perm, 0};
+  forEachGridNeighbor(s.g, x, r, skip, v);
+  sortRow(v.row, v.k);
+}
+
+template <typename T>
+void checkCellSize(T h) {
+  if (!(h > T(0)) || !neighborRadiusValid(h) || !neighborRadiusValid(T(1) / h))
+    throw InputError("", "cell_size", "must be finite and > 0 with a finite inverse, got " + std::to_string(double(h)));
+}
+
+}  // namespace
+
+NeighborLists DeviceNeighborLists::download() const {
+  NeighborLists l;
+  l.offsets = offsets.download();
+  l.indices = indices.download();
+  if (l.offsets.empty()) l.offsets.assign(1, 0);
+  return l;
+}
+
+template <typename T>
+void* GridNeighborSearch<T>::scratch(std::size_t bytes) const {
+  temp_.resize(bytes == 0 ? 1 : bytes);
+  return temp_.data();
+}
+
+template <typename T>
+void GridNeighborSearch<T>::build(const std::vector<Vec3<T>>& points, T cell_size, bool morton_order) {
+  upload_.upload(points);
+  build(upload_.data(), points.size(), cell_size, morton_order);
+}
+
+template <typename T>
+void GridNeighborSearch<T>::build(const Vec3<T>* d_points, std::size_t n, T cell_size, bool morton_order) {
+  checkCellSize(cell_size);
+  if (n > kMaxPoints)
+    throw InputError("", "points", "too many points for the grid search (" + std::to_string(n) + " > 2^30)");
+  if (n > 0 && !d_points) throw InputError("", "points", "null device pointer for " + std::to_string(n) + " points");
+  cell_size_ = cell_size;
+  morton_ = morton_order;
+  n_ = 0;
+  const std::uint32_t buckets = neighborBucketCount(n);
+  if (n == 0) {
+    params_ = makeNeighborGridParams(Vec3<T>(), Vec3<T>(), cell_size, buckets, 0, false);
+    used_buckets_ = 0;
+    return;
+  }
+  const int ni = int(n);
+
+  // 1. Bounding box and first non-finite point, reduced on the device into the grid parameters.
+  const int parts = int(std::min<std::size_t>(kReduceBlocks, blocksFor(n)));
+  partial_lo_.resize(std::size_t(parts));
+  partial_hi_.resize(std::size_t(parts));
+  partial_bad_.resize(std::size_t(parts));
+  d_params_.resize(1);
+  boxPartialKernel<T><<<parts, kThreads>>>(d_points, (long long)n, partial_lo_.data(), partial_hi_.data(),
+                                           reinterpret_cast<long long*>(partial_bad_.data()));
+  INC_CUDA_LAUNCH("boxPartialKernel");
+  gridParamsKernel<T><<<1, kThreads>>>(partial_lo_.data(), partial_hi_.data(),
+                                       reinterpret_cast<const long long*>(partial_bad_.data()), parts, (long long)n,
+                                       cell_size, buckets, d_params_.data());
+  INC_CUDA_LAUNCH("gridParamsKernel");
+  // Host sync 1 of 1 in a build: the parameters decide the cell-table size and the sort's key width, and
+  // a non-finite point must be reported before any list is built from it.
+  INC_CUDA(cudaMemcpy(&params_, d_params_.data(), sizeof(params_), cudaMemcpyDeviceToHost));
+  if (params_.first_bad < std::int64_t(n)) {
+    Vec3<T> bad;
+    INC_CUDA(cudaMemcpy(&bad, d_points + params_.first_bad, sizeof(bad), cudaMemcpyDeviceToHost));
+    const std::string i = std::to_string(params_.first_bad);
+    throw InputError("", "points[" + i + "]", "position " + describe(bad) + " is not finite");
+  }
+  std::uint64_t used = buckets;
+  if (params_.dense) used = std::uint64_t(params_.dims[0]) * std::uint64_t(params_.dims[1]) * std::uint64_t(params_.dims[2]);
+  used_buckets_ = std::size_t(used);
+  const int bucket_bits = keyBits(used);
+
+  sorted_.resize(n);
+  perm_.resize(n);
+  inv_perm_.resize(n);
+  keys_.resize(n);
+  keys_sorted_.resize(n);
+  iota_.resize(n);
+  cell_count_.resize(used_buckets_ + 1);
+  bucket_start_.resize(used_buckets_ + 1);
+  INC_CUDA(cudaMemsetAsync(cell_count_.data(), 0, cell_count_.bytes()));
+
+  auto radixSort = [&](const std::uint32_t* keys_in, std::uint32_t* keys_out, const std::int32_t* vals_in,
+                       std::int32_t* vals_out, int bits) {
+    std::size_t bytes = 0;
+    INC_CUDA(cub::DeviceRadixSort::SortPairs(nullptr, bytes, keys_in, keys_out, vals_in, vals_out, ni, 0, bits));
+    void* tmp = scratch(bytes);
+    INC_CUDA(cub::DeviceRadixSort::SortPairs(tmp, bytes, keys_in, keys_out, vals_in, vals_out, ni, 0, bits));
+  };
+
+  // 2. Storage order. CUB's radix sort is stable, like the CPU's counting sort, so slots agree exactly.
+  const Vec3<T>* keyed = d_points;
+  if (morton_order) {
+    cellKeysKernel<T><<<blocksFor(n), kThreads>>>(params_, d_points, ni, true, keys_.data(), iota_.data(), nullptr);
+    INC_CUDA_LAUNCH("cellKeysKernel(morton)");
+    const int max_dim = std::max(params_.dims[0], std::max(params_.dims[1], params_.dims[2]));
+    const int axis_bits = keyBits(std::uint64_t(max_dim)) - params_.morton_shift;
+    radixSort(keys_.data(), keys_sorted_.data(), iota_.data(), perm_.data(), std::max(1, std::min(30, 3 * axis_bits)));
+    gatherKernel<T><<<blocksFor(n), kThreads>>>(d_points, perm_.data(), ni, sorted_.data(), inv_perm_.data());
+    INC_CUDA_LAUNCH("gatherKernel(morton)");
+    keyed = sorted_.data();
+  }
+  cellKeysKernel<T><<<blocksFor(n), kThreads>>>(params_, keyed, ni, false, keys_.data(), iota_.data(),
+                                                cell_count_.data());
+  INC_CUDA_LAUNCH("cellKeysKernel(bucket)");
+  if (morton_order) {
+    // entries: storage slots in bucket order (the lookup table into the Z-ordered points)
+    entries_.resize(n);
+    radixSort(keys_.data(), keys_sorted_.data(), iota_.data(), entries_.data(), bucket_bits);
+  } else {
+    radixSort(keys_.data(), keys_sorted_.data(), iota_.data(), perm_.data(), bucket_bits);
+    gatherKernel<T><<<blocksFor(n), kThreads>>>(d_points, perm_.data(), ni, sorted_.data(), inv_perm_.data());
+    INC_CUDA_LAUNCH("gatherKernel");
+  }
+
+  // 3. Cell table: start[b] = number of points in buckets < b (exclusive scan of the histogram; its last
+  // entry, zeroed by the memset, makes start[used] = n).
+  std::size_t bytes = 0;
+  INC_CUDA(cub::DeviceScan::ExclusiveScan(nullptr, bytes, cell_count_.data(), bucket_start_.data(),
+                                          ::cuda::std::plus<std::int32_t>{}, std::int32_t(0), used_buckets_ + 1));
+  void* tmp = scratch(bytes);
+  INC_CUDA(cub::DeviceScan::ExclusiveScan(tmp, bytes, cell_count_.data(), bucket_start_.data(),
+                                          ::cuda::std::plus<std::int32_t>{}, std::int32_t(0), used_buckets_ + 1));
+  n_ = n;
+}
+
+template <typename T>
+DeviceNeighborLists GridNeighborSearch<T>::querySelf(T radius) const {
+  DeviceNeighborLists out;
+  querySelf(radius, out);
+  return out;
+}
+
+template <typename T>
+void GridNeighborSearch<T>::querySelf(T radius, DeviceNeighborLists& out) const {
+  run(nullptr, n_, radius, nullptr, 1, true, out);
+}
+
+template <typename T>
+void GridNeighborSearch<T>::querySelf(const T* d_radii, std::size_t radii_count, DeviceNeighborLists& out) const {
+  if (!d_radii) throw InputError("", "radii", "null device pointer");
+  run(nullptr, n_, T(0), d_radii, radii_count, true, out);
+}
+
+template <typename T>
+DeviceNeighborLists GridNeighborSearch<T>::query(const Vec3<T>* d_queries, std::size_t nq, T radius) const {
+  DeviceNeighborLists out;
+  query(d_queries, nq, radius, out);
+  return out;
+}
+
+template <typename T>
+void GridNeighborSearch<T>::query(const Vec3<T>* d_queries, std::size_t nq, T radius, DeviceNeighborLists& out) const {
+  run(d_queries, nq, radius, nullptr, 1, false, out);
+}
+
+template <typename T>
+void GridNeighborSearch<T>::query(const Vec3<T>* d_queries, std::size_t nq, const T* d_radii, std::size_t radii_count,
+                                  DeviceNeighborLists& out) const {
+  if (!d_radii) throw InputError("", "radii", "null device pointer");
+  run(d_queries, nq, T(0), d_radii, radii_count, false, out);
+}
+
+template <typename T>
+void GridNeighborSearch<T>::run(const Vec3<T>* d_queries, std::size_t nq, T radius, const T* d_radii,
+                                std::size_t radii_count, bool self, DeviceNeighborLists& out) const {
+  if (radii_count != 1 && radii_count != nq)
+    throw InputError("", "radii", "expected 1 radius or one per query (" + std::to_string(nq) + "), got " +
+                                      std::to_string(radii_count));
+  if (nq > kMaxPoints) throw InputError("", "queries", "too many queries (" + std::to_string(nq) + " > 2^30)");
+  if (!self && nq > 0 && !d_queries) throw InputError("", "queries", "null device pointer for " + std::to_string(nq) + " queries");
+  if (!d_radii && !neighborRadiusValid(radius))
+    throw InputError("", "radius", "must be finite and >= 0, got " + std::to_string(double(radius)));
+  out.offsets.resize(nq + 1);
+  if (nq == 0) {
+    out.offsets.fillZero();
+    out.indices.resize(0);
+    return;
+  }
+  const int nqi = int(nq);
+  status_.resize(3);
+  INC_CUDA(cudaMemsetAsync(status_.data(), 0xff, status_.bytes()));  // "none" = all ones
+  const Vec3<T>* check_queries = self ? nullptr : d_queries;  // self-query points were checked by build
+  if (check_queries || d_radii) {
+    const std::size_t m = std::max(check_queries ? nq : std::size_t(0), d_radii ? radii_count : std::size_t(0));
+    validateKernel<T><<<blocksFor(m), kThreads>>>(check_queries, (long long)nq, d_radii, (long long)radii_count,
+                                                  reinterpret_cast<unsigned long long*>(status_.data()));
+    INC_CUDA_LAUNCH("validateKernel");
+  }
+
+  QuerySpec<T> s;
+  s.g.p = params_;
+  s.g.points = sorted_.data();
+  s.g.bucket_start = bucket_start_.data();
+  s.g.entries = morton_ ? entries_.data() : nullptr;
+  s.g.n = std::int32_t(n_);
+  s.queries = self ? nullptr : d_queries;
+  s.perm = perm_.data();
+  s.radii = d_radii;
+  s.radii_stride = radii_count == nq ? 1 : 0;  // one device radius for all: every query reads radii[0]
+  s.radius = radius;
+  s.nq = nqi;
+
+  // Count pass, then offsets = exclusive scan of the counts (int64: totals beyond 2^31 stay exact).
+  counts_.resize(nq + 1);
+  INC_CUDA(cudaMemsetAsync(counts_.data() + nq, 0, sizeof(std::int32_t)));
+  countKernel<T><<<blocksFor(nq), kThreads>>>(s, counts_.data());
+  INC_CUDA_LAUNCH("countKernel");
+  std::size_t bytes = 0;
+  INC_CUDA(cub::DeviceScan::ExclusiveScan(nullptr, bytes, counts_.data(), out.offsets.data(),
+                                          ::cuda::std::plus<std::int64_t>{}, std::int64_t(0), nq + 1));
+  void* tmp = scratch(bytes);
+  INC_CUDA(cub::DeviceScan::ExclusiveScan(tmp, bytes, counts_.data(), out.offsets.data(),
+                                          ::cuda::std::plus<std::int64_t>{}, std::int64_t(0), nq + 1));
+  totalKernel<<<1, 1>>>(out.offsets.data(), nq, reinterpret_cast<unsigned long long*>(status_.data()));
+  INC_CUDA_LAUNCH("totalKernel");
+
+  // Host sync 1 of 1 in a query: the total sizes the index array (exact, so nothing is truncated), and an
+  // invalid query or radius found by validateKernel is reported before any list is handed out.
+  std::uint64_t st[3];
+  INC_CUDA(cudaMemcpy(st, status_.data(), sizeof(st), cudaMemcpyDeviceToHost));
+  if (st[0] != kNone) {
+    Vec3<T> bad;
+    INC_CUDA(cudaMemcpy(&bad, d_queries + st[0], sizeof(bad), cudaMemcpyDeviceToHost));
+    throw InputError("", "queries[" + std::to_string(st[0]) + "]", "position " + describe(bad) + " is not finite");
+  }
+  if (st[1] != kNone) {
+    T bad = T(0);
+    INC_CUDA(cudaMemcpy(&bad, d_radii + st[1], sizeof(bad), cudaMemcpyDeviceToHost));
+    throw InputError("", radii_count == 1 ? std::string("radius") : "radii[" + std::to_string(st[1]) + "]",
+                     "must be finite and >= 0, got " + std::to_string(double(bad)));
+  }
+  const std::uint64_t total = st[2];
+  if (total > std::uint64_t(std::numeric_limits<std::int64_t>::max() / 4))
+    throw InputError("", "radius", "the neighbour lists hold " + std::to_string(total) + " entries; use a smaller radius");
+  try {
+    out.indices.resize(std::size_t(total));
+  } catch (const std::runtime_error&) {  // cudaMalloc failed: never hand out truncated lists
+    cudaGetLastError();  // clear the allocation error so that later launch checks do not report it again
+    throw InputError("", "radius", "the neighbour lists (" + std::to_string(total) +
+                                       " entries) do not fit in device memory; use a smaller radius");
+  }
+  if (total == 0) return;
+  fillKernel<T><<<blocksFor(nq), kThreads>>>(s, out.offsets.data(), out.indices.data());
+  INC_CUDA_LAUNCH("fillKernel");
+}
+
+template class GridNeighborSearch<float>;
+template class GridNeighborSearch<double>;
+
+}  // namespace inc::cuda

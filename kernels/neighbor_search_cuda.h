@@ -1,0 +1,94 @@
+// CUDA uniform-grid fixed-radius neighbour search (device-resident grid and CSR lists; same lists as the CPU).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "host/neighbor_lists.h"
+#include "kernels/device_buffer.h"
+#include "physics/neighbor_grid.h"
+#include "physics/vec3.h"
+
+namespace inc::cuda {
+
+// Device copy of host/neighbor_lists.h: row q is indices[offsets[q] .. offsets[q + 1]), ascending original
+// point index, closed ball (distance2Exact <= r * r), self-queries leave q out.
+struct DeviceNeighborLists {
+  DeviceBuffer<std::int64_t> offsets;  // queries + 1
+  DeviceBuffer<std::int32_t> indices;  // offsets[queries] entries
+  std::size_t queryCount() const { return offsets.size() == 0 ? 0 : offsets.size() - 1; }
+  NeighborLists download() const;
+};
+
+// Build once per point configuration, query many times. Everything runs on the default stream.
+// Host synchronisations (each one device-to-host copy of a few bytes, documented in docs/neighbor-search.md):
+//  - build: one, reading back the grid parameters (bounding box reduced on the device) together with the
+//    index of the first non-finite point: the host needs the number of occupied cells to size the cell
+//    table and the radix-sort key width, and must throw InputError before anything else uses the grid.
+//  - each query: one, reading back the total neighbour count (to allocate the index array exactly, so no
+//    list is ever truncated) together with the first invalid query point / radius found on the device.
+// Not thread-safe: queries share scratch buffers of the object.
+template <typename T>
+class GridNeighborSearch {
+ public:
+  GridNeighborSearch() = default;
+
+  // d_points: n positions in device memory (read during build only; the grid keeps its own sorted copy).
+  // cell_size: edge of a grid cell, usually the (largest) query radius; any radius works with any cell size.
+  // morton_order: store the points in Z order of their cells (sortedToOriginal() maps back).
+  // Throws InputError naming points[i] for the first non-finite point, or for a bad cell size.
+  void build(const Vec3<T>* d_points, std::size_t n, T cell_size, bool morton_order = false);
+  // Convenience: uploads host points, then builds.
+  void build(const std::vector<Vec3<T>>& points, T cell_size, bool morton_order = false);
+
+  // Every built point against every other point; one radius, or d_radii[count] on the device (count 1 or n).
+  DeviceNeighborLists querySelf(T radius) const;
+  void querySelf(T radius, DeviceNeighborLists& out) const;  // reuses out's buffers (they never shrink)
+  void querySelf(const T* d_radii, std::size_t radii_count, DeviceNeighborLists& out) const;
+  // nq device query points (e.g. tool samples) against the built points.
+  DeviceNeighborLists query(const Vec3<T>* d_queries, std::size_t nq, T radius) const;
+  void query(const Vec3<T>* d_queries, std::size_t nq, T radius, DeviceNeighborLists& out) const;
+  void query(const Vec3<T>* d_queries, std::size_t nq, const T* d_radii, std::size_t radii_count,
+             DeviceNeighborLists& out) const;
+
+  std::size_t size() const { return n_; }
+  T cellSize() const { return cell_size_; }
+  bool mortonOrder() const { return morton_; }
+  bool hashed() const { return n_ > 0 && params_.dense == 0; }
+  // Host copy of the grid parameters (read back during build).
+  const NeighborGridParams<T>& params() const { return params_; }
+  // Device arrays of size(): storage slot -> original index, its inverse, and the points in storage order.
+  const std::int32_t* sortedToOriginal() const { return perm_.data(); }
+  const std::int32_t* originalToSorted() const { return inv_perm_.data(); }
+  const Vec3<T>* sortedPoints() const { return sorted_.data(); }
+  // Cell-table entries actually used (occupied-cell box for dense grids, bucket count for hashed ones).
+  std::size_t bucketTableSize() const { return used_buckets_; }
+
+ private:
+  void run(const Vec3<T>* d_queries, std::size_t nq, T radius, const T* d_radii, std::size_t radii_count,
+           bool self, DeviceNeighborLists& out) const;
+  void* scratch(std::size_t bytes) const;
+
+  std::size_t n_ = 0;
+  T cell_size_ = T(0);
+  bool morton_ = false;
+  std::size_t used_buckets_ = 0;
+  NeighborGridParams<T> params_{};
+  DeviceBuffer<Vec3<T>> upload_;                // host-vector build only
+  DeviceBuffer<NeighborGridParams<T>> d_params_;
+  DeviceBuffer<Vec3<T>> sorted_;                // points in storage order
+  DeviceBuffer<std::int32_t> perm_, inv_perm_;  // slot -> original, original -> slot
+  DeviceBuffer<std::int32_t> bucket_start_;     // used_buckets_ + 1
+  DeviceBuffer<std::int32_t> cell_count_;       // used_buckets_ + 1 (histogram before the scan)
+  DeviceBuffer<std::int32_t> entries_;          // Morton mode: storage slot per bucket-ordered entry
+  DeviceBuffer<std::uint32_t> keys_, keys_sorted_;
+  DeviceBuffer<std::int32_t> iota_;
+  mutable DeviceBuffer<std::int32_t> counts_;       // per query
+  mutable DeviceBuffer<std::uint64_t> status_;      // {first bad query, first bad radius, total}
+  mutable DeviceBuffer<unsigned char> temp_;        // CUB temporary storage
+  DeviceBuffer<Vec3<T>> partial_lo_, partial_hi_;   // bounding-box partials per block
+  DeviceBuffer<std::int64_t> partial_bad_;
+};
+
+}  // namespace inc::cuda

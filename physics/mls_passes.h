@@ -1,0 +1,122 @@
+// The per-particle bodies of the MLS step (drift, pass 1 stress, pass 2 force gather + kick) that the CPU
+// loops and the CUDA kernels both call, over raw SoA pointers.
+#pragma once
+
+#include <cstdint>
+
+#include "physics/hd.h"
+#include "physics/mls_elasticity.h"
+#include "physics/mls_integrate.h"
+#include "physics/mls_kernel.h"
+#include "physics/vec3.h"
+
+namespace inc {
+
+// Raw views of one MLS model + state (host or device memory alike). Rest neighbourhoods are symmetric
+// (one support radius h, closed ball decided by distance2Exact), which makes pass 2 a pure gather.
+template <typename T>
+struct MlsView {
+  std::int64_t n = 0;
+  // model (rest configuration)
+  const Vec3<T>* rest = nullptr;          // X_i relative to the model origin (m)
+  const T* mass = nullptr;                // kg
+  const T* volume = nullptr;              // rest volume v_i (m^3)
+  const Mat3<T>* moment_inverse = nullptr;  // regularised A_i^{-1} (m)
+  const std::uint8_t* kind = nullptr;     // MlsParticleKind
+  const std::int64_t* offsets = nullptr;  // CSR rest neighbourhoods
+  const std::int32_t* indices = nullptr;
+  T support = T(0);                       // h (m)
+  MlsCoefficients<T> coeffs;
+  Vec3<T> gravity;                        // m/s^2
+  // state
+  Vec3<T>* displacement = nullptr;        // u_i (m)
+  Vec3<T>* velocity = nullptr;            // m/s
+  Vec3<T>* force = nullptr;               // elastic force f_i (N), at the current displacement
+  const Vec3<T>* target = nullptr;        // prescribed displacement at the end of the frame (m)
+  // pass-1 output consumed by pass 2
+  Mat3<T>* stress_moment = nullptr;       // M_i = v_i P_i A_i^{-1} (N m^2)
+  T* energy = nullptr;                    // v_i psi_i (J)
+};
+
+// eq. 5: G_i = [sum_j w_ij (u_j - u_i) x_ij^T] A_i^{-1}, x_ij = X_j - X_i.
+template <typename T>
+INC_HD Mat3<T> mlsDisplacementGradient(const MlsView<T>& s, std::int64_t i) {
+  const Vec3<T> xi = s.rest[i];
+  const Vec3<T> ui = s.displacement[i];
+  Mat3<T> b;
+  for (std::int64_t p = s.offsets[i]; p < s.offsets[i + 1]; ++p) {
+    const std::int32_t j = s.indices[p];
+    const Vec3<T> xij = s.rest[j] - xi;
+    const T w = mlsKernelWeight(norm2(xij), s.support);
+    accumulateGradient(b, s.displacement[j] - ui, xij, w);
+  }
+  return b * s.moment_inverse[i];
+}
+
+// Pass 1 at particle i: gradient, strain, stress, energy; stores M_i = v_i P_i A_i^{-1} for pass 2.
+template <typename T>
+INC_HD void mlsStressPass(const MlsView<T>& s, std::int64_t i) {
+  const Mat3<T> g = mlsDisplacementGradient(s, i);
+  const MlsStressPoint<T> sp = mlsStressPoint(g, s.coeffs);
+  const T v = s.volume[i];
+  s.stress_moment[i] = (sp.piola * v) * s.moment_inverse[i];
+  s.energy[i] = v * sp.energy_density;
+}
+
+// eq. 9, exact negative gradient of U = sum_i v_i psi_i with d_ij = w_ij A_i^{-1} x_ij:
+//   f_k = v_k P_k sum_j d_kj - sum_{i in N(k)} v_i P_i d_ik = sum_{i in N(k)} w_ki (M_k + M_i)(X_i - X_k).
+// Each pair term is antisymmetric in (k, i), so momentum is conserved pair by pair.
+template <typename T>
+INC_HD Vec3<T> mlsElasticForce(const MlsView<T>& s, std::int64_t k) {
+  const Vec3<T> xk = s.rest[k];
+  const Mat3<T> mk = s.stress_moment[k];
+  Vec3<T> f;
+  for (std::int64_t p = s.offsets[k]; p < s.offsets[k + 1]; ++p) {
+    const std::int32_t i = s.indices[p];
+    const Vec3<T> xki = s.rest[i] - xk;
+    const T w = mlsKernelWeight(norm2(xki), s.support);
+    f += ((mk + s.stress_moment[i]) * xki) * w;
+  }
+  return f;
+}
+
+// Pass 2 at particle k: gather the force, then the second half kick (free particles only).
+template <typename T>
+INC_HD void mlsForcePass(const MlsView<T>& s, std::int64_t k, T half_dt, bool kick) {
+  const Vec3<T> f = mlsElasticForce(s, k);
+  s.force[k] = f;
+  if (kick && s.kind[k] == kMlsFree)
+    s.velocity[k] = mlsHalfKick(s.velocity[k], f, s.mass[k], s.gravity, half_dt, s.coeffs.damping);
+}
+
+// First half kick and drift at particle k, using the force of the current displacement. Fixed particles
+// keep their displacement and have zero velocity; prescribed ones move on towards their target.
+template <typename T>
+INC_HD void mlsDriftPass(const MlsView<T>& s, std::int64_t k, T dt, int remaining_substeps) {
+  const std::uint8_t kind = s.kind[k];
+  if (kind == kMlsFree) {
+    const Vec3<T> v = mlsHalfKick(s.velocity[k], s.force[k], s.mass[k], s.gravity, T(0.5) * dt, s.coeffs.damping);
+    s.velocity[k] = v;
+    s.displacement[k] += v * dt;
+  } else if (kind == kMlsPrescribed) {
+    mlsPrescribedStep(s.displacement[k], s.velocity[k], s.target[k], dt, remaining_substeps);
+  } else {
+    s.velocity[k] = Vec3<T>();
+  }
+}
+
+// Per-particle terms of the frame reductions (energies in J, squared displacement in m^2).
+template <typename T>
+INC_HD T mlsKineticEnergy(const MlsView<T>& s, std::int64_t k) {
+  return T(0.5) * s.mass[k] * norm2(s.velocity[k]);
+}
+template <typename T>
+INC_HD T mlsGravityEnergy(const MlsView<T>& s, std::int64_t k) {
+  return -s.mass[k] * dot(s.gravity, s.displacement[k]);
+}
+template <typename T>
+INC_HD bool mlsParticleFinite(const MlsView<T>& s, std::int64_t k) {
+  return isFinite(s.displacement[k]) && isFinite(s.velocity[k]) && isFinite(s.force[k]) && std::isfinite(s.energy[k]);
+}
+
+}  // namespace inc

@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# End-to-end check of the `incision` command line: bad input exits 2 with a message naming file, key, reason.
+set -u
+exe="$1"; tmp="$(mktemp -d)"; trap 'rm -rf "$tmp"' EXIT
+fails=0
+expect() {  # expect CODE PATTERN -- command...
+  local code="$1" pattern="$2"; shift 3
+  local out; out="$("$@" 2>&1)"; local rc=$?
+  if [ "$rc" != "$code" ] || ! grep -qE -- "$pattern" <<<"$out"; then
+    echo "FAIL: '$*' gave rc=$rc (want $code), output: $out (want /$pattern/)"; fails=$((fails + 1))
+  else
+    echo "ok: $* -> rc=$rc"
+  fi
+}
+printf '{"geometry":{"kind":"box"},"models":{"mls":true},"material":{"poisson_ratio":0.7}}' >"$tmp/nu.json"
+printf '{"geometry":{"kind":"box"},\n "models":{"mls":true},,}' >"$tmp/syntax.json"
+printf '{"geometry":{"kind":"box"},"models":{"mls":true},"solver":{"frame_dt":0.01}}' >"$tmp/typo.json"
+printf '{"geometry":{"kind":"mesh","mesh":"missing.obj"},"models":{"mls":true}}' >"$tmp/mesh.json"
+expect 2 "nope.json: .*no such file" -- "$exe" validate "$tmp/nope.json"
+expect 2 "nu.json: material.poisson_ratio: must lie" -- "$exe" validate "$tmp/nu.json"
+expect 2 "syntax.json.*line 2" -- "$exe" validate "$tmp/syntax.json"
+expect 2 "typo.json: solver.frame_dt: .*frame_dt_s" -- "$exe" validate "$tmp/typo.json"
+expect 2 "mesh.json: geometry.mesh" -- "$exe" validate "$tmp/mesh.json"
+expect 2 "--backend" -- "$exe" run --backend quantum --out "$tmp/o"
+expect 2 "--precision" -- "$exe" run --precision float16 --out "$tmp/o"
+expect 0 "beam" -- "$exe" scenes
+expect 0 "CUDA backend compiled" -- "$exe" devices
+[ "$fails" = 0 ] && echo "all CLI exit-code checks passed" || { echo "$fails CLI check(s) failed"; exit 1; }

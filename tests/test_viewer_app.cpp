@@ -1,0 +1,264 @@
+// The whole viewer in a real window (xvfb-run -a with Mesa): scripted frames, screenshot contents, recording.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+#include <stb_image.h>
+
+#include "host/input_error.h"
+#include "host/mesh.h"
+#include "tests/viewer_test_model.h"
+#include "viewer/gl_window.h"
+#include "viewer/viewer_app.h"
+
+namespace inc::viewer {
+namespace {
+
+using testing::SaggingBall;
+
+bool displayAvailable(std::string& why) {
+  GlWindowOptions o;
+  o.width = o.height = 32;
+  o.visible = false;
+  return GlWindow::open(o, &why) != nullptr;
+}
+
+struct Png {
+  int w = 0, h = 0;
+  std::vector<unsigned char> rgb;
+};
+
+Png loadPng(const std::string& path) {
+  Png p;
+  int n = 0;
+  unsigned char* data = stbi_load(path.c_str(), &p.w, &p.h, &n, 3);
+  if (data) {
+    p.rgb.assign(data, data + std::size_t(p.w) * p.h * 3);
+    stbi_image_free(data);
+  }
+  return p;
+}
+
+// Tissue colour: clearly red (the Phong-lit front colour is (0.80, 0.36, 0.33) times the light).
+double tissueFraction(const Png& p) {
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < p.rgb.size(); i += 3)
+    if (p.rgb[i] > p.rgb[i + 1] + 25 && p.rgb[i] > p.rgb[i + 2] + 25) ++n;
+  return double(n) / (double(p.w) * p.h);
+}
+
+std::string outPath(const std::string& name) { return std::string(INCISION_BINARY_DIR) + "/" + name; }
+
+class ViewerApp : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    std::string why;
+    if (!displayAvailable(why)) GTEST_SKIP() << "no display (run under xvfb-run -a): " << why;
+  }
+};
+
+// Cut-wall colour: the back-face colour (0.55, 0.10, 0.12) has red/green 5.5; the tissue's lit colour at most
+// 0.80 / 0.36 = 2.2 (specular only lowers it). Count clearly cut-wall pixels.
+double cutWallFraction(const Png& p) {
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < p.rgb.size(); i += 3)
+    if (p.rgb[i] > 50 && p.rgb[i] >= 3.5 * p.rgb[i + 1]) ++n;
+  return double(n) / (double(p.w) * p.h);
+}
+
+// A cut scene shows the cut wall colour through the opening; the intact organ shows none.
+TEST_F(ViewerApp, CutSceneShowsCutWallColour) {
+  for (bool cut : {false, true}) {
+    ViewerOptions o;
+    if (cut)
+      o.model = std::make_unique<testing::CutBall>(0.05);
+    else
+      o.model = std::make_unique<SaggingBall>();
+    o.width = 960;
+    o.height = 600;
+    o.frames = 6;
+    o.screenshot_path = outPath(cut ? "viewer_test_cut.png" : "viewer_test_uncut.png");
+    ASSERT_EQ(runViewer(o), 0);
+    const Png p = loadPng(o.screenshot_path);
+    ASSERT_EQ(p.w, 960);
+    if (cut) {
+      EXPECT_GT(cutWallFraction(p), 0.01);
+    } else {
+      EXPECT_LT(cutWallFraction(p), 1e-4);
+    }
+    EXPECT_GT(tissueFraction(p), 0.03);
+  }
+}
+
+// The organ (a ball of radius R framed by its bounding box) covers its analytic share of the picture.
+TEST_F(ViewerApp, ScriptedCaptureShowsTheOrganAtPlausibleSize) {
+  ViewerOptions o;
+  o.model = std::make_unique<SaggingBall>();
+  o.width = 400;
+  o.height = 300;
+  o.frames = 10;
+  o.show_ui = false;
+  o.layers.tool = false;
+  o.screenshot_path = outPath("viewer_test_capture.png");
+  std::filesystem::remove(o.screenshot_path);
+  ASSERT_EQ(runViewer(o), 0);
+  const Png p = loadPng(o.screenshot_path);
+  ASSERT_EQ(p.w, 400);
+  ASSERT_EQ(p.h, 300);
+  // OrbitCamera::frameBox: distance = 1.2 r_box / sin(fovy/2), r_box = sqrt(3) R (the ball's bounding box);
+  // the ball subtends asin(R / distance); on screen its radius is tan(that) / tan(fovy/2) * (H/2).
+  const double fovy = 0.8, dist = 1.2 * std::sqrt(3.0) * 0.1 / std::sin(fovy / 2);
+  const double r_px = std::tan(std::asin(0.1 / dist)) / std::tan(fovy / 2) * 150.0;
+  const double expected = M_PI * r_px * r_px / (400.0 * 300.0);
+  // 8 %: the silhouette's darker rim (grazing light) falls below the colour threshold; level-3 icosphere.
+  EXPECT_NEAR(tissueFraction(p), expected, 0.08 * expected);
+  // Not a single-colour frame: the headlight makes the centre brighter than the rim.
+  const unsigned char* centre = &p.rgb[3 * (std::size_t(150) * 400 + 200)];
+  const unsigned char* edge = &p.rgb[3 * (std::size_t(150) * 400 + 200 + int(0.9 * r_px))];
+  EXPECT_GT(int(centre[0]), int(edge[0]) + 20);
+}
+
+// With the panels and the splat layer on, the frame is still mostly background with the organ in it,
+// and a recording writes one PNG per frame.
+TEST_F(ViewerApp, SplatLayerWithPanelsAndRecording) {
+  namespace fs = std::filesystem;
+  ViewerOptions o;
+  o.factory = [] { return std::unique_ptr<SimulationModel>(std::make_unique<SaggingBall>()); };
+  o.width = 960;
+  o.height = 600;
+  o.frames = 4;
+  o.layers.surface = false;
+  o.layers.splats = true;
+  o.record_dir = outPath("viewer_test_record");
+  fs::remove_all(o.record_dir);
+  fs::create_directories(o.record_dir);
+  o.screenshot_path = outPath("viewer_test_splats.png");
+  ASSERT_EQ(runViewer(o), 0);
+  int files = 0;
+  for (const auto& e : fs::directory_iterator(o.record_dir)) files += e.path().extension() == ".png" ? 1 : 0;
+  EXPECT_EQ(files, 4);
+  const Png p = loadPng(o.screenshot_path);
+  ASSERT_EQ(p.w, 960);
+  const double frac = tissueFraction(p);
+  EXPECT_GT(frac, 0.02);  // the organ is there (some of it may be under the panel)
+  EXPECT_LT(frac, 0.5);
+}
+
+// A model without a surface is drawn as particle splats.
+TEST_F(ViewerApp, ParticleOnlyModelIsVisible) {
+  class Points : public SaggingBall {
+   public:
+    bool currentSurface(TriangleMesh&) const override { return false; }
+  };
+  ViewerOptions o;
+  o.model = std::make_unique<Points>();
+  o.width = 320;
+  o.height = 240;
+  o.frames = 3;
+  o.show_ui = false;
+  o.screenshot_path = outPath("viewer_test_points.png");
+  ASSERT_EQ(runViewer(o), 0);
+  const Png p = loadPng(o.screenshot_path);
+  ASSERT_EQ(p.w, 320);
+  std::size_t blue = 0;
+  for (std::size_t i = 0; i < p.rgb.size(); i += 3) blue += (p.rgb[i + 2] > p.rgb[i] + 30) ? 1 : 0;
+  EXPECT_GT(double(blue) / (320.0 * 240.0), 0.03);
+}
+
+// The tool under a (scripted) cursor sits on the drawn surface, found from the z-buffer, and the paper's
+// z-buffer collision reports it inside once pressed in.
+TEST_F(ViewerApp, ToolUnderCursorSitsOnSurfaceAndCollides) {
+  for (int mode = 0; mode < 2; ++mode) {
+    for (double press : {-0.01, 0.02}) {  // hovering 1 cm above, pressed 2 cm in
+      ViewerOptions o;
+      o.model = std::make_unique<SaggingBall>();
+      o.width = 320;
+      o.height = 240;
+      o.frames = 2;
+      o.show_ui = false;
+      o.cursor_x = 0.55;
+      o.cursor_y = 0.45;
+      o.press_depth_m = press;
+      o.collision = mode == 0 ? ToolCollision::DepthBuffer : ToolCollision::SplatZBuffer;
+      ViewerFrameInfo last;
+      o.on_frame = [&last](const ViewerFrameInfo& f) { last = f; };
+      ASSERT_EQ(runViewer(o), 0);
+      ASSERT_TRUE(last.tool_on_surface);
+      // The picked point is on the ball (radius 0.1 m; the level-3 icosphere's facets lie within 1.2 mm
+      // inside the sphere, the sag is 0.2 mm): the surface point, press metres back along the eye ray from
+      // the tip, is at |p| = R within 1.5 mm.
+      const Vec3d dir = (last.tool_tip - last.camera.eye) * (1.0 / norm(last.tool_tip - last.camera.eye));
+      EXPECT_NEAR(norm(last.tool_tip - dir * press), 0.1, 1.5e-3) << mode << " " << press;
+      EXPECT_EQ(last.contact.inside, press > 0.0) << mode << " " << press;
+      if (press > 0.0) {
+        EXPECT_NEAR(last.contact.penetration_m, press, 1.5e-3) << mode;
+      }
+    }
+  }
+}
+
+// A real liver surface (../shared/organs, skipped when absent) with a cut slot: the picture shows tissue and
+// the cut walls. Set INCISION_DOC_SCREENSHOT=PATH to also write the picture there (docs/images/viewer.png).
+TEST_F(ViewerApp, CutLiverShowsTissueAndCutWalls) {
+  const std::string path = std::string(INCISION_SHARED_DIR) + "/organs/liver-smooth.obj";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << "organ mesh absent: " << path;
+  TriangleMesh liver = loadMesh(path);
+  for (auto& v : liver.vertices) v = v * 0.01;  // the file is in centimetres
+  Vec3d lo, hi;
+  lo = hi = liver.vertices[0];
+  for (const auto& v : liver.vertices)
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = std::min(lo[k], v[k]);
+      hi[k] = std::max(hi[k], v[k]);
+    }
+  const Vec3d mid = (lo + hi) * 0.5;
+  ViewerOptions o;
+  o.model = std::make_unique<testing::CutMeshModel>(liver, mid, Vec3d{0.8, 0.0, 0.6}, 0.004);
+  o.width = 1280;
+  o.height = 800;
+  o.frames = 4;
+  o.cursor_x = 0.62;
+  o.cursor_y = 0.45;
+  o.press_depth_m = 0.004;
+  o.collision = ToolCollision::SplatZBuffer;
+  o.screenshot_path = outPath("viewer_test_liver.png");
+  ViewerFrameInfo last;
+  o.on_frame = [&last](const ViewerFrameInfo& f) { last = f; };
+  ASSERT_EQ(runViewer(o), 0);
+  const Png p = loadPng(o.screenshot_path);
+  ASSERT_EQ(p.w, 1280);
+  EXPECT_GT(tissueFraction(p), 0.05);
+  EXPECT_GT(cutWallFraction(p), 0.002);
+  EXPECT_TRUE(last.tool_on_surface);
+  if (const char* doc = std::getenv("INCISION_DOC_SCREENSHOT")) std::filesystem::copy_file(o.screenshot_path, doc,
+      std::filesystem::copy_options::overwrite_existing);
+}
+
+TEST(ViewerAppNoDisplay, SaysSoAndReturnsOne) {
+  const char* old = std::getenv("DISPLAY");
+  const std::string saved = old ? old : "";
+  setenv("DISPLAY", ":4099", 1);  // no server there
+  ViewerOptions o;
+  o.model = std::make_unique<SaggingBall>();
+  o.frames = 1;
+  ::testing::internal::CaptureStderr();
+  const int rc = runViewer(o);
+  const std::string err = ::testing::internal::GetCapturedStderr();
+  if (old) setenv("DISPLAY", saved.c_str(), 1); else unsetenv("DISPLAY");
+  EXPECT_EQ(rc, 1);
+  EXPECT_NE(err.find("incision run"), std::string::npos) << err;
+}
+
+TEST(ViewerAppOptions, BadOptionsAreInputErrors) {
+  ViewerOptions o;
+  EXPECT_THROW(runViewer(o), InputError);  // no model
+  o.model = std::make_unique<SaggingBall>();
+  o.frames = -1;
+  EXPECT_THROW(runViewer(o), InputError);
+}
+
+}  // namespace
+}  // namespace inc::viewer

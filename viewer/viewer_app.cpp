@@ -1,0 +1,485 @@
+// The viewer's main loop: window, input, drawing layers, the tool under the mouse, ImGui panels, captures.
+#include "viewer/viewer_app.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <map>
+
+#include "host/input_error.h"
+#include "viewer/gl_api.h"
+#include "viewer/gl_window.h"
+
+#include <GLFW/glfw3.h>
+#include <imgui.h>
+#include <backends/imgui_impl_glfw.h>
+#include <backends/imgui_impl_opengl3.h>
+
+#include "viewer/orbit_camera.h"
+#include "viewer/screenshot.h"
+#include "viewer/splat_renderer.h"
+#include "viewer/splat_sources.h"
+#include "viewer/surface_renderer.h"
+#include "viewer/zbuffer_collision.h"
+#include "viewer/zbuffer_collision_gl.h"
+
+namespace inc::viewer {
+
+namespace {
+
+// Lets the runner own a model the caller keeps owning (ViewerOptions is passed by const reference).
+class BorrowedModel : public SimulationModel {
+ public:
+  explicit BorrowedModel(SimulationModel& m) : m_(m) {}
+  std::string name() const override { return m_.name(); }
+  BackendKind backend() const override { return m_.backend(); }
+  std::size_t particleCount() const override { return m_.particleCount(); }
+  FrameReport advance(double dt) override { return m_.advance(dt); }
+  void saveCheckpoint() override { m_.saveCheckpoint(); }
+  void restoreCheckpoint() override { m_.restoreCheckpoint(); }
+  void scaleTimeStep(double f) override { m_.scaleTimeStep(f); }
+  void currentPositions(std::vector<Vec3d>& out) const override { m_.currentPositions(out); }
+  bool currentSurface(TriangleMesh& out) const override { return m_.currentSurface(out); }
+  MemoryReport memory() const override { return m_.memory(); }
+
+ private:
+  SimulationModel& m_;
+};
+
+// A fixed-length history for ImGui's PlotLines.
+struct History {
+  std::vector<float> values = std::vector<float>(240, 0.0f);
+  int offset = 0;
+  float last = 0.0f;
+  void push(double v) {
+    last = float(v);
+    values[std::size_t(offset)] = last;
+    offset = (offset + 1) % int(values.size());
+  }
+  void plot(const char* label, const char* unit) const {
+    char overlay[64];
+    std::snprintf(overlay, sizeof overlay, "%.4g %s", double(last), unit);
+    ImGui::PlotLines(label, values.data(), int(values.size()), offset, overlay, FLT_MAX, FLT_MAX, ImVec2(0, 40));
+  }
+};
+
+const char* viewerBackendName(BackendKind k) {
+  switch (k) {
+    case BackendKind::Cuda: return "CUDA (GPU)";
+    case BackendKind::Cpu: return "CPU fallback";
+    default: return "auto";
+  }
+}
+
+struct Frame {
+  ViewCamera cam;
+  int fb_w = 1, fb_h = 1;
+};
+
+std::string numbered(const std::string& stem, int n) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "_%05d.png", n);
+  return stem + buf;
+}
+
+}  // namespace
+
+int runViewer(const ViewerOptions& opt) {
+  if (!opt.model && !opt.factory) throw InputError("view", "model", "no model to show");
+  if (opt.width < 16 || opt.height < 16) throw InputError("view", "window", "width and height must be >= 16");
+  if (opt.frames < 0) throw InputError("view", "--frames", "must be >= 0");
+
+  GlWindowOptions wopt;
+  wopt.width = opt.width;
+  wopt.height = opt.height;
+  wopt.vsync = opt.vsync && opt.frames == 0;
+  wopt.title = opt.title;
+  std::string why;
+  auto window = GlWindow::open(wopt, &why);
+  if (!window) {
+    std::fprintf(stderr,
+                 "incision view: %s.\nThe viewer needs a display with OpenGL 3.3; for a headless run use "
+                 "`incision run SCENE` (or xvfb-run -a incision view ...).\n",
+                 why.c_str());
+    return 1;
+  }
+  GLFWwindow* win = window->handle();
+  if (opt.verbose) std::printf("incision view: OpenGL %s\n", window->glVersion().c_str());
+
+  std::unique_ptr<SimulationModel> first;
+  if (opt.model) first = std::make_unique<BorrowedModel>(*opt.model);
+  const bool scripted = opt.frames > 0;
+  SimRunner runner(std::move(first), opt.factory, opt.knobs, opt.frame_dt_s, opt.threaded && !scripted);
+  runner.setPaused(opt.start_paused);
+
+  IMGUI_CHECKVERSION();
+  ImGui::CreateContext();
+  ImGuiIO& io = ImGui::GetIO();
+  io.IniFilename = nullptr;  // no imgui.ini litter in the working directory
+  ImGui::StyleColorsDark();
+  ImGui_ImplGlfw_InitForOpenGL(win, true);
+  ImGui_ImplOpenGL3_Init("#version 330");
+
+  int rc = 0;
+  try {
+    SurfaceRenderer surface, tool;
+    SplatRenderer surface_splats, particle_splats;
+    ZBufferCollider collider;
+    ViewLayers layers = opt.layers;
+    ToolCollision collision = opt.collision;
+    SurfaceStyle style;
+    SurfaceStyle tool_style;
+    tool_style.front = {0.75f, 0.78f, 0.82f};
+    tool_style.back = tool_style.front;
+    SplatParams splat_params;
+
+    SimSnapshot snap;
+    std::uint64_t version = 0;
+    runner.latest(snap, version);
+    OrbitCamera orbit;
+    double scene_radius = 0.1;
+    auto frameScene = [&] {
+      Vec3d lo, hi;
+      if (pointBounds(snap.has_surface ? snap.surface.vertices : snap.positions, lo, hi)) {
+        orbit.frameBox(lo, hi);
+        scene_radius = std::max(0.5 * norm(hi - lo), 1e-3);
+      }
+    };
+    frameScene();
+    tool.upload([&] {
+      TriangleMesh m;  // unit octahedron refined by normalising: a small sphere for the tool tip
+      const double t = 1.0;
+      m.vertices = {{t, 0, 0}, {-t, 0, 0}, {0, t, 0}, {0, -t, 0}, {0, 0, t}, {0, 0, -t}};
+      m.triangles = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4}, {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
+      for (int level = 0; level < 3; ++level) {
+        std::map<std::pair<int, int>, int> mid;
+        std::vector<std::array<int, 3>> next;
+        auto midpoint = [&](int a, int b) {
+          const auto key = std::minmax(a, b);
+          auto it = mid.find(key);
+          if (it != mid.end()) return it->second;
+          const Vec3d p = m.vertices[a] + m.vertices[b];
+          m.vertices.push_back(p * (1.0 / norm(p)));
+          return mid[key] = int(m.vertices.size()) - 1;
+        };
+        for (const auto& f : m.triangles) {
+          const int a = midpoint(f[0], f[1]), b = midpoint(f[1], f[2]), c = midpoint(f[2], f[0]);
+          next.push_back({f[0], a, c});
+          next.push_back({f[1], b, a});
+          next.push_back({f[2], c, b});
+          next.push_back({a, b, c});
+        }
+        m.triangles.swap(next);
+      }
+      return m;
+    }());
+
+    SplatCloud particle_cloud;
+    bool need_upload = true;
+    std::map<std::string, History> stage_hist, counter_hist;
+    History fps_hist, advance_hist, ke_hist, ee_hist, pe_hist, disp_hist;
+    double press_depth_m = opt.press_depth_m;
+    bool show_help = false, recording = !opt.record_dir.empty();
+    int shot_counter = 0, record_counter = 0, frame_index = 0;
+    double last_x = 0, last_y = 0;
+    ZContact contact;
+    bool tool_valid = false;
+    Vec3d tool_tip;
+    std::string status;
+    auto t_prev = std::chrono::steady_clock::now();
+
+    while (!glfwWindowShouldClose(win) && (!scripted || frame_index < opt.frames)) {
+      glfwPollEvents();
+      runner.pump();
+      if (runner.latest(snap, version)) {
+        need_upload = true;
+        for (const auto& st : snap.report.stages) stage_hist[st.stage].push(st.ms);
+        advance_hist.push(snap.advance_ms);
+        ke_hist.push(snap.report.kinetic_energy);
+        ee_hist.push(snap.report.elastic_energy);
+        pe_hist.push(snap.report.potential_energy);
+        disp_hist.push(snap.report.max_displacement);
+        for (const auto& [k, v] : snap.report.counters) counter_hist[k].push(v);
+      }
+      if (need_upload) {
+        if (snap.has_surface) {
+          surface.upload(snap.surface);
+          surface_splats.upload(surfaceSplats(snap.surface, style.front));
+        }
+        particle_cloud = particleSplats(snap.positions, opt.particle_radius_m, {0.35f, 0.55f, 0.85f});
+        particle_splats.upload(particle_cloud);
+        need_upload = false;
+      }
+      const auto t_now = std::chrono::steady_clock::now();
+      const double frame_s = std::chrono::duration<double>(t_now - t_prev).count();
+      t_prev = t_now;
+      if (frame_s > 0) fps_hist.push(1.0 / frame_s);
+
+      Frame f;
+      glfwGetFramebufferSize(win, &f.fb_w, &f.fb_h);
+      f.fb_w = std::max(f.fb_w, 1);
+      f.fb_h = std::max(f.fb_h, 1);
+      int win_w = 1, win_h = 1;
+      glfwGetWindowSize(win, &win_w, &win_h);
+      const double px_scale = double(f.fb_w) / std::max(win_w, 1);
+
+      ImGui_ImplOpenGL3_NewFrame();
+      ImGui_ImplGlfw_NewFrame();
+      ImGui::NewFrame();
+
+      // --- input: camera and shortcuts (unless ImGui has the mouse/keyboard) ---
+      double mx, my;
+      glfwGetCursorPos(win, &mx, &my);
+      const bool scripted_cursor = opt.cursor_x >= 0.0 && opt.cursor_y >= 0.0;
+      if (scripted_cursor) {
+        mx = opt.cursor_x * win_w;
+        my = opt.cursor_y * win_h;
+      }
+      if (!io.WantCaptureMouse) {
+        const double dx = mx - last_x, dy = my - last_y;
+        const bool shift = glfwGetKey(win, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS;
+        if (glfwGetMouseButton(win, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS && !shift) orbit.orbit(dx, dy);
+        if (glfwGetMouseButton(win, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS ||
+            (glfwGetMouseButton(win, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS && shift))
+          orbit.pan(dx * px_scale, dy * px_scale, f.fb_h);
+        if (io.MouseWheel != 0.0f) {
+          if (glfwGetKey(win, GLFW_KEY_LEFT_CONTROL) == GLFW_PRESS)
+            press_depth_m = std::max(0.0, press_depth_m + 0.02 * scene_radius * io.MouseWheel);
+          else
+            orbit.zoom(std::pow(0.9, double(io.MouseWheel)));
+        }
+      }
+      last_x = mx;
+      last_y = my;
+      bool want_shot = false;
+      if (!io.WantCaptureKeyboard) {
+        if (ImGui::IsKeyPressed(GLFW_KEY_SPACE)) runner.setPaused(!runner.paused());
+        if (ImGui::IsKeyPressed(GLFW_KEY_N)) runner.stepOnce();
+        if (ImGui::IsKeyPressed(GLFW_KEY_R)) runner.reset();
+        if (ImGui::IsKeyPressed(GLFW_KEY_F)) frameScene();
+        if (ImGui::IsKeyPressed(GLFW_KEY_P)) want_shot = true;
+        if (ImGui::IsKeyPressed(GLFW_KEY_V)) recording = !recording;
+        if (ImGui::IsKeyPressed(GLFW_KEY_H) || ImGui::IsKeyPressed(GLFW_KEY_F1)) show_help = !show_help;
+        if (ImGui::IsKeyPressed(GLFW_KEY_1)) layers.surface = !layers.surface;
+        if (ImGui::IsKeyPressed(GLFW_KEY_2)) layers.splats = !layers.splats;
+        if (ImGui::IsKeyPressed(GLFW_KEY_3)) layers.particles = !layers.particles;
+        if (ImGui::IsKeyPressed(GLFW_KEY_4)) layers.wireframe = !layers.wireframe;
+        if (ImGui::IsKeyPressed(GLFW_KEY_T)) layers.tool = !layers.tool;
+        if (ImGui::IsKeyPressed(GLFW_KEY_MINUS)) runner.setTimeScale(runner.timeScale() * 0.5);
+        if (ImGui::IsKeyPressed(GLFW_KEY_EQUAL)) runner.setTimeScale(runner.timeScale() * 2.0);
+        if (ImGui::IsKeyPressed(GLFW_KEY_ESCAPE)) glfwSetWindowShouldClose(win, GLFW_TRUE);
+      }
+
+      // --- the scene ---
+      f.cam = orbit.view(f.fb_w, f.fb_h);
+      glBindFramebuffer(GL_FRAMEBUFFER, 0);
+      glViewport(0, 0, f.fb_w, f.fb_h);
+      glDepthMask(GL_TRUE);
+      glClearColor(0.11f, 0.12f, 0.14f, 1.0f);
+      glClearDepth(1.0);
+      glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+      style.wireframe = layers.wireframe;
+      if (snap.has_surface && layers.surface && !layers.splats) surface.draw(f.cam, style);
+      if (snap.has_surface && layers.splats) surface_splats.draw(f.cam, splat_params);
+      if (layers.particles || !snap.has_surface) particle_splats.draw(f.cam, splat_params);
+
+      // --- the tool under the mouse: z-buffer depth under the cursor places it on the drawn surface ---
+      tool_valid = false;
+      contact = ZContact{};
+      const double cx = mx * px_scale, cy = f.fb_h - my * px_scale;  // GL pixels, origin bottom-left
+      if (layers.tool && (scripted_cursor || !io.WantCaptureMouse) && cx >= 0 && cy >= 0 && cx < f.fb_w && cy < f.fb_h) {
+        const std::vector<float> d = readDepth(int(cx), int(cy), 1, 1);
+        Vec3d hit;
+        if (pointFromWindowDepth(f.cam, std::floor(cx) + 0.5, std::floor(cy) + 0.5, d[0], hit)) {
+          Vec3d o, dir;
+          f.cam.pixelRay(std::floor(cx) + 0.5, std::floor(cy) + 0.5, o, dir);
+          tool_tip = hit + dir * press_depth_m;
+          tool_valid = true;
+          if (collision == ToolCollision::SplatZBuffer) {
+            const ViewCamera zc = cameraRayDepthCamera(f.cam.eye, tool_tip, 0.01 * scene_radius, f.cam.far_m, 33);
+            // The paper's GPU z-buffer test needs oriented splats: the surface's (view-facing particle
+            // discs have no back side, so nothing would ever count as inside).
+            if (snap.has_surface) contact = collider.collide(zc, surface_splats, tool_tip);
+            else contact = ZContact{};
+          } else {
+            contact = ZContact{};
+            contact.inside = press_depth_m > 0.0;
+            contact.surface_point = hit;
+            contact.penetration_m = press_depth_m;
+          }
+        }
+      }
+      if (tool_valid) {
+        const double r = 0.03 * scene_radius;
+        tool_style.front = contact.inside ? std::array<float, 3>{0.3f, 0.85f, 0.4f} : std::array<float, 3>{0.75f, 0.78f, 0.82f};
+        tool_style.back = tool_style.front;
+        tool_style.on_top = true;  // the tip stays visible when pressed into the tissue
+        const Mat4f model = frameMatrix({r, 0, 0}, {0, r, 0}, {0, 0, r}, tool_tip);
+        tool.draw(f.cam, tool_style, model);
+      }
+
+      // --- panels ---
+      if (opt.show_ui) {
+        ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
+        ImGui::SetNextWindowSize(ImVec2(390, 0), ImGuiCond_FirstUseEver);
+        ImGui::Begin("Incision");
+        ImGui::PushItemWidth(170);
+        ImGui::Text("%s", snap.name.c_str());
+        ImGui::Text("backend: %s   particles: %zu", viewerBackendName(snap.backend), snap.particles);
+        ImGui::Text("frame %llu   t = %.3f s", static_cast<unsigned long long>(snap.frame), snap.sim_time_s);
+        if (snap.failed) ImGui::TextColored(ImVec4(1, 0.4f, 0.3f, 1), "%s", snap.failure.c_str());
+        bool paused = runner.paused();
+        if (ImGui::Checkbox("pause (space)", &paused)) runner.setPaused(paused);
+        ImGui::SameLine();
+        if (ImGui::Button("step (N)")) runner.stepOnce();
+        if (runner.canReset()) {
+          ImGui::SameLine();
+          if (ImGui::Button("reset (R)")) runner.reset();
+        }
+        float slow = float(runner.timeScale());
+        if (ImGui::SliderFloat("time scale", &slow, 0.01f, 1.0f, "%.2f", ImGuiSliderFlags_Logarithmic))
+          runner.setTimeScale(slow);
+        if (ImGui::CollapsingHeader("Speed / accuracy", ImGuiTreeNodeFlags_DefaultOpen)) {
+          float safety = float(runner.stepSafety());
+          if (ImGui::SliderFloat("step safety x", &safety, 0.05f, 2.0f, "%.2f", ImGuiSliderFlags_Logarithmic))
+            runner.setStepSafety(safety);
+          const std::vector<ViewerKnob> knobs = runner.knobs();
+          for (std::size_t i = 0; i < knobs.size(); ++i) {
+            double v = knobs[i].value;
+            ImGuiSliderFlags fl = knobs[i].logarithmic ? ImGuiSliderFlags_Logarithmic : 0;
+            bool changed;
+            if (knobs[i].integer) {
+              int iv = int(v);
+              changed = ImGui::SliderInt(knobs[i].label.c_str(), &iv, int(knobs[i].min_value), int(knobs[i].max_value),
+                                         "%d", fl);
+              v = iv;
+            } else {
+              changed = ImGui::SliderScalar(knobs[i].label.c_str(), ImGuiDataType_Double, &v, &knobs[i].min_value,
+                                            &knobs[i].max_value, "%.4g", fl);
+            }
+            if (changed) runner.setKnob(i, v);
+          }
+          ImGui::Text("substeps %d   dt %.3g s", snap.report.substeps, snap.report.dt);
+        }
+        if (ImGui::CollapsingHeader("Timing", ImGuiTreeNodeFlags_DefaultOpen)) {
+          fps_hist.plot("fps", "Hz");
+          advance_hist.plot("step", "ms");
+          for (const auto& [name, h] : stage_hist) h.plot(name.c_str(), "ms");
+        }
+        if (ImGui::CollapsingHeader("Energy and counters")) {
+          ke_hist.plot("kinetic", "J");
+          ee_hist.plot("elastic", "J");
+          pe_hist.plot("potential", "J");
+          disp_hist.plot("max |u|", "m");
+          // Model counters (e.g. haptic_hz, haptic_p99_ms, broken_bonds) plotted over the last frames.
+          for (const auto& [k, h] : counter_hist) h.plot(k.c_str(), "");
+        }
+        if (ImGui::CollapsingHeader("Layers")) {
+          ImGui::Checkbox("surface (1)", &layers.surface);
+          ImGui::SameLine();
+          ImGui::Checkbox("splats (2)", &layers.splats);
+          ImGui::Checkbox("particles (3)", &layers.particles);
+          ImGui::SameLine();
+          ImGui::Checkbox("wireframe (4)", &layers.wireframe);
+          float sf = float(splat_params.sigma_fraction);
+          if (ImGui::SliderFloat("splat sigma / r", &sf, 0.2f, 1.0f)) splat_params.sigma_fraction = sf;
+        }
+        if (ImGui::CollapsingHeader("Tool", ImGuiTreeNodeFlags_DefaultOpen)) {
+          ImGui::Checkbox("tool (T)", &layers.tool);
+          int mode = collision == ToolCollision::DepthBuffer ? 0 : 1;
+          ImGui::RadioButton("depth under cursor", &mode, 0);
+          ImGui::SameLine();
+          ImGui::RadioButton("z-buffer splats", &mode, 1);
+          collision = mode == 0 ? ToolCollision::DepthBuffer : ToolCollision::SplatZBuffer;
+          float press_mm = float(press_depth_m * 1e3);
+          if (ImGui::SliderFloat("press depth [mm] (ctrl+wheel)", &press_mm, 0.0f, float(200.0 * scene_radius)))
+            press_depth_m = press_mm * 1e-3;
+          if (tool_valid)
+            ImGui::Text("tip (%.4f, %.4f, %.4f) m  %s  pen %.2f mm", tool_tip.x, tool_tip.y, tool_tip.z,
+                        contact.inside ? "INSIDE" : "outside", contact.penetration_m * 1e3);
+          else
+            ImGui::TextDisabled("tip: no surface under the cursor");
+          if (collision == ToolCollision::SplatZBuffer && !snap.has_surface)
+            ImGui::TextDisabled("z-buffer mode needs oriented splats (a surface)");
+        }
+        if (ImGui::Button("screenshot (P)")) want_shot = true;
+        ImGui::SameLine();
+        ImGui::Checkbox("record (V)", &recording);
+        ImGui::SameLine();
+        if (ImGui::Button("help (H)")) show_help = !show_help;
+        if (!status.empty()) ImGui::TextDisabled("%s", status.c_str());
+        ImGui::PopItemWidth();
+        ImGui::End();
+
+        if (show_help) {
+          ImGui::Begin("Controls", &show_help, ImGuiWindowFlags_AlwaysAutoResize);
+          ImGui::TextUnformatted(
+              "left drag     orbit\n"
+              "right drag    pan (or shift + left drag)\n"
+              "wheel         zoom\n"
+              "ctrl + wheel  tool press depth\n"
+              "space         pause / run\n"
+              "N             single step\n"
+              "R             reset\n"
+              "- / =         slower / faster (time scale)\n"
+              "1 2 3 4       surface / splats / particles / wireframe\n"
+              "T             tool on / off\n"
+              "F             frame the model\n"
+              "P             screenshot   V  record frames\n"
+              "H, F1         this help    Esc  quit");
+          ImGui::End();
+        }
+        // Status bar.
+        ImGui::SetNextWindowPos(ImVec2(0, io.DisplaySize.y - 24));
+        ImGui::SetNextWindowSize(ImVec2(io.DisplaySize.x, 24));
+        ImGui::Begin("status", nullptr,
+                     ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoInputs | ImGuiWindowFlags_NoSavedSettings);
+        ImGui::Text("%s | %s | %.0f fps | step %.2f ms%s", viewerBackendName(snap.backend),
+                    snap.backend == BackendKind::Cpu ? "no GPU model: running on the CPU" : "GPU",
+                    double(fps_hist.last), snap.advance_ms, runner.paused() ? " | PAUSED" : "");
+        ImGui::End();
+      }
+      ImGui::Render();
+      ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+
+      if (opt.on_frame) {
+        ViewerFrameInfo info;
+        info.index = frame_index;
+        info.sim_frame = snap.frame;
+        info.tool_on_surface = tool_valid;
+        info.tool_tip = tool_tip;
+        info.contact = contact;
+        info.camera = f.cam;
+        opt.on_frame(info);
+      }
+      // --- captures read the back buffer before the swap ---
+      ++frame_index;
+      const bool last_scripted = scripted && frame_index == opt.frames;
+      if (want_shot || recording || (last_scripted && !opt.screenshot_path.empty())) {
+        glReadBuffer(GL_BACK);
+        const RgbImage img = readFramebuffer(f.fb_w, f.fb_h);
+        if (last_scripted && !opt.screenshot_path.empty()) writePng(opt.screenshot_path, img);
+        if (want_shot) {
+          const std::string path = numbered("incision_screenshot", shot_counter++);
+          writePng(path, img);
+          status = "wrote " + path;
+        }
+        if (recording) {
+          const std::string dir = opt.record_dir.empty() ? std::string(".") : opt.record_dir;
+          writePng(numbered(dir + "/frame", record_counter++), img);
+        }
+      }
+      glfwSwapBuffers(win);
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "incision view: %s\n", e.what());
+    rc = 1;
+  }
+  ImGui_ImplOpenGL3_Shutdown();
+  ImGui_ImplGlfw_Shutdown();
+  ImGui::DestroyContext();
+  return rc;
+}
+
+}  // namespace inc::viewer

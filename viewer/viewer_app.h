@@ -1,0 +1,70 @@
+// The interactive viewer: a GLFW window with ImGui panels showing a SimulationModel as it runs.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "host/simulation_model.h"
+#include "viewer/sim_runner.h"
+#include "viewer/zbuffer_collision.h"
+
+namespace inc::viewer {
+
+struct ViewLayers {
+  bool surface = true;    // the model's surface mesh, Phong shaded (inner side in the cut-wall colour)
+  bool splats = false;    // the surface drawn as Gaussian point splats instead (paper, section 3)
+  bool particles = false; // every particle (nodal points, metaball centres) as view-facing splats
+  bool wireframe = false;
+  bool tool = true;       // the tool tip under the mouse
+};
+
+enum class ToolCollision {
+  DepthBuffer,  // the tip sits on the drawn surface under the cursor (z-buffer read-back)
+  SplatZBuffer, // the paper's z-buffer collision against the particle splats along the eye ray
+};
+
+// What a frame showed, for scripted runs and tests (ViewerOptions::on_frame).
+struct ViewerFrameInfo {
+  int index = 0;                 // displayed frames so far, from 0
+  std::uint64_t sim_frame = 0;   // the snapshot's simulation frame
+  bool tool_on_surface = false;  // the cursor is over drawn geometry
+  Vec3d tool_tip;                // m, world
+  ZContact contact;              // of the active collision mode
+  ViewCamera camera;
+};
+
+struct ViewerOptions {
+  // The model to show: `model`, or built by `factory` (which also rebuilds it on reset). When both are set
+  // the model is shown first and the factory serves resets. The viewer borrows `model` for the call.
+  std::unique_ptr<SimulationModel> model;
+  ModelFactory factory;
+  std::vector<ViewerKnob> knobs;  // live parameters (Young's modulus, iterations, substeps, ...)
+  std::string title = "Incision";
+  int width = 1280;  // window, screen coordinates
+  int height = 800;
+  bool vsync = true;
+  double frame_dt_s = 1.0 / 60.0;  // simulated seconds per frame (at slow-motion scale 1)
+  bool threaded = true;            // simulation on its own thread; scripted runs (frames > 0) always pump
+  int frames = 0;                  // > 0: render this many frames, then exit (scripted capture, tests)
+  std::string screenshot_path;     // written after the last scripted frame; the P key writes numbered ones
+  std::string record_dir;          // non-empty: every frame written as record_dir/frame_00000.png
+  bool show_ui = true;
+  bool start_paused = false;
+  double particle_radius_m = 0.0;  // 0: from the particles' mean spacing
+  ViewLayers layers;
+  ToolCollision collision = ToolCollision::DepthBuffer;
+  // Scripted cursor in window fractions (0, 0 top-left .. 1, 1 bottom-right); negative: the real mouse.
+  double cursor_x = -1.0, cursor_y = -1.0;
+  double press_depth_m = 0.0;      // m, the tool tip below the surface under the cursor (negative: above)
+  std::function<void(const ViewerFrameInfo&)> on_frame;  // called after each frame is drawn
+  bool verbose = false;            // print the GL version and progress to stdout
+};
+
+// Runs until the window closes (or `frames` frames). Returns 0 on success, 1 when no display or no
+// OpenGL 3.3 context is available (a message on stderr suggests `incision run`) or rendering failed.
+// Throws InputError for invalid options.
+int runViewer(const ViewerOptions& options);
+
+}  // namespace inc::viewer
