@@ -26,6 +26,7 @@ struct Row {
   std::string table, backend, precision, solver;
   std::int64_t spheres = 0, constraints = 0;
   int iterations = 0, substeps = 0, colors = 0;
+  std::string stages;  // "name=ms ..." of the last timed frame
   double ms_frame = 0, constraints_per_s = 0, residual_max = 0, residual_rms = 0, deflection_m = 0, deflection_err = 0;
 };
 
@@ -119,6 +120,11 @@ Row timeFrames(BackendKind kind, PbdSolverKind solver, std::int64_t n, int itera
   r.constraints_per_s = double(r.constraints) * iterations * substeps / (r.ms_frame * 1e-3);
   r.residual_max = st.residual_max;
   r.residual_rms = st.residual_rms;
+  for (const auto& s : st.stages) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%s%s=%.3f", r.stages.empty() ? "" : " ", s.stage.c_str(), s.ms);
+    r.stages += buf;
+  }
   return r;
 }
 
@@ -152,9 +158,9 @@ double tipDeflection(BackendKind kind, PbdSolverKind solver, std::int64_t n, int
 
 void printRow(const Row& r) {
   if (r.table == "scaling")
-    std::printf("%-6s %-8s %-12s %8lld %9lld %4d %4d %5d %10.3f %12.3e %10.2e\n", r.backend.c_str(), r.precision.c_str(),
+    std::printf("%-6s %-8s %-12s %8lld %9lld %4d %4d %5d %10.3f %12.3e %10.2e  %s\n", r.backend.c_str(), r.precision.c_str(),
                 r.solver.c_str(), (long long)r.spheres, (long long)r.constraints, r.iterations, r.substeps, r.colors,
-                r.ms_frame, r.constraints_per_s, r.residual_max);
+                r.ms_frame, r.constraints_per_s, r.residual_max, r.stages.c_str());
   else
     std::printf("%-6s %-8s %-12s %8lld %4d %4d %10.3f %10.3e %10.3e %10.3e %9.2f%%\n", r.backend.c_str(), r.precision.c_str(),
                 r.solver.c_str(), (long long)r.spheres, r.iterations, r.substeps, r.ms_frame, r.residual_max,
@@ -210,7 +216,7 @@ int main(int argc, char** argv) {
     std::vector<Row> rows;
     std::printf("# scaling: %d iterations x %d substeps per 1/60 s frame, probe pressing, volume preservation near it\n",
                 iterations, substeps);
-    std::printf("%-6s %-8s %-12s %8s %9s %4s %4s %5s %10s %12s %10s\n", "backend", "prec", "solver", "spheres",
+    std::printf("%-6s %-8s %-12s %8s %9s %4s %4s %5s %10s %12s %10s  stages\n", "backend", "prec", "solver", "spheres",
                 "constr", "it", "sub", "cols", "ms/frame", "constr/s", "resid_m");
     for (BackendKind k : kinds)
       for (std::int64_t n : sizes) {
