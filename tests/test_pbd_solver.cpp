@@ -440,3 +440,58 @@ TEST(PbdSolver, MetaballVolumePreservationKeepsSqueezedUnionVolume) {
   EXPECT_LT(loss[1], 0.05);
   EXPECT_GT(loss[0], 2.0 * loss[1]);
 }
+
+// Bad frame inputs are InputErrors naming the key, never a crash.
+TEST(PbdSolver, BadFrameInputsAreInputErrors) {
+  auto be = cpu::makePbdCpuBackend<double>();
+  be->setModel(test::makeHangingChain<double>(4, 0.1, 0.01, 0.0));
+  PbdStepParams<double> p;
+  PbdFrameInput<double> in;
+  in.kinematic_ids = {2};
+  in.kinematic_from = in.kinematic_to = {Vec3d(0, 0, -0.2)};
+  in.attach_ids = {2};  // also kinematic
+  in.attach_from = in.attach_to = {Vec3d(0, 0, -0.2)};
+  in.attach_compliance = {0.0};
+  EXPECT_THROW(be->advanceFrame(p, in), InputError);
+  in.attach_ids = {3};
+  in.attach_compliance = {-1.0};
+  EXPECT_THROW(be->advanceFrame(p, in), InputError);
+  in.attach_compliance = {0.0, 0.0};
+  EXPECT_THROW(be->advanceFrame(p, in), InputError);
+  in.attach_compliance = {0.0};
+  in.attach_ids = {7};
+  EXPECT_THROW(be->advanceFrame(p, in), InputError);
+  in.attach_ids = {3};
+  EXPECT_NO_THROW(be->advanceFrame(p, in));
+  p.substeps = 0;
+  EXPECT_THROW(be->advanceFrame(p, in), InputError);
+}
+
+// A grasp attachment with compliance alpha holds a hanging particle of mass m at alpha m g below its target
+// (XPBD static balance C = alpha F); alpha = 0 holds it on the target.
+TEST(PbdSolver, AttachmentSagsByComplianceTimesWeight) {
+  for (double alpha : {0.0, 0.5}) {
+    PbdModel<double> m;
+    m.rest_positions = {Vec3d(0, 0, 0)};
+    m.masses = {0.01};
+    m.inv_mass = {100.0};
+    m.rest_radii = {0.0};
+    m.overlap_offsets = {0, 0};
+    finalizePbdModel(m);
+    auto be = cpu::makePbdCpuBackend<double>();
+    be->setModel(m);
+    PbdStepParams<double> p;
+    p.damping = 8;
+    p.volume_preservation = false;
+    PbdFrameInput<double> in;
+    in.attach_ids = {0};
+    in.attach_from = in.attach_to = {Vec3d(0.1, 0, 0.05)};
+    in.attach_compliance = {alpha};
+    test::runFrames(*be, p, 240, in);
+    PbdState<double> s;
+    be->getState(s);
+    const double sag = 0.05 - s.positions[0].z;
+    EXPECT_NEAR(s.positions[0].x, 0.1, 1e-6);
+    EXPECT_NEAR(sag, alpha * 0.01 * kG, 1e-3 * alpha * 0.01 * kG + 1e-9);
+  }
+}
