@@ -196,6 +196,99 @@ __global__ void summaryKernel(int n, const Vec3<T>* x, const Vec3<T>* v, const T
   }
 }
 
+// Small models (the haptic case): the whole constraint loop of a frame in one thread block. Each phase is a
+// block-strided loop over the same physics calls as the per-phase kernels above, separated by
+// __syncthreads() (which orders this block's global-memory writes), so the result equals the multi-launch
+// path bit for bit while paying one launch per frame instead of one per block, colour and iteration.
+constexpr int kMaxFusedBlocks = 8;
+constexpr int kFusedThreads = 1024;
+
+template <typename T>
+struct FusedBlock {
+  pbd::BlockView<T> view;
+  const std::int32_t* order = nullptr;          // Gauss-Seidel: constraints sorted by colour
+  const std::int32_t* color_offsets = nullptr;  // device copy, colors + 1 entries
+  int colors = 0;
+  int multipliers = 0;
+  bool solve = true;
+};
+
+template <typename T>
+struct FusedFrame {
+  int n = 0, substeps = 1, iterations = 1, nblocks = 0;
+  Vec3<T>* x = nullptr;
+  Vec3<T>* v = nullptr;
+  Vec3<T>* x_prev = nullptr;
+  const T* w = nullptr;
+  const T* r = nullptr;
+  Vec3<T> g;
+  T damp = T(1), dt = T(0);
+  pbd::SolveContext<T> ctx;
+  FusedBlock<T> blocks[kMaxFusedBlocks];
+  int n_kin = 0;
+  const std::int32_t* kin_ids = nullptr;
+  const Vec3<T>* kin_from = nullptr;
+  const Vec3<T>* kin_to = nullptr;
+  int n_att = 0;
+  const std::int32_t* att_ids = nullptr;
+  const Vec3<T>* att_from = nullptr;
+  const Vec3<T>* att_to = nullptr;
+  const T* att_comp = nullptr;
+  Vec3<T>* att_lambda = nullptr;
+  const pbd::PlaneCollider<T>* planes = nullptr;
+  const pbd::BoxCollider<T>* boxes = nullptr;
+  const pbd::CapsuleCollider<T>* tools_from = nullptr;
+  const pbd::CapsuleCollider<T>* tools_to = nullptr;
+  int np = 0, nb = 0, nt = 0;
+};
+
+template <typename T>
+__global__ void __launch_bounds__(kFusedThreads) fusedFrameKernel(FusedFrame<T> f) {
+  const int tid = threadIdx.x, nth = blockDim.x;
+  for (int s = 0; s < f.substeps; ++s) {
+    const T t_end = T(s + 1) / T(f.substeps);
+    for (int i = tid; i < f.n; i += nth) pbd::predictParticle(f.x[i], f.v[i], f.x_prev[i], f.w[i], f.g, f.damp, f.dt);
+    for (int b = 0; b < f.nblocks; ++b)
+      for (int k = tid; k < f.blocks[b].multipliers; k += nth) f.blocks[b].view.lambda[k] = Vec3<T>();
+    for (int k = tid; k < f.n_att; k += nth) f.att_lambda[k] = Vec3<T>();
+    __syncthreads();
+    for (int q = tid; q < f.n_kin; q += nth) f.x[f.kin_ids[q]] = pbd::lerp(f.kin_from[q], f.kin_to[q], t_end);
+    __syncthreads();
+    for (int it = 0; it < f.iterations; ++it) {
+      for (int b = 0; b < f.nblocks; ++b) {
+        const FusedBlock<T>& fb = f.blocks[b];
+        if (!fb.solve || fb.view.count == 0) continue;
+        if (f.ctx.jacobi) {
+          for (int c = tid; c < fb.view.count; c += nth) pbd::projectConstraint(fb.view, c, f.ctx);
+          __syncthreads();
+          for (int i = tid; i < f.n; i += nth) f.x[i] += pbd::gatherCorrection(fb.view, std::int32_t(i));
+          __syncthreads();
+        } else {
+          for (int k = 0; k < fb.colors; ++k) {
+            const int c0 = fb.color_offsets[k], c1 = fb.color_offsets[k + 1];
+            for (int q = c0 + tid; q < c1; q += nth) pbd::projectConstraint(fb.view, fb.order[q], f.ctx);
+            __syncthreads();
+          }
+        }
+      }
+      for (int q = tid; q < f.n_att; q += nth) {
+        const std::int32_t id = f.att_ids[q];
+        pbd::projectAttachment(f.x[id], f.w[id], pbd::lerp(f.att_from[q], f.att_to[q], t_end), f.att_comp[q],
+                               f.ctx.xpbd, f.dt, f.att_lambda[q]);
+      }
+      __syncthreads();
+      for (int i = tid; i < f.n; i += nth)
+        if (f.w[i] > T(0))
+          f.x[i] = pbd::resolveContacts(f.x[i], f.r[i], f.planes, f.np, f.boxes, f.nb, f.tools_from, f.tools_to, f.nt,
+                                        t_end);
+      __syncthreads();
+    }
+    const T inv_dt = T(1) / f.dt;
+    for (int i = tid; i < f.n; i += nth) f.v[i] = (f.x[i] - f.x_prev[i]) * inv_dt;
+    __syncthreads();
+  }
+}
+
 // ----------------------------------------------------------------------------------------------
 
 template <typename T>
@@ -208,6 +301,7 @@ struct DeviceBlock {
   DeviceBuffer<T> rest, compliance, jacobi_scale;
   DeviceBuffer<Vec3<T>> rest_vec, lambda, slot_corr;
   std::vector<std::int32_t> color_offsets;  // host: launch ranges
+  DeviceBuffer<std::int32_t> color_offsets_dev;  // the same, for the fused small-model kernel
 };
 
 // What a captured graph depends on besides stable buffer pointers; a change re-captures.
@@ -227,7 +321,8 @@ bool sameKey(const GraphKey<T>& a, const GraphKey<T>& b) {
          x.gravity.y == y.gravity.y && x.gravity.z == y.gravity.z && x.damping == y.damping &&
          x.rotation_iterations == y.rotation_iterations && x.volume_preservation == y.volume_preservation &&
          x.volume_influence == y.volume_influence && x.max_radius_growth == y.max_radius_growth &&
-         x.volume_passes == y.volume_passes && x.bisection_steps == y.bisection_steps && a.kinematic == b.kinematic &&
+         x.volume_passes == y.volume_passes && x.bisection_steps == y.bisection_steps &&
+         x.fused_max_particles == y.fused_max_particles && a.kinematic == b.kinematic &&
          a.tools == b.tools && a.attached == b.attached && std::equal(a.ptrs, a.ptrs + 11, b.ptrs);
 }
 
@@ -294,6 +389,7 @@ class PbdCudaBackend final : public PbdBackend<T> {
       d.particle_slots.upload(s.particle_slots);
       d.order.upload(s.coloring.order);
       d.color_offsets = s.coloring.color_offsets;
+      d.color_offsets_dev.upload(s.coloring.color_offsets);
       d.rest.upload(s.rest);
       d.compliance.upload(s.compliance);
       d.jacobi_scale.upload(s.jacobi_scale);
@@ -498,7 +594,52 @@ class PbdCudaBackend final : public PbdBackend<T> {
     ctx.omega = p.jacobi_omega;
     ctx.rotation_iterations = p.rotation_iterations;
 
-    for (int s = 0; s < p.substeps; ++s) {
+    const bool fused = !profile_ && n_ > 0 && n_ <= p.fused_max_particles && int(blocks_.size()) <= kMaxFusedBlocks;
+    if (fused) {
+      FusedFrame<T> f;
+      f.n = n_;
+      f.substeps = p.substeps;
+      f.iterations = p.iterations;
+      f.x = x_.data();
+      f.v = v_.data();
+      f.x_prev = x_prev_.data();
+      f.w = w_.data();
+      f.r = radii_.data();
+      f.g = p.gravity;
+      f.damp = damp;
+      f.dt = dt;
+      f.ctx = ctx;
+      f.nblocks = int(blocks_.size());
+      for (std::size_t b = 0; b < blocks_.size(); ++b) {
+        DeviceBlock<T>& d = blocks_[b];
+        f.blocks[b].view = view(d);
+        f.blocks[b].order = d.order.data();
+        f.blocks[b].color_offsets = d.color_offsets_dev.data();
+        f.blocks[b].colors = int(d.color_offsets.size()) - 1;
+        f.blocks[b].multipliers = int(d.lambda.size());
+        f.blocks[b].solve = d.solve;
+      }
+      f.n_kin = n_kin_;
+      f.kin_ids = kin_ids_.data();
+      f.kin_from = kin_from_.data();
+      f.kin_to = kin_to_.data();
+      f.n_att = n_att_;
+      f.att_ids = att_ids_.data();
+      f.att_from = att_from_.data();
+      f.att_to = att_to_.data();
+      f.att_comp = att_comp_.data();
+      f.att_lambda = att_lambda_.data();
+      f.planes = planes_.data();
+      f.boxes = boxes_.data();
+      f.tools_from = tools_from_.data();
+      f.tools_to = tools_to_.data();
+      f.np = n_planes_;
+      f.nb = n_boxes_;
+      f.nt = n_tools_;
+      fusedFrameKernel<T><<<1, kFusedThreads, 0, stream_>>>(f);
+      INC_CUDA_LAUNCH("pbd fused frame");
+    }
+    for (int s = 0; s < (fused ? 0 : p.substeps); ++s) {
       const T t_end = T(s + 1) / T(p.substeps);
       std::size_t ev = stageBegin();
       if (n_ > 0) {
