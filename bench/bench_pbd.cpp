@@ -23,7 +23,7 @@ using namespace inc;
 namespace {
 
 struct Row {
-  std::string table, backend, precision, solver;
+  std::string table, backend, precision, solver, path = "-";  // path (CUDA): fused | launches
   std::int64_t spheres = 0, constraints = 0;
   int iterations = 0, substeps = 0, colors = 0;
   std::string stages;  // "name=ms ..." of the last timed frame
@@ -83,7 +83,8 @@ double median(std::vector<double> v) {
 // Frame time: CUDA events (the backend's "frame" stage) on the GPU, wall clock on the CPU; median of `repeats`
 // frames after 3 warm-up frames (graph capture, first touch).
 template <typename T>
-Row timeFrames(BackendKind kind, PbdSolverKind solver, std::int64_t n, int iterations, int substeps, int repeats) {
+Row timeFrames(BackendKind kind, PbdSolverKind solver, std::int64_t n, int iterations, int substeps, int repeats,
+               int fused_max = 4096) {
   Vec3d size;
   const PbdModel<T> m = blockModel<T>(n, size);
   auto be = makePbdBackend<T>(kind);
@@ -93,6 +94,7 @@ Row timeFrames(BackendKind kind, PbdSolverKind solver, std::int64_t n, int itera
   p.iterations = iterations;
   p.substeps = substeps;
   p.volume_influence = T(2 * kSpacing);
+  p.fused_max_particles = fused_max;
   const PbdFrameInput<T> in = probeInput<T>(size);
   PbdFrameStats st;
   for (int k = 0; k < 3; ++k) st = be->advanceFrame(p, in);
@@ -111,6 +113,7 @@ Row timeFrames(BackendKind kind, PbdSolverKind solver, std::int64_t n, int itera
   r.backend = backendName(be->kind());
   r.precision = sizeof(T) == 4 ? "float32" : "float64";
   r.solver = solver == PbdSolverKind::Jacobi ? "jacobi" : "gauss_seidel";
+  if (be->kind() == BackendKind::Cuda) r.path = std::int64_t(m.size()) <= fused_max ? "fused" : "launches";
   r.spheres = std::int64_t(m.size());
   r.constraints = solvedConstraints(m);
   r.iterations = iterations;
@@ -158,8 +161,8 @@ double tipDeflection(BackendKind kind, PbdSolverKind solver, std::int64_t n, int
 
 void printRow(const Row& r) {
   if (r.table == "scaling")
-    std::printf("%-6s %-8s %-12s %8lld %9lld %4d %4d %5d %10.3f %12.3e %10.2e  %s\n", r.backend.c_str(), r.precision.c_str(),
-                r.solver.c_str(), (long long)r.spheres, (long long)r.constraints, r.iterations, r.substeps, r.colors,
+    std::printf("%-6s %-8s %-12s %-8s %8lld %9lld %4d %4d %5d %10.3f %12.3e %10.2e  %s\n", r.backend.c_str(),
+                r.precision.c_str(), r.solver.c_str(), r.path.c_str(), (long long)r.spheres, (long long)r.constraints, r.iterations, r.substeps, r.colors,
                 r.ms_frame, r.constraints_per_s, r.residual_max, r.stages.c_str());
   else
     std::printf("%-6s %-8s %-12s %8lld %4d %4d %10.3f %10.3e %10.3e %10.3e %9.2f%%\n", r.backend.c_str(), r.precision.c_str(),
@@ -173,7 +176,7 @@ int main(int argc, char** argv) {
   CLI::App app{"PBD/XPBD metaball solver benchmark"};
   std::string backend = "auto", csv, precision = "float32";
   std::int64_t min_n = 100, max_n = 100000, cpu_max = 20000, accuracy_n = 570;
-  int iterations = 10, substeps = 4, repeats = 20;
+  int iterations = 10, substeps = 4, repeats = 20, fused_max = 4096;
   bool quick = false;
   app.add_option("--backend", backend, "auto (CPU and, when present, CUDA) | cpu | cuda");
   app.add_option("--precision", precision, "float32 | float64");
@@ -184,6 +187,7 @@ int main(int argc, char** argv) {
   app.add_option("--iterations", iterations, "iterations per substep in the scaling table");
   app.add_option("--substeps", substeps, "substeps per 1/60 s frame");
   app.add_option("--repeats", repeats, "timed frames per point (median)");
+  app.add_option("--fused-max", fused_max, "CUDA: largest sphere count run by the fused single-block kernel (0: never)");
   app.add_option("--csv", csv, "write every row to this CSV file");
   app.add_flag("--quick", quick, "short run: up to 10^4 spheres, 5 repeats");
   CLI11_PARSE(app, argc, argv);
@@ -216,16 +220,23 @@ int main(int argc, char** argv) {
     std::vector<Row> rows;
     std::printf("# scaling: %d iterations x %d substeps per 1/60 s frame, probe pressing, volume preservation near it\n",
                 iterations, substeps);
-    std::printf("%-6s %-8s %-12s %8s %9s %4s %4s %5s %10s %12s %10s  stages\n", "backend", "prec", "solver", "spheres",
+    std::printf("%-6s %-8s %-12s %-8s %8s %9s %4s %4s %5s %10s %12s %10s  stages\n", "backend", "prec", "solver", "path",
+                "spheres",
                 "constr", "it", "sub", "cols", "ms/frame", "constr/s", "resid_m");
     for (BackendKind k : kinds)
       for (std::int64_t n : sizes) {
         if (k == BackendKind::Cpu && n > cpu_max) continue;
         for (PbdSolverKind s : {PbdSolverKind::Jacobi, PbdSolverKind::GaussSeidel}) {
-          const Row r = f64 ? timeFrames<double>(k, s, n, iterations, substeps, repeats)
-                            : timeFrames<float>(k, s, n, iterations, substeps, repeats);
+          const Row r = f64 ? timeFrames<double>(k, s, n, iterations, substeps, repeats, fused_max)
+                            : timeFrames<float>(k, s, n, iterations, substeps, repeats, fused_max);
           printRow(r);
           rows.push_back(r);
+          if (k == BackendKind::Cuda && r.path == "fused") {  // the same on per-phase launches, for comparison
+            const Row u = f64 ? timeFrames<double>(k, s, n, iterations, substeps, repeats, 0)
+                              : timeFrames<float>(k, s, n, iterations, substeps, repeats, 0);
+            printRow(u);
+            rows.push_back(u);
+          }
         }
       }
 
@@ -241,8 +252,8 @@ int main(int argc, char** argv) {
                              : tipDeflection<float>(k, PbdSolverKind::GaussSeidel, accuracy_n, 200, substeps, frames, st);
       for (PbdSolverKind s : {PbdSolverKind::Jacobi, PbdSolverKind::GaussSeidel})
         for (int it : {1, 2, 5, 10, 20, 50}) {
-          Row r = f64 ? timeFrames<double>(k, s, accuracy_n, it, substeps, std::max(3, repeats / 2))
-                      : timeFrames<float>(k, s, accuracy_n, it, substeps, std::max(3, repeats / 2));
+          Row r = f64 ? timeFrames<double>(k, s, accuracy_n, it, substeps, std::max(3, repeats / 2), fused_max)
+                      : timeFrames<float>(k, s, accuracy_n, it, substeps, std::max(3, repeats / 2), fused_max);
           r.table = "accuracy";
           r.deflection_m = f64 ? tipDeflection<double>(k, s, accuracy_n, it, substeps, frames, st)
                                : tipDeflection<float>(k, s, accuracy_n, it, substeps, frames, st);
@@ -257,10 +268,10 @@ int main(int argc, char** argv) {
     if (!csv.empty()) {
       std::ofstream out(csv);
       if (!out) throw InputError(csv, "--csv", "cannot write");
-      out << "table,backend,precision,solver,spheres,constraints,iterations,substeps,colors,ms_frame,constraints_per_s,"
+      out << "table,backend,precision,solver,path,spheres,constraints,iterations,substeps,colors,ms_frame,constraints_per_s,"
              "residual_max_m,residual_rms_m,deflection_m,deflection_rel_err\n";
       for (const Row& r : rows)
-        out << r.table << ',' << r.backend << ',' << r.precision << ',' << r.solver << ',' << r.spheres << ','
+        out << r.table << ',' << r.backend << ',' << r.precision << ',' << r.solver << ',' << r.path << ',' << r.spheres << ','
             << r.constraints << ',' << r.iterations << ',' << r.substeps << ',' << r.colors << ',' << r.ms_frame << ','
             << r.constraints_per_s << ',' << r.residual_max << ',' << r.residual_rms << ',' << r.deflection_m << ','
             << r.deflection_err << '\n';
