@@ -158,6 +158,57 @@ NearestHit TriangleBvh::nearest(const Vec3d& p, double bound2) const {
   return best;
 }
 
+int TriangleBvh::countRayCrossings(const Vec3d& o, const Vec3d& d) const {
+  if (nodes_.empty()) return 0;
+  Vec3d inv;
+  for (int a = 0; a < 3; ++a) inv[a] = d[a] != 0.0 ? 1.0 / d[a] : std::numeric_limits<double>::infinity();
+  auto hitsBox = [&](const Aabb& b) {
+    double t0 = 0.0, t1 = std::numeric_limits<double>::infinity();
+    for (int a = 0; a < 3; ++a) {
+      if (d[a] == 0.0) {
+        if (o[a] < b.lo[a] || o[a] > b.hi[a]) return false;
+        continue;
+      }
+      double ta = (b.lo[a] - o[a]) * inv[a], tb = (b.hi[a] - o[a]) * inv[a];
+      if (ta > tb) std::swap(ta, tb);
+      t0 = std::max(t0, ta);
+      t1 = std::min(t1, tb);
+      if (t0 > t1) return false;
+    }
+    return true;
+  };
+  int crossings = 0;
+  int stack[64];
+  int top = 0;
+  stack[top++] = 0;
+  while (top) {
+    const Node& n = nodes_[std::size_t(stack[--top])];
+    if (!hitsBox(n.box)) continue;
+    if (n.count == 0) {
+      stack[top++] = n.first;
+      stack[top++] = n.first + 1;
+      continue;
+    }
+    for (int k = 0; k < n.count; ++k) {
+      const auto& tri = triangles_[std::size_t(order_[std::size_t(n.first + k)])];
+      const Vec3d a = vertices_[std::size_t(tri[0])];
+      const Vec3d e1 = vertices_[std::size_t(tri[1])] - a, e2 = vertices_[std::size_t(tri[2])] - a;
+      const Vec3d pv = cross(d, e2);
+      const double det = dot(e1, pv);
+      if (det == 0.0) continue;  // ray parallel to the triangle's plane
+      const double inv_det = 1.0 / det;
+      const Vec3d tv = o - a;
+      const double u = dot(tv, pv) * inv_det;
+      if (u < 0.0 || u >= 1.0) continue;
+      const Vec3d qv = cross(tv, e1);
+      const double v = dot(d, qv) * inv_det;
+      if (v < 0.0 || u + v >= 1.0) continue;
+      if (dot(e2, qv) * inv_det > 0.0) ++crossings;
+    }
+  }
+  return crossings;
+}
+
 SurfaceDistance::SurfaceDistance(const TriangleMesh& mesh) : bvh_(mesh) {
   const auto& V = mesh.vertices;
   const auto& F = mesh.triangles;
@@ -208,6 +259,16 @@ SurfaceDistance::Result SurfaceDistance::signedDistance(const Vec3d& p, double b
   const double d = std::sqrt(hit.distance2);
   r.distance = dot(p - hit.point, pn) >= 0.0 ? d : -d;
   return r;
+}
+
+bool SurfaceDistance::insideByRays(const Vec3d& p) const {
+  // Directions with irrational-looking components: no mesh axis or lattice plane is parallel to them.
+  static const Vec3d kDirs[3] = {{0.8191520442889918, 0.4539904997395468, 0.3507556053865862},
+                                 {-0.2873478855663454, 0.9076733711353459, -0.3059617310829767},
+                                 {0.3255681544571567, -0.2249510543438651, -0.9183613517770219}};
+  int votes = 0;
+  for (const auto& d : kDirs) votes += bvh_.countRayCrossings(p, d) & 1;
+  return votes >= 2;
 }
 
 }  // namespace inc::pack

@@ -82,6 +82,9 @@ class TriangleBvh {
     }
   }
 
+  // Number of triangles the ray o + t d (t > 0) crosses (Moller-Trumbore, half-open barycentric tests).
+  int countRayCrossings(const Vec3d& o, const Vec3d& d) const;
+
   const Aabb& bounds() const { return nodes_.front().box; }
   const std::vector<Vec3d>& vertices() const { return vertices_; }
   const std::vector<std::array<int, 3>>& triangles() const { return triangles_; }
@@ -113,6 +116,10 @@ class SurfaceDistance {
   };
   Result signedDistance(const Vec3d& p, double bound = std::numeric_limits<double>::infinity()) const;
   const TriangleBvh& bvh() const { return bvh_; }
+
+  // Inside test by ray parity: a majority vote over three rays in fixed, irrational directions, so that a ray
+  // grazing an edge or a vertex, or crossing a small local self-intersection, is outvoted by the other two.
+  bool insideByRays(const Vec3d& p) const;
 
  private:
   TriangleBvh bvh_;

@@ -156,7 +156,8 @@ std::vector<std::array<int, 2>> findSelfIntersections(const TriangleMesh& mesh, 
   return found;
 }
 
-PackInputReport preparePackInput(TriangleMesh& mesh, const std::string& file, const std::string& key) {
+PackInputReport preparePackInput(TriangleMesh& mesh, const std::string& file, const std::string& key,
+                                 double max_self_intersecting_fraction) {
   PackInputReport rep;
   if (mesh.vertices.empty() || mesh.triangles.empty())
     throw InputError(file, key, "empty mesh: a closed surface with at least 4 triangles is needed");
@@ -260,13 +261,25 @@ PackInputReport preparePackInput(TriangleMesh& mesh, const std::string& file, co
     if (norm(n) <= 1e-14 * norm2(e)) ++rep.zero_area_triangles;
   }
 
-  const auto pairs = findSelfIntersections(mesh, 4);
+  const std::size_t allowed_faces =
+      std::size_t(std::max(0.0, max_self_intersecting_fraction) * double(mesh.triangles.size()));
+  // Enough pairs to know whether the involved faces exceed the allowance (each pair adds at most two).
+  const auto pairs = findSelfIntersections(mesh, std::max<std::size_t>(4, allowed_faces + 1));
   if (!pairs.empty()) {
-    std::ostringstream s;
-    s << "self-intersecting surface: faces " << pairs[0][0] << " and " << pairs[0][1] << " intersect";
-    if (pairs.size() > 1) s << " (and at least " << pairs.size() - 1 << " more pair(s))";
-    s << "; not repaired: resolving intersections changes the shape";
-    throw InputError(file, key, s.str());
+    std::vector<int> faces;
+    for (const auto& pr : pairs) { faces.push_back(pr[0]); faces.push_back(pr[1]); }
+    std::sort(faces.begin(), faces.end());
+    faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
+    if (faces.size() > allowed_faces || pairs.size() > allowed_faces) {
+      std::ostringstream s;
+      s << "self-intersecting surface: faces " << pairs[0][0] << " and " << pairs[0][1] << " intersect";
+      if (pairs.size() > 1) s << " (and at least " << pairs.size() - 1 << " more pair(s))";
+      s << "; not repaired: resolving intersections changes the shape";
+      if (max_self_intersecting_fraction > 0.0)
+        s << " (more than the tolerated fraction " << max_self_intersecting_fraction << " of faces)";
+      throw InputError(file, key, s.str());
+    }
+    rep.self_intersecting_faces = int(faces.size());
   }
 
   std::ostringstream r;
@@ -274,6 +287,10 @@ PackInputReport preparePackInput(TriangleMesh& mesh, const std::string& file, co
   if (rep.welded_vertices) { r << sep << "welded " << rep.welded_vertices << " duplicate vertices"; sep = "; "; }
   if (rep.removed_triangles) { r << sep << "dropped " << rep.removed_triangles << " degenerate triangles"; sep = "; "; }
   if (rep.flipped) { r << sep << "flipped inward-oriented surface"; sep = "; "; }
+  if (rep.self_intersecting_faces) {
+    r << sep << "tolerated " << rep.self_intersecting_faces << " locally self-intersecting faces";
+    sep = "; ";
+  }
   rep.repairs = r.str();
   return rep;
 }

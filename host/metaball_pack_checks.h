@@ -21,6 +21,7 @@ struct PackInputReport {
   int removed_triangles = 0;    // triangles with a repeated vertex index (after welding) dropped
   int zero_area_triangles = 0;  // kept; they carry no normal and so do not affect distances or signs
   bool flipped = false;         // the surface was consistently inward-oriented and has been flipped
+  int self_intersecting_faces = 0;  // faces in an intersecting pair, when tolerated (see below)
   double volume = 0.0;          // enclosed volume after repair (mesh units^3)
   std::string repairs;          // one line listing the repairs made, "" when none
 };
@@ -30,6 +31,10 @@ struct PackInputReport {
 // surface); rejects the rest with InputError(file, key, reason): empty, non-finite coordinates, bad
 // indices, open (boundary edges), non-manifold edges, inconsistent orientation, zero volume,
 // self-intersection. The reason names the first offending edge or triangle pair.
-PackInputReport preparePackInput(TriangleMesh& mesh, const std::string& file, const std::string& key = "mesh");
+// Small local self-intersections (real scanned organs have a few folded triangles) are tolerated when the
+// faces involved are at most `max_self_intersecting_fraction` of all faces: the packer decides inside by
+// ray parity, which such folds only disturb locally; they are then listed in `repairs` as tolerated.
+PackInputReport preparePackInput(TriangleMesh& mesh, const std::string& file, const std::string& key = "mesh",
+                                 double max_self_intersecting_fraction = 0.0);
 
 }  // namespace inc
