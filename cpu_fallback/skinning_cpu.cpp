@@ -17,6 +17,19 @@ void vertexNormalsCpu(int vertex_count, const Vec3<T>* x, const std::int32_t* tr
               [&](std::int64_t v) { normals[v] = skin::vertexNormal(int(v), x, triangles, tri_offsets, tri_of_vertex); });
 }
 
+template <typename T>
+void sphereRotationsCpu(int sphere_count, const Vec3<T>* x, const Vec3<T>* x0, const T* mass, const std::int32_t* off,
+                        const std::int32_t* nbr, int iterations, pbd::Quat<T>* quats, Mat3<T>* rotations) {
+  parallelFor(sphere_count, [&](std::int64_t i) {
+    quats[i] = skin::sphereRotation(int(i), x, x0, mass, off, nbr, quats[i], iterations);
+    rotations[i] = pbd::quatToMatrix(quats[i]);
+  });
+}
+
+template void sphereRotationsCpu<float>(int, const Vec3<float>*, const Vec3<float>*, const float*, const std::int32_t*,
+                                        const std::int32_t*, int, pbd::Quat<float>*, Mat3<float>*);
+template void sphereRotationsCpu<double>(int, const Vec3<double>*, const Vec3<double>*, const double*, const std::int32_t*,
+                                         const std::int32_t*, int, pbd::Quat<double>*, Mat3<double>*);
 template void skinSurfaceCpu<float>(const skin::SkinView<float>&, const Vec3<float>*, const Mat3<float>*, Vec3<float>*);
 template void skinSurfaceCpu<double>(const skin::SkinView<double>&, const Vec3<double>*, const Mat3<double>*, Vec3<double>*);
 template void vertexNormalsCpu<float>(int, const Vec3<float>*, const std::int32_t*, const std::int32_t*, const std::int32_t*,

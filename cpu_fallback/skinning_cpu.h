@@ -16,4 +16,10 @@ template <typename T>
 void vertexNormalsCpu(int vertex_count, const Vec3<T>* x, const std::int32_t* triangles, const std::int32_t* tri_offsets,
                       const std::int32_t* tri_of_vertex, Vec3<T>* normals);
 
+// Per-sphere rotations from the neighbourhoods' deformation: quats (warm start in, result out, one per sphere)
+// and rotations[i] = the matrix of quats[i]. x: current centres, x0: rest centres.
+template <typename T>
+void sphereRotationsCpu(int sphere_count, const Vec3<T>* x, const Vec3<T>* x0, const T* mass, const std::int32_t* off,
+                        const std::int32_t* nbr, int iterations, pbd::Quat<T>* quats, Mat3<T>* rotations);
+
 }  // namespace inc::cpu

@@ -170,6 +170,34 @@ SkinArrays<T> skinArrays(const SkinBinding& b) {
   return a;
 }
 
+template <typename T>
+SphereNeighbourhoods<T> sphereNeighbourhoods(const MetaballModel& mb) {
+  const int n = int(mb.size());
+  if (mb.masses.size() != mb.size()) throw InputError("metaball model", "masses", "one mass per sphere needed");
+  SphereNeighbourhoods<T> h;
+  h.offsets.assign(std::size_t(n) + 1, 0);
+  for (const auto& l : mb.links) {
+    if (l[0] < 0 || l[1] < 0 || l[0] >= n || l[1] >= n || l[0] == l[1])
+      throw InputError("metaball model", "links", "link (" + std::to_string(l[0]) + ", " + std::to_string(l[1]) + ") out of range");
+    ++h.offsets[std::size_t(l[0]) + 1];
+    ++h.offsets[std::size_t(l[1]) + 1];
+  }
+  std::partial_sum(h.offsets.begin(), h.offsets.end(), h.offsets.begin());
+  h.neighbours.resize(std::size_t(h.offsets.back()));
+  std::vector<std::int32_t> fill(h.offsets.begin(), h.offsets.end() - 1);
+  for (const auto& l : mb.links) {
+    h.neighbours[std::size_t(fill[std::size_t(l[0])]++)] = l[1];
+    h.neighbours[std::size_t(fill[std::size_t(l[1])]++)] = l[0];
+  }
+  for (int i = 0; i < n; ++i)
+    std::sort(h.neighbours.begin() + h.offsets[std::size_t(i)], h.neighbours.begin() + h.offsets[std::size_t(i) + 1]);
+  for (double m : mb.masses) h.masses.push_back(T(m));
+  for (const auto& c : mb.rest_centers) h.rest_centres.push_back(Vec3<T>(c));
+  return h;
+}
+
+template SphereNeighbourhoods<float> sphereNeighbourhoods<float>(const MetaballModel&);
+template SphereNeighbourhoods<double> sphereNeighbourhoods<double>(const MetaballModel&);
 template SkinArrays<float> skinArrays<float>(const SkinBinding&);
 template SkinArrays<double> skinArrays<double>(const SkinBinding&);
 

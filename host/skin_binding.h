@@ -54,4 +54,17 @@ struct SkinArrays {
 template <typename T>
 SkinArrays<T> skinArrays(const SkinBinding& b);
 
+// Sphere neighbourhoods for the per-sphere rotation estimate (skin::sphereRotation): CSR of linked spheres.
+template <typename T>
+struct SphereNeighbourhoods {
+  std::vector<std::int32_t> offsets;     // size() + 1
+  std::vector<std::int32_t> neighbours;  // ascending per sphere
+  std::vector<T> masses;
+  std::vector<Vec3<T>> rest_centres;
+};
+
+// Throws InputError("metaball model", "links", reason) for a link index out of range or masses of the wrong size.
+template <typename T>
+SphereNeighbourhoods<T> sphereNeighbourhoods(const MetaballModel& mb);
+
 }  // namespace inc

@@ -26,6 +26,16 @@ __global__ void normalKernel(int n, const Vec3<T>* x, const std::int32_t* tris, 
   normals[v] = skin::vertexNormal(v, x, tris, off, tri_of);
 }
 
+template <typename T>
+__global__ void rotationKernel(int n, const Vec3<T>* x, const Vec3<T>* x0, const T* mass, const std::int32_t* off,
+                               const std::int32_t* nbr, int iterations, pbd::Quat<T>* quats, Mat3<T>* rotations) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= n) return;
+  const pbd::Quat<T> q = skin::sphereRotation(i, x, x0, mass, off, nbr, quats[i], iterations);
+  quats[i] = q;
+  rotations[i] = pbd::quatToMatrix(q);
+}
+
 int blocks(int n) { return (n + kBlock - 1) / kBlock; }
 
 }  // namespace
@@ -34,7 +44,10 @@ template <typename T>
 struct SkinningCuda<T>::Impl {
   int vertex_count = 0, k = 0, sphere_count = 0;
   DeviceBuffer<Vec3<T>> rest_vertices, rest_centres, positions, normals, centres;
-  DeviceBuffer<Mat3<T>> rotations;
+  DeviceBuffer<Mat3<T>> rotations, estimated;
+  DeviceBuffer<pbd::Quat<T>> quats;
+  DeviceBuffer<std::int32_t> nbr_offsets, nbr;
+  DeviceBuffer<T> masses;
   DeviceBuffer<std::int32_t> sphere, triangles, tri_offsets, tri_of_vertex;
   DeviceBuffer<T> weight;
   skin::SkinView<T> view() const {
@@ -98,6 +111,51 @@ void SkinningCuda<T>::normalsDevice(void* stream) {
       m.vertex_count, m.positions.data(), m.triangles.data(), m.tri_offsets.data(), m.tri_of_vertex.data(),
       m.normals.data());
   INC_CUDA_LAUNCH("normalKernel");
+}
+
+template <typename T>
+void SkinningCuda<T>::uploadNeighbourhoods(const std::vector<std::int32_t>& offsets, const std::vector<std::int32_t>& neighbours,
+                                           const std::vector<T>& masses) {
+  Impl& m = *impl_;
+  if (offsets.size() != std::size_t(m.sphere_count) + 1 || masses.size() != std::size_t(m.sphere_count))
+    throw std::invalid_argument("SkinningCuda::uploadNeighbourhoods: sizes do not match the uploaded spheres");
+  m.nbr_offsets.upload(offsets);
+  m.nbr.upload(neighbours);
+  m.masses.upload(masses);
+  const std::vector<pbd::Quat<T>> identity(std::size_t(m.sphere_count));
+  m.quats.upload(identity);
+  m.estimated.resize(std::size_t(m.sphere_count));
+}
+
+template <typename T>
+void SkinningCuda<T>::estimateRotationsDevice(const Vec3<T>* d_centres, int iterations, void* stream) {
+  Impl& m = *impl_;
+  if (m.nbr_offsets.size() != std::size_t(m.sphere_count) + 1)
+    throw std::logic_error("SkinningCuda::estimateRotationsDevice: no neighbourhoods uploaded");
+  rotationKernel<T><<<blocks(m.sphere_count), kBlock, 0, static_cast<cudaStream_t>(stream)>>>(
+      m.sphere_count, d_centres, m.rest_centres.data(), m.masses.data(), m.nbr_offsets.data(), m.nbr.data(), iterations,
+      m.quats.data(), m.estimated.data());
+  INC_CUDA_LAUNCH("rotationKernel");
+}
+
+template <typename T>
+const Mat3<T>* SkinningCuda<T>::rotations() const { return impl_->estimated.data(); }
+
+template <typename T>
+void SkinningCuda<T>::deformWithEstimatedRotationsHost(const Vec3<T>* centres, int iterations,
+                                                       std::vector<Vec3<T>>& positions_out,
+                                                       std::vector<Mat3<T>>* rotations_out) {
+  Impl& m = *impl_;
+  m.centres.upload(centres, std::size_t(m.sphere_count));
+  estimateRotationsDevice(m.centres.data(), iterations);
+  deformDevice(m.centres.data(), m.estimated.data());
+  INC_CUDA(cudaDeviceSynchronize());  // the results are read on the host next
+  positions_out.resize(std::size_t(m.vertex_count));
+  m.positions.download(positions_out.data(), positions_out.size());
+  if (rotations_out) {
+    rotations_out->resize(std::size_t(m.sphere_count));
+    m.estimated.download(rotations_out->data(), rotations_out->size());
+  }
 }
 
 template <typename T>

@@ -33,6 +33,18 @@ class SkinningCuda {
   void deformHost(const Vec3<T>* centres, const Mat3<T>* rotations, std::vector<Vec3<T>>& positions_out,
                   std::vector<Vec3<T>>* normals_out = nullptr);
 
+  // Per-sphere rotation estimate (skin::sphereRotation) on the device: upload the link neighbourhoods once per
+  // topology (CSR offsets/neighbours, masses; rest centres come from upload()), then each frame
+  // estimateRotationsDevice(centres) updates the warm-started quaternions and rotations() (device, Mat3 per
+  // sphere), ready for deformDevice(centres, rotations()).
+  void uploadNeighbourhoods(const std::vector<std::int32_t>& offsets, const std::vector<std::int32_t>& neighbours,
+                            const std::vector<T>& masses);
+  void estimateRotationsDevice(const Vec3<T>* d_centres, int iterations, void* stream = nullptr);
+  const Mat3<T>* rotations() const;
+  // Host convenience: estimate from host centres, deform with those rotations, copy positions (and rotations).
+  void deformWithEstimatedRotationsHost(const Vec3<T>* centres, int iterations, std::vector<Vec3<T>>& positions_out,
+                                        std::vector<Mat3<T>>* rotations_out = nullptr);
+
   int vertexCount() const;
   int sphereCount() const;
 

@@ -4,6 +4,7 @@
 #include <cstdint>
 
 #include "physics/hd.h"
+#include "physics/pbd_rotation.h"
 #include "physics/vec3.h"
 
 namespace inc::skin {
@@ -64,6 +65,31 @@ INC_HD Vec3<T> vertexNormal(int v, const Vec3<T>* x, const std::int32_t* tris, c
   }
   const T l = norm(n);
   return l > T(0) ? n * (T(1) / l) : Vec3<T>{};
+}
+
+// Rotation of sphere i from its neighbourhood's deformation (shape matching): the moment matrix
+// A = sum_j m_j (x_j - xbar)(x0_j - x0bar)^T over the sphere and its linked neighbours (CSR off/nbr), with
+// mass-weighted centroids xbar, x0bar; R is the rotational part of A (polar decomposition, warm-started from
+// the previous frame's quaternion `q`). Exact for any rigid motion of a neighbourhood that spans 3D.
+template <typename T>
+INC_HD pbd::Quat<T> sphereRotation(int i, const Vec3<T>* x, const Vec3<T>* x0, const T* mass, const std::int32_t* off,
+                                   const std::int32_t* nbr, pbd::Quat<T> q, int iterations) {
+  T msum = mass[i];
+  Vec3<T> xbar = x[i] * mass[i], x0bar = x0[i] * mass[i];
+  for (int m = off[i]; m < off[i + 1]; ++m) {
+    const int j = nbr[m];
+    msum += mass[j];
+    xbar += x[j] * mass[j];
+    x0bar += x0[j] * mass[j];
+  }
+  xbar *= T(1) / msum;
+  x0bar *= T(1) / msum;
+  Mat3<T> a = outer(x[i] - xbar, x0[i] - x0bar) * mass[i];
+  for (int m = off[i]; m < off[i + 1]; ++m) {
+    const int j = nbr[m];
+    a += outer(x[j] - xbar, x0[j] - x0bar) * mass[j];
+  }
+  return pbd::extractRotation(a, q, iterations);
 }
 
 }  // namespace inc::skin

@@ -93,6 +93,31 @@ TEST(SkinningGpu, RestAndRigidMotionExact) {
   for (std::size_t v = 0; v < x.size(); ++v) EXPECT_LE(norm(Vec3d(x[v]) - (R * f.mesh.vertices[v] + t)), 1e-6 * 0.2);
 }
 
+// Rotation estimate + skinning on the device equals the CPU path (float, 100 frames of a growing twist with
+// warm-started quaternions, 2 iterations per frame).
+TEST(SkinningGpu, EstimatedRotationsMatchCpu) {
+  if (cuda::queryDevices().device_count == 0) GTEST_SKIP() << "no CUDA device";
+  const Fixture& f = fixture();
+  const SkinArrays<float> arr = skinArrays<float>(f.binding);
+  const auto nb = sphereNeighbourhoods<float>(f.pack.model);
+  cuda::SkinningCuda<float> gpu;
+  gpu.upload(arr.view(), int(arr.rest_centres.size()), arr.triangles, arr.tri_offsets, arr.tri_of_vertex);
+  gpu.uploadNeighbourhoods(nb.offsets, nb.neighbours, nb.masses);
+  const int n = int(f.pack.model.size());
+  std::vector<pbd::Quat<float>> q(static_cast<std::size_t>(n));
+  std::vector<Mat3f> cpu_r(static_cast<std::size_t>(n)), gpu_r, ignored;
+  std::vector<Vec3f> centres, cpu_x(arr.rest_vertices.size()), gpu_x;
+  for (int frame = 0; frame < 100; ++frame) {
+    twist<float>(f.pack.model, centres, ignored, 0.01 * frame);
+    cpu::sphereRotationsCpu(n, centres.data(), nb.rest_centres.data(), nb.masses.data(), nb.offsets.data(),
+                            nb.neighbours.data(), 2, q.data(), cpu_r.data());
+    gpu.deformWithEstimatedRotationsHost(centres.data(), 2, gpu_x, &gpu_r);
+  }
+  cpu::skinSurfaceCpu(arr.view(), centres.data(), cpu_r.data(), cpu_x.data());
+  for (int i = 0; i < n; ++i) EXPECT_LE(frobeniusNorm(Mat3d(gpu_r[std::size_t(i)]) - Mat3d(cpu_r[std::size_t(i)])), 1e-4) << i;
+  for (std::size_t v = 0; v < cpu_x.size(); ++v) EXPECT_LE(norm(Vec3d(gpu_x[v]) - Vec3d(cpu_x[v])), 1e-5 * 0.2) << v;
+}
+
 }  // namespace
 }  // namespace inc
 #endif  // INCISION_HAVE_CUDA
