@@ -38,7 +38,7 @@ double median(std::vector<double> v) {
 struct Row {
   std::string what, backend, precision;
   int vertices = 0, spheres = 0, k = 0;
-  double ms_skin = 0.0, ms_skin_normals = 0.0;
+  double ms_skin = 0.0, ms_skin_normals = 0.0, ms_frame = 0.0;  // frame: rotations + skin + normals
 };
 
 // A bending motion of the spheres (rotation about z growing along x), the kind of frame the solver hands over.
@@ -56,12 +56,13 @@ void bendFrame(const MetaballModel& m, int frame, std::vector<Vec3<T>>& c, std::
 }
 
 template <typename T>
-Row skinCpu(const SkinArrays<T>& arr, const MetaballModel& m, int reps) {
+Row skinCpu(const SkinArrays<T>& arr, const SphereNeighbourhoods<T>& nb, const MetaballModel& m, int reps) {
   Row row;
   const auto view = arr.view();
   std::vector<Vec3<T>> x(arr.rest_vertices.size()), n(arr.rest_vertices.size()), c;
-  std::vector<Mat3<T>> r;
-  std::vector<double> t_skin, t_both;
+  std::vector<Mat3<T>> r, est(m.size());
+  std::vector<pbd::Quat<T>> q(m.size());
+  std::vector<double> t_skin, t_both, t_frame;
   for (int f = 0; f < reps + 2; ++f) {  // two warm-up frames
     bendFrame(m, f, c, r);
     const auto t0 = Clock::now();
@@ -70,22 +71,32 @@ Row skinCpu(const SkinArrays<T>& arr, const MetaballModel& m, int reps) {
     cpu::vertexNormalsCpu(view.vertex_count, x.data(), arr.triangles.data(), arr.tri_offsets.data(),
                           arr.tri_of_vertex.data(), n.data());
     const auto t2 = Clock::now();
+    // A whole frame as the runner does it: rotations estimated from the centres (2 warm-started iterations).
+    cpu::sphereRotationsCpu(int(m.size()), c.data(), nb.rest_centres.data(), nb.masses.data(), nb.offsets.data(),
+                            nb.neighbours.data(), 2, q.data(), est.data());
+    cpu::skinSurfaceCpu(view, c.data(), est.data(), x.data());
+    cpu::vertexNormalsCpu(view.vertex_count, x.data(), arr.triangles.data(), arr.tri_offsets.data(),
+                          arr.tri_of_vertex.data(), n.data());
+    const auto t3 = Clock::now();
     if (f >= 2) {
       t_skin.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
       t_both.push_back(std::chrono::duration<double, std::milli>(t2 - t0).count());
+      t_frame.push_back(std::chrono::duration<double, std::milli>(t3 - t2).count());
     }
   }
   row.ms_skin = median(t_skin);
   row.ms_skin_normals = median(t_both);
+  row.ms_frame = median(t_frame);
   return row;
 }
 
 #if INCISION_HAVE_CUDA
 template <typename T>
-Row skinCuda(const SkinArrays<T>& arr, const MetaballModel& m, int reps) {
+Row skinCuda(const SkinArrays<T>& arr, const SphereNeighbourhoods<T>& nb, const MetaballModel& m, int reps) {
   Row row;
   cuda::SkinningCuda<T> gpu;
   gpu.upload(arr.view(), int(arr.rest_centres.size()), arr.triangles, arr.tri_offsets, arr.tri_of_vertex);
+  gpu.uploadNeighbourhoods(nb.offsets, nb.neighbours, nb.masses);
   cuda::DeviceBuffer<Vec3<T>> dc;
   cuda::DeviceBuffer<Mat3<T>> dr;
   std::vector<Vec3<T>> c;
@@ -93,31 +104,40 @@ Row skinCuda(const SkinArrays<T>& arr, const MetaballModel& m, int reps) {
   bendFrame(m, 7, c, r);
   dc.upload(c);
   dr.upload(r);
-  cudaEvent_t e0, e1, e2;
+  cudaEvent_t e0, e1, e2, e3;
   INC_CUDA(cudaEventCreate(&e0));
   INC_CUDA(cudaEventCreate(&e1));
   INC_CUDA(cudaEventCreate(&e2));
-  std::vector<double> t_skin, t_both;
+  INC_CUDA(cudaEventCreate(&e3));
+  std::vector<double> t_skin, t_both, t_frame;
   for (int f = 0; f < reps + 3; ++f) {  // three warm-up frames
     INC_CUDA(cudaEventRecord(e0));
     gpu.deformDevice(dc.data(), dr.data());
     INC_CUDA(cudaEventRecord(e1));
     gpu.normalsDevice();
     INC_CUDA(cudaEventRecord(e2));
-    INC_CUDA(cudaEventSynchronize(e2));  // timing needs the events' times on the host
-    float a = 0.0f, b = 0.0f;
+    gpu.estimateRotationsDevice(dc.data(), 2);
+    gpu.deformDevice(dc.data(), gpu.rotations());
+    gpu.normalsDevice();
+    INC_CUDA(cudaEventRecord(e3));
+    INC_CUDA(cudaEventSynchronize(e3));  // timing needs the events' times on the host
+    float a = 0.0f, b = 0.0f, c3 = 0.0f;
     INC_CUDA(cudaEventElapsedTime(&a, e0, e1));
     INC_CUDA(cudaEventElapsedTime(&b, e0, e2));
+    INC_CUDA(cudaEventElapsedTime(&c3, e2, e3));
     if (f >= 3) {
       t_skin.push_back(a);
       t_both.push_back(b);
+      t_frame.push_back(c3);
     }
   }
   INC_CUDA(cudaEventDestroy(e0));
   INC_CUDA(cudaEventDestroy(e1));
   INC_CUDA(cudaEventDestroy(e2));
+  INC_CUDA(cudaEventDestroy(e3));
   row.ms_skin = median(t_skin);
   row.ms_skin_normals = median(t_both);
+  row.ms_frame = median(t_frame);
   return row;
 }
 #endif
@@ -154,11 +174,12 @@ int run(const std::string& backend, const std::string& precision, int min_v, int
   if (quick && sizes.size() > 3) sizes = {sizes.front(), 8000 >= min_v && 8000 <= max_v ? 8000 : sizes[1], sizes.back()};
   const int reps = repeats > 0 ? repeats : (quick ? 5 : 50);
   std::vector<Row> rows;
-  std::printf("%-10s %-6s %-7s %10s %8s %3s %12s %16s\n", "what", "backend", "prec", "vertices", "spheres", "k", "skin ms",
-              "skin+normals ms");
+  std::printf("%-10s %-6s %-7s %10s %8s %3s %12s %16s %22s\n", "what", "backend", "prec", "vertices", "spheres", "k",
+              "skin ms", "skin+normals ms", "rot+skin+normals ms");
   for (int target : sizes) {
     const TriangleMesh mesh = makeLiverLikeMesh({target, 0.2, 0});
     const SkinArrays<T> arr = skinArrays<T>(bindSkin(mesh, pack.model, k));
+    const SphereNeighbourhoods<T> nb = sphereNeighbourhoods<T>(pack.model);
     auto emit = [&](Row row, const char* be) {
       row.what = "skin";
       row.backend = be;
@@ -166,25 +187,25 @@ int run(const std::string& backend, const std::string& precision, int min_v, int
       row.vertices = int(mesh.vertices.size());
       row.spheres = int(pack.model.size());
       row.k = k;
-      std::printf("%-10s %-6s %-7s %10d %8d %3d %12.4f %16.4f\n", row.what.c_str(), be, precision.c_str(), row.vertices,
-                  row.spheres, k, row.ms_skin, row.ms_skin_normals);
+      std::printf("%-10s %-6s %-7s %10d %8d %3d %12.4f %16.4f %22.4f\n", row.what.c_str(), be, precision.c_str(),
+                  row.vertices, row.spheres, k, row.ms_skin, row.ms_skin_normals, row.ms_frame);
       std::fflush(stdout);
       rows.push_back(row);
     };
-    if (int(mesh.vertices.size()) <= cpu_max) emit(skinCpu(arr, pack.model, reps), "cpu");
+    if (int(mesh.vertices.size()) <= cpu_max) emit(skinCpu(arr, nb, pack.model, reps), "cpu");
 #if INCISION_HAVE_CUDA
-    if (have_gpu) emit(skinCuda(arr, pack.model, reps), "cuda");
+    if (have_gpu) emit(skinCuda(arr, nb, pack.model, reps), "cuda");
 #endif
   }
   if (!csv.empty()) {
     std::ofstream f(csv);
     if (!f) throw InputError(csv, "--csv", "cannot write the file");
-    f << "what,backend,precision,vertices,spheres,k,ms_skin,ms_skin_normals,pack_s,coverage\n";
-    f << "pack,cpu," << precision << "," << ref.vertices.size() << "," << pr.spheres << ",0,0,0," << median(pack_s) << ","
-      << pr.coverage << "\n";
+    f << "what,backend,precision,vertices,spheres,k,ms_skin,ms_skin_normals,ms_frame,pack_s,coverage\n";
+    f << "pack,cpu," << precision << "," << ref.vertices.size() << "," << pr.spheres << ",0,0,0,0," << median(pack_s)
+      << "," << pr.coverage << "\n";
     for (const auto& r : rows)
       f << r.what << "," << r.backend << "," << r.precision << "," << r.vertices << "," << r.spheres << "," << r.k << ","
-        << r.ms_skin << "," << r.ms_skin_normals << ",,\n";
+        << r.ms_skin << "," << r.ms_skin_normals << "," << r.ms_frame << ",,\n";
   }
   // One-line summary (last line): packing, and skinning of the reference-sized surface per backend.
   std::string summary = "bench_packing " + precision + ": pack " + std::to_string(pr.spheres) + " spheres " +
@@ -193,7 +214,7 @@ int run(const std::string& backend, const std::string& precision, int min_v, int
   for (const auto& r : rows)
     if (r.vertices >= 7000 && r.vertices <= 9000) {
       char buf[128];
-      std::snprintf(buf, sizeof buf, "; skin+normals %d v %s %.4f ms", r.vertices, r.backend.c_str(), r.ms_skin_normals);
+      std::snprintf(buf, sizeof buf, "; rot+skin+normals %d v %s %.4f ms", r.vertices, r.backend.c_str(), r.ms_frame);
       summary += buf;
     }
   std::printf("%s\n", summary.c_str());
