@@ -335,8 +335,8 @@ PackedOrgan packOrgan(const TriangleMesh& input, const PackingOptions& opt, cons
   }
   progress(opt, "tightened radii", 1.0);
 
-  // 3b. Connectivity: a sphere group detached from the rest (a thin part, a corner) is joined by growing its
-  // sphere nearest to another group until they overlap by 5% of the smaller radius (counted in `bridged`).
+  // 3b. Connectivity: a sphere group detached from the rest by a narrow gap (a thin part, a corner) is joined by
+  // growing its sphere nearest to another group until they overlap by 5% of the smaller radius (`bridged`).
   int bridged = 0;
   for (;;) {
     UnionFind g(N);
@@ -354,7 +354,8 @@ PackedOrgan packOrgan(const TriangleMesh& input, const PackingOptions& opt, cons
         if (d < gap) { gap = d; bi = i; bj = j; }
       }
     }
-    if (bi < 0) break;
+    // Only a narrow gap (a sampling artefact) is bridged; separate shells of the mesh stay separate groups.
+    if (bi < 0 || gap > std::max(2.0 * grid.h, protrusion)) break;
     radius[std::size_t(bi)] += gap + 0.05 * std::min(radius[std::size_t(bi)], radius[std::size_t(bj)]);
     ++bridged;
   }

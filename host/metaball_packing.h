@@ -25,7 +25,8 @@ struct PackingOptions {
 struct PackReport {
   int spheres = 0;
   int links = 0;                 // overlapping pairs
-  int components = 0;            // connected components of the overlap graph (1 for a connected organ)
+  int components = 0;            // connected components of the overlap graph (1 for a connected organ; one per
+                                 // separate shell of a multi-shell mesh)
   int bridged = 0;               // spheres grown to join a detached group to the rest
   double mesh_volume = 0.0;      // enclosed volume, mesh units^3
   double sample_spacing = 0.0;   // grid spacing h, mesh units

@@ -293,6 +293,24 @@ TEST(Packing, InwardOrientedMeshIsFlippedAndSaysSo) {
   EXPECT_GE(p.report.coverage, 0.95);
 }
 
+TEST(Packing, SeparateShellsStaySeparateGroups) {
+  // Two disjoint balls in one mesh: valid input; each gets its own spheres and no sphere bridges the gap.
+  TriangleMesh two = makeSphereMesh(0.02, 5, Vec3d{-0.03, 0.0, 0.0});
+  const TriangleMesh b = makeSphereMesh(0.02, 5, Vec3d{0.03, 0.0, 0.0});
+  const int base = int(two.vertices.size());
+  two.vertices.insert(two.vertices.end(), b.vertices.begin(), b.vertices.end());
+  for (auto t : b.triangles) two.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+  PackingOptions o = smallOptions(60);
+  o.samples = 4000;
+  const PackedOrgan p = packOrgan(two, o);
+  EXPECT_EQ(p.report.components, 2);
+  EXPECT_EQ(p.report.bridged, 0);
+  EXPECT_GE(p.report.coverage, 0.95);
+  for (std::size_t i = 0; i < p.model.size(); ++i)
+    EXPECT_LT(std::fabs(p.model.rest_centers[i].x) + p.model.rest_radii[i], 0.05 + 0.011 * diagonal(two) + 1e-12);
+  EXPECT_FALSE(inUnion(p.model, Vec3d{0.0, 0.0, 0.0}));
+}
+
 TEST(PackingBvh, RayParityAndSignedDistanceAgreeOnABox) {
   const TriangleMesh box = makeBoxMesh({1.0, 1.0, 1.0}, 3);
   const pack::SurfaceDistance sd(box);
