@@ -26,6 +26,13 @@ void sphereRotationsCpu(int sphere_count, const Vec3<T>* x, const Vec3<T>* x0, c
   });
 }
 
+template <typename T>
+void quatsToMatricesCpu(int n, const pbd::Quat<T>* quats, Mat3<T>* rotations) {
+  parallelFor(n, [&](std::int64_t i) { rotations[i] = pbd::quatToMatrix(quats[i]); });
+}
+
+template void quatsToMatricesCpu<float>(int, const pbd::Quat<float>*, Mat3<float>*);
+template void quatsToMatricesCpu<double>(int, const pbd::Quat<double>*, Mat3<double>*);
 template void sphereRotationsCpu<float>(int, const Vec3<float>*, const Vec3<float>*, const float*, const std::int32_t*,
                                         const std::int32_t*, int, pbd::Quat<float>*, Mat3<float>*);
 template void sphereRotationsCpu<double>(int, const Vec3<double>*, const Vec3<double>*, const double*, const std::int32_t*,

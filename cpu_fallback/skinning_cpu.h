@@ -22,4 +22,8 @@ template <typename T>
 void sphereRotationsCpu(int sphere_count, const Vec3<T>* x, const Vec3<T>* x0, const T* mass, const std::int32_t* off,
                         const std::int32_t* nbr, int iterations, pbd::Quat<T>* quats, Mat3<T>* rotations);
 
+// rotations[i] = matrix of quats[i] (the PBD state keeps per-particle rotations as quaternions).
+template <typename T>
+void quatsToMatricesCpu(int n, const pbd::Quat<T>* quats, Mat3<T>* rotations);
+
 }  // namespace inc::cpu

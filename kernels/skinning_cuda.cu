@@ -36,6 +36,13 @@ __global__ void rotationKernel(int n, const Vec3<T>* x, const Vec3<T>* x0, const
   rotations[i] = pbd::quatToMatrix(q);
 }
 
+template <typename T>
+__global__ void quatKernel(int n, const pbd::Quat<T>* quats, Mat3<T>* rotations) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= n) return;
+  rotations[i] = pbd::quatToMatrix(quats[i]);
+}
+
 int blocks(int n) { return (n + kBlock - 1) / kBlock; }
 
 }  // namespace
@@ -99,6 +106,16 @@ void SkinningCuda<T>::deformDevice(const Vec3<T>* d_centres, const Mat3<T>* d_ro
   skinKernel<T><<<blocks(m.vertex_count), kBlock, 0, static_cast<cudaStream_t>(stream)>>>(m.view(), d_centres, d_rotations,
                                                                                           m.positions.data());
   INC_CUDA_LAUNCH("skinKernel");
+}
+
+template <typename T>
+void SkinningCuda<T>::deformDeviceFromQuats(const Vec3<T>* d_centres, const pbd::Quat<T>* d_quats, void* stream) {
+  Impl& m = *impl_;
+  if (m.vertex_count == 0) return;
+  quatKernel<T><<<blocks(m.sphere_count), kBlock, 0, static_cast<cudaStream_t>(stream)>>>(m.sphere_count, d_quats,
+                                                                                        m.rotations.data());
+  INC_CUDA_LAUNCH("quatKernel");
+  deformDevice(d_centres, m.rotations.data(), stream);
 }
 
 template <typename T>

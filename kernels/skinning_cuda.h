@@ -24,6 +24,9 @@ class SkinningCuda {
   // Device-resident path (no host synchronisation): centres and optional rotations are device pointers of
   // sphere_count entries; results stay on the device (positions(), normals()). `stream` is a cudaStream_t.
   void deformDevice(const Vec3<T>* d_centres, const Mat3<T>* d_rotations, void* stream = nullptr);
+  // The same with rotations given as quaternions (the PBD state's per-particle rotations, device pointer):
+  // converted into an internal matrix buffer first.
+  void deformDeviceFromQuats(const Vec3<T>* d_centres, const pbd::Quat<T>* d_quats, void* stream = nullptr);
   void normalsDevice(void* stream = nullptr);
   const Vec3<T>* positions() const;
   const Vec3<T>* normals() const;

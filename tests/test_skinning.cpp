@@ -189,6 +189,16 @@ TEST(SkinBinding, FewerSpheresThanSlots) {
 namespace inc {
 namespace {
 
+TEST(SphereRotations, QuaternionsConvertToTheSameRotations) {
+  std::vector<pbd::Quat<double>> q = {pbd::quatFromAxisAngle(Vec3d{0.0, 0.0, 1.0}, 0.5),
+                                      pbd::quatFromAxisAngle(Vec3d{0.6, 0.0, 0.8}, -1.2), pbd::Quat<double>{}};
+  std::vector<Mat3d> m(q.size());
+  cpu::quatsToMatricesCpu(int(q.size()), q.data(), m.data());
+  EXPECT_LE(frobeniusNorm(m[0] - rotation({0.0, 0.0, 1.0}, 0.5)), 1e-15);
+  EXPECT_LE(frobeniusNorm(m[1] - rotation({0.6, 0.0, 0.8}, -1.2)), 1e-15);
+  EXPECT_LE(frobeniusNorm(m[2] - Mat3d::identity()), 0.0);
+}
+
 TEST(SphereRotations, RigidMotionRecoveredExactly) {
   const PackedOrgan& p = liverPack();
   const auto nb = sphereNeighbourhoods<double>(p.model);
