@@ -167,6 +167,28 @@ int run(const std::string& backend, const std::string& precision, int min_v, int
               ref.vertices.size(), pr.spheres, pr.links, pr.coverage, pr.surface_mean, pr.surface_max, pr.max_protrusion,
               median(pack_s), pack_s.size(), cpu::threadCount());
 
+  // 1b. Packing time against the sphere count (samples grow with it: 80 per sphere, at least the option's).
+  struct PackRow {
+    int target, spheres, samples;
+    double seconds, coverage, surface_max;
+  };
+  std::vector<PackRow> pack_rows;
+  if (!quick) {
+    std::printf("%-10s %8s %8s %9s %10s %10s %14s\n", "what", "target", "spheres", "samples", "seconds", "coverage",
+                "surf max (m)");
+    for (int target : {150, 550, 2000, 5000}) {
+      PackingOptions o = popt;
+      o.target_spheres = target;
+      o.samples = std::max(popt.samples, 80 * target);
+      const PackedOrgan pk = packOrgan(ref, o);
+      pack_rows.push_back({target, pk.report.spheres, o.samples, pk.report.seconds, pk.report.coverage,
+                           pk.report.surface_max});
+      std::printf("%-10s %8d %8d %9d %10.3f %10.4f %14.3e\n", "pack", target, pk.report.spheres, o.samples,
+                  pk.report.seconds, pk.report.coverage, pk.report.surface_max);
+      std::fflush(stdout);
+    }
+  }
+
   // 2. Skinning per frame against vertex count (same shape, same spheres).
   std::vector<int> sizes;
   for (int v : {1000, 8000, 30000, 100000, 300000, 1000000, 3000000})
@@ -203,6 +225,9 @@ int run(const std::string& backend, const std::string& precision, int min_v, int
     f << "what,backend,precision,vertices,spheres,k,ms_skin,ms_skin_normals,ms_frame,pack_s,coverage\n";
     f << "pack,cpu," << precision << "," << ref.vertices.size() << "," << pr.spheres << ",0,0,0,0," << median(pack_s)
       << "," << pr.coverage << "\n";
+    for (const auto& r : pack_rows)
+      f << "pack,cpu," << precision << "," << ref.vertices.size() << "," << r.spheres << ",0,0,0,0," << r.seconds << ","
+        << r.coverage << "\n";
     for (const auto& r : rows)
       f << r.what << "," << r.backend << "," << r.precision << "," << r.vertices << "," << r.spheres << "," << r.k << ","
         << r.ms_skin << "," << r.ms_skin_normals << "," << r.ms_frame << ",,\n";

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <limits>
@@ -210,7 +211,7 @@ PackedOrgan packOrgan(const TriangleMesh& input, const PackingOptions& opt, cons
   const int S = int(cell_of.size());
   if (S < 8)
     throw InputError(file, "mesh", "the surface encloses fewer than 8 grid samples (spacing " +
-                                       std::to_string(grid.h) + "); it is too thin to pack");
+                                       std::to_string(grid.h) + "); it is too thin to pack at this resolution (raise packing.samples)");
 
   // Calls f(sample) for every interior sample within distance r of the sample grid point of sample s.
   auto forBall = [&](int s, double r, auto&& f) {
@@ -248,10 +249,19 @@ PackedOrgan packOrgan(const TriangleMesh& input, const PackingOptions& opt, cons
   auto runCover = [&](double cap, int max_count) {
     Cover cv;
     using Entry = std::pair<std::int64_t, int>;  // (gain bound, -sample)
-    std::vector<Entry> init(static_cast<std::size_t>(S));
+    // Capped balls (deep inside) are all alike: candidates among them on a lattice of stride ~cap / 3h suffice
+    // and keep the lazy evaluation cheap; uncapped (medial, near-surface) candidates are all kept.
+    const int stride = std::max(1, int(cap / (3.0 * grid.h)));
+    std::vector<Entry> init;
+    init.reserve(static_cast<std::size_t>(S));
     for (int s = 0; s < S; ++s) {
+      if (stride > 1 && D[std::size_t(s)] + protrusion >= cap) {
+        const std::int64_t id = cell_of[std::size_t(s)];
+        const std::int64_t i = id % grid.n[0], j = (id / grid.n[0]) % grid.n[1], k = id / (std::int64_t(grid.n[0]) * grid.n[1]);
+        if (i % stride || j % stride || k % stride) continue;
+      }
       const double rr = ballRadius(s, cap) / grid.h + 0.8660254037844386;
-      init[std::size_t(s)] = {std::int64_t(std::ceil(4.0 / 3.0 * kPi * rr * rr * rr)) + 1, -s};
+      init.push_back({std::int64_t(std::ceil(4.0 / 3.0 * kPi * rr * rr * rr)) + 1, -s});
     }
     std::priority_queue<Entry> heap(std::less<Entry>(), std::move(init));
     std::vector<unsigned char> covered(std::size_t(S), 0);
@@ -278,34 +288,43 @@ PackedOrgan packOrgan(const TriangleMesh& input, const PackingOptions& opt, cons
   // by (N / target)^(1/3). Keep the smallest cap whose full cover needs at most target_spheres.
   const int target = opt.target_spheres;
   double cap = std::cbrt(3.0 * 3.0 * in.volume / (4.0 * kPi * target));
+  // A full cover with up to 10% more spheres than the target is acceptable: it is cut to the target, dropping the
+  // last (least useful, the greedy order) spheres. Among acceptable runs the one nearest the target wins.
   Cover best;
   bool have_best = false;
+  int best_score = -1;
   double too_small = 0.0;                                     // largest cap known to need too many spheres
   double fits = std::numeric_limits<double>::infinity();       // smallest cap known to fit the target
   const double cap_max = protrusion + *std::max_element(D.begin(), D.end());  // beyond this the cap never binds
-  double largest_cap = 0.0;
+  double largest_full_cap = 0.0;
+  const int accept = target + std::max(1, target / 10);
   for (int it = 0; it < 8; ++it) {
     Cover cv = runCover(cap, 2 * target);
     const bool full = cv.covered >= stop_count;
     const int n = int(cv.chosen.size());
     progress(opt, "placing spheres", (it + 1) / 8.0);
-    largest_cap = std::max(largest_cap, cap);
-    if (full && n <= target) {
-      fits = cap;
-      best = std::move(cv);
-      have_best = true;
+    if (full) largest_full_cap = std::max(largest_full_cap, cap);
+    if (full && n <= accept) {
+      const int score = std::min(n, target) * 2 - (n > target ? 1 : 0);
+      if (score > best_score) {
+        best_score = score;
+        best = std::move(cv);
+        have_best = true;
+      }
       if (n >= int(0.95 * target) || cap >= cap_max) break;  // close enough, or the cap no longer binds
-    } else {
-      too_small = cap;
     }
+    if (full && n <= target) fits = cap; else too_small = cap;
     double next = cap * std::clamp(std::cbrt(full ? double(std::max(n, 1)) / target : 2.5), 0.6, 1.6);
     if (!(next > too_small && next < fits))
       next = std::isfinite(fits) ? std::sqrt(std::max(too_small, 1e-3 * fits) * fits) : 1.6 * cap;
     if (std::isfinite(fits) && fits - too_small < 0.01 * fits) break;  // bracket closed
     cap = next;
   }
-  if (!have_best) {  // no cap fitted: take the largest tried and stop at the target count
-    best = runCover(largest_cap, target);
+  if (!have_best)  // nothing acceptable: the largest cap that covered everything (or the last), cut at the target
+    best = runCover(largest_full_cap > 0.0 ? largest_full_cap : cap, target);
+  if (int(best.chosen.size()) > target) {
+    best.chosen.resize(std::size_t(target));
+    best.radius.resize(std::size_t(target));
   }
   std::vector<int> chosen = std::move(best.chosen);
   const int N = int(chosen.size());
