@@ -591,4 +591,18 @@ PackedOrgan loadOrBuildPack(const TriangleMesh& mesh, const PackingOptions& opti
 
 std::string defaultPackCachePath(const std::string& mesh_path) { return mesh_path + ".pack"; }
 
+std::string describePack(const PackReport& r) {
+  char buf[512];
+  std::snprintf(buf, sizeof buf,
+                "%d spheres, %d links (%d component%s%s), coverage %.2f%%, surface->union mean %.3g max %.3g, "
+                "union->surface mean %.3g max %.3g, protrusion %.3g (mesh units), %s",
+                r.spheres, r.links, r.components, r.components == 1 ? "" : "s",
+                r.bridged ? (", " + std::to_string(r.bridged) + " bridged").c_str() : "", 100.0 * r.coverage,
+                r.surface_mean, r.surface_max, r.union_mean, r.union_max, r.max_protrusion,
+                r.from_cache ? "from cache" : (std::to_string(r.seconds).substr(0, 5) + " s").c_str());
+  std::string s = buf;
+  if (!r.repairs.empty()) s += "; input: " + r.repairs;
+  return s;
+}
+
 }  // namespace inc

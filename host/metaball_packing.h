@@ -65,6 +65,9 @@ std::uint64_t packCacheKey(const TriangleMesh& mesh, const PackingOptions& optio
 PackedOrgan loadOrBuildPack(const TriangleMesh& mesh, const PackingOptions& options, const std::string& cache_path,
                             const std::string& file = "");
 
+// One human-readable line for the CLI and logs: spheres, links, coverage, deviations, time, repairs.
+std::string describePack(const PackReport& report);
+
 // The cache file next to a mesh: "<mesh_path>.pack".
 std::string defaultPackCachePath(const std::string& mesh_path);
 

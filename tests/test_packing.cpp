@@ -217,6 +217,9 @@ TEST(Packing, CacheHitsMissesAndCorruption) {
   EXPECT_TRUE(loadOrBuildPack(mesh, o, path).report.from_cache);
   std::filesystem::remove(path);
   EXPECT_EQ(defaultPackCachePath("scenes/liver.obj"), "scenes/liver.obj.pack");
+  const std::string line = describePack(c.report);
+  EXPECT_NE(line.find(std::to_string(c.report.spheres) + " spheres"), std::string::npos) << line;
+  EXPECT_NE(line.find("coverage"), std::string::npos) << line;
 }
 
 TEST(Packing, RealOrganMeshes) {
