@@ -27,7 +27,7 @@ tear::SheetView<T> sheetView(TearSheet<T>& s) {
 }  // namespace
 
 template <typename T>
-TearStepStats tearStepCpu(TearSheet<T>& s, const TearParams<T>& p, TearCandidates<T>* out) {
+TearStepStats tearStepCpu(TearSheet<T>& s, const TearParams<T>& p, TearCandidates<T>* out, bool rebuild) {
   const std::size_t n = s.size();
   const std::int64_t ni = std::int64_t(n);
   TearCandidates<T> local;
@@ -91,11 +91,11 @@ TearStepStats tearStepCpu(TearSheet<T>& s, const TearParams<T>& p, TearCandidate
     tear::rebuildTriangle(view, std::int32_t(t), c.accept.data(), c.dir.data(), rank.data(), std::int32_t(n));
   });
   ++s.step;
-  s.rebuildTopology();
+  if (rebuild) s.rebuildTopology();
   return st;
 }
 
-template TearStepStats tearStepCpu<float>(TearSheet<float>&, const TearParams<float>&, TearCandidates<float>*);
-template TearStepStats tearStepCpu<double>(TearSheet<double>&, const TearParams<double>&, TearCandidates<double>*);
+template TearStepStats tearStepCpu<float>(TearSheet<float>&, const TearParams<float>&, TearCandidates<float>*, bool);
+template TearStepStats tearStepCpu<double>(TearSheet<double>&, const TearParams<double>&, TearCandidates<double>*, bool);
 
 }  // namespace inc::cpu

@@ -34,8 +34,10 @@ struct TearCandidates {
 //  3 exclusive prefix sum of accept -> new particle index n = N + rank;
 //  4 per accepted particle: fraction t (seeded), back-off to keep triangles valid, new particle's data;
 //  5 per triangle: the vertex of an accepted particle on the crack side becomes its new particle.
-// Then the adjacency is rebuilt. Deterministic for any thread count.
+// Then the adjacency is rebuilt (unless rebuild == false: the caller rebuilds it with the model).
+// Deterministic for any thread count.
 template <typename T>
-TearStepStats tearStepCpu(TearSheet<T>& s, const TearParams<T>& p, TearCandidates<T>* out = nullptr);
+TearStepStats tearStepCpu(TearSheet<T>& s, const TearParams<T>& p, TearCandidates<T>* out = nullptr,
+                          bool rebuild = true);
 
 }  // namespace inc::cpu

@@ -6,7 +6,7 @@
 #include "cpu_fallback/pbd_solver_cpu.h"
 #include "cpu_fallback/tearing_cpu.h"
 #include "host/input_error.h"
-#if INCISION_HAVE_CUDA && INCISION_TEAR_CUDA_READY
+#if INCISION_HAVE_CUDA
 #include "kernels/tearing_cuda.h"
 #endif
 
@@ -21,7 +21,7 @@ class TearStepCpu final : public TearStepBackend<T> {
  public:
   BackendKind kind() const override { return BackendKind::Cpu; }
   int step(TearSheet<T>& s, const TearParams<T>& p, TearFrameStats& st) override {
-    const cpu::TearStepStats r = cpu::tearStepCpu(s, p);
+    const cpu::TearStepStats r = cpu::tearStepCpu<T>(s, p, nullptr, false);  // the driver rebuilds
     st.splits += r.splits;
     st.yielding += r.yielding;
     st.deferred += r.deferred;
@@ -33,7 +33,7 @@ class TearStepCpu final : public TearStepBackend<T> {
 template <typename T>
 std::unique_ptr<TearStepBackend<T>> makeTearStepBackend(BackendKind kind) {
   const BackendChoice choice = resolveBackend(kind);
-#if INCISION_HAVE_CUDA && INCISION_TEAR_CUDA_READY
+#if INCISION_HAVE_CUDA
   if (choice.kind == BackendKind::Cuda) return cuda::makeTearStepCuda<T>();
 #endif
   (void)choice;

@@ -28,7 +28,8 @@ class TearStepBackend {
  public:
   virtual ~TearStepBackend() = default;
   virtual BackendKind kind() const = 0;
-  // One tearing step on `s` (positions and velocities current); returns new particles created.
+  // One tearing step on `s` (positions and velocities current); returns new particles created. The
+  // adjacency (rebuildTopology) is left to the caller, which rebuilds it together with the PBD model.
   virtual int step(TearSheet<T>& s, const TearParams<T>& p, TearFrameStats& st) = 0;
 };
 
