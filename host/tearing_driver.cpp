@@ -102,8 +102,9 @@ TearFrameStats TearingDriver<T>::advance(const std::vector<std::int32_t>& grasp_
 }
 
 template <typename T>
-int TearingDriver<T>::removeParticles(const std::vector<std::uint8_t>& mark, bool debris_fringe) {
-  const int removed = removeTearParticles(sheet_, mark, debris_fringe, tear_);
+int TearingDriver<T>::removeParticles(const std::vector<std::uint8_t>& mark, bool debris_fringe,
+                                      std::vector<std::int32_t>* remap) {
+  const int removed = removeTearParticles(sheet_, mark, debris_fringe, tear_, remap);
   resetModel();
   return removed;
 }

@@ -47,7 +47,8 @@ class TearingDriver {
   TearFrameStats advance(const std::vector<std::int32_t>& grasp_ids, const std::vector<Vec3<T>>& grasp_to);
   // Removes tissue at once (traditional PBD, the paper's Fig. 5 a, c): marked particles, their triangles and
   // orphaned particles go. debris_fringe keeps a fringe (removeTearParticles). Returns particles removed.
-  int removeParticles(const std::vector<std::uint8_t>& mark, bool debris_fringe = false);
+  int removeParticles(const std::vector<std::uint8_t>& mark, bool debris_fringe = false,
+                      std::vector<std::int32_t>* remap = nullptr);
   // Tears tissue out (the paper's Fig. 5 b, d): the marked particles are gripped and lifted by `lift` over
   // `frames` frames while the tearing criterion runs, so the surrounding tissue tears and leaves debris; then
   // the gripped particles are removed as above. Returns the splits made while lifting.

@@ -349,7 +349,8 @@ std::vector<std::uint8_t> markNearSegment(const TearSheet<T>& s, const Vec3d& a,
 }
 
 template <typename T>
-int removeTearParticles(TearSheet<T>& s, const std::vector<std::uint8_t>& mark, bool debris, const TearParams<T>& p) {
+int removeTearParticles(TearSheet<T>& s, const std::vector<std::uint8_t>& mark, bool debris, const TearParams<T>& p,
+                        std::vector<std::int32_t>* remap_out) {
   const std::size_t n = s.size();
   if (mark.size() != n) throw InputError("tearing", "mark", "one flag per particle");
   std::vector<std::uint8_t> gone(n, 0);
@@ -426,6 +427,7 @@ int removeTearParticles(TearSheet<T>& s, const std::vector<std::uint8_t>& mark, 
   s.ref_normal = std::move(refn);
   ++s.step;
   s.rebuildTopology();
+  if (remap_out) *remap_out = std::move(remap);
   return int(n) - int(next);
 }
 
@@ -449,7 +451,7 @@ TriangleMesh tearSurface(const TearSheet<T>& s) {
   template double tearBoundaryLength<T>(const TearSheet<T>&, bool);                                              \
   template double totalMass<T>(const TearSheet<T>&);                                                             \
   template Vec3d totalMomentum<T>(const TearSheet<T>&);                                                          \
-  template int removeTearParticles<T>(TearSheet<T>&, const std::vector<std::uint8_t>&, bool, const TearParams<T>&); \
+  template int removeTearParticles<T>(TearSheet<T>&, const std::vector<std::uint8_t>&, bool, const TearParams<T>&, std::vector<std::int32_t>*); \
   template std::vector<std::uint8_t> markInBox<T>(const TearSheet<T>&, const Vec3d&, const Vec3d&);              \
   template std::vector<std::uint8_t> markNearSegment<T>(const TearSheet<T>&, const Vec3d&, const Vec3d&, double); \
   template TriangleMesh tearSurface<T>(const TearSheet<T>&);

@@ -118,8 +118,10 @@ Vec3d totalMomentum(const TearSheet<T>& s);
 // without triangles go. debris == true (Tresca): marked particles with an unmarked bond partner stay as debris,
 // moved to x_k + t (x_r - x_k) of their lowest-index unmarked partner k (t the seeded fraction around 1/2),
 // triangles without any unmarked vertex go. Compacts particles and triangles; returns particles removed.
+// remap (optional) receives old index -> new index (-1 when removed).
 template <typename T>
-int removeTearParticles(TearSheet<T>& s, const std::vector<std::uint8_t>& mark, bool debris, const TearParams<T>& p);
+int removeTearParticles(TearSheet<T>& s, const std::vector<std::uint8_t>& mark, bool debris, const TearParams<T>& p,
+                        std::vector<std::int32_t>* remap = nullptr);
 
 // Marks: rest position inside the box / within `radius` of the segment a-b (current positions).
 template <typename T>
