@@ -192,7 +192,7 @@ int main(int argc, char** argv) {
     for (BackendKind b : backends) {
       if (b == BackendKind::Cpu && particles > cpu_max) continue;
       for (std::int64_t t : tears)
-        for (TearCriterion c : {TearCriterion::Threshold, TearCriterion::TrescaBonds}) {
+        for (TearCriterion c : {TearCriterion::Threshold, TearCriterion::TrescaBonds, TearCriterion::TrescaPrincipal}) {
           const Row r = runCase(b, c, particles, t, f_before, f_during, f_after);
           rows.push_back(r);
           std::printf("%-5s %-12s %9lld %6lld %7lld %7lld %9.3f %9.3f %9.3f %9.3f %8.3f %8.3f %6.1f%%\n",

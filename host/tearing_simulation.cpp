@@ -266,6 +266,8 @@ class TearingSimulation final : public SimulationModel {
     int removed = 0;
     for (std::size_t t = 0; t < scene_.tools.size(); ++t) {
       if (scene_.tools[t].kind != "scalpel") continue;
+      const ToolSpec& tool = scene_.tools[t];
+      if (tool.path.empty() || time < tool.path.front().t || time > tool.path.back().t) continue;  // blade not in
       const auto mark = markBlade(scene_.tools[t], time);
       if (std::find(mark.begin(), mark.end(), std::uint8_t(1)) == mark.end()) continue;
       std::vector<std::int32_t> remap;

@@ -18,7 +18,8 @@ namespace inc {
 //  density * spacing; damping_per_s the PBD damping; pbd: iterations, xpbd, solver, stretch_compliance;
 //  geometry.seed seeds the debris; fixed boxes hold particles; tools: "grasper" grabs the particles within
 //  radius_m of its blade (position .. position + direction * length_m) at t = 0 and moves them along its
-//  path; "scalpel" removes the tissue within radius_m of its blade every frame (the criterion tears around it).
+//  path; "scalpel" removes the tissue within radius_m of its blade every frame between its first and last
+//  keyframe (the criterion tears around it).
 struct TearingSceneSetup {
   TearSheet<double> sheet;
   TearParams<double> tear;
