@@ -44,6 +44,7 @@ template <typename T>
 TearingDriver<T>::TearingDriver(TearSheet<T> sheet, const TearParams<T>& tear, const TearModelOptions& model_opt,
                                 const PbdStepParams<T>& step, BackendKind kind)
     : sheet_(std::move(sheet)), tear_(tear), model_opt_(model_opt), step_(step) {
+  model_opt_.coloring = step_.solver == PbdSolverKind::GaussSeidel;  // Jacobi never reads the colouring
   if (!(tear_.random_range >= T(0)) || !(tear_.t_lo > T(0)) || !(tear_.t_hi < T(1)) || !(tear_.t_lo <= tear_.t_hi))
     throw InputError("tearing", "random_range", "need range >= 0 and 0 < t_lo <= t_hi < 1");
   if (!(tear_.break_strain > T(0))) throw InputError("tearing", "break_strain", "must be > 0");

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <parallel/algorithm>
 
 #include "host/input_error.h"
 #include "physics/pbd_constraints.h"
@@ -60,7 +61,7 @@ void TearSheet<T>::rebuildTopology() {
   keys.reserve(tris.size() * 3);
   for (const auto& t : tris)
     for (int c = 0; c < 3; ++c) keys.push_back(edgeKey(t[c], t[(c + 1) % 3]));
-  std::sort(keys.begin(), keys.end());
+  __gnu_parallel::sort(keys.begin(), keys.end());  // OpenMP sort of plain integers: same result as std::sort
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
   edge_a.resize(keys.size());
   edge_b.resize(keys.size());
@@ -68,18 +69,14 @@ void TearSheet<T>::rebuildTopology() {
     edge_a[e] = std::int32_t(keys[e] >> 32);
     edge_b[e] = std::int32_t(keys[e] & 0xffffffffu);
   }
-  // particle -> partners, ascending: push (a, b) for every edge in key order for a (b ascending), and
-  // (b, a) ordered by a: a second counting pass keeps each list sorted by filling lower partners first.
+  // particle -> partners, ascending. Edges are sorted by (a, b); the counting sort in buildCsr keeps push
+  // order per owner, so pushing every (b <- a) first and then every (a <- b) lists, for each particle p, its
+  // partners below p ascending and then those above p ascending.
   std::vector<std::int32_t> own, val;
   own.reserve(keys.size() * 2);
   val.reserve(keys.size() * 2);
-  // Edges sorted by (a, b): for particle p the partners < p come from edges (q, p) with q < p, which appear
-  // in ascending q when sorted by b then a. Build both halves and merge per particle.
-  std::vector<std::size_t> by_b(keys.size());
-  std::iota(by_b.begin(), by_b.end(), std::size_t(0));
-  std::stable_sort(by_b.begin(), by_b.end(), [&](std::size_t u, std::size_t w) { return edge_b[u] < edge_b[w]; });
-  for (std::size_t k : by_b) { own.push_back(edge_b[k]); val.push_back(edge_a[k]); }  // partners < p, ascending
-  for (std::size_t e = 0; e < keys.size(); ++e) { own.push_back(edge_a[e]); val.push_back(edge_b[e]); }  // > p
+  for (std::size_t e = 0; e < keys.size(); ++e) { own.push_back(edge_b[e]); val.push_back(edge_a[e]); }
+  for (std::size_t e = 0; e < keys.size(); ++e) { own.push_back(edge_a[e]); val.push_back(edge_b[e]); }
   buildCsr(n, own, val, pe_offsets, pe_partner);
   own.clear();
   val.clear();
@@ -225,7 +222,7 @@ PbdModel<T> buildTearPbdModel(const TearSheet<T>& s, const TearModelOptions& opt
   half.reserve(s.tris.size() * 3);
   for (const auto& t : s.tris)
     for (int c = 0; c < 3; ++c) half.push_back({edgeKey(t[c], t[(c + 1) % 3]), t[(c + 2) % 3]});
-  std::sort(half.begin(), half.end());
+  __gnu_parallel::sort(half.begin(), half.end());  // total order on (key, vertex): deterministic
   for (std::size_t h = 0; h < half.size();) {
     std::size_t e = h;
     while (e < half.size() && half[e].first == half[h].first) ++e;
@@ -242,7 +239,30 @@ PbdModel<T> buildTearPbdModel(const TearSheet<T>& s, const TearModelOptions& opt
   m.blocks.push_back(std::move(dist));
   if (bend.count() > 0) m.blocks.push_back(std::move(bend));
   m.overlap_offsets.assign(n + 1, 0);
-  finalizePbdModel(m);
+  if (opt.coloring) {
+    finalizePbdModel(m);
+    return m;
+  }
+  // finalizePbdModel's derived data without the colouring (valid by construction: ids from the mesh).
+  for (PbdConstraintBlock<T>& b : m.blocks) {
+    b.particle_offsets.assign(n + 1, 0);
+    for (std::int32_t p : b.ids) ++b.particle_offsets[p + 1];
+    for (std::size_t p = 0; p < n; ++p) b.particle_offsets[p + 1] += b.particle_offsets[p];
+    b.particle_slots.resize(b.ids.size());
+    std::vector<std::int32_t> fill(b.particle_offsets.begin(), b.particle_offsets.end() - 1);
+    for (std::size_t q = 0; q < b.ids.size(); ++q) b.particle_slots[fill[b.ids[q]]++] = std::int32_t(q);
+    b.jacobi_scale.assign(b.ids.size(), T(1));
+    for (std::size_t c = 0; c < b.count(); ++c) {
+      int busiest = 1;
+      for (std::int32_t q = b.offsets[c]; q < b.offsets[c + 1]; ++q) {
+        const std::int32_t p = b.ids[q];
+        if (s.fixed[p]) continue;
+        busiest = std::max(busiest, b.particle_offsets[p + 1] - b.particle_offsets[p]);
+      }
+      for (std::int32_t q = b.offsets[c]; q < b.offsets[c + 1]; ++q) b.jacobi_scale[q] = T(1) / T(busiest);
+    }
+    b.coloring = ConstraintColoring{};
+  }
   return m;
 }
 

@@ -82,6 +82,9 @@ struct TearModelOptions {
   double stretch_compliance = 0.0;  // m/N (XPBD)
   double bending_compliance = 1.0;  // rad/(N m)
   double pbd_stiffness = 1.0;
+  // false: skip the Gauss-Seidel colouring (the Jacobi solver does not read it) and derive the particle ->
+  // slot lists and Jacobi scales here exactly as finalizePbdModel does; a tearing frame rebuilds the model.
+  bool coloring = true;
 };
 // Distance block on every bond, Bending block on every edge shared by exactly two triangles, rest values
 // from the rest positions; fixed particles get inverse mass 0. Finalised.

@@ -330,6 +330,25 @@ TEST(Tearing, PullTearOpensCrackInWeakBand) {
   EXPECT_GT(extra[1], 0.0);
 }
 
+TEST(Tearing, JacobiModelWithoutColoringMatchesFinalize) {
+  TearSheet<double> s = makeTearGrid<double>(9, 7, kH, kRhoA, Vec3d(0, 0, 0), kK, 100.0);
+  fixTearParticles(s, Vec3d(-1, -1, -1), Vec3d(1e-3, 1, 1));
+  TearModelOptions a = softSkin(), b = softSkin();
+  b.coloring = false;
+  const PbdModel<double> ma = buildTearPbdModel(s, a), mb = buildTearPbdModel(s, b);
+  ASSERT_EQ(ma.blocks.size(), 2u);
+  ASSERT_EQ(mb.blocks.size(), 2u);
+  for (std::size_t k = 0; k < 2; ++k) {
+    EXPECT_EQ(ma.blocks[k].ids, mb.blocks[k].ids);
+    EXPECT_EQ(ma.blocks[k].particle_offsets, mb.blocks[k].particle_offsets);
+    EXPECT_EQ(ma.blocks[k].particle_slots, mb.blocks[k].particle_slots);
+    EXPECT_EQ(ma.blocks[k].jacobi_scale, mb.blocks[k].jacobi_scale);
+    EXPECT_GT(ma.blocks[k].coloring.colorCount(), 0);
+    EXPECT_EQ(mb.blocks[k].coloring.colorCount(), 0);
+  }
+  EXPECT_EQ(ma.inv_mass, mb.inv_mass);
+}
+
 TEST(Tearing, BadInputIsRefused) {
   EXPECT_THROW(makeTearGrid<double>(1, 5, kH, kRhoA, Vec3d(), kK, 1.0), InputError);
   EXPECT_THROW(makeTearGrid<double>(5, 5, kH, kRhoA, Vec3d(), kK, -1.0), InputError);
