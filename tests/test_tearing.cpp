@@ -1,6 +1,8 @@
 // Tearing sheet tests: yield below/above eq. 6, split placement, conservation, mesh validity over thousands of splits, reproducibility, roughness.
 #include <gtest/gtest.h>
 
+#include <omp.h>
+
 #include <algorithm>
 #include <cstdio>
 #include <cmath>
@@ -241,6 +243,26 @@ double restAreaOf(const TearSheet<double>& s) {
   return a;
 }
 }  // namespace
+
+TEST(Tearing, SameResultForAnyThreadCount) {
+  auto run = [](int threads) {
+    const int old = omp_get_max_threads();
+    omp_set_num_threads(threads);
+    TearSheet<double> s = makeTearGrid<double>(30, 30, kH, kRhoA, Vec3d(0, 0, 0), kK, 120.0);
+    TearParams<double> p;
+    p.criterion = TearCriterion::TrescaPrincipal;
+    tearManyTimes(s, p, 3, 8);
+    omp_set_num_threads(old);
+    return s;
+  };
+  const TearSheet<double> a = run(1), b = run(3);
+  EXPECT_EQ(a.tris, b.tris);
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(norm(a.x[i] - b.x[i]), 0.0);
+    EXPECT_EQ(a.mass[i], b.mass[i]);
+  }
+}
 
 TEST(Tearing, DebrisBoundaryRougherThanTraditional) {
   // The paper's Fig. 5 cases: remove a rectangle and a vertical strip from a sheet clamped on its border.
