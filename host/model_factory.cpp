@@ -2,6 +2,7 @@
 #include "host/input_error.h"
 #include "host/mls_simulation.h"
 #include "host/runner.h"
+#include "host/tearing_simulation.h"
 
 namespace inc {
 
@@ -10,8 +11,7 @@ std::vector<std::unique_ptr<SimulationModel>> createSceneModels(const Scene& sce
   if (scene.models.mls) models.push_back(makeMlsSimulation(scene, backend, scene.solver.precision));
   if (scene.models.pbd_metaballs)
     throw InputError(scene.file, "models.pbd_metaballs", "the PBD metaball model is not built into this version");
-  if (scene.models.tearing)
-    throw InputError(scene.file, "models.tearing", "the tearing model is not built into this version");
+  if (scene.models.tearing) models.push_back(makeTearingSimulation(scene, backend, scene.solver.precision));
   return models;
 }
 
