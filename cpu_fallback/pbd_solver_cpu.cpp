@@ -15,6 +15,19 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
+// parallelFor above a size where a parallel region pays for itself; below it a plain loop (same results:
+// every body writes only its own outputs). A PBD frame opens hundreds of regions, so for small models the
+// fork/join cost would dominate, and worse on a loaded machine.
+constexpr std::int64_t kParallelMin = 2048;
+template <typename Body>
+void loop(std::int64_t n, Body&& body) {
+  if (n >= kParallelMin) {
+    parallelFor(n, body);
+  } else {
+    for (std::int64_t i = 0; i < n; ++i) body(i);
+  }
+}
+
 template <typename T>
 class PbdCpuBackend final : public PbdBackend<T> {
  public:
@@ -92,12 +105,13 @@ class PbdCpuBackend final : public PbdBackend<T> {
     for (int s = 0; s < p.substeps; ++s) {
       const T t_end = T(s + 1) / T(p.substeps);
       auto t0 = Clock::now();
-      parallelFor(ni, [&](std::int64_t i) {
+      loop(ni, [&](std::int64_t i) {
         pbd::predictParticle(x[i], v[i], x_prev_[i], w_[i], p.gravity, damp, dt);
       });
       for (std::size_t k = 0; k < in.kinematic_ids.size(); ++k)
         x[in.kinematic_ids[k]] = pbd::lerp(in.kinematic_from[k], in.kinematic_to[k], t_end);
       for (auto& l : lambda_) std::fill(l.begin(), l.end(), Vec3<T>());
+      attach_lambda_.assign(in.attach_ids.size(), Vec3<T>());
       t_predict += msSince(t0);
 
       for (int it = 0; it < p.iterations; ++it) {
@@ -107,19 +121,24 @@ class PbdCpuBackend final : public PbdBackend<T> {
           if (!b.solve) continue;
           const pbd::BlockView<T> view = blockView(bi);
           if (ctx.jacobi) {
-            parallelFor(std::int64_t(b.count()), [&](std::int64_t c) { pbd::projectConstraint(view, int(c), ctx); });
-            parallelFor(ni, [&](std::int64_t i) { x[i] += pbd::gatherCorrection(view, std::int32_t(i)); });
+            loop(std::int64_t(b.count()), [&](std::int64_t c) { pbd::projectConstraint(view, int(c), ctx); });
+            loop(ni, [&](std::int64_t i) { x[i] += pbd::gatherCorrection(view, std::int32_t(i)); });
           } else {
             const ConstraintColoring& col = b.coloring;
             for (int k = 0; k < col.colorCount(); ++k) {
               const std::int32_t c0 = col.color_offsets[k], c1 = col.color_offsets[k + 1];
-              parallelFor(std::int64_t(c1 - c0), [&](std::int64_t q) { pbd::projectConstraint(view, col.order[c0 + q], ctx); });
+              loop(std::int64_t(c1 - c0), [&](std::int64_t q) { pbd::projectConstraint(view, col.order[c0 + q], ctx); });
             }
           }
         }
+        loop(std::int64_t(in.attach_ids.size()), [&](std::int64_t k) {
+          const std::int32_t id = in.attach_ids[k];
+          pbd::projectAttachment(x[id], w_[id], pbd::lerp(in.attach_from[k], in.attach_to[k], t_end),
+                                 in.attach_compliance[k], p.xpbd, dt, attach_lambda_[k]);
+        });
         t_constraints += msSince(t0);
         t0 = Clock::now();
-        parallelFor(ni, [&](std::int64_t i) {
+        loop(ni, [&](std::int64_t i) {
           if (w_[i] > T(0))
             x[i] = pbd::resolveContacts(x[i], r[i], model_.planes.data(), int(model_.planes.size()), model_.boxes.data(),
                                         int(model_.boxes.size()), in.tools_from.data(), in.tools_to.data(), nt, t_end);
@@ -129,7 +148,7 @@ class PbdCpuBackend final : public PbdBackend<T> {
 
       t0 = Clock::now();
       const T inv_dt = T(1) / dt;
-      parallelFor(ni, [&](std::int64_t i) { v[i] = (x[i] - x_prev_[i]) * inv_dt; });
+      loop(ni, [&](std::int64_t i) { v[i] = (x[i] - x_prev_[i]) * inv_dt; });
       t_velocities += msSince(t0);
     }
     st.iterations = p.substeps * p.iterations;
@@ -138,7 +157,7 @@ class PbdCpuBackend final : public PbdBackend<T> {
     if (model_.rotation_block >= 0 && !model_.blocks[model_.rotation_block].solve) {
       auto t0 = Clock::now();
       const pbd::BlockView<T> view = blockView(std::size_t(model_.rotation_block));
-      parallelFor(std::int64_t(view.count), [&](std::int64_t c) { pbd::updateClusterRotation(view, int(c), ctx); });
+      loop(std::int64_t(view.count), [&](std::int64_t c) { pbd::updateClusterRotation(view, int(c), ctx); });
       t_constraints += msSince(t0);
     }
 
@@ -204,7 +223,7 @@ class PbdCpuBackend final : public PbdBackend<T> {
     const bool have_volume = p.volume_preservation && model_.rest_cell_volume.size() == n && !model_.ball_samples.empty();
     std::vector<std::uint8_t> active(n, 0);
     if (have_volume) {
-      parallelFor(ni, [&](std::int64_t i) {
+      loop(ni, [&](std::int64_t i) {
         if (p.volume_influence < T(0)) {
           active[i] = 1;
           return;
@@ -218,7 +237,7 @@ class PbdCpuBackend final : public PbdBackend<T> {
     }
     Vec3<T>* x = state_.positions.data();
     for (int pass = 0; pass < (have_volume ? p.volume_passes : 1); ++pass) {
-      parallelFor(ni, [&](std::int64_t i) {
+      loop(ni, [&](std::int64_t i) {
         const T r0 = model_.rest_radii[i];
         if (!active[i]) {
           radii_next_[i] = r0;
@@ -248,6 +267,7 @@ class PbdCpuBackend final : public PbdBackend<T> {
   std::vector<T> radii_next_;
   std::vector<std::vector<Vec3<T>>> lambda_;
   std::vector<std::vector<Vec3<T>>> slot_corr_;
+  std::vector<Vec3<T>> attach_lambda_;
 };
 
 }  // namespace

@@ -1,6 +1,7 @@
 // PBD/XPBD model (constraint blocks, colliders), state, per-frame inputs and the backend interface both solvers implement.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -95,12 +96,16 @@ struct PbdStepParams {
   bool profile_stages = false;  // CUDA backend: time each stage with events (no graph)
 };
 
-// What the host prescribes for one frame: kinematic (grasped) particles move linearly from `from` to `to`
-// over the frame's substeps; tools are capsules moving linearly likewise.
+// What the host prescribes for one frame: kinematic particles move linearly from `from` to `to` over the
+// frame's substeps; attached (grasped) particles are pulled towards targets moving likewise by a compliant
+// constraint (physics/pbd_block.h projectAttachment); tools are capsules moving linearly likewise.
 template <typename T>
 struct PbdFrameInput {
   std::vector<std::int32_t> kinematic_ids;
   std::vector<Vec3<T>> kinematic_from, kinematic_to;
+  std::vector<std::int32_t> attach_ids;        // unique, not kinematic
+  std::vector<Vec3<T>> attach_from, attach_to; // target at the frame's start and end (m)
+  std::vector<T> attach_compliance;            // m/N, >= 0
   std::vector<pbd::CapsuleCollider<T>> tools_from, tools_to;
 };
 
@@ -157,6 +162,18 @@ inline void validateFrameInput(std::size_t n, const PbdStepParams<T>& p, const P
     if (seen[id]) throw InputError(f, "kinematic_ids", "duplicate index " + std::to_string(id));
     seen[id] = 1;
     if (!isFinite(in.kinematic_from[k]) || !isFinite(in.kinematic_to[k])) throw InputError(f, "kinematic", "not finite");
+  }
+  if (in.attach_from.size() != in.attach_ids.size() || in.attach_to.size() != in.attach_ids.size() ||
+      in.attach_compliance.size() != in.attach_ids.size())
+    throw InputError(f, "attach", "ids, from, to and compliance must have equal sizes");
+  for (std::size_t k = 0; k < in.attach_ids.size(); ++k) {
+    const std::int32_t id = in.attach_ids[k];
+    if (id < 0 || std::size_t(id) >= n) throw InputError(f, "attach_ids", "index out of range");
+    if (seen[id]) throw InputError(f, "attach_ids", "index " + std::to_string(id) + " is duplicate or kinematic");
+    seen[id] = 1;
+    if (!isFinite(in.attach_from[k]) || !isFinite(in.attach_to[k])) throw InputError(f, "attach", "not finite");
+    if (!(in.attach_compliance[k] >= T(0)) || !std::isfinite(double(in.attach_compliance[k])))
+      throw InputError(f, "attach_compliance", "must be finite and >= 0");
   }
   if (in.tools_from.size() != in.tools_to.size()) throw InputError(f, "tools", "from and to must have equal sizes");
   for (std::size_t k = 0; k < in.tools_from.size(); ++k)

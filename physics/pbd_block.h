@@ -111,15 +111,35 @@ INC_HD void projectConstraint(const BlockView<T>& b, int c, const SolveContext<T
       const Quat<T> q = extractRotation(f.a_pq, ctx.rotation[centre], ctx.rotation_iterations);
       ctx.rotation[centre] = q;
       const Mat3<T> rot = quatToMatrix(q);
-      // Goals from positions read before any member moves (Gauss-Seidel writes only after all are computed
-      // for the member itself; the goal of a member does not depend on its own update).
+      // Pass 1: the cluster's net momentum change sum_k m_k dp_k. With equal compliance-to-mass ratios it is
+      // zero (sum_k m_k q_k = 0), but per-member compliances and Jacobi scales differ at the boundary; the
+      // change is removed below by a uniform shift of the movable members, so internal shape matching never
+      // creates momentum (the shift is a rigid translation: it does not change the shape error).
+      Vec3<T> dmom;
+      T mov_mass = T(0);
+      for (std::int32_t s = s0; s < s1; ++s) {
+        const std::int32_t p = b.ids[s];
+        if (!(w[p] > T(0))) continue;
+        const T sc = ctx.jacobi ? ctx.omega * b.jacobi_scale[s] : T(1);
+        const XpbdTerm<T> term = xpbdTerm(ctx.xpbd, b.compliance[s], b.stiffness, ctx.dt);
+        const GoalCorrection<T> r = projectGoal(x[p], w[p], rot * b.rest_vec[s] + f.x_cm, term, b.lambda[s]);
+        dmom += r.dp * (sc * ctx.mass[p]);
+        mov_mass += ctx.mass[p];
+      }
+      const Vec3<T> shift = mov_mass > T(0) ? dmom * (-T(1) / mov_mass) : Vec3<T>();
+      // Pass 2: goals from the cluster frame computed above; a member's goal does not depend on its own
+      // update, so Gauss-Seidel may write each member in place.
       for (std::int32_t s = s0; s < s1; ++s) {
         const std::int32_t p = b.ids[s];
         const Vec3<T> goal = rot * b.rest_vec[s] + f.x_cm;
         const T sc = ctx.jacobi ? ctx.omega * b.jacobi_scale[s] : T(1);
         const XpbdTerm<T> term = xpbdTerm(ctx.xpbd, b.compliance[s], b.stiffness, ctx.dt);
         const GoalCorrection<T> r = projectGoal(x[p], w[p], goal, term, b.lambda[s]);
-        emitCorrection(b, ctx, s, r.dp, sc);
+        const Vec3<T> d = w[p] > T(0) ? r.dp * sc + shift : Vec3<T>();
+        if (ctx.jacobi)
+          b.slot_corr[s] = d;
+        else
+          ctx.x[p] += d;
         b.lambda[s] += r.dlambda * sc;
       }
       break;
@@ -135,6 +155,18 @@ INC_HD void updateClusterRotation(const BlockView<T>& b, int c, const SolveConte
   const std::int32_t s0 = b.offsets[c], s1 = b.offsets[c + 1];
   const ClusterFrame<T> f = clusterFrame(ctx.x, ctx.mass, b.ids + s0, b.rest_vec + s0, s1 - s0);
   ctx.rotation[b.ids[s0]] = extractRotation(f.a_pq, ctx.rotation[b.ids[s0]], ctx.rotation_iterations);
+}
+
+// Grasp attachment of one particle to a moving target point: the zero-rest-length compliant constraint
+// C = x - target (3-vector) with compliance alpha (m/N); alpha = 0 holds the particle rigidly in the jaws.
+// Each attached particle has one attachment, so all of them are projected in parallel without conflict.
+template <typename T>
+INC_HD void projectAttachment(Vec3<T>& x, T w, const Vec3<T>& target, T compliance, bool xpbd, T dt,
+                              Vec3<T>& lambda) {
+  const XpbdTerm<T> term = xpbdTerm(xpbd, compliance, T(1), dt);
+  const GoalCorrection<T> r = projectGoal(x, w, target, term, lambda);
+  x += r.dp;
+  lambda += r.dlambda;
 }
 
 // Jacobi gather: the sum of the (already scaled) corrections of particle p's slots, in ascending slot order.

@@ -1,0 +1,292 @@
+// PBD/XPBD metaball solver: frame time and constraints/s against sphere count (CPU and CUDA, Jacobi and Gauss-Seidel), and residual/deflection against iterations.
+#include <CLI/CLI.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "host/backend.h"
+#include "host/input_error.h"
+#include "host/pbd_builders.h"
+#include "host/pbd_model.h"
+#if INCISION_HAVE_CUDA
+#include "kernels/device_info.h"
+#endif
+
+using namespace inc;
+
+namespace {
+
+struct Row {
+  std::string table, backend, precision, solver;
+  std::int64_t spheres = 0, constraints = 0;
+  int iterations = 0, substeps = 0, colors = 0;
+  std::string stages;  // "name=ms ..." of the last timed frame
+  double ms_frame = 0, constraints_per_s = 0, residual_max = 0, residual_rms = 0, deflection_m = 0, deflection_err = 0;
+};
+
+const double kSpacing = 0.005;  // m
+
+// A clamped block of about n metaballs (4:1:1, 5 mm lattice, radius 0.75 spacing, E = 5 kPa): shape
+// matching, Laplacian and stretch constraints, volume preservation near the probe that presses its middle.
+template <typename T>
+PbdModel<T> blockModel(std::int64_t n, Vec3d& size) {
+  const int ny = std::max(1, int(std::lround(std::cbrt(double(n) / 4.0))));
+  const int nx = std::max(2, int(std::lround(double(n) / (ny * ny))));
+  size = Vec3d((nx - 1) * kSpacing, (ny - 1) * kSpacing, (ny - 1) * kSpacing);
+  const MetaballModel mb = makeLatticeMetaballs(Vec3d(0, 0, 0), size, kSpacing, 0.75, 1060.0);
+  MetaballPbdOptions opt;
+  opt.youngs_modulus = 5.0e3;
+  opt.volume_samples = 32;
+  FixedRegion r;
+  r.min = Vec3d(-1, -1, -1);
+  r.max = Vec3d(0.5 * kSpacing, 1, 1);
+  opt.fixed.push_back(r);
+  return buildMetaballPbdModel<T>(mb, opt);
+}
+
+template <typename T>
+PbdFrameInput<T> probeInput(const Vec3d& size) {
+  PbdFrameInput<T> in;
+  pbd::CapsuleCollider<T> c;
+  c.a = Vec3<T>(T(0.5 * size.x), T(-0.01), T(size.z + 0.5 * kSpacing));
+  c.b = Vec3<T>(T(0.5 * size.x), T(size.y + 0.01), T(size.z + 0.5 * kSpacing));
+  c.radius = T(0.004);
+  in.tools_from.push_back(c);
+  in.tools_to.push_back(c);
+  return in;
+}
+
+std::int64_t solvedConstraints(const PbdModel<float>& m) {
+  std::int64_t c = 0;
+  for (const auto& b : m.blocks)
+    if (b.solve) c += std::int64_t(b.count());
+  return c;
+}
+std::int64_t solvedConstraints(const PbdModel<double>& m) {
+  std::int64_t c = 0;
+  for (const auto& b : m.blocks)
+    if (b.solve) c += std::int64_t(b.count());
+  return c;
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[v.size() / 2];
+}
+
+// Frame time: CUDA events (the backend's "frame" stage) on the GPU, wall clock on the CPU; median of `repeats`
+// frames after 3 warm-up frames (graph capture, first touch).
+template <typename T>
+Row timeFrames(BackendKind kind, PbdSolverKind solver, std::int64_t n, int iterations, int substeps, int repeats) {
+  Vec3d size;
+  const PbdModel<T> m = blockModel<T>(n, size);
+  auto be = makePbdBackend<T>(kind);
+  be->setModel(m);
+  PbdStepParams<T> p;
+  p.solver = solver;
+  p.iterations = iterations;
+  p.substeps = substeps;
+  p.volume_influence = T(2 * kSpacing);
+  const PbdFrameInput<T> in = probeInput<T>(size);
+  PbdFrameStats st;
+  for (int k = 0; k < 3; ++k) st = be->advanceFrame(p, in);
+  std::vector<double> ms;
+  for (int k = 0; k < repeats; ++k) {
+    const auto t0 = std::chrono::steady_clock::now();
+    st = be->advanceFrame(p, in);
+    const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    double ev = -1;
+    for (const auto& s : st.stages)
+      if (s.stage == "frame") ev = s.ms;
+    ms.push_back(be->kind() == BackendKind::Cuda && ev >= 0 ? ev : wall);
+  }
+  Row r;
+  r.table = "scaling";
+  r.backend = backendName(be->kind());
+  r.precision = sizeof(T) == 4 ? "float32" : "float64";
+  r.solver = solver == PbdSolverKind::Jacobi ? "jacobi" : "gauss_seidel";
+  r.spheres = std::int64_t(m.size());
+  r.constraints = solvedConstraints(m);
+  r.iterations = iterations;
+  r.substeps = substeps;
+  r.colors = st.colors;
+  r.ms_frame = median(ms);
+  r.constraints_per_s = double(r.constraints) * iterations * substeps / (r.ms_frame * 1e-3);
+  r.residual_max = st.residual_max;
+  r.residual_rms = st.residual_rms;
+  for (const auto& s : st.stages) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%s%s=%.3f", r.stages.empty() ? "" : " ", s.stage.c_str(), s.ms);
+    r.stages += buf;
+  }
+  return r;
+}
+
+// Speed/accuracy: mean tip deflection after `frames` frames of sagging, against a 200-iteration
+// Gauss-Seidel reference run.
+template <typename T>
+double tipDeflection(BackendKind kind, PbdSolverKind solver, std::int64_t n, int iterations, int substeps, int frames,
+                     PbdFrameStats& st) {
+  Vec3d size;
+  const PbdModel<T> m = blockModel<T>(n, size);
+  auto be = makePbdBackend<T>(kind);
+  be->setModel(m);
+  PbdStepParams<T> p;
+  p.solver = solver;
+  p.iterations = iterations;
+  p.substeps = substeps;
+  p.damping = T(5);
+  p.volume_preservation = false;
+  for (int f = 0; f < frames; ++f) st = be->advanceFrame(p, PbdFrameInput<T>());
+  PbdState<T> s;
+  be->getState(s);
+  double tip = 0;
+  int cnt = 0;
+  for (std::size_t i = 0; i < m.size(); ++i)
+    if (double(m.rest_positions[i].x) > size.x - 0.5 * kSpacing) {
+      tip += double(m.rest_positions[i].z - s.positions[i].z);
+      ++cnt;
+    }
+  return tip / std::max(1, cnt);
+}
+
+void printRow(const Row& r) {
+  if (r.table == "scaling")
+    std::printf("%-6s %-8s %-12s %8lld %9lld %4d %4d %5d %10.3f %12.3e %10.2e  %s\n", r.backend.c_str(), r.precision.c_str(),
+                r.solver.c_str(), (long long)r.spheres, (long long)r.constraints, r.iterations, r.substeps, r.colors,
+                r.ms_frame, r.constraints_per_s, r.residual_max, r.stages.c_str());
+  else
+    std::printf("%-6s %-8s %-12s %8lld %4d %4d %10.3f %10.3e %10.3e %10.3e %9.2f%%\n", r.backend.c_str(), r.precision.c_str(),
+                r.solver.c_str(), (long long)r.spheres, r.iterations, r.substeps, r.ms_frame, r.residual_max,
+                r.residual_rms, r.deflection_m, 100.0 * r.deflection_err);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"PBD/XPBD metaball solver benchmark"};
+  std::string backend = "auto", csv, precision = "float32";
+  std::int64_t min_n = 100, max_n = 100000, cpu_max = 20000, accuracy_n = 570;
+  int iterations = 10, substeps = 4, repeats = 20;
+  bool quick = false;
+  app.add_option("--backend", backend, "auto (CPU and, when present, CUDA) | cpu | cuda");
+  app.add_option("--precision", precision, "float32 | float64");
+  app.add_option("--min", min_n, "smallest sphere count");
+  app.add_option("--max", max_n, "largest sphere count");
+  app.add_option("--cpu-max", cpu_max, "largest sphere count timed on the CPU");
+  app.add_option("--accuracy-spheres", accuracy_n, "sphere count of the residual/deflection vs iterations table");
+  app.add_option("--iterations", iterations, "iterations per substep in the scaling table");
+  app.add_option("--substeps", substeps, "substeps per 1/60 s frame");
+  app.add_option("--repeats", repeats, "timed frames per point (median)");
+  app.add_option("--csv", csv, "write every row to this CSV file");
+  app.add_flag("--quick", quick, "short run: up to 10^4 spheres, 5 repeats");
+  CLI11_PARSE(app, argc, argv);
+  try {
+    const BackendKind requested = parseBackend(backend);
+    if (precision != "float32" && precision != "float64") throw InputError("bench_pbd", "--precision", "float32 or float64");
+    if (quick) {
+      max_n = std::min<std::int64_t>(max_n, 10000);
+      cpu_max = std::min<std::int64_t>(cpu_max, 3000);
+      repeats = std::min(repeats, 5);
+    }
+    if (min_n < 8 || max_n < min_n || iterations < 1 || substeps < 1 || repeats < 1)
+      throw InputError("bench_pbd", "arguments", "need 8 <= min <= max, iterations, substeps, repeats >= 1");
+    std::vector<BackendKind> kinds;
+    if (requested != BackendKind::Cuda) kinds.push_back(BackendKind::Cpu);
+#if INCISION_HAVE_CUDA
+    const bool have_gpu = cuda::queryDevices().device_count > 0;
+#else
+    const bool have_gpu = false;
+#endif
+    if (requested == BackendKind::Cuda && !have_gpu) throw InputError("bench_pbd", "--backend", "no usable CUDA device");
+    if (have_gpu && requested != BackendKind::Cpu) kinds.push_back(BackendKind::Cuda);
+    const bool f64 = precision == "float64";
+
+    std::vector<std::int64_t> sizes;
+    for (double n = double(min_n); n <= double(max_n) * 1.0001; n *= std::sqrt(10.0)) sizes.push_back(std::llround(n));
+    if (accuracy_n >= min_n && accuracy_n <= max_n) sizes.push_back(accuracy_n);
+    std::sort(sizes.begin(), sizes.end());
+
+    std::vector<Row> rows;
+    std::printf("# scaling: %d iterations x %d substeps per 1/60 s frame, probe pressing, volume preservation near it\n",
+                iterations, substeps);
+    std::printf("%-6s %-8s %-12s %8s %9s %4s %4s %5s %10s %12s %10s  stages\n", "backend", "prec", "solver", "spheres",
+                "constr", "it", "sub", "cols", "ms/frame", "constr/s", "resid_m");
+    for (BackendKind k : kinds)
+      for (std::int64_t n : sizes) {
+        if (k == BackendKind::Cpu && n > cpu_max) continue;
+        for (PbdSolverKind s : {PbdSolverKind::Jacobi, PbdSolverKind::GaussSeidel}) {
+          const Row r = f64 ? timeFrames<double>(k, s, n, iterations, substeps, repeats)
+                            : timeFrames<float>(k, s, n, iterations, substeps, repeats);
+          printRow(r);
+          rows.push_back(r);
+        }
+      }
+
+    // Speed/accuracy trade: deflection error against iterations (reference: 200 Gauss-Seidel iterations).
+    const int frames = quick ? 30 : 90;
+    std::printf("# accuracy: %lld spheres, %d frames of sagging; deflection error vs a 200-iteration Gauss-Seidel run\n",
+                (long long)accuracy_n, frames);
+    std::printf("%-6s %-8s %-12s %8s %4s %4s %10s %10s %10s %10s %10s\n", "backend", "prec", "solver", "spheres", "it",
+                "sub", "ms/frame", "resid_max", "resid_rms", "tip_m", "err");
+    for (BackendKind k : kinds) {
+      PbdFrameStats st;
+      const double ref = f64 ? tipDeflection<double>(k, PbdSolverKind::GaussSeidel, accuracy_n, 200, substeps, frames, st)
+                             : tipDeflection<float>(k, PbdSolverKind::GaussSeidel, accuracy_n, 200, substeps, frames, st);
+      for (PbdSolverKind s : {PbdSolverKind::Jacobi, PbdSolverKind::GaussSeidel})
+        for (int it : {1, 2, 5, 10, 20, 50}) {
+          Row r = f64 ? timeFrames<double>(k, s, accuracy_n, it, substeps, std::max(3, repeats / 2))
+                      : timeFrames<float>(k, s, accuracy_n, it, substeps, std::max(3, repeats / 2));
+          r.table = "accuracy";
+          r.deflection_m = f64 ? tipDeflection<double>(k, s, accuracy_n, it, substeps, frames, st)
+                               : tipDeflection<float>(k, s, accuracy_n, it, substeps, frames, st);
+          r.residual_max = st.residual_max;
+          r.residual_rms = st.residual_rms;
+          r.deflection_err = ref > 0 ? std::fabs(r.deflection_m - ref) / ref : 0.0;
+          printRow(r);
+          rows.push_back(r);
+        }
+    }
+
+    if (!csv.empty()) {
+      std::ofstream out(csv);
+      if (!out) throw InputError(csv, "--csv", "cannot write");
+      out << "table,backend,precision,solver,spheres,constraints,iterations,substeps,colors,ms_frame,constraints_per_s,"
+             "residual_max_m,residual_rms_m,deflection_m,deflection_rel_err\n";
+      for (const Row& r : rows)
+        out << r.table << ',' << r.backend << ',' << r.precision << ',' << r.solver << ',' << r.spheres << ','
+            << r.constraints << ',' << r.iterations << ',' << r.substeps << ',' << r.colors << ',' << r.ms_frame << ','
+            << r.constraints_per_s << ',' << r.residual_max << ',' << r.residual_rms << ',' << r.deflection_m << ','
+            << r.deflection_err << '\n';
+    }
+    // Summary: the liver-sized case (accuracy_n spheres) at the scaling table's settings, fastest per backend.
+    std::string summary = "bench_pbd: " + std::to_string(accuracy_n) + " spheres, " + std::to_string(iterations) + "x" +
+                          std::to_string(substeps) + " it/frame:";
+    for (BackendKind k : kinds) {
+      double best = 1e30;
+      std::string which;
+      for (const Row& r : rows)
+        if (r.table == "scaling" && r.spheres > 0 && r.backend == backendName(k) &&
+            std::llabs(r.spheres - accuracy_n) <= accuracy_n / 5 && r.ms_frame < best) {
+          best = r.ms_frame;
+          which = r.solver;
+        }
+      char buf[160];
+      if (best < 1e30) {
+        std::snprintf(buf, sizeof buf, " %s %.3f ms/frame (%s);", backendName(k), best, which.c_str());
+        summary += buf;
+      }
+    }
+    std::printf("%s\n", summary.c_str());
+  } catch (const InputError& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return 2;
+  }
+  return 0;
+}

@@ -1,0 +1,283 @@
+// PBD metaball organ as a SimulationModel: lattice sphere fill, constraint model, scripted probes and graspers, frame reports.
+#include "host/metaball_simulation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+
+#include "host/grasper.h"
+#include "host/input_error.h"
+#include "host/mesh.h"
+#include "host/particle_sampling.h"
+#include "host/pbd_builders.h"
+#include "host/pbd_model.h"
+#include "physics/pbd_rotation.h"
+
+namespace inc {
+
+namespace {
+
+constexpr double kRadiusFactor = 0.75;  // sphere radius / lattice spacing
+constexpr int kDefaultSubsteps = 4;
+
+// Links between overlapping spheres through a hash grid of cell 2 r_max (each pair tested once).
+void linkOverlapping(MetaballModel& mb) {
+  const std::size_t n = mb.size();
+  double rmax = 0;
+  for (double r : mb.rest_radii) rmax = std::max(rmax, r);
+  const double cell = 2.0 * rmax;
+  auto key = [&](const Vec3d& p) {
+    const long long i = (long long)std::floor(p.x / cell), j = (long long)std::floor(p.y / cell),
+                    k = (long long)std::floor(p.z / cell);
+    return std::make_tuple(i, j, k);
+  };
+  struct Hash {
+    std::size_t operator()(const std::tuple<long long, long long, long long>& t) const {
+      return std::size_t(std::get<0>(t) * 73856093LL ^ std::get<1>(t) * 19349663LL ^ std::get<2>(t) * 83492791LL);
+    }
+  };
+  std::unordered_map<std::tuple<long long, long long, long long>, std::vector<std::int32_t>, Hash> grid;
+  for (std::size_t i = 0; i < n; ++i) grid[key(mb.rest_centers[i])].push_back(std::int32_t(i));
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto [a, b, c] = key(mb.rest_centers[i]);
+    std::vector<std::int32_t> found;
+    for (long long da = -1; da <= 1; ++da)
+      for (long long db = -1; db <= 1; ++db)
+        for (long long dc = -1; dc <= 1; ++dc) {
+          auto it = grid.find(std::make_tuple(a + da, b + db, c + dc));
+          if (it == grid.end()) continue;
+          for (std::int32_t j : it->second) {
+            if (std::size_t(j) <= i) continue;
+            const double d = norm(mb.rest_centers[i] - mb.rest_centers[j]);
+            if (d < mb.rest_radii[i] + mb.rest_radii[j] && d > 0) found.push_back(j);
+          }
+        }
+    std::sort(found.begin(), found.end());
+    for (std::int32_t j : found) {
+      mb.links.push_back({std::int32_t(i), j});
+      mb.link_rest_lengths.push_back(norm(mb.rest_centers[i] - mb.rest_centers[j]));
+    }
+  }
+}
+
+template <typename T>
+class MetaballSimulation final : public SimulationModel {
+ public:
+  MetaballSimulation(const Scene& scene, BackendKind backend) : scene_(scene) {
+    const std::string& f = scene.file;
+    if (scene.pbd.iterations < 1) throw InputError(f, "pbd.iterations", "must be >= 1");
+    if (scene.solver.substeps < 0) throw InputError(f, "solver.substeps", "must be >= 0");
+    if (!(scene.material.density > 0)) throw InputError(f, "material.density_kg_m3", "must be > 0");
+    if (!(scene.material.damping >= 0)) throw InputError(f, "material.damping_per_s", "must be >= 0");
+    params_.solver = parsePbdSolver(scene.pbd.solver, f, "pbd.solver");
+    params_.iterations = scene.pbd.iterations;
+    params_.xpbd = scene.pbd.xpbd;
+    params_.gravity = Vec3<T>(scene.solver.gravity);
+    params_.damping = T(scene.material.damping);
+    params_.volume_preservation = scene.pbd.volume_preservation;
+    params_.volume_influence = T(2.0 * scene.geometry.spacing);
+    base_substeps_ = scene.solver.substeps > 0 ? scene.solver.substeps : kDefaultSubsteps;
+
+    const MetaballModel mb = buildSceneMetaballs(scene);
+    MetaballPbdOptions opt;
+    opt.youngs_modulus = scene.material.youngs_modulus;
+    opt.stretch_compliance = scene.pbd.stretch_compliance;
+    opt.laplacian_compliance = scene.pbd.laplacian_compliance;
+    opt.fixed = scene.fixed;
+    opt.volume_samples = scene.pbd.volume_preservation ? 64 : 0;
+    model_ = buildMetaballPbdModel<T>(mb, opt);
+    backend_ = makePbdBackend<T>(backend);
+    backend_->setModel(model_);
+    backend_->getState(state_);
+
+    for (const ToolSpec& t : scene.tools) {
+      if (t.path.empty()) throw InputError(f, "tools." + t.name + ".path", "needs at least one keyframe");
+      if (t.kind == "grasper")
+        graspers_.emplace_back(t, t.radius + scene.geometry.spacing, 1.0e-6);
+      else if (t.kind == "probe")
+        probes_.push_back(t);
+    }
+    movable_.resize(model_.size());
+    for (std::size_t i = 0; i < model_.size(); ++i) movable_[i] = model_.inv_mass[i] > T(0) ? 1 : 0;
+    saveCheckpoint();
+  }
+
+  std::string name() const override { return "pbd_metaballs"; }
+  BackendKind backend() const override { return backend_->kind(); }
+  std::size_t particleCount() const override { return model_.size(); }
+
+  FrameReport advance(double frame_dt) override {
+    FrameReport rep;
+    const double t0 = time_, t1 = time_ + frame_dt;
+    PbdFrameInput<T> in;
+    for (Grasper& g : graspers_) {
+      if (g.holding() && t0 >= g.releaseTime()) g.release();
+      if (!g.holding() && !g.finished() && t0 >= g.closeTime() && t0 < g.releaseTime()) {
+        std::vector<Vec3d> c(model_.size());
+        std::vector<double> r(model_.size());
+        for (std::size_t i = 0; i < model_.size(); ++i) {
+          c[i] = Vec3d(state_.positions[i]);
+          r[i] = double(state_.radii[i]);
+        }
+        g.grasp(toolPoseAt(g.tool(), t0).position, c, r, movable_);
+      }
+      const ToolPose a = toolPoseAt(g.tool(), t0), b = toolPoseAt(g.tool(), t1);
+      if (g.holding()) {
+        g.appendAttachments(a.position, b.position, in);
+      } else {
+        in.tools_from.push_back(capsule(toolCapsule(g.tool(), a)));
+        in.tools_to.push_back(capsule(toolCapsule(g.tool(), b)));
+      }
+    }
+    for (const ToolSpec& t : probes_) {
+      in.tools_from.push_back(capsule(toolCapsule(t, toolPoseAt(t, t0))));
+      in.tools_to.push_back(capsule(toolCapsule(t, toolPoseAt(t, t1))));
+    }
+    PbdStepParams<T> p = params_;
+    p.frame_dt = T(frame_dt);
+    p.substeps = substeps();
+    const PbdFrameStats st = backend_->advanceFrame(p, in);
+    backend_->getState(state_);
+    time_ = t1;
+
+    rep.substeps = p.substeps;
+    rep.dt = frame_dt / p.substeps;
+    rep.stages = st.stages;
+    rep.finite = st.finite;
+    if (!st.finite) {
+      rep.failure_stage = "pbd";
+      rep.failure_particle = st.failure_particle;
+    }
+    energies(rep, double(p.frame_dt) / p.substeps);
+    int grasped = 0;
+    for (const Grasper& g : graspers_) grasped += int(g.grasped().size());
+    rep.counters["residual_max_m"] = st.residual_max;
+    rep.counters["residual_rms_m"] = st.residual_rms;
+    rep.counters["colors"] = st.colors;
+    rep.counters["iterations"] = st.iterations;
+    rep.counters["substeps"] = p.substeps;
+    rep.counters["grasped"] = grasped;
+    rep.counters["volume_active"] = st.volume_active;
+    rep.counters["max_radius_ratio"] = st.max_radius_ratio;
+    return rep;
+  }
+
+  void saveCheckpoint() override {
+    saved_state_ = state_;
+    saved_time_ = time_;
+    saved_graspers_ = graspers_;
+  }
+  void restoreCheckpoint() override {
+    state_ = saved_state_;
+    time_ = saved_time_;
+    graspers_ = saved_graspers_;
+    backend_->setState(state_);
+  }
+  void scaleTimeStep(double factor) override {
+    if (factor > 0 && std::isfinite(factor)) substep_scale_ /= factor;
+  }
+  void currentPositions(std::vector<Vec3d>& out) const override {
+    out.resize(state_.positions.size());
+    for (std::size_t i = 0; i < out.size(); ++i) out[i] = Vec3d(state_.positions[i]);
+  }
+  MemoryReport memory() const override {
+    MemoryReport m = backend_->memory();
+    m.host_bytes += model_.size() * (sizeof(Vec3<T>) * 3 + sizeof(T) * 4);
+    return m;
+  }
+
+ private:
+  static pbd::CapsuleCollider<T> capsule(const pbd::CapsuleCollider<double>& c) {
+    pbd::CapsuleCollider<T> o;
+    o.a = Vec3<T>(c.a);
+    o.b = Vec3<T>(c.b);
+    o.radius = T(c.radius);
+    return o;
+  }
+  int substeps() const { return std::max(1, int(std::ceil(base_substeps_ * substep_scale_ - 1e-9))); }
+
+  // Kinetic, gravity potential (relative to rest) and compliance energy of the stretch and Laplacian
+  // constraints (sum |C|^2 / 2 alpha, the XPBD potential), and the max displacement from rest.
+  void energies(FrameReport& rep, double /*dt*/) const {
+    double ke = 0, pe = 0, disp = 0;
+    const Vec3d g = scene_.solver.gravity;
+    for (std::size_t i = 0; i < model_.size(); ++i) {
+      const Vec3d x(state_.positions[i]), x0(model_.rest_positions[i]), v(state_.velocities[i]);
+      const double m = double(model_.masses[i]);
+      ke += 0.5 * m * norm2(v);
+      pe -= m * dot(g, x - x0);
+      disp = std::max(disp, norm(x - x0));
+    }
+    double el = 0;
+    for (const PbdConstraintBlock<T>& b : model_.blocks) {
+      if (!b.solve) continue;
+      for (std::size_t c = 0; c < b.count(); ++c) {
+        const double a = double(b.compliance[c]);
+        if (!(a > 0)) continue;
+        const std::int32_t s0 = b.offsets[c], s1 = b.offsets[c + 1];
+        if (b.kind == PbdConstraintKind::Distance) {
+          const double cv = norm(Vec3d(state_.positions[b.ids[s0]]) - Vec3d(state_.positions[b.ids[s0 + 1]])) - double(b.rest[c]);
+          el += 0.5 * cv * cv / a;
+        } else if (b.kind == PbdConstraintKind::Laplacian) {
+          Vec3d mean;
+          for (std::int32_t s = s0 + 1; s < s1; ++s) mean += Vec3d(state_.positions[b.ids[s]]);
+          mean *= 1.0 / double(s1 - s0 - 1);
+          const Mat3<T> rot = pbd::quatToMatrix(state_.rotations[b.ids[s0]]);
+          const Vec3d cv = Vec3d(state_.positions[b.ids[s0]]) - mean - Vec3d(rot * b.rest_vec[c]);
+          el += 0.5 * norm2(cv) / a;
+        }
+      }
+    }
+    rep.kinetic_energy = ke;
+    rep.potential_energy = pe;
+    rep.elastic_energy = el;
+    rep.max_displacement = disp;
+  }
+
+  Scene scene_;
+  PbdModel<T> model_;
+  std::unique_ptr<PbdBackend<T>> backend_;
+  PbdStepParams<T> params_;
+  PbdState<T> state_, saved_state_;
+  std::vector<Grasper> graspers_, saved_graspers_;
+  std::vector<ToolSpec> probes_;
+  std::vector<std::uint8_t> movable_;
+  int base_substeps_ = kDefaultSubsteps;
+  double substep_scale_ = 1.0;
+  double time_ = 0, saved_time_ = 0;
+};
+
+}  // namespace
+
+MetaballModel buildSceneMetaballs(const Scene& scene) {
+  const GeometrySpec& g = scene.geometry;
+  const std::string& f = scene.file;
+  if (!(std::isfinite(g.spacing) && g.spacing > 0)) throw InputError(f, "geometry.spacing_m", "must be a positive number");
+  if (!(scene.material.density > 0)) throw InputError(f, "material.density_kg_m3", "must be > 0");
+  std::vector<Vec3d> centers;
+  if (g.kind == GeometrySpec::Kind::Mesh) {
+    if (!(std::isfinite(g.mesh_scale) && g.mesh_scale > 0))
+      throw InputError(f, "geometry.mesh_scale", "must be a positive number");
+    TriangleMesh mesh = loadMesh(g.mesh_path);
+    for (auto& v : mesh.vertices) v = v * g.mesh_scale;
+    requireClosedMesh(mesh, g.mesh_path, "geometry.mesh");
+    centers = sampleMesh(mesh, LatticeSpec{g.spacing, g.jitter, g.seed});
+  } else {
+    centers = sampleGeometry(g, f);
+  }
+  if (centers.empty()) throw InputError(f, "geometry.spacing_m", "the body holds no lattice cell (spacing too large?)");
+  if (centers.size() > 5000000) throw InputError(f, "geometry.spacing_m", "more than 5 million spheres");
+  MetaballModel mb;
+  mb.rest_centers = std::move(centers);
+  mb.rest_radii.assign(mb.size(), kRadiusFactor * g.spacing);
+  mb.masses.assign(mb.size(), scene.material.density * g.spacing * g.spacing * g.spacing);
+  linkOverlapping(mb);
+  return mb;
+}
+
+std::unique_ptr<SimulationModel> makeMetaballSimulation(const Scene& scene, BackendKind backend, Precision precision) {
+  if (precision == Precision::Float64) return std::make_unique<MetaballSimulation<double>>(scene, backend);
+  return std::make_unique<MetaballSimulation<float>>(scene, backend);
+}
+
+}  // namespace inc

@@ -1,0 +1,672 @@
+// CUDA PBD/XPBD backend: device-resident state, one launch per block (Jacobi: project + gather) or per colour (Gauss-Seidel), frame captured in a CUDA graph.
+#include "kernels/pbd_solver_cuda.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "kernels/cuda_check.h"
+#include "kernels/device_buffer.h"
+#include "physics/pbd_block.h"
+#include "physics/pbd_volume.h"
+
+namespace inc::cuda {
+
+namespace {
+
+constexpr int kThreads = 128;
+constexpr int kReduceBlocks = 256;  // fixed grid of the reductions: partials are summed on the host in order
+
+inline unsigned blocksFor(std::int64_t n) { return unsigned((n + kThreads - 1) / kThreads); }
+
+// ----------------------------------------------------------------------------------------------
+// Kernels: each is one loop of the CPU backend (cpu_fallback/pbd_solver_cpu.cpp) with the same physics calls.
+
+template <typename T>
+__global__ void predictKernel(int n, Vec3<T>* x, Vec3<T>* v, Vec3<T>* x_prev, const T* w, Vec3<T> g, T damp, T dt) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= n) return;
+  pbd::predictParticle(x[i], v[i], x_prev[i], w[i], g, damp, dt);
+}
+
+template <typename T>
+__global__ void kinematicKernel(int k, Vec3<T>* x, const std::int32_t* ids, const Vec3<T>* from, const Vec3<T>* to,
+                                T t) {
+  const int q = blockIdx.x * blockDim.x + threadIdx.x;
+  if (q >= k) return;
+  x[ids[q]] = pbd::lerp(from[q], to[q], t);
+}
+
+template <typename T>
+__global__ void attachKernel(int k, Vec3<T>* x, const T* w, const std::int32_t* ids, const Vec3<T>* from,
+                             const Vec3<T>* to, const T* compliance, Vec3<T>* lambda, bool xpbd, T dt, T t) {
+  const int q = blockIdx.x * blockDim.x + threadIdx.x;
+  if (q >= k) return;
+  const std::int32_t id = ids[q];
+  pbd::projectAttachment(x[id], w[id], pbd::lerp(from[q], to[q], t), compliance[q], xpbd, dt, lambda[q]);
+}
+
+template <typename T>
+__global__ void projectAllKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx) {
+  const int c = blockIdx.x * blockDim.x + threadIdx.x;
+  if (c >= b.count) return;
+  pbd::projectConstraint(b, c, ctx);
+}
+
+// Gauss-Seidel: constraints order[0 .. count) of one colour share no movable particle, so in-place writes
+// do not race.
+template <typename T>
+__global__ void projectColorKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx, const std::int32_t* order, int count) {
+  const int q = blockIdx.x * blockDim.x + threadIdx.x;
+  if (q >= count) return;
+  pbd::projectConstraint(b, order[q], ctx);
+}
+
+// Jacobi gather: each particle sums its own slots' corrections (no atomics, fixed order).
+template <typename T>
+__global__ void gatherKernel(int n, pbd::BlockView<T> b, Vec3<T>* x) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= n) return;
+  x[i] += pbd::gatherCorrection(b, std::int32_t(i));
+}
+
+template <typename T>
+__global__ void rotationKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx) {
+  const int c = blockIdx.x * blockDim.x + threadIdx.x;
+  if (c >= b.count) return;
+  pbd::updateClusterRotation(b, c, ctx);
+}
+
+template <typename T>
+__global__ void contactKernel(int n, Vec3<T>* x, const T* r, const T* w, const pbd::PlaneCollider<T>* planes, int np,
+                              const pbd::BoxCollider<T>* boxes, int nb, const pbd::CapsuleCollider<T>* tools_from,
+                              const pbd::CapsuleCollider<T>* tools_to, int nt, T t) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= n || !(w[i] > T(0))) return;
+  x[i] = pbd::resolveContacts(x[i], r[i], planes, np, boxes, nb, tools_from, tools_to, nt, t);
+}
+
+template <typename T>
+__global__ void velocityKernel(int n, const Vec3<T>* x, const Vec3<T>* x_prev, Vec3<T>* v, T inv_dt) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= n) return;
+  v[i] = (x[i] - x_prev[i]) * inv_dt;
+}
+
+// Spheres whose radius is solved this frame: all (influence < 0) or those within influence of a tool.
+template <typename T>
+__global__ void volumeActiveKernel(int n, const Vec3<T>* x, const T* rest_r, const pbd::CapsuleCollider<T>* tools_to,
+                                   int nt, T influence, std::uint8_t* active) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= n) return;
+  std::uint8_t a = influence < T(0) ? 1 : 0;
+  for (int k = 0; k < nt && !a; ++k)
+    if (pbd::capsuleDistance(x[i], tools_to[k]) <= rest_r[i] + influence) a = 1;
+  active[i] = a;
+}
+
+template <typename T>
+__global__ void radiusKernel(int n, const Vec3<T>* x, const T* radii, T* radii_next, const T* rest_r,
+                             const T* rest_cell, const std::int32_t* ov_off, const std::int32_t* ov_ids,
+                             const Vec3<T>* samples, int sample_count, const std::uint8_t* active, T growth,
+                             int bisection_steps) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= n) return;
+  const T r0 = rest_r[i];
+  if (!active[i]) {
+    radii_next[i] = r0;
+    return;
+  }
+  const std::int32_t b = ov_off[i], e = ov_off[i + 1];
+  radii_next[i] = pbd::radiusForCellVolume(x[i], r0, r0 * growth, rest_cell[i], x, radii, ov_ids + b, e - b, samples,
+                                           sample_count, bisection_steps);
+}
+
+template <typename T>
+__global__ void restRadiiKernel(int n, T* radii, const T* rest_r) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= n) return;
+  radii[i] = rest_r[i];
+}
+
+// Per-block partials of the distance residual: max and sum of squares (double), fixed tree order.
+template <typename T>
+__global__ void residualKernel(pbd::BlockView<T> b, const Vec3<T>* x, bool xpbd, T dt, double* part_max,
+                               double* part_sum) {
+  __shared__ double smax[kThreads];
+  __shared__ double ssum[kThreads];
+  double m = 0.0, s = 0.0;
+  for (int c = blockIdx.x * blockDim.x + threadIdx.x; c < b.count; c += gridDim.x * blockDim.x) {
+    const double r = double(pbd::distanceResidual(b, c, x, xpbd, dt));
+    m = m > r ? m : r;
+    s += r * r;
+  }
+  smax[threadIdx.x] = m;
+  ssum[threadIdx.x] = s;
+  __syncthreads();
+  for (int h = blockDim.x / 2; h > 0; h /= 2) {
+    if (threadIdx.x < h) {
+      smax[threadIdx.x] = smax[threadIdx.x] > smax[threadIdx.x + h] ? smax[threadIdx.x] : smax[threadIdx.x + h];
+      ssum[threadIdx.x] += ssum[threadIdx.x + h];
+    }
+    __syncthreads();
+  }
+  if (threadIdx.x == 0) {
+    part_max[blockIdx.x] = smax[0];
+    part_sum[blockIdx.x] = ssum[0];
+  }
+}
+
+// Per-block partials over particles: first non-finite particle (n if none), active count, max radius ratio.
+template <typename T>
+__global__ void summaryKernel(int n, const Vec3<T>* x, const Vec3<T>* v, const T* r, const T* rest_r,
+                              const std::uint8_t* active, long long* part_bad, long long* part_active,
+                              double* part_ratio) {
+  __shared__ long long sbad[kThreads];
+  __shared__ long long sact[kThreads];
+  __shared__ double srat[kThreads];
+  long long bad = n, act = 0;
+  double rat = 1.0;
+  for (int i = blockIdx.x * blockDim.x + threadIdx.x; i < n; i += gridDim.x * blockDim.x) {
+    // r - r is NaN exactly when r is NaN or infinite
+    if ((!isFinite(x[i]) || !isFinite(v[i]) || !(r[i] - r[i] == T(0))) && i < bad) bad = i;
+    act += active[i];
+    if (rest_r[i] > T(0)) {
+      const double q = double(r[i] / rest_r[i]);
+      rat = rat > q ? rat : q;
+    }
+  }
+  sbad[threadIdx.x] = bad;
+  sact[threadIdx.x] = act;
+  srat[threadIdx.x] = rat;
+  __syncthreads();
+  for (int h = blockDim.x / 2; h > 0; h /= 2) {
+    if (threadIdx.x < h) {
+      sbad[threadIdx.x] = sbad[threadIdx.x] < sbad[threadIdx.x + h] ? sbad[threadIdx.x] : sbad[threadIdx.x + h];
+      sact[threadIdx.x] += sact[threadIdx.x + h];
+      srat[threadIdx.x] = srat[threadIdx.x] > srat[threadIdx.x + h] ? srat[threadIdx.x] : srat[threadIdx.x + h];
+    }
+    __syncthreads();
+  }
+  if (threadIdx.x == 0) {
+    part_bad[blockIdx.x] = sbad[0];
+    part_active[blockIdx.x] = sact[0];
+    part_ratio[blockIdx.x] = srat[0];
+  }
+}
+
+// ----------------------------------------------------------------------------------------------
+
+template <typename T>
+struct DeviceBlock {
+  PbdConstraintKind kind = PbdConstraintKind::Distance;
+  bool solve = true;
+  T stiffness = T(1);
+  int count = 0;
+  DeviceBuffer<std::int32_t> offsets, ids, particle_offsets, particle_slots, order;
+  DeviceBuffer<T> rest, compliance, jacobi_scale;
+  DeviceBuffer<Vec3<T>> rest_vec, lambda, slot_corr;
+  std::vector<std::int32_t> color_offsets;  // host: launch ranges
+};
+
+// What a captured graph depends on besides stable buffer pointers; a change re-captures.
+template <typename T>
+struct GraphKey {
+  PbdStepParams<T> p;
+  std::size_t kinematic = 0, tools = 0;
+  std::size_t attached = 0;
+  const void* ptrs[11] = {};  // frame-input buffers
+};
+
+template <typename T>
+bool sameKey(const GraphKey<T>& a, const GraphKey<T>& b) {
+  const PbdStepParams<T>&x = a.p, &y = b.p;
+  return x.frame_dt == y.frame_dt && x.substeps == y.substeps && x.iterations == y.iterations && x.xpbd == y.xpbd &&
+         x.solver == y.solver && x.jacobi_omega == y.jacobi_omega && x.gravity.x == y.gravity.x &&
+         x.gravity.y == y.gravity.y && x.gravity.z == y.gravity.z && x.damping == y.damping &&
+         x.rotation_iterations == y.rotation_iterations && x.volume_preservation == y.volume_preservation &&
+         x.volume_influence == y.volume_influence && x.max_radius_growth == y.max_radius_growth &&
+         x.volume_passes == y.volume_passes && x.bisection_steps == y.bisection_steps && a.kinematic == b.kinematic &&
+         a.tools == b.tools && a.attached == b.attached && std::equal(a.ptrs, a.ptrs + 11, b.ptrs);
+}
+
+template <typename T>
+class PbdCudaBackend final : public PbdBackend<T> {
+ public:
+  // A blocking stream: it orders itself after the synchronous cudaMemcpy uploads of DeviceBuffer (legacy
+  // default stream), so a frame never reads an input whose DMA is still in flight.
+  PbdCudaBackend() { INC_CUDA(cudaStreamCreate(&stream_)); }
+  ~PbdCudaBackend() override {
+    destroyGraph();
+    for (cudaEvent_t e : events_) cudaEventDestroy(e);
+    if (stream_) cudaStreamDestroy(stream_);
+  }
+  PbdCudaBackend(const PbdCudaBackend&) = delete;
+  PbdCudaBackend& operator=(const PbdCudaBackend&) = delete;
+
+  BackendKind kind() const override { return BackendKind::Cuda; }
+
+  void setModel(const PbdModel<T>& m) override {
+    destroyGraph();
+    n_ = int(m.size());
+    host_rest_radii_ = m.rest_radii;
+    inv_mass_h_ = m.inv_mass;
+    rotation_block_ = m.rotation_block;
+    rest_positions_.upload(m.rest_positions);
+    x_.upload(m.rest_positions);
+    v_.resize(m.size());
+    v_.fillZero();
+    x_prev_.resize(m.size());
+    x_prev_.fillZero();
+    masses_.upload(m.masses);
+    inv_mass_.upload(m.inv_mass);
+    w_.upload(m.inv_mass);
+    rest_radii_.upload(m.rest_radii);
+    radii_.upload(m.rest_radii);
+    radii_next_.upload(m.rest_radii);
+    std::vector<pbd::Quat<T>> ident(m.size());
+    rotations_.upload(ident);
+    active_.resize(m.size());
+    active_.fillZero();
+    planes_.upload(m.planes);
+    boxes_.upload(m.boxes);
+    n_planes_ = int(m.planes.size());
+    n_boxes_ = int(m.boxes.size());
+    ov_off_.upload(m.overlap_offsets);
+    ov_ids_.upload(m.overlap_ids);
+    rest_cell_.upload(m.rest_cell_volume);
+    samples_.upload(m.ball_samples);
+    have_volume_data_ = m.rest_cell_volume.size() == m.size() && !m.ball_samples.empty() &&
+                        m.overlap_offsets.size() == m.size() + 1;
+    blocks_.clear();
+    blocks_.resize(m.blocks.size());
+    for (std::size_t bi = 0; bi < m.blocks.size(); ++bi) {
+      const PbdConstraintBlock<T>& s = m.blocks[bi];
+      DeviceBlock<T>& d = blocks_[bi];
+      d.kind = s.kind;
+      d.solve = s.solve;
+      d.stiffness = s.stiffness;
+      d.count = int(s.count());
+      d.offsets.upload(s.offsets);
+      d.ids.upload(s.ids);
+      d.particle_offsets.upload(s.particle_offsets);
+      d.particle_slots.upload(s.particle_slots);
+      d.order.upload(s.coloring.order);
+      d.color_offsets = s.coloring.color_offsets;
+      d.rest.upload(s.rest);
+      d.compliance.upload(s.compliance);
+      d.jacobi_scale.upload(s.jacobi_scale);
+      d.rest_vec.upload(s.rest_vec);
+      d.lambda.resize(s.multiplierCount());
+      d.lambda.fillZero();
+      d.slot_corr.resize(s.slotCount());
+      d.slot_corr.fillZero();
+    }
+    part_max_.resize(kReduceBlocks);
+    part_sum_.resize(kReduceBlocks);
+    part_bad_.resize(kReduceBlocks);
+    part_active_.resize(kReduceBlocks);
+    part_ratio_.resize(kReduceBlocks);
+    INC_CUDA(cudaDeviceSynchronize());
+  }
+
+  void setState(const PbdState<T>& s) override {
+    const std::size_t n = std::size_t(n_);
+    if (s.positions.size() != n || s.velocities.size() != n || s.radii.size() != n || s.rotations.size() != n)
+      throw InputError("pbd state", "size", "state arrays must have one entry per particle");
+    INC_CUDA(cudaStreamSynchronize(stream_));
+    x_.upload(s.positions);
+    v_.upload(s.velocities);
+    radii_.upload(s.radii);
+    rotations_.upload(s.rotations);
+  }
+
+  void getState(PbdState<T>& s) const override {
+    INC_CUDA(cudaStreamSynchronize(stream_));
+    s.positions = x_.download();
+    s.velocities = v_.download();
+    s.radii = radii_.download();
+    s.rotations = rotations_.download();
+  }
+
+  MemoryReport memory() const override {
+    MemoryReport r;
+    std::size_t b = x_.capacityBytes() + v_.capacityBytes() + x_prev_.capacityBytes() + rest_positions_.capacityBytes() +
+                    masses_.capacityBytes() + inv_mass_.capacityBytes() + w_.capacityBytes() +
+                    rest_radii_.capacityBytes() + radii_.capacityBytes() + radii_next_.capacityBytes() +
+                    rotations_.capacityBytes() + active_.capacityBytes() + ov_off_.capacityBytes() +
+                    ov_ids_.capacityBytes() + rest_cell_.capacityBytes() + samples_.capacityBytes();
+    for (const DeviceBlock<T>& d : blocks_)
+      b += d.offsets.capacityBytes() + d.ids.capacityBytes() + d.particle_offsets.capacityBytes() +
+           d.particle_slots.capacityBytes() + d.order.capacityBytes() + d.rest.capacityBytes() +
+           d.compliance.capacityBytes() + d.jacobi_scale.capacityBytes() + d.rest_vec.capacityBytes() +
+           d.lambda.capacityBytes() + d.slot_corr.capacityBytes();
+    r.device_bytes = b;
+    r.host_bytes = host_rest_radii_.size() * sizeof(T) + inv_mass_h_.size() * sizeof(T);
+    return r;
+  }
+
+  PbdFrameStats advanceFrame(const PbdStepParams<T>& p, const PbdFrameInput<T>& in) override {
+    validateFrameInput(std::size_t(n_), p, in);
+    PbdFrameStats st;
+    // Per-frame inputs (synchronous uploads: the previous frame has finished with these buffers).
+    INC_CUDA(cudaStreamSynchronize(stream_));
+    uploadFrameInput(in);
+
+    const bool jacobi = p.solver == PbdSolverKind::Jacobi;
+    if (!jacobi)
+      for (const DeviceBlock<T>& d : blocks_)
+        if (d.solve) st.colors += int(d.color_offsets.size()) - 1;
+    st.iterations = p.substeps * p.iterations;
+
+    if (p.profile_stages) {
+      profile_ = true;
+      prof_.clear();
+      recordFrame(p);
+      profile_ = false;
+      INC_CUDA(cudaStreamSynchronize(stream_));
+      const char* names[] = {"predict", "constraints", "collisions", "velocities", "volume"};
+      double ms[5] = {0, 0, 0, 0, 0};
+      for (const ProfRecord& r : prof_) {
+        float e = 0.f;
+        INC_CUDA(cudaEventElapsedTime(&e, events_[r.start], events_[r.stop]));
+        ms[r.stage] += double(e);
+      }
+      for (int k = 0; k < 5; ++k) st.stages.push_back({names[k], ms[k]});
+    } else {
+      ensureEvents(2);
+      INC_CUDA(cudaEventRecord(events_[0], stream_));
+      if (p.use_graph) {
+        GraphKey<T> key;
+        key.p = p;
+        key.kinematic = in.kinematic_ids.size();
+        key.tools = in.tools_from.size();
+        key.attached = in.attach_ids.size();
+        const void* ptrs[11] = {kin_ids_.data(),    kin_from_.data(),  kin_to_.data(),      tools_from_.data(),
+                                tools_to_.data(),   w_.data(),         att_ids_.data(),     att_from_.data(),
+                                att_to_.data(),     att_comp_.data(),  att_lambda_.data()};
+        std::copy(ptrs, ptrs + 11, key.ptrs);
+        if (!graph_exec_ || !sameKey(key, graph_key_)) {
+          destroyGraph();
+          INC_CUDA(cudaStreamBeginCapture(stream_, cudaStreamCaptureModeThreadLocal));
+          recordFrame(p);
+          cudaGraph_t graph = nullptr;
+          INC_CUDA(cudaStreamEndCapture(stream_, &graph));
+          const cudaError_t inst = cudaGraphInstantiate(&graph_exec_, graph, 0);
+          cudaGraphDestroy(graph);
+          INC_CUDA(inst);
+          graph_key_ = key;
+        }
+        INC_CUDA(cudaGraphLaunch(graph_exec_, stream_));
+      } else {
+        recordFrame(p);
+      }
+      INC_CUDA(cudaEventRecord(events_[1], stream_));
+      INC_CUDA(cudaEventSynchronize(events_[1]));
+      float e = 0.f;
+      INC_CUDA(cudaEventElapsedTime(&e, events_[0], events_[1]));
+      st.stages.push_back({"frame", double(e)});
+    }
+    summarize(p, st);
+    return st;
+  }
+
+ private:
+  struct ProfRecord {
+    int stage;
+    std::size_t start, stop;
+  };
+
+  void ensureEvents(std::size_t k) {
+    while (events_.size() < k) {
+      cudaEvent_t e;
+      INC_CUDA(cudaEventCreate(&e));
+      events_.push_back(e);
+    }
+  }
+  // Profiling only: event pairs around each stage launch group (summed per stage after the frame).
+  std::size_t stageBegin() {
+    if (!profile_) return 0;
+    const std::size_t k = 2 + 2 * prof_.size();
+    ensureEvents(k + 2);
+    INC_CUDA(cudaEventRecord(events_[k], stream_));
+    return k;
+  }
+  void stageEnd(int stage, std::size_t k) {
+    if (!profile_) return;
+    INC_CUDA(cudaEventRecord(events_[k + 1], stream_));
+    prof_.push_back({stage, k, k + 1});
+  }
+
+  void destroyGraph() {
+    if (graph_exec_) cudaGraphExecDestroy(graph_exec_);
+    graph_exec_ = nullptr;
+  }
+
+  void uploadFrameInput(const PbdFrameInput<T>& in) {
+    // Inverse masses of this frame: kinematic particles get w = 0 (set on the host copy, then uploaded).
+    w_h_ = inv_mass_h_;
+    for (std::int32_t id : in.kinematic_ids) w_h_[id] = T(0);
+    w_.upload(w_h_);
+    kin_ids_.upload(in.kinematic_ids);
+    kin_from_.upload(in.kinematic_from);
+    kin_to_.upload(in.kinematic_to);
+    tools_from_.upload(in.tools_from);
+    tools_to_.upload(in.tools_to);
+    att_ids_.upload(in.attach_ids);
+    att_from_.upload(in.attach_from);
+    att_to_.upload(in.attach_to);
+    att_comp_.upload(in.attach_compliance);
+    att_lambda_.resize(in.attach_ids.size());
+    n_att_ = int(in.attach_ids.size());
+    n_kin_ = int(in.kinematic_ids.size());
+    n_tools_ = int(in.tools_from.size());
+  }
+
+  pbd::BlockView<T> view(DeviceBlock<T>& d) {
+    pbd::BlockView<T> b;
+    b.kind = int(d.kind);
+    b.count = d.count;
+    b.stiffness = d.stiffness;
+    b.offsets = d.offsets.data();
+    b.ids = d.ids.data();
+    b.rest = d.rest.data();
+    b.rest_vec = d.rest_vec.data();
+    b.compliance = d.compliance.data();
+    b.jacobi_scale = d.jacobi_scale.data();
+    b.particle_offsets = d.particle_offsets.data();
+    b.particle_slots = d.particle_slots.data();
+    b.lambda = d.lambda.data();
+    b.slot_corr = d.slot_corr.data();
+    return b;
+  }
+
+  // Enqueues one whole frame on stream_ (captured into a graph, or run directly). No host synchronisation.
+  void recordFrame(const PbdStepParams<T>& p) {
+    const T dt = p.frame_dt / T(p.substeps);
+    const T damp = std::exp(-p.damping * dt);
+    const unsigned gn = blocksFor(n_);
+    pbd::SolveContext<T> ctx;
+    ctx.x = x_.data();
+    ctx.w = w_.data();
+    ctx.mass = masses_.data();
+    ctx.rotation = rotations_.data();
+    ctx.xpbd = p.xpbd;
+    ctx.dt = dt;
+    ctx.jacobi = p.solver == PbdSolverKind::Jacobi;
+    ctx.omega = p.jacobi_omega;
+    ctx.rotation_iterations = p.rotation_iterations;
+
+    for (int s = 0; s < p.substeps; ++s) {
+      const T t_end = T(s + 1) / T(p.substeps);
+      std::size_t ev = stageBegin();
+      if (n_ > 0) {
+        predictKernel<T><<<gn, kThreads, 0, stream_>>>(n_, x_.data(), v_.data(), x_prev_.data(), w_.data(), p.gravity,
+                                                       damp, dt);
+        INC_CUDA_LAUNCH("pbd predict");
+      }
+      if (n_kin_ > 0) {
+        kinematicKernel<T><<<blocksFor(n_kin_), kThreads, 0, stream_>>>(n_kin_, x_.data(), kin_ids_.data(),
+                                                                        kin_from_.data(), kin_to_.data(), t_end);
+        INC_CUDA_LAUNCH("pbd kinematic");
+      }
+      for (DeviceBlock<T>& d : blocks_)
+        if (d.lambda.size()) INC_CUDA(cudaMemsetAsync(d.lambda.data(), 0, d.lambda.bytes(), stream_));
+      if (n_att_ > 0) INC_CUDA(cudaMemsetAsync(att_lambda_.data(), 0, att_lambda_.bytes(), stream_));
+      stageEnd(0, ev);
+
+      for (int it = 0; it < p.iterations; ++it) {
+        ev = stageBegin();
+        for (DeviceBlock<T>& d : blocks_) {
+          if (!d.solve || d.count == 0) continue;
+          const pbd::BlockView<T> b = view(d);
+          if (ctx.jacobi) {
+            projectAllKernel<T><<<blocksFor(d.count), kThreads, 0, stream_>>>(b, ctx);
+            INC_CUDA_LAUNCH("pbd project (jacobi)");
+            gatherKernel<T><<<gn, kThreads, 0, stream_>>>(n_, b, x_.data());
+            INC_CUDA_LAUNCH("pbd gather");
+          } else {
+            for (std::size_t k = 0; k + 1 < d.color_offsets.size(); ++k) {
+              const int c0 = d.color_offsets[k], cnt = d.color_offsets[k + 1] - c0;
+              if (cnt == 0) continue;
+              projectColorKernel<T><<<blocksFor(cnt), kThreads, 0, stream_>>>(b, ctx, d.order.data() + c0, cnt);
+              INC_CUDA_LAUNCH("pbd project (colour)");
+            }
+          }
+        }
+        if (n_att_ > 0) {
+          attachKernel<T><<<blocksFor(n_att_), kThreads, 0, stream_>>>(n_att_, x_.data(), w_.data(), att_ids_.data(),
+                                                                       att_from_.data(), att_to_.data(),
+                                                                       att_comp_.data(), att_lambda_.data(), p.xpbd,
+                                                                       dt, t_end);
+          INC_CUDA_LAUNCH("pbd attachments");
+        }
+        stageEnd(1, ev);
+        ev = stageBegin();
+        if (n_ > 0) {
+          contactKernel<T><<<gn, kThreads, 0, stream_>>>(n_, x_.data(), radii_.data(), w_.data(), planes_.data(),
+                                                         n_planes_, boxes_.data(), n_boxes_, tools_from_.data(),
+                                                         tools_to_.data(), n_tools_, t_end);
+          INC_CUDA_LAUNCH("pbd contacts");
+        }
+        stageEnd(2, ev);
+      }
+      ev = stageBegin();
+      if (n_ > 0) {
+        velocityKernel<T><<<gn, kThreads, 0, stream_>>>(n_, x_.data(), x_prev_.data(), v_.data(), T(1) / dt);
+        INC_CUDA_LAUNCH("pbd velocities");
+      }
+      stageEnd(3, ev);
+    }
+
+    std::size_t ev = stageBegin();
+    if (rotation_block_ >= 0 && !blocks_[rotation_block_].solve && blocks_[rotation_block_].count > 0) {
+      DeviceBlock<T>& d = blocks_[rotation_block_];
+      rotationKernel<T><<<blocksFor(d.count), kThreads, 0, stream_>>>(view(d), ctx);
+      INC_CUDA_LAUNCH("pbd rotations");
+    }
+    stageEnd(1, ev);
+
+    ev = stageBegin();
+    if (n_ > 0) {
+      const bool have_volume = p.volume_preservation && have_volume_data_;
+      if (have_volume) {
+        volumeActiveKernel<T><<<gn, kThreads, 0, stream_>>>(n_, x_.data(), rest_radii_.data(), tools_to_.data(),
+                                                            n_tools_, p.volume_influence, active_.data());
+        INC_CUDA_LAUNCH("pbd volume active");
+        for (int pass = 0; pass < p.volume_passes; ++pass) {
+          radiusKernel<T><<<gn, kThreads, 0, stream_>>>(n_, x_.data(), radii_.data(), radii_next_.data(),
+                                                        rest_radii_.data(), rest_cell_.data(), ov_off_.data(),
+                                                        ov_ids_.data(), samples_.data(), int(samples_.size()),
+                                                        active_.data(), p.max_radius_growth, p.bisection_steps);
+          INC_CUDA_LAUNCH("pbd radii");
+          INC_CUDA(cudaMemcpyAsync(radii_.data(), radii_next_.data(), radii_.bytes(), cudaMemcpyDeviceToDevice, stream_));
+        }
+      } else {
+        INC_CUDA(cudaMemsetAsync(active_.data(), 0, active_.bytes(), stream_));
+        restRadiiKernel<T><<<gn, kThreads, 0, stream_>>>(n_, radii_.data(), rest_radii_.data());
+        INC_CUDA_LAUNCH("pbd rest radii");
+      }
+    }
+    stageEnd(4, ev);
+  }
+
+  // Residual, finiteness and volume statistics: small partial reductions downloaded once per frame (the
+  // frame's one synchronisation, needed to report them).
+  void summarize(const PbdStepParams<T>& p, PbdFrameStats& st) {
+    const T dt = p.frame_dt / T(p.substeps);
+    double rmax = 0, rsum = 0;
+    std::size_t rcount = 0;
+    for (DeviceBlock<T>& d : blocks_) {
+      if (d.kind != PbdConstraintKind::Distance || !d.solve || d.count == 0) continue;
+      residualKernel<T><<<kReduceBlocks, kThreads, 0, stream_>>>(view(d), x_.data(), p.xpbd, dt, part_max_.data(),
+                                                                  part_sum_.data());
+      INC_CUDA_LAUNCH("pbd residual");
+      const std::vector<double> pm = part_max_.download(), ps = part_sum_.download();
+      for (int k = 0; k < kReduceBlocks; ++k) {
+        rmax = std::max(rmax, pm[k]);
+        rsum += ps[k];
+      }
+      rcount += std::size_t(d.count);
+    }
+    st.residual_max = rmax;
+    st.residual_rms = rcount ? std::sqrt(rsum / double(rcount)) : 0.0;
+    if (n_ > 0) {
+      summaryKernel<T><<<kReduceBlocks, kThreads, 0, stream_>>>(n_, x_.data(), v_.data(), radii_.data(),
+                                                                 rest_radii_.data(), active_.data(), part_bad_.data(),
+                                                                 part_active_.data(), part_ratio_.data());
+      INC_CUDA_LAUNCH("pbd summary");
+      INC_CUDA(cudaStreamSynchronize(stream_));
+      const std::vector<long long> pb = part_bad_.download(), pa = part_active_.download();
+      const std::vector<double> pr = part_ratio_.download();
+      long long bad = n_, act = 0;
+      double rat = 1.0;
+      for (int k = 0; k < kReduceBlocks; ++k) {
+        bad = std::min(bad, pb[k]);
+        act += pa[k];
+        rat = std::max(rat, pr[k]);
+      }
+      st.volume_active = int(act);
+      st.max_radius_ratio = rat;
+      if (bad < n_) {
+        st.finite = false;
+        st.failure_particle = bad;
+      }
+    }
+  }
+
+  cudaStream_t stream_ = nullptr;
+  cudaGraphExec_t graph_exec_ = nullptr;
+  GraphKey<T> graph_key_;
+  std::vector<cudaEvent_t> events_;
+  std::vector<ProfRecord> prof_;
+  bool profile_ = false;
+
+  int n_ = 0, n_planes_ = 0, n_boxes_ = 0, n_kin_ = 0, n_att_ = 0, n_tools_ = 0, rotation_block_ = -1;
+  bool have_volume_data_ = false;
+  std::vector<T> host_rest_radii_, inv_mass_h_, w_h_;
+  DeviceBuffer<Vec3<T>> rest_positions_, x_, v_, x_prev_, kin_from_, kin_to_, samples_, att_from_, att_to_, att_lambda_;
+  DeviceBuffer<T> masses_, inv_mass_, w_, rest_radii_, radii_, radii_next_, rest_cell_, att_comp_;
+  DeviceBuffer<pbd::Quat<T>> rotations_;
+  DeviceBuffer<std::uint8_t> active_;
+  DeviceBuffer<std::int32_t> kin_ids_, ov_off_, ov_ids_, att_ids_;
+  DeviceBuffer<pbd::PlaneCollider<T>> planes_;
+  DeviceBuffer<pbd::BoxCollider<T>> boxes_;
+  DeviceBuffer<pbd::CapsuleCollider<T>> tools_from_, tools_to_;
+  DeviceBuffer<double> part_max_, part_sum_, part_ratio_;
+  DeviceBuffer<long long> part_bad_, part_active_;
+  std::vector<DeviceBlock<T>> blocks_;
+};
+
+}  // namespace
+
+template <typename T>
+std::unique_ptr<PbdBackend<T>> makePbdCudaBackend() {
+  return std::make_unique<PbdCudaBackend<T>>();
+}
+
+template std::unique_ptr<PbdBackend<float>> makePbdCudaBackend<float>();
+template std::unique_ptr<PbdBackend<double>> makePbdCudaBackend<double>();
+
+}  // namespace inc::cuda
