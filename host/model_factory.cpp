@@ -1,5 +1,6 @@
 // Builds the models a scene switches on, and nothing else (a scene pays only for what it uses).
 #include "host/input_error.h"
+#include "host/metaball_simulation.h"
 #include "host/mls_simulation.h"
 #include "host/runner.h"
 #include "host/tearing_simulation.h"
@@ -9,8 +10,7 @@ namespace inc {
 std::vector<std::unique_ptr<SimulationModel>> createSceneModels(const Scene& scene, BackendKind backend) {
   std::vector<std::unique_ptr<SimulationModel>> models;
   if (scene.models.mls) models.push_back(makeMlsSimulation(scene, backend, scene.solver.precision));
-  if (scene.models.pbd_metaballs)
-    throw InputError(scene.file, "models.pbd_metaballs", "the PBD metaball model is not built into this version");
+  if (scene.models.pbd_metaballs) models.push_back(makeMetaballSimulation(scene, backend, scene.solver.precision));
   if (scene.models.tearing) models.push_back(makeTearingSimulation(scene, backend, scene.solver.precision));
   return models;
 }
