@@ -115,7 +115,9 @@ class MlsCudaSolver final : public MlsSolver {
     energy_.resize(n);
     energy_.fillZero();
     partials_.resize(kReduceBlocks);
-    INC_CUDA(cudaStreamCreateWithFlags(&stream_, cudaStreamNonBlocking));
+    // A blocking stream: it is ordered after the legacy-stream copies of DeviceBuffer::upload/download
+    // (a pageable cudaMemcpy may return before its DMA lands; a kernel on a non-blocking stream could race it).
+    INC_CUDA(cudaStreamCreate(&stream_));
   }
   ~MlsCudaSolver() override {
     for (cudaEvent_t e : events_) cudaEventDestroy(e);
