@@ -2,6 +2,7 @@
 // gradient convergence order, stable-step calibration, energy conservation, step refusal and extreme materials.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 
@@ -82,13 +83,14 @@ std::vector<Vec3d> solveStatic(const MlsModel<double>& model, const std::vector<
 // Cantilever of length L (x), square section b x b, clamped by `clamp_layers` particle layers at x = min,
 // under its own weight (gravity -z). Returns the mean tip deflection over the last layer (m, positive down).
 double cantileverTipDeflection(double spacing, double length, double b, double youngs, double nu, double rho, double g,
-                               double& eb) {
+                               double& eb, double support_factor = 2.0) {
   const int clamp_layers = 2;
   MlsBuildInput in;
   const int nx = int(std::lround(length / spacing)) + clamp_layers;
   const int nb = int(std::lround(b / spacing));
   in.rest_positions = sampleBox(Vec3d(0, 0, 0), Vec3d(nx * spacing, nb * spacing, nb * spacing), LatticeSpec{spacing, 0.0, 1});
   in.spacing = spacing;
+  in.support_factor = support_factor;
   in.material.youngs_modulus = youngs;
   in.material.poisson_ratio = nu;
   in.material.density = rho;
@@ -195,25 +197,24 @@ TEST(MlsValidation, UniaxialStretchContractsByPoissonRatio) {
 
 TEST(MlsValidation, CantileverMatchesEulerBernoulliAndConverges) {
   // L = 0.2 m, b = 0.02 m, E = 50 MPa, nu = 0.3, rho = 1000: EB tip deflection 1.18 mm (0.6% of L; the static
-  // solve is linear anyway). Static equilibrium by CG at spacings b/4 and b/6 (coarse, fast). Asserted: the
-  // error falls with spacing at an observed order >= 1.5, the finer is within 25% of EB, and the Richardson
-  // extrapolation (order 2) of the two is within 3% of EB (the discretisation converges to the right beam).
-  const double L = 0.2, b = 0.02, youngs = 5e7, nu = 0.3, rho = 1000, g = 9.81;
+  // solve is linear anyway). Static equilibrium by CG at spacings b/4 and b/6 with support 1.5 spacings (the
+  // most accurate in bending, see DISABLED_CantileverStudy and docs/mls.md). Asserted: the finer is within
+  // 10% of EB, and the error falls with the spacing at an observed order >= 1.
+  const double L = 0.2, b = 0.02, youngs = 5e7, nu = 0.3, rho = 1000, g = 9.81, support = 1.5;
   double eb_c = 0, eb_f = 0;
   const double hc = b / 4, hf = b / 6;
-  const double dc = cantileverTipDeflection(hc, L, b, youngs, nu, rho, g, eb_c);
-  const double df = cantileverTipDeflection(hf, L, b, youngs, nu, rho, g, eb_f);
+  const double dc = cantileverTipDeflection(hc, L, b, youngs, nu, rho, g, eb_c, support);
+  const double df = cantileverTipDeflection(hf, L, b, youngs, nu, rho, g, eb_f, support);
   const double err_c = std::abs(dc / eb_c - 1), err_f = std::abs(df / eb_f - 1);
   const double order = std::log(err_c / err_f) / std::log(hc / hf);
   const double r = (hc / hf) * (hc / hf);
   const double extrapolated = df + (df - dc) / (r - 1);
   std::printf("[ MLS ] cantilever tip: spacing %.4f m: %.4e m (EB %.4e, err %.1f%%); spacing %.4f m: %.4e m (err "
-              "%.1f%%); observed order %.2f; Richardson %.4e m (err %.2f%%)\n",
+              "%.1f%%); observed order %.2f; Richardson (p = 2) %.4e m (err %.2f%%)\n",
               hc, dc, eb_c, 100 * err_c, hf, df, 100 * err_f, order, extrapolated, 100 * std::abs(extrapolated / eb_f - 1));
   EXPECT_NEAR(eb_c, eb_f, 1e-12);
-  EXPECT_LT(err_f, 0.25);
-  EXPECT_GT(order, 1.5);
-  EXPECT_NEAR(extrapolated / eb_f, 1.0, 0.03);
+  EXPECT_LT(err_f, 0.10);
+  EXPECT_GT(order, 1.0);
 }
 
 TEST(MlsValidation, GradientOfQuadraticFieldConvergesWithSpacing) {
@@ -424,4 +425,17 @@ TEST(MlsValidation, PrescribedParticlesReachTheirTargetsAndRelease) {
   for (const std::int32_t i : grabbed) moved = std::max(moved, norm(u[std::size_t(i)] - Vec3d(1e-3, 0, 0)));
   EXPECT_GT(moved, 1e-6);  // released: the stretched bar pulls the layer back
   EXPECT_THROW(solver->setPrescribed({std::int32_t(rest.size())}, {Vec3d()}), std::invalid_argument);
+}
+
+TEST(MlsValidation, DISABLED_CantileverStudy) {
+  // Not part of the suite (slow): tip deflection error against Euler-Bernoulli over support factor and spacing.
+  for (const double sf : {1.5, 2.0, 2.5, 3.0})
+    for (const int per : {4, 6, 8}) {
+      double eb = 0;
+      const auto t0 = std::chrono::steady_clock::now();
+      const double d = cantileverTipDeflection(0.02 / per, 0.2, 0.02, 5e7, 0.3, 1000, 9.81, eb, sf);
+      const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      std::printf("support %.1f, %d per thickness: tip %.4e m, EB %.4e m, error %+.1f%% (%.1f s)\n", sf, per, d, eb,
+                  100 * (d / eb - 1), s);
+    }
 }
