@@ -5,6 +5,9 @@
 
 #include "host/input_error.h"
 #include "host/mls_simulation.h"
+#if INCISION_HAVE_CUDA
+#include "kernels/device_info.h"
+#endif
 
 using namespace inc;
 
@@ -118,4 +121,11 @@ TEST(MlsSimulation, BadSceneInputIsRefusedWithItsKey) {
   Scene box = scene;
   box.fixed[0].min.x = 1.0;  // min > max
   EXPECT_EQ(keyOf(box, BackendKind::Cpu), "fixed[0]");
+  // CUDA asked for where no device is usable: refused with a reason, never a crash.
+#if INCISION_HAVE_CUDA
+  const bool gpu = inc::cuda::queryDevices().device_count > 0;
+#else
+  const bool gpu = false;
+#endif
+  if (!gpu) EXPECT_NE(keyOf(scene, BackendKind::Cuda), "<no error>");
 }
