@@ -127,5 +127,7 @@ TEST(MlsSimulation, BadSceneInputIsRefusedWithItsKey) {
 #else
   const bool gpu = false;
 #endif
-  if (!gpu) EXPECT_NE(keyOf(scene, BackendKind::Cuda), "<no error>");
+  if (!gpu) {
+    EXPECT_NE(keyOf(scene, BackendKind::Cuda), "<no error>");
+  }
 }
