@@ -44,7 +44,9 @@ class MlsSimulation final : public SimulationModel {
     r.failure_stage = st.totals.bad_stage;
     r.failure_particle = st.totals.first_bad;
     const MlsModelStats& m = solver_->modelStats();
-    r.counters["stable_dt_s"] = solver_->stableTimeStep();
+    r.counters["stable_dt_s"] = solver_->stableTimeStep();          // rest state, safety 1
+    r.counters["current_stable_dt_s"] = solver_->currentStableTimeStep();  // at the frame's end deformation
+    r.counters["stiffening"] = st.totals.stiffening;
     r.counters["regularised_particles"] = double(m.regularised);
     r.counters["few_neighbours"] = double(m.few_neighbors);
     r.counters["coplanar_neighbourhoods"] = double(m.coplanar);

@@ -20,8 +20,8 @@ MlsBuildInput mlsBuildInputFromScene(const Scene& scene);
 // stable limit for the scene's frame_dt. advance() reports non-finite states (finite == false, stage
 // "integrate" | "stress" | "forces", lowest bad particle) instead of throwing.
 // FrameReport: stages integrate / stress / forces / reduce (ms, summed over substeps), kinetic, elastic
-// (strain + volume penalty) and gravity potential energy, max displacement; counters: stable_dt_s,
-// substeps, regularised / few_neighbours / coplanar / collinear / ill_conditioned / isolated particles,
+// (strain + volume penalty) and gravity potential energy, max displacement; counters: stable_dt_s (rest),
+// current_stable_dt_s and stiffening (at the frame's end deformation, used to plan the next frame), regularised / few_neighbours / coplanar / collinear / ill_conditioned / isolated particles,
 // min / mean neighbours, max_condition.
 std::unique_ptr<SimulationModel> makeMlsSimulation(const Scene& scene, BackendKind resolved, Precision precision);
 

@@ -44,15 +44,15 @@ __global__ void forceKernel(MlsView<T> s, T half_dt, bool kick) {
 // Per block: kinetic, gravity potential, elastic energy sums, max |u|^2, and the lowest non-finite index
 // with its stage (0 integrate, 1 forces, 2 stress), packed as index * 4 + stage (n * 4 when none).
 struct Partial {
-  double kinetic, potential, elastic, max_u2;
+  double kinetic, potential, elastic, max_u2, stiffening;
   long long bad;
 };
 
 template <typename T>
 __global__ void reduceKernel(MlsView<T> s, Partial* out) {
-  __shared__ double ke[kBlock], pe[kBlock], el[kBlock], mu[kBlock];
+  __shared__ double ke[kBlock], pe[kBlock], el[kBlock], mu[kBlock], sf[kBlock];
   __shared__ long long bad[kBlock];
-  double k_sum = 0, p_sum = 0, e_sum = 0, m = 0;
+  double k_sum = 0, p_sum = 0, e_sum = 0, m = 0, stiff = 1;
   long long b = s.n * 4;
   for (std::int64_t i = std::int64_t(blockIdx.x) * blockDim.x + threadIdx.x; i < s.n;
        i += std::int64_t(gridDim.x) * blockDim.x) {
@@ -67,12 +67,15 @@ __global__ void reduceKernel(MlsView<T> s, Partial* out) {
     e_sum += double(s.energy[i]);
     const double u2 = double(norm2(s.displacement[i]));
     m = u2 > m ? u2 : m;
+    const double k = double(mlsStiffening(s, i));
+    stiff = k > stiff ? k : stiff;
   }
   const int t = threadIdx.x;
   ke[t] = k_sum;
   pe[t] = p_sum;
   el[t] = e_sum;
   mu[t] = m;
+  sf[t] = stiff;
   bad[t] = b;
   __syncthreads();
   for (int w = kBlock / 2; w > 0; w /= 2) {
@@ -81,11 +84,12 @@ __global__ void reduceKernel(MlsView<T> s, Partial* out) {
       pe[t] += pe[t + w];
       el[t] += el[t + w];
       mu[t] = mu[t] > mu[t + w] ? mu[t] : mu[t + w];
+      sf[t] = sf[t] > sf[t + w] ? sf[t] : sf[t + w];
       bad[t] = bad[t] < bad[t + w] ? bad[t] : bad[t + w];
     }
     __syncthreads();
   }
-  if (t == 0) out[blockIdx.x] = Partial{ke[0], pe[0], el[0], mu[0], bad[0]};
+  if (t == 0) out[blockIdx.x] = Partial{ke[0], pe[0], el[0], mu[0], sf[0], bad[0]};
 }
 
 template <typename T>
@@ -157,7 +161,7 @@ class MlsCudaSolver final : public MlsSolver {
 
   MlsFrameStats advance(double frame_dt, int fixed_substeps) override {
     MlsFrameStats st;
-    st.substeps = planMlsSubsteps(frame_dt, stableTimeStep(), safety_, fixed_substeps, model_.source);
+    st.substeps = planFrame(frame_dt, fixed_substeps, model_.source);
     st.dt = frame_dt / st.substeps;
     substeps(T(st.dt), st.substeps, true);
     const auto t0 = std::chrono::steady_clock::now();
@@ -193,6 +197,7 @@ class MlsCudaSolver final : public MlsSolver {
       r.potential_energy += q.potential;
       r.elastic_energy += q.elastic;
       max_u2 = std::max(max_u2, q.max_u2);
+      r.stiffening = std::max(r.stiffening, q.stiffening);
       bad = std::min(bad, q.bad);
     }
     r.max_displacement = std::sqrt(max_u2);
@@ -202,12 +207,14 @@ class MlsCudaSolver final : public MlsSolver {
       const int stage = int(bad % 4);
       r.bad_stage = stage == 0 ? "integrate" : (stage == 1 ? "forces" : "stress");
     }
+    noteReduction(r);
     return r;
   }
 
   void setDisplacements(const std::vector<Vec3d>& u) override {
     upload(u_, u, "displacements");
     forces_valid_ = false;
+    forgetStiffening();
   }
   void setVelocities(const std::vector<Vec3d>& v) override { upload(v_, v, "velocities"); }
   void displacements(std::vector<Vec3d>& out) const override { download(u_, out); }
@@ -254,6 +261,7 @@ class MlsCudaSolver final : public MlsSolver {
     copy(u_, saved_u_);
     copy(v_, saved_v_);
     forces_valid_ = false;
+    forgetStiffening();
   }
 
   MemoryReport memory() const override {

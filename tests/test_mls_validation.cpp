@@ -439,3 +439,55 @@ TEST(MlsValidation, DISABLED_CantileverStudy) {
                   100 * (d / eb - 1), s);
     }
 }
+
+TEST(MlsValidation, StretchedBodiesTakeSmallerSteps) {
+  // A homogeneous stretch F: mlsStiffening = max((3 c - 1)/2, c^2) with c the largest row sum of F^T F
+  // (exact for a diagonal F), 1 for a rigid rotation; advance() divides the rest-state limit by its sqrt.
+  MlsBuildInput in = blockInput(6, 5, 5, 0.01, 0.2);
+  in.material.volume_preservation = true;
+  MlsModel<double> model = buildMlsModel<double>(in);
+  MlsState<double> state;
+  state.resize(model.size());
+  const MlsView<double> view = makeMlsView(model, state);
+  const Mat3d r = rotation(Vec3d(1, 1, 0), 0.8);
+  for (std::size_t i = 0; i < model.size(); ++i) state.displacement[i] = r * model.rest[i] - model.rest[i];
+  for (std::int64_t i = 0; i < view.n; ++i)
+    if (model.degeneracy[std::size_t(i)] == kMlsRegular) {
+      EXPECT_NEAR(mlsStiffening(view, i), 1.0, 1e-12);
+    }
+  const double stretch = 1.8, c = stretch * stretch;
+  for (std::size_t i = 0; i < model.size(); ++i) state.displacement[i] = Vec3d((stretch - 1) * model.rest[i].x, 0, 0);
+  for (std::int64_t i = 0; i < view.n; ++i)
+    if (model.degeneracy[std::size_t(i)] == kMlsRegular) {
+      EXPECT_NEAR(mlsStiffening(view, i), std::max(0.5 * (3 * c - 1), c * c), 1e-10);
+    }
+
+  // Released from an 80% stretch, undamped, at the full (safety 1) step: the rest-state step blows up, the
+  // guarded plan (rest limit / sqrt(stiffening)) stays finite with the energy within 5%.
+  in.material.damping = 0;
+  auto guarded = makeMlsSolver(in, BackendKind::Cpu, Precision::Float64);
+  auto unguarded = makeMlsSolver(in, BackendKind::Cpu, Precision::Float64);
+  const std::vector<Vec3d> rest = guarded->restPositions();
+  std::vector<Vec3d> u(rest.size());
+  for (std::size_t i = 0; i < u.size(); ++i) u[i] = Vec3d((stretch - 1) * (rest[i].x - guarded->origin().x), 0, 0);
+  guarded->setDisplacements(u);
+  unguarded->setDisplacements(u);
+  guarded->setSafety(1.0);
+  const double e0 = guarded->reduce().total();
+  const double frame = 50 * guarded->stableTimeStep();
+  bool unguarded_failed = false;
+  double worst = 0;
+  for (int f = 0; f < 10; ++f) {
+    const MlsFrameStats st = guarded->advance(frame);
+    ASSERT_TRUE(st.totals.finite) << "frame " << f;
+    EXPECT_GE(st.substeps, 50 * std::sqrt(std::max(0.5 * (3 * c - 1), c * c)) * 0.7) << "frame " << f;
+    worst = std::max(worst, std::abs(st.totals.total() / e0 - 1));
+    unguarded->step(unguarded->stableTimeStep(), 50);
+    const MlsReduction ru = unguarded->reduce();
+    if (!ru.finite || std::abs(ru.total() / e0 - 1) > 1.0) unguarded_failed = true;
+  }
+  std::printf("[ MLS ] %.0f%% stretch released at safety 1: guarded energy error %.2e; rest-state step %s\n",
+              100 * (stretch - 1), worst, unguarded_failed ? "blew up" : "survived");
+  EXPECT_LT(worst, 0.05);
+  EXPECT_TRUE(unguarded_failed);  // the guard is needed: the rest-state limit is not enough at this stretch
+}

