@@ -364,10 +364,10 @@ TEST(MlsValidation, ExtremeMaterialsStayFiniteAndBounded) {
     }
 }
 
-TEST(MlsValidation, CollapseUnderGravityIsReportedNotSilent) {
-  // A 100 Pa block 6 cm long under gravity cannot carry its own weight (rho g L / E ~ 6): SVK collapses and
-  // the explicit step chosen from the rest-state wave speed becomes unstable. The solver must then report
-  // where (finite == false, stage and particle), never return NaN as a valid state.
+TEST(MlsValidation, SoftBlockBeyondItsStrengthHangsWithoutBlowingUp) {
+  // A 100 Pa block 6 cm long clamped at one end cannot carry its own weight (rho g L / E ~ 6): it sags into a
+  // strongly stretched hanging shape (SVK stiffens ~100x). Every frame stays finite, the planned substeps grow
+  // with the stiffening, and the energy obeys the work bound (kinetic + strain <= work of gravity).
   MlsBuildInput in = blockInput(6, 3, 3, 0.01, 0.1);
   in.material.youngs_modulus = 1e2;
   in.material.poisson_ratio = 0.0;
@@ -378,15 +378,15 @@ TEST(MlsValidation, CollapseUnderGravityIsReportedNotSilent) {
   for (std::size_t i = 0; i < in.kinds.size(); ++i) in.kinds[i] = in.rest_positions[i].x < -0.02 ? kMlsFixed : kMlsFree;
   auto solver = makeMlsSolver(in, BackendKind::Cpu, Precision::Float32);
   const double frame = 400 * solver->safety() * solver->stableTimeStep();
-  for (int k = 0; k < 5; ++k) {
-    const MlsFrameStats st = solver->advance(frame);
-    if (!st.totals.finite) {
-      EXPECT_GE(st.totals.first_bad, 0);
-      EXPECT_FALSE(st.totals.bad_stage.empty());
-      return;
-    }
-    EXPECT_TRUE(std::isfinite(st.totals.total()));
+  MlsFrameStats st;
+  for (int k = 0; k < 8; ++k) {
+    st = solver->advance(frame);
+    ASSERT_TRUE(st.totals.finite) << "frame " << k << ": " << st.totals.bad_stage << " particle " << st.totals.first_bad;
+    EXPECT_LE(st.totals.kinetic_energy + st.totals.elastic_energy, -st.totals.potential_energy * 1.01) << "frame " << k;
   }
+  EXPECT_GT(st.totals.stiffening, 10.0);
+  EXPECT_GT(st.substeps, 4 * 400);
+  EXPECT_GT(st.totals.max_displacement, 0.05);  // it really hangs (the block is 6 cm long)
 }
 
 TEST(MlsValidation, PrescribedParticlesReachTheirTargetsAndRelease) {
