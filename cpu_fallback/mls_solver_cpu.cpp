@@ -94,6 +94,7 @@ template <typename T>
 MlsFrameStats MlsCpuSolver<T>::advance(double frame_dt, int fixed_substeps) {
   MlsFrameStats st;
   st.substeps = planFrame(frame_dt, fixed_substeps, model_.source);
+  if (st.substeps == 0) return unplannableFrame();
   st.dt = frame_dt / st.substeps;
   substeps(T(st.dt), st.substeps, &st);
   const auto t0 = std::chrono::steady_clock::now();

@@ -106,11 +106,25 @@ class MlsSolver {
   virtual MemoryReport memory() const = 0;
 
  protected:
-  // Substeps for a frame: fixed as given (checked against the rest limit), else automatic at the current limit.
+  // Substeps for a frame: fixed as given (checked against the rest limit: bad input throws), else automatic
+  // at the current limit. Returns 0 when the deformed body would need more than kMlsMaxSubsteps (a physics
+  // failure, not bad input: advance() then reports finite == false, stage "timestep", without stepping).
   int planFrame(double frame_dt, int fixed_substeps, const std::string& file) {
     if (fixed_substeps > 0) return planMlsSubsteps(frame_dt, stableTimeStep(), safety_, fixed_substeps, file);
+    planMlsSubsteps(frame_dt, stableTimeStep(), safety_, 0, file);  // bad input (frame_dt, safety) throws here
     if (!stiffening_known_) stiffening_ = reduce().stiffening;
+    const double n = std::ceil(frame_dt / (safety_ * currentStableTimeStep()) * (1.0 - 1e-12));
+    if (!(n <= double(kMlsMaxSubsteps))) return 0;
     return planMlsSubsteps(frame_dt, currentStableTimeStep(), safety_, 0, file);
+  }
+  // The report of a frame that could not be planned (see planFrame).
+  MlsFrameStats unplannableFrame() {
+    MlsFrameStats st;
+    st.totals = reduce();
+    st.totals.finite = false;
+    st.totals.bad_stage = "timestep";
+    st.totals.first_bad = -1;
+    return st;
   }
   void forgetStiffening() { stiffening_known_ = false; }  // the state was replaced: measure again
   void noteReduction(const MlsReduction& r) {

@@ -162,6 +162,7 @@ class MlsCudaSolver final : public MlsSolver {
   MlsFrameStats advance(double frame_dt, int fixed_substeps) override {
     MlsFrameStats st;
     st.substeps = planFrame(frame_dt, fixed_substeps, model_.source);
+    if (st.substeps == 0) return unplannableFrame();
     st.dt = frame_dt / st.substeps;
     substeps(T(st.dt), st.substeps, true);
     const auto t0 = std::chrono::steady_clock::now();

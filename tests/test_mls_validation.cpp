@@ -491,3 +491,23 @@ TEST(MlsValidation, StretchedBodiesTakeSmallerSteps) {
   EXPECT_LT(worst, 0.05);
   EXPECT_TRUE(unguarded_failed);  // the guard is needed: the rest-state limit is not enough at this stretch
 }
+
+TEST(MlsValidation, UnplannableFrameIsReportedNotThrown) {
+  // A state stretched 1e6-fold would need > 1e7 substeps per frame at its stiffness: advance() must not
+  // throw (that is physics, not input) but report finite == false at stage "timestep" and leave the state.
+  MlsBuildInput in = blockInput(4, 4, 4, 0.01);
+  auto solver = makeMlsSolver(in, BackendKind::Cpu, Precision::Float64);
+  const std::vector<Vec3d> rest = solver->restPositions();
+  std::vector<Vec3d> u(rest.size()), after;
+  for (std::size_t i = 0; i < u.size(); ++i) u[i] = Vec3d(1e6 * (rest[i].x - solver->origin().x), 0, 0);
+  solver->setDisplacements(u);
+  MlsFrameStats st;
+  ASSERT_NO_THROW(st = solver->advance(1.0 / 60.0));
+  EXPECT_FALSE(st.totals.finite);
+  EXPECT_EQ(st.totals.bad_stage, "timestep");
+  EXPECT_EQ(st.substeps, 0);
+  solver->displacements(after);
+  EXPECT_EQ(maxNorm(after), maxNorm(u));
+  // Bad input still throws: a non-positive frame.
+  EXPECT_THROW(solver->advance(-1.0), InputError);
+}
