@@ -41,6 +41,18 @@ __global__ void forceKernel(MlsView<T> s, T half_dt, bool kick) {
   if (k < s.n) mlsForcePass(s, k, half_dt, kick);
 }
 
+// Tools: particle idx[p] (unique, validated on the host) becomes prescribed with target tgt[p], unless fixed.
+template <typename T>
+__global__ void prescribeKernel(const std::int32_t* idx, const Vec3<T>* tgt, std::int64_t count, std::uint8_t* kind,
+                                Vec3<T>* target) {
+  const std::int64_t p = std::int64_t(blockIdx.x) * blockDim.x + threadIdx.x;
+  if (p >= count) return;
+  const std::int32_t i = idx[p];
+  if (kind[i] == kMlsFixed) return;
+  kind[i] = kMlsPrescribed;
+  target[i] = tgt[p];
+}
+
 // Per block: kinetic, gravity potential, elastic energy sums, max |u|^2, and the lowest non-finite index
 // with its stage (0 integrate, 1 forces, 2 stress), packed as index * 4 + stage (n * 4 when none).
 struct Partial {
@@ -227,19 +239,29 @@ class MlsCudaSolver final : public MlsSolver {
     out.assign(e.begin(), e.end());
   }
 
+  // Only the listed particles travel: a compact (index, target) upload and a scatter kernel (indices are
+  // unique after validation, so no two threads write one particle).
   void setPrescribed(const std::vector<std::int32_t>& particles, const std::vector<Vec3d>& targets) override {
     if (targets.size() != particles.size()) throw std::invalid_argument("MlsSolver: one target per prescribed particle");
-    INC_CUDA(cudaStreamSynchronize(stream_));
-    std::vector<Vec3<T>> tgt = target_.download();
+    std::vector<std::int32_t> idx;
+    std::vector<Vec3<T>> tgt;
+    std::vector<char> seen(size(), 0);
     for (std::size_t p = 0; p < particles.size(); ++p) {
       const std::int32_t i = particles[p];
       if (i < 0 || std::size_t(i) >= size()) throw std::invalid_argument("MlsSolver: prescribed particle out of range");
-      if (model_.kind[std::size_t(i)] == kMlsFixed) continue;
+      if (model_.kind[std::size_t(i)] == kMlsFixed || seen[std::size_t(i)]) continue;
+      seen[std::size_t(i)] = 1;
       model_.kind[std::size_t(i)] = kMlsPrescribed;
-      tgt[std::size_t(i)] = Vec3<T>(targets[p]);
+      idx.push_back(i);
+      tgt.push_back(Vec3<T>(targets[p]));
     }
-    target_.upload(tgt);
-    kind_.upload(model_.kind);
+    if (idx.empty()) return;
+    INC_CUDA(cudaStreamSynchronize(stream_));  // the staging buffers may still be read by the previous scatter
+    pres_idx_.upload(idx);
+    pres_tgt_.upload(tgt);
+    prescribeKernel<T><<<gridFor(std::int64_t(idx.size())), kBlock, 0, stream_>>>(
+        pres_idx_.data(), pres_tgt_.data(), std::int64_t(idx.size()), kind_.data(), target_.data());
+    INC_CUDA_LAUNCH("mls prescribeKernel");
   }
   void release(const std::vector<std::int32_t>& particles) override {
     for (const std::int32_t i : particles) {
@@ -247,7 +269,7 @@ class MlsCudaSolver final : public MlsSolver {
       if (model_.kind[std::size_t(i)] == kMlsPrescribed) model_.kind[std::size_t(i)] = kMlsFree;
     }
     INC_CUDA(cudaStreamSynchronize(stream_));
-    kind_.upload(model_.kind);
+    kind_.upload(model_.kind);  // rare (a tool lets go): one upload of the kind array
   }
 
   void saveCheckpoint() override {
@@ -360,6 +382,8 @@ class MlsCudaSolver final : public MlsSolver {
   DeviceBuffer<Mat3<T>> stress_moment_;
   DeviceBuffer<T> energy_;
   DeviceBuffer<Partial> partials_;
+  DeviceBuffer<std::int32_t> pres_idx_;
+  DeviceBuffer<Vec3<T>> pres_tgt_;
   cudaStream_t stream_ = nullptr;
   std::vector<cudaEvent_t> events_;
   bool forces_valid_ = false;
