@@ -60,8 +60,15 @@ struct Partial {
   long long bad;
 };
 
+// Stiffening per particle over the full grid (a neighbour loop: too much work for the fixed reduction grid).
 template <typename T>
-__global__ void reduceKernel(MlsView<T> s, Partial* out) {
+__global__ void stiffeningKernel(MlsView<T> s, T* out) {
+  const std::int64_t i = std::int64_t(blockIdx.x) * blockDim.x + threadIdx.x;
+  if (i < s.n) out[i] = mlsStiffening(s, i);
+}
+
+template <typename T>
+__global__ void reduceKernel(MlsView<T> s, const T* stiffening, Partial* out) {
   __shared__ double ke[kBlock], pe[kBlock], el[kBlock], mu[kBlock], sf[kBlock];
   __shared__ long long bad[kBlock];
   double k_sum = 0, p_sum = 0, e_sum = 0, m = 0, stiff = 1;
@@ -79,7 +86,7 @@ __global__ void reduceKernel(MlsView<T> s, Partial* out) {
     e_sum += double(s.energy[i]);
     const double u2 = double(norm2(s.displacement[i]));
     m = u2 > m ? u2 : m;
-    const double k = double(mlsStiffening(s, i));
+    const double k = double(stiffening[i]);
     stiff = k > stiff ? k : stiff;
   }
   const int t = threadIdx.x;
@@ -130,6 +137,7 @@ class MlsCudaSolver final : public MlsSolver {
     stress_moment_.fillZero();
     energy_.resize(n);
     energy_.fillZero();
+    stiffening_buf_.resize(n);
     partials_.resize(kReduceBlocks);
     // A blocking stream: it is ordered after the legacy-stream copies of DeviceBuffer::upload/download
     // (a pageable cudaMemcpy may return before its DMA lands; a kernel on a non-blocking stream could race it).
@@ -198,7 +206,9 @@ class MlsCudaSolver final : public MlsSolver {
     const MlsView<T> s = view();
     MlsReduction r;
     if (s.n == 0) return r;
-    reduceKernel<T><<<kReduceBlocks, kBlock, 0, stream_>>>(s, partials_.data());
+    stiffeningKernel<T><<<gridFor(s.n), kBlock, 0, stream_>>>(s, stiffening_buf_.data());
+    INC_CUDA_LAUNCH("mls stiffeningKernel");
+    reduceKernel<T><<<kReduceBlocks, kBlock, 0, stream_>>>(s, stiffening_buf_.data(), partials_.data());
     INC_CUDA_LAUNCH("mls reduceKernel");
     std::vector<Partial> p(kReduceBlocks);
     INC_CUDA(cudaMemcpyAsync(p.data(), partials_.data(), kReduceBlocks * sizeof(Partial), cudaMemcpyDeviceToHost, stream_));
@@ -293,6 +303,7 @@ class MlsCudaSolver final : public MlsSolver {
                      moment_inverse_.capacityBytes() + kind_.capacityBytes() + offsets_.capacityBytes() +
                      indices_.capacityBytes() + u_.capacityBytes() + v_.capacityBytes() + f_.capacityBytes() +
                      target_.capacityBytes() + stress_moment_.capacityBytes() + energy_.capacityBytes() +
+                     stiffening_buf_.capacityBytes() +
                      partials_.capacityBytes() + saved_u_.capacityBytes() + saved_v_.capacityBytes();
     m.host_bytes = model_.bytes();
     return m;
@@ -380,7 +391,7 @@ class MlsCudaSolver final : public MlsSolver {
   DeviceBuffer<std::int32_t> indices_;
   DeviceBuffer<Vec3<T>> u_, v_, f_, target_, saved_u_, saved_v_;
   DeviceBuffer<Mat3<T>> stress_moment_;
-  DeviceBuffer<T> energy_;
+  DeviceBuffer<T> energy_, stiffening_buf_;
   DeviceBuffer<Partial> partials_;
   DeviceBuffer<std::int32_t> pres_idx_;
   DeviceBuffer<Vec3<T>> pres_tgt_;
