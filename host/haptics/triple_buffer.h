@@ -15,7 +15,9 @@ template <typename T>
 class TripleBuffer {
  public:
   TripleBuffer() = default;
-  explicit TripleBuffer(const T& initial) { slots_[0] = slots_[1] = slots_[2] = initial; }
+  explicit TripleBuffer(const T& initial) { reset(initial); }
+  // Sets all slots; only while no other thread uses the buffer (set-up).
+  void reset(const T& initial) { slots_[0] = slots_[1] = slots_[2] = initial; }
 
   // Writer side (one thread).
   T& back() { return slots_[back_]; }
