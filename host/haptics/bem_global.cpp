@@ -336,6 +336,24 @@ Eigen::VectorXd BemModel::solveFresh(const Eigen::VectorXd& known) const {
   return matrixFor(bc).partialPivLu().solve(rhs(known, bc));
 }
 
+void BemModel::interiorRows(const Vec3d& xi, Eigen::MatrixXd& g_rows, Eigen::MatrixXd& h_rows) const {
+  const int E = elementCount();
+  g_rows.setZero(3, 3 * E);
+  h_rows.setZero(3, 3 * E);
+  for (int j = 0; j < E; ++j) {
+    const auto& tri = mesh_.triangles[j];
+    Blocks blk;
+    const int level = subdivisionLevel(norm(centroids_[j] - xi), std::sqrt(2.0 * areas_[j]));
+    integrateRegular(mesh_.vertices[tri[0]], mesh_.vertices[tri[1]], mesh_.vertices[tri[2]], normals_[j], xi, level,
+                     shear_pa_, nu_, true, blk);
+    for (int k = 0; k < 3; ++k)
+      for (int l = 0; l < 3; ++l) {
+        g_rows(k, 3 * j + l) = blk.g(k, l);
+        h_rows(k, 3 * j + l) = blk.h(k, l);
+      }
+  }
+}
+
 Vec3d BemModel::interiorDisplacement(const Vec3d& xi, const Eigen::VectorXd& u, const Eigen::VectorXd& t) const {
   Vec3d out;
   for (int j = 0; j < elementCount(); ++j) {

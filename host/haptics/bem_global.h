@@ -60,6 +60,8 @@ class BemModel {
   // Displacement at an interior point xi from the boundary solution (Somigliana, c = 1):
   // u(xi) = sum_j G_j(xi) t_j - sum_j H_j(xi) u_j.
   Vec3d interiorDisplacement(const Vec3d& xi, const Eigen::VectorXd& u, const Eigen::VectorXd& t) const;
+  // The same as rows: u(xi) = g_rows t - h_rows u (each 3 x 3E), to precompute for fixed points.
+  void interiorRows(const Vec3d& xi, Eigen::MatrixXd& g_rows, Eigen::MatrixXd& h_rows) const;
 
  private:
   Eigen::VectorXd rhs(const Eigen::VectorXd& known, const std::vector<BemBc>& bc) const;

@@ -45,6 +45,18 @@ void HybridHapticModel::touch(int element) {
   for (int j = 0; j < global_.elementCount(); ++j)
     if (j == element || norm(global_.centroids()[j] - contact_point_) <= contact_radius_m_) contact_elements_.push_back(j);
   global_.setContact(contact_elements_);  // SMW: rank 3k update of the precomputed inverse
+  const int nc = int(coupled_nodes_.size()), E = global_.elementCount();
+  infl_g_.resize(3 * nc, 3 * E);
+  infl_h_.resize(3 * nc, 3 * E);
+  const double inset = 0.25 * (cloud_.shell_r_m.back() - cloud_.shell_r_m[cloud_.shell_r_m.size() - 2]);
+  Eigen::MatrixXd g, h;
+  for (int q = 0; q < nc; ++q) {
+    // Surface-ring nodes lie on the tangent plane; evaluate a little inside, where Somigliana's c = 1.
+    const Vec3d xw = contact_point_ + toWorld(cloud_.cloud.nodes[coupled_nodes_[q]]) - frame_[2] * inset;
+    global_.interiorRows(xw, g, h);
+    infl_g_.middleRows(3 * q, 3) = g;
+    infl_h_.middleRows(3 * q, 3) = h;
+  }
   CouplingData& c = coupling_.back();
   c.u_c.setZero();
   c.time_s = -1.0;
@@ -70,14 +82,11 @@ void HybridHapticModel::globalStep(const Vec3d& tip_displacement_world, double t
     }
   }
   CouplingData& c = coupling_.back();
-  c.u_c.resize(3 * Eigen::Index(coupled_nodes_.size()));
-  const double inset = 0.25 * (cloud_.shell_r_m.back() - cloud_.shell_r_m[cloud_.shell_r_m.size() - 2]);
-  for (std::size_t q = 0; q < coupled_nodes_.size(); ++q) {
-    const Vec3d xl = cloud_.cloud.nodes[coupled_nodes_[q]];
-    // Surface-ring nodes lie on the tangent plane; evaluate a little inside, where Somigliana's c = 1.
-    const Vec3d xw = contact_point_ + toWorld(xl) - frame_[2] * inset;
-    const Vec3d ul = toLocal(global_.interiorDisplacement(xw, u, t));
-    c.u_c.segment<3>(3 * Eigen::Index(q)) << ul.x, ul.y, ul.z;
+  const Eigen::VectorXd uw = infl_g_ * t - infl_h_ * u;  // world frame, 3 per coupled node
+  c.u_c.resize(uw.size());
+  for (Eigen::Index q = 0; q < uw.size() / 3; ++q) {
+    const Vec3d ul = toLocal(Vec3d{uw[3 * q], uw[3 * q + 1], uw[3 * q + 2]});
+    c.u_c.segment<3>(3 * q) << ul.x, ul.y, ul.z;
   }
   c.time_s = t_s;
   c.global_step = global_steps_.load() + 1;

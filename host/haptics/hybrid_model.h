@@ -32,7 +32,8 @@ class HybridHapticModel {
   HybridHapticModel(BemModel& global, const HemisphereCloudSpec& local_spec, const MfsMaterial& material,
                     double contact_radius_m);
   // The tool touches the surface at element `element` (contact point: its centroid). Selects the
-  // global contact elements (SMW) and resets the coupling to zero. Called from the simulation thread
+  // global contact elements (SMW), precomputes the Somigliana rows of the coupled nodes (they move
+  // only with the contact point) and resets the coupling to zero. Called from the simulation thread
   // while the haptic loop is not using the model (or before it starts).
   void touch(int element);
   const Vec3d& contactPoint() const { return contact_point_; }
@@ -61,6 +62,7 @@ class HybridHapticModel {
   Vec3d contact_point_, frame_[3];  // frame_: local x, y, z (= outward normal) axes in world
   std::vector<int> contact_elements_;
   std::vector<int> coupled_nodes_;   // node index of each coupled DOF triple
+  Eigen::MatrixXd infl_g_, infl_h_;  // u at the coupled nodes (world) = infl_g t - infl_h u (set in touch)
   TripleBuffer<CouplingData> coupling_;
   std::atomic<std::uint64_t> global_steps_{0};
   double last_global_s_ = 0.0;
