@@ -164,3 +164,37 @@ TEST(HapticLoop, RealThreadRunsAndStops) {
 
 }  // namespace
 }  // namespace inc
+
+namespace inc {
+namespace {
+
+TEST(HapticLoop, AuthoredTrajectoryFileInterpolatesAndBadLinesAreInputErrors) {
+  const std::string path = std::string(INCISION_BINARY_DIR) + "/haptic_authored_test.traj";
+  {
+    std::FILE* f = std::fopen(path.c_str(), "w");
+    ASSERT_NE(f, nullptr);
+    std::fprintf(f, "# authored path\n0.0 0 0 0 1 0 0 0 0\n\n0.5 0.01 0 -0.002 1 0 0 0 1  # press\n");
+    std::fclose(f);
+  }
+  ScriptedDevice dev(loadTrajectory(path), ScriptedDevice::Mode::kByTime);
+  const DeviceSample s = dev.read(0, 0.25);
+  EXPECT_NEAR(s.position_m.x, 0.005, 1e-15);
+  EXPECT_NEAR(s.position_m.z, -0.001, 1e-15);
+  EXPECT_EQ(dev.read(0, 9.0).position_m.x, 0.01);  // held after the end
+  {
+    std::FILE* f = std::fopen(path.c_str(), "w");
+    std::fprintf(f, "0.0 0 0 0 1 0 0 0 0\n0.5 0.01 zero 0 1 0 0 0 1\n");
+    std::fclose(f);
+  }
+  try {
+    loadTrajectory(path);
+    ADD_FAILURE() << "no InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.key(), "line 2");
+  }
+  EXPECT_THROW(loadTrajectory(path + ".missing"), InputError);
+  std::remove(path.c_str());
+}
+
+}  // namespace
+}  // namespace inc
