@@ -84,5 +84,30 @@ TEST(HapticHybrid, MultiRateLoopsRunSideBySide) {
   EXPECT_GT(dot(haptic.records().back().force_n, n), 0.0);  // pushing back once pressed in
 }
 
+TEST(HapticHybrid, StalledGlobalModelFadesTheForce) {
+  Organ organ(0.05);
+  HybridHapticModel model(organ.bem, tipCloud(), {3e3, 0.45}, 1e-3);
+  model.touch(organ.top);
+  const Vec3d n = organ.bem.normals()[organ.top], rest = model.contactPoint();
+  Trajectory tr;
+  DeviceSample s;
+  s.position_m = rest - n * 2e-3;
+  tr.samples.push_back(s);
+  s.t_s = 1.0;
+  tr.samples.push_back(s);
+  ScriptedDevice dev(tr, ScriptedDevice::Mode::kByTime, 5.0);
+  FakeClock clock;
+  HapticLoopConfig cfg;  // stall after 1/30 s, fade over 0.1 s
+  HapticLoop loop(dev, [&](const ForceRequest& q) { return model.localTick(q.sample.position_m - rest); }, cfg, &clock);
+  model.globalStep(s.position_m - rest, 0.0);  // one global step at t = 0, then the simulation stalls
+  loop.runTicks(200);
+  const auto& rec = loop.records();
+  const double f0 = dot(rec[20].force_n, n);
+  EXPECT_GT(f0, 0.0);
+  EXPECT_NEAR(dot(rec[20].model_force_n, n), f0, 1e-12);                 // fresh data: no fade
+  EXPECT_NEAR(dot(rec[83].force_n, n), f0 * (1.0 - (0.083 - 1.0 / 30.0) / 0.1), 1e-9 * f0);  // fading
+  EXPECT_EQ(norm(rec[150].force_n), 0.0);                                 // released, not frozen
+}
+
 }  // namespace
 }  // namespace inc
