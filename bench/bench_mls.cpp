@@ -32,6 +32,7 @@ struct Row {
   std::int64_t particles = 0;
   double mean_neighbors = 0;
   double ms_step = 0, ms_integrate = 0, ms_stress = 0, ms_forces = 0;  // medians per substep
+  double ms_wall = 0;  // wall time per substep seen by the host (GPU: includes launch gaps and event calls)
   double particles_per_s = 0;
   double mbytes_per_step = 0, gbytes_per_s = 0;
 };
@@ -78,11 +79,12 @@ Row timeSolver(MlsSolver& solver, int substeps, int repeats) {
   r.mean_neighbors = solver.modelStats().mean_neighbors;
   const double dt = 0.5 * solver.stableTimeStep();
   solver.advance(dt * substeps, substeps);  // warm-up (first-touch, kernel load)
-  std::vector<double> step, integ, stress, forces;
+  std::vector<double> step, integ, stress, forces, walls;
   for (int k = 0; k < repeats; ++k) {
     const auto t0 = std::chrono::steady_clock::now();
     const MlsFrameStats st = solver.advance(dt * substeps, substeps);
     const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    walls.push_back((wall - st.ms_reduce) / substeps);
     integ.push_back(st.ms_integrate / substeps);
     stress.push_back(st.ms_stress / substeps);
     forces.push_back(st.ms_forces / substeps);
@@ -91,6 +93,7 @@ Row timeSolver(MlsSolver& solver, int substeps, int repeats) {
                                                          : (wall - st.ms_reduce) / substeps);
   }
   r.ms_step = median(step);
+  r.ms_wall = median(walls);
   r.ms_integrate = median(integ);
   r.ms_stress = median(stress);
   r.ms_forces = median(forces);
@@ -103,9 +106,9 @@ Row timeSolver(MlsSolver& solver, int substeps, int repeats) {
 }
 
 void printRow(const Row& r) {
-  std::printf("%-5s %-8s %10lld %6.1f %11.4f %10.4f %10.4f %10.4f %12.3e %9.2f %8.1f\n", r.backend.c_str(),
-              r.precision.c_str(), (long long)r.particles, r.mean_neighbors, r.ms_step, r.ms_integrate, r.ms_stress,
-              r.ms_forces, r.particles_per_s, r.mbytes_per_step, r.gbytes_per_s);
+  std::printf("%-5s %-8s %10lld %6.1f %11.4f %10.4f %10.4f %10.4f %10.4f %12.3e %9.2f %8.1f\n", r.backend.c_str(),
+              r.precision.c_str(), (long long)r.particles, r.mean_neighbors, r.ms_step, r.ms_wall, r.ms_integrate,
+              r.ms_stress, r.ms_forces, r.particles_per_s, r.mbytes_per_step, r.gbytes_per_s);
   std::fflush(stdout);
 }
 
@@ -185,8 +188,8 @@ int main(int argc, char** argv) {
 
     std::printf("# bench_mls: %s; CPU threads %d; %d substeps x %d repeats (median); cube of lattice particles, "
                 "support 2 spacings\n", note.empty() ? "-" : note.c_str(), omp_get_max_threads(), substeps, repeats);
-    std::printf("%-5s %-8s %10s %6s %11s %10s %10s %10s %12s %9s %8s\n", "back", "prec", "particles", "nbrs", "ms/step",
-                "integrate", "stress", "forces", "particles/s", "MB/step", "GB/s");
+    std::printf("%-5s %-8s %10s %6s %11s %10s %10s %10s %10s %12s %9s %8s\n", "back", "prec", "particles", "nbrs",
+                "ms/step", "wall ms", "integrate", "stress", "forces", "particles/s", "MB/step", "GB/s");
     std::vector<Row> rows;
     std::vector<std::int64_t> sizes;
     for (double n = double(lo); n <= double(hi) * 1.0001; n *= 4) sizes.push_back(std::int64_t(n));
@@ -227,13 +230,16 @@ int main(int argc, char** argv) {
     if (!csv.empty()) {
       std::ofstream f(csv);
       if (!f) throw InputError(csv, "--csv", "cannot write the file");
-      f << "backend,precision,particles,mean_neighbors,ms_per_step,ms_integrate,ms_stress,ms_forces,particles_per_s,"
-           "mbytes_per_step,gbytes_per_s\n";
+      // kind "timing": one row per backend, precision and size; kind "accuracy": the float32 and float64 runs of
+      // the same 1e4-particle motion (wall ms per step, float32's max |du| / max |u| against float64).
+      f << "kind,backend,precision,particles,mean_neighbors,ms_per_step,wall_ms_per_step,ms_integrate,ms_stress,"
+           "ms_forces,particles_per_s,mbytes_per_step,gbytes_per_s,rel_error_vs_float64\n";
       for (const Row& r : rows)
-        f << r.backend << ',' << r.precision << ',' << r.particles << ',' << r.mean_neighbors << ',' << r.ms_step << ','
-          << r.ms_integrate << ',' << r.ms_stress << ',' << r.ms_forces << ',' << r.particles_per_s << ','
-          << r.mbytes_per_step << ',' << r.gbytes_per_s << '\n';
-      f << "accuracy," << backendName(acc_backend) << ",10000,," << ms32 << ',' << ms64 << ",,,," << err << ",\n";
+        f << "timing," << r.backend << ',' << r.precision << ',' << r.particles << ',' << r.mean_neighbors << ','
+          << r.ms_step << ',' << r.ms_wall << ',' << r.ms_integrate << ',' << r.ms_stress << ',' << r.ms_forces << ','
+          << r.particles_per_s << ',' << r.mbytes_per_step << ',' << r.gbytes_per_s << ",\n";
+      f << "accuracy," << backendName(acc_backend) << ",float32,10000,," << ms32 << ',' << ms32 << ",,,,,,," << err << '\n';
+      f << "accuracy," << backendName(acc_backend) << ",float64,10000,," << ms64 << ',' << ms64 << ",,,,,,,0\n";
     }
     // Summary line (last line of stdout): the largest float32 row of the fastest backend.
     const Row* best = nullptr;

@@ -93,7 +93,8 @@ void MlsCpuSolver<T>::step(double dt, int n) {
 template <typename T>
 MlsFrameStats MlsCpuSolver<T>::advance(double frame_dt, int fixed_substeps) {
   MlsFrameStats st;
-  st.substeps = planMlsSubsteps(frame_dt, stableTimeStep(), safety_, fixed_substeps, model_.source);
+  st.substeps = planFrame(frame_dt, fixed_substeps, model_.source);
+  if (st.substeps == 0) return unplannableFrame();
   st.dt = frame_dt / st.substeps;
   substeps(T(st.dt), st.substeps, &st);
   const auto t0 = std::chrono::steady_clock::now();
@@ -127,6 +128,11 @@ MlsReduction MlsCpuSolver<T>::reduce() {
     max_u2 = std::max(max_u2, double(norm2(st.displacement[std::size_t(k)])));
   }
   r.max_displacement = std::sqrt(max_u2);
+  // Stiffening: one more gradient per particle, once per frame (max is order independent).
+  std::vector<T> stiff(std::size_t(s.n));
+  forEachParticle(s.n, [&](std::int64_t k) { stiff[std::size_t(k)] = mlsStiffening(s, k); });
+  for (const T k : stiff) r.stiffening = std::max(r.stiffening, double(k));
+  noteReduction(r);
   return r;
 }
 
@@ -135,6 +141,7 @@ void MlsCpuSolver<T>::setDisplacements(const std::vector<Vec3d>& u) {
   checkSize(u, size(), "displacements");
   for (std::size_t i = 0; i < u.size(); ++i) state_.displacement[i] = Vec3<T>(u[i]);
   forces_valid_ = false;
+  forgetStiffening();
 }
 
 template <typename T>
@@ -199,6 +206,7 @@ void MlsCpuSolver<T>::restoreCheckpoint() {
   state_.displacement = saved_u_;
   state_.velocity = saved_v_;
   forces_valid_ = false;
+  forgetStiffening();
 }
 
 template <typename T>

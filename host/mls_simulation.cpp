@@ -14,16 +14,55 @@ namespace inc {
 
 namespace {
 
+// Tool tip position at time t: piecewise linear over the keyframes, held constant outside them.
+Vec3d toolPosition(const ToolSpec& tool, double t) {
+  const auto& k = tool.path;
+  if (t <= k.front().t) return k.front().position;
+  for (std::size_t i = 1; i < k.size(); ++i)
+    if (t <= k[i].t) {
+      const double span = k[i].t - k[i - 1].t;
+      const double a = span > 0 ? (t - k[i - 1].t) / span : 1.0;
+      return k[i - 1].position + (k[i].position - k[i - 1].position) * a;
+    }
+  return k.back().position;
+}
+
+// A grasper holds the free particles within its radius of its first keyframe and carries them along its path.
+struct Grasp {
+  std::size_t tool = 0;
+  std::vector<std::int32_t> particles;
+};
+
 bool insideBox(const Vec3d& p, const FixedRegion& r) {
   return p.x >= r.min.x && p.x <= r.max.x && p.y >= r.min.y && p.y <= r.max.y && p.z >= r.min.z && p.z <= r.max.z;
 }
 
 class MlsSimulation final : public SimulationModel {
  public:
-  MlsSimulation(std::unique_ptr<MlsSolver> solver, int fixed_substeps, double frame_dt, const std::string& file)
-      : solver_(std::move(solver)), fixed_substeps_(fixed_substeps) {
+  MlsSimulation(std::unique_ptr<MlsSolver> solver, const Scene& scene)
+      : solver_(std::move(solver)), fixed_substeps_(scene.solver.substeps), tools_(scene.tools) {
     // Refuse an unstable fixed substep count now (bad input), not in the middle of a run.
-    planMlsSubsteps(frame_dt, solver_->stableTimeStep(), solver_->safety(), fixed_substeps_, file, "solver.substeps");
+    planMlsSubsteps(scene.solver.frame_dt, solver_->stableTimeStep(), solver_->safety(), fixed_substeps_, scene.file,
+                    "solver.substeps");
+    const std::vector<Vec3d> rest = solver_->restPositions();
+    for (std::size_t k = 0; k < tools_.size(); ++k) {
+      const ToolSpec& tool = tools_[k];
+      const std::string key = "tools[" + std::to_string(k) + "]";
+      if (tool.kind != "grasper") continue;  // probes (contact) and scalpels (cutting) belong to other models
+      if (tool.path.empty()) throw InputError(scene.file, key + ".path", "a grasper needs at least one keyframe");
+      if (!(std::isfinite(tool.radius) && tool.radius > 0)) throw InputError(scene.file, key + ".radius_m", "must be > 0");
+      for (std::size_t p = 1; p < tool.path.size(); ++p)
+        if (!(tool.path[p].t >= tool.path[p - 1].t))
+          throw InputError(scene.file, key + ".path", "keyframes must be sorted by t_s");
+      Grasp g;
+      g.tool = k;
+      const Vec3d at = tool.path.front().position;
+      for (std::size_t i = 0; i < rest.size(); ++i)
+        if (norm2(rest[i] - at) <= tool.radius * tool.radius) g.particles.push_back(std::int32_t(i));
+      if (g.particles.empty())
+        throw InputError(scene.file, key, "the grasper's first keyframe holds no particle within radius_m of it");
+      grasps_.push_back(std::move(g));
+    }
   }
 
   std::string name() const override { return "mls"; }
@@ -31,7 +70,15 @@ class MlsSimulation final : public SimulationModel {
   std::size_t particleCount() const override { return solver_->size(); }
 
   FrameReport advance(double frame_dt) override {
+    // Graspers: their particles reach the tool's displacement at the end of this frame.
+    const double t1 = time_ + frame_dt;
+    for (const Grasp& g : grasps_) {
+      const ToolSpec& tool = tools_[g.tool];
+      const Vec3d d = toolPosition(tool, t1) - tool.path.front().position;
+      solver_->setPrescribed(g.particles, std::vector<Vec3d>(g.particles.size(), d));
+    }
     const MlsFrameStats st = solver_->advance(frame_dt, fixed_substeps_);
+    if (st.totals.finite) time_ = t1;
     FrameReport r;
     r.substeps = st.substeps;
     r.dt = st.dt;
@@ -44,7 +91,9 @@ class MlsSimulation final : public SimulationModel {
     r.failure_stage = st.totals.bad_stage;
     r.failure_particle = st.totals.first_bad;
     const MlsModelStats& m = solver_->modelStats();
-    r.counters["stable_dt_s"] = solver_->stableTimeStep();
+    r.counters["stable_dt_s"] = solver_->stableTimeStep();          // rest state, safety 1
+    r.counters["current_stable_dt_s"] = solver_->currentStableTimeStep();  // at the frame's end deformation
+    r.counters["stiffening"] = st.totals.stiffening;
     r.counters["regularised_particles"] = double(m.regularised);
     r.counters["few_neighbours"] = double(m.few_neighbors);
     r.counters["coplanar_neighbourhoods"] = double(m.coplanar);
@@ -54,11 +103,20 @@ class MlsSimulation final : public SimulationModel {
     r.counters["min_neighbours"] = double(m.min_neighbors);
     r.counters["mean_neighbours"] = m.mean_neighbors;
     r.counters["max_condition"] = m.max_condition;
+    double grasped = 0;
+    for (const Grasp& g : grasps_) grasped += double(g.particles.size());
+    r.counters["grasped_particles"] = grasped;
     return r;
   }
 
-  void saveCheckpoint() override { solver_->saveCheckpoint(); }
-  void restoreCheckpoint() override { solver_->restoreCheckpoint(); }
+  void saveCheckpoint() override {
+    solver_->saveCheckpoint();
+    saved_time_ = time_;
+  }
+  void restoreCheckpoint() override {
+    solver_->restoreCheckpoint();
+    time_ = saved_time_;
+  }
 
   void scaleTimeStep(double factor) override {
     if (!(factor > 0) || !std::isfinite(factor)) return;
@@ -72,6 +130,9 @@ class MlsSimulation final : public SimulationModel {
  private:
   std::unique_ptr<MlsSolver> solver_;
   int fixed_substeps_ = 0;
+  std::vector<ToolSpec> tools_;
+  std::vector<Grasp> grasps_;
+  double time_ = 0.0, saved_time_ = 0.0;  // s, simulated time (tool paths are functions of it)
 };
 
 }  // namespace
@@ -121,7 +182,7 @@ std::unique_ptr<SimulationModel> makeMlsSimulation(const Scene& scene, BackendKi
   if (scene.solver.substeps < 0) throw InputError(scene.file, "solver.substeps", "must be >= 0");
   const MlsBuildInput in = mlsBuildInputFromScene(scene);
   std::unique_ptr<MlsSolver> solver = makeMlsSolver(in, resolved, precision);
-  return std::make_unique<MlsSimulation>(std::move(solver), scene.solver.substeps, scene.solver.frame_dt, scene.file);
+  return std::make_unique<MlsSimulation>(std::move(solver), scene);
 }
 
 }  // namespace inc

@@ -20,9 +20,12 @@ MlsBuildInput mlsBuildInputFromScene(const Scene& scene);
 // stable limit for the scene's frame_dt. advance() reports non-finite states (finite == false, stage
 // "integrate" | "stress" | "forces", lowest bad particle) instead of throwing.
 // FrameReport: stages integrate / stress / forces / reduce (ms, summed over substeps), kinetic, elastic
-// (strain + volume penalty) and gravity potential energy, max displacement; counters: stable_dt_s,
-// substeps, regularised / few_neighbours / coplanar / collinear / ill_conditioned / isolated particles,
-// min / mean neighbours, max_condition.
+// (strain + volume penalty) and gravity potential energy, max displacement; counters: stable_dt_s (rest),
+// current_stable_dt_s and stiffening (at the frame's end deformation, used to plan the next frame), regularised / few_neighbours / coplanar / collinear / ill_conditioned / isolated particles,
+// min / mean neighbours, max_condition, grasped_particles.
+// Tools: a "grasper" holds the particles within radius_m of its first keyframe (InputError if none) and
+// carries them along its piecewise-linear path (prescribed displacement = tool position(t) - first position,
+// reached at the end of each frame); "probe" and "scalpel" tools are left to the contact and cutting models.
 std::unique_ptr<SimulationModel> makeMlsSimulation(const Scene& scene, BackendKind resolved, Precision precision);
 
 }  // namespace inc

@@ -21,6 +21,7 @@ struct MlsReduction {
   double elastic_energy = 0.0;     // J, sum v_i psi_i (eq. 8, with the volume penalty)
   double potential_energy = 0.0;   // J, -sum m g . u (gravity, relative to rest)
   double max_displacement = 0.0;   // m
+  double stiffening = 1.0;         // largest mlsStiffening (>= 1): the stable step is divided by its sqrt
   bool finite = true;
   std::int64_t first_bad = -1;     // lowest index with a non-finite u, v, f or energy
   std::string bad_stage;           // "integrate" (u, v), "forces" (f) or "stress" (energy)
@@ -70,12 +71,16 @@ class MlsSolver {
   virtual const MlsModelStats& modelStats() const = 0;
   virtual Vec3d origin() const = 0;                 // rest positions are relative to this (m)
   virtual std::vector<Vec3d> restPositions() const = 0;  // absolute (m)
-  double stableTimeStep() const { return modelStats().stable_dt; }  // s, safety 1
+  double stableTimeStep() const { return modelStats().stable_dt; }  // s, safety 1, rest state
+  // The limit at the current deformation (rest limit / sqrt(stiffening) of the last reduction), safety 1.
+  double currentStableTimeStep() const { return stableTimeStep() / std::sqrt(stiffening_ > 1.0 ? stiffening_ : 1.0); }
   double safety() const { return safety_; }
   void setSafety(double s) { safety_ = s; }
 
   // One frame: the substeps stability needs (or exactly `fixed_substeps`, refused when unstable), then the
-  // frame reductions. Prescribed particles reach their targets at the end of the frame.
+  // frame reductions. Prescribed particles reach their targets at the end of the frame. Automatic
+  // substepping uses the rest-state limit divided by sqrt(stiffening) of the last reduction (computed
+  // before the first frame), so a strongly stretched body takes more substeps.
   virtual MlsFrameStats advance(double frame_dt, int fixed_substeps = 0) = 0;
   // Exactly n substeps of dt (tests, benchmarks); refuses dt above the stable limit (InputError "dt").
   virtual void step(double dt, int n) = 0;
@@ -101,7 +106,34 @@ class MlsSolver {
   virtual MemoryReport memory() const = 0;
 
  protected:
+  // Substeps for a frame: fixed as given (checked against the rest limit: bad input throws), else automatic
+  // at the current limit. Returns 0 when the deformed body would need more than kMlsMaxSubsteps (a physics
+  // failure, not bad input: advance() then reports finite == false, stage "timestep", without stepping).
+  int planFrame(double frame_dt, int fixed_substeps, const std::string& file) {
+    if (fixed_substeps > 0) return planMlsSubsteps(frame_dt, stableTimeStep(), safety_, fixed_substeps, file);
+    planMlsSubsteps(frame_dt, stableTimeStep(), safety_, 0, file);  // bad input (frame_dt, safety) throws here
+    if (!stiffening_known_) stiffening_ = reduce().stiffening;
+    const double n = std::ceil(frame_dt / (safety_ * currentStableTimeStep()) * (1.0 - 1e-12));
+    if (!(n <= double(kMlsMaxSubsteps))) return 0;
+    return planMlsSubsteps(frame_dt, currentStableTimeStep(), safety_, 0, file);
+  }
+  // The report of a frame that could not be planned (see planFrame).
+  MlsFrameStats unplannableFrame() {
+    MlsFrameStats st;
+    st.totals = reduce();
+    st.totals.finite = false;
+    st.totals.bad_stage = "timestep";
+    st.totals.first_bad = -1;
+    return st;
+  }
+  void forgetStiffening() { stiffening_known_ = false; }  // the state was replaced: measure again
+  void noteReduction(const MlsReduction& r) {
+    stiffening_ = r.finite ? r.stiffening : stiffening_;
+    stiffening_known_ = true;
+  }
   double safety_ = 0.5;
+  double stiffening_ = 1.0;
+  bool stiffening_known_ = false;
 };
 
 // Builds the model in the requested precision and the solver on the requested backend (Auto resolves

@@ -1,14 +1,17 @@
 // Builds the models a scene switches on, and nothing else (a scene pays only for what it uses).
 #include "host/input_error.h"
+#include "host/metaball_simulation.h"
+#include "host/mls_simulation.h"
 #include "host/runner.h"
+#include "host/tearing_simulation.h"
 
 namespace inc {
 
 std::vector<std::unique_ptr<SimulationModel>> createSceneModels(const Scene& scene, BackendKind backend) {
   std::vector<std::unique_ptr<SimulationModel>> models;
-  (void)backend;
-  if (scene.models.mls)
-    throw InputError(scene.file, "models.mls", "the MLS model is not built into this version");
+  if (scene.models.mls) models.push_back(makeMlsSimulation(scene, backend, scene.solver.precision));
+  if (scene.models.pbd_metaballs) models.push_back(makeMetaballSimulation(scene, backend, scene.solver.precision));
+  if (scene.models.tearing) models.push_back(makeTearingSimulation(scene, backend, scene.solver.precision));
   return models;
 }
 

@@ -41,18 +41,37 @@ __global__ void forceKernel(MlsView<T> s, T half_dt, bool kick) {
   if (k < s.n) mlsForcePass(s, k, half_dt, kick);
 }
 
+// Tools: particle idx[p] (unique, validated on the host) becomes prescribed with target tgt[p], unless fixed.
+template <typename T>
+__global__ void prescribeKernel(const std::int32_t* idx, const Vec3<T>* tgt, std::int64_t count, std::uint8_t* kind,
+                                Vec3<T>* target) {
+  const std::int64_t p = std::int64_t(blockIdx.x) * blockDim.x + threadIdx.x;
+  if (p >= count) return;
+  const std::int32_t i = idx[p];
+  if (kind[i] == kMlsFixed) return;
+  kind[i] = kMlsPrescribed;
+  target[i] = tgt[p];
+}
+
 // Per block: kinetic, gravity potential, elastic energy sums, max |u|^2, and the lowest non-finite index
 // with its stage (0 integrate, 1 forces, 2 stress), packed as index * 4 + stage (n * 4 when none).
 struct Partial {
-  double kinetic, potential, elastic, max_u2;
+  double kinetic, potential, elastic, max_u2, stiffening;
   long long bad;
 };
 
+// Stiffening per particle over the full grid (a neighbour loop: too much work for the fixed reduction grid).
 template <typename T>
-__global__ void reduceKernel(MlsView<T> s, Partial* out) {
-  __shared__ double ke[kBlock], pe[kBlock], el[kBlock], mu[kBlock];
+__global__ void stiffeningKernel(MlsView<T> s, T* out) {
+  const std::int64_t i = std::int64_t(blockIdx.x) * blockDim.x + threadIdx.x;
+  if (i < s.n) out[i] = mlsStiffening(s, i);
+}
+
+template <typename T>
+__global__ void reduceKernel(MlsView<T> s, const T* stiffening, Partial* out) {
+  __shared__ double ke[kBlock], pe[kBlock], el[kBlock], mu[kBlock], sf[kBlock];
   __shared__ long long bad[kBlock];
-  double k_sum = 0, p_sum = 0, e_sum = 0, m = 0;
+  double k_sum = 0, p_sum = 0, e_sum = 0, m = 0, stiff = 1;
   long long b = s.n * 4;
   for (std::int64_t i = std::int64_t(blockIdx.x) * blockDim.x + threadIdx.x; i < s.n;
        i += std::int64_t(gridDim.x) * blockDim.x) {
@@ -67,12 +86,15 @@ __global__ void reduceKernel(MlsView<T> s, Partial* out) {
     e_sum += double(s.energy[i]);
     const double u2 = double(norm2(s.displacement[i]));
     m = u2 > m ? u2 : m;
+    const double k = double(stiffening[i]);
+    stiff = k > stiff ? k : stiff;
   }
   const int t = threadIdx.x;
   ke[t] = k_sum;
   pe[t] = p_sum;
   el[t] = e_sum;
   mu[t] = m;
+  sf[t] = stiff;
   bad[t] = b;
   __syncthreads();
   for (int w = kBlock / 2; w > 0; w /= 2) {
@@ -81,11 +103,12 @@ __global__ void reduceKernel(MlsView<T> s, Partial* out) {
       pe[t] += pe[t + w];
       el[t] += el[t + w];
       mu[t] = mu[t] > mu[t + w] ? mu[t] : mu[t + w];
+      sf[t] = sf[t] > sf[t + w] ? sf[t] : sf[t + w];
       bad[t] = bad[t] < bad[t + w] ? bad[t] : bad[t + w];
     }
     __syncthreads();
   }
-  if (t == 0) out[blockIdx.x] = Partial{ke[0], pe[0], el[0], mu[0], bad[0]};
+  if (t == 0) out[blockIdx.x] = Partial{ke[0], pe[0], el[0], mu[0], sf[0], bad[0]};
 }
 
 template <typename T>
@@ -114,8 +137,11 @@ class MlsCudaSolver final : public MlsSolver {
     stress_moment_.fillZero();
     energy_.resize(n);
     energy_.fillZero();
+    stiffening_buf_.resize(n);
     partials_.resize(kReduceBlocks);
-    INC_CUDA(cudaStreamCreateWithFlags(&stream_, cudaStreamNonBlocking));
+    // A blocking stream: it is ordered after the legacy-stream copies of DeviceBuffer::upload/download
+    // (a pageable cudaMemcpy may return before its DMA lands; a kernel on a non-blocking stream could race it).
+    INC_CUDA(cudaStreamCreate(&stream_));
   }
   ~MlsCudaSolver() override {
     for (cudaEvent_t e : events_) cudaEventDestroy(e);
@@ -155,7 +181,8 @@ class MlsCudaSolver final : public MlsSolver {
 
   MlsFrameStats advance(double frame_dt, int fixed_substeps) override {
     MlsFrameStats st;
-    st.substeps = planMlsSubsteps(frame_dt, stableTimeStep(), safety_, fixed_substeps, model_.source);
+    st.substeps = planFrame(frame_dt, fixed_substeps, model_.source);
+    if (st.substeps == 0) return unplannableFrame();
     st.dt = frame_dt / st.substeps;
     substeps(T(st.dt), st.substeps, true);
     const auto t0 = std::chrono::steady_clock::now();
@@ -179,7 +206,9 @@ class MlsCudaSolver final : public MlsSolver {
     const MlsView<T> s = view();
     MlsReduction r;
     if (s.n == 0) return r;
-    reduceKernel<T><<<kReduceBlocks, kBlock, 0, stream_>>>(s, partials_.data());
+    stiffeningKernel<T><<<gridFor(s.n), kBlock, 0, stream_>>>(s, stiffening_buf_.data());
+    INC_CUDA_LAUNCH("mls stiffeningKernel");
+    reduceKernel<T><<<kReduceBlocks, kBlock, 0, stream_>>>(s, stiffening_buf_.data(), partials_.data());
     INC_CUDA_LAUNCH("mls reduceKernel");
     std::vector<Partial> p(kReduceBlocks);
     INC_CUDA(cudaMemcpyAsync(p.data(), partials_.data(), kReduceBlocks * sizeof(Partial), cudaMemcpyDeviceToHost, stream_));
@@ -191,6 +220,7 @@ class MlsCudaSolver final : public MlsSolver {
       r.potential_energy += q.potential;
       r.elastic_energy += q.elastic;
       max_u2 = std::max(max_u2, q.max_u2);
+      r.stiffening = std::max(r.stiffening, q.stiffening);
       bad = std::min(bad, q.bad);
     }
     r.max_displacement = std::sqrt(max_u2);
@@ -200,12 +230,14 @@ class MlsCudaSolver final : public MlsSolver {
       const int stage = int(bad % 4);
       r.bad_stage = stage == 0 ? "integrate" : (stage == 1 ? "forces" : "stress");
     }
+    noteReduction(r);
     return r;
   }
 
   void setDisplacements(const std::vector<Vec3d>& u) override {
     upload(u_, u, "displacements");
     forces_valid_ = false;
+    forgetStiffening();
   }
   void setVelocities(const std::vector<Vec3d>& v) override { upload(v_, v, "velocities"); }
   void displacements(std::vector<Vec3d>& out) const override { download(u_, out); }
@@ -217,19 +249,29 @@ class MlsCudaSolver final : public MlsSolver {
     out.assign(e.begin(), e.end());
   }
 
+  // Only the listed particles travel: a compact (index, target) upload and a scatter kernel (indices are
+  // unique after validation, so no two threads write one particle).
   void setPrescribed(const std::vector<std::int32_t>& particles, const std::vector<Vec3d>& targets) override {
     if (targets.size() != particles.size()) throw std::invalid_argument("MlsSolver: one target per prescribed particle");
-    INC_CUDA(cudaStreamSynchronize(stream_));
-    std::vector<Vec3<T>> tgt = target_.download();
+    std::vector<std::int32_t> idx;
+    std::vector<Vec3<T>> tgt;
+    std::vector<char> seen(size(), 0);
     for (std::size_t p = 0; p < particles.size(); ++p) {
       const std::int32_t i = particles[p];
       if (i < 0 || std::size_t(i) >= size()) throw std::invalid_argument("MlsSolver: prescribed particle out of range");
-      if (model_.kind[std::size_t(i)] == kMlsFixed) continue;
+      if (model_.kind[std::size_t(i)] == kMlsFixed || seen[std::size_t(i)]) continue;
+      seen[std::size_t(i)] = 1;
       model_.kind[std::size_t(i)] = kMlsPrescribed;
-      tgt[std::size_t(i)] = Vec3<T>(targets[p]);
+      idx.push_back(i);
+      tgt.push_back(Vec3<T>(targets[p]));
     }
-    target_.upload(tgt);
-    kind_.upload(model_.kind);
+    if (idx.empty()) return;
+    INC_CUDA(cudaStreamSynchronize(stream_));  // the staging buffers may still be read by the previous scatter
+    pres_idx_.upload(idx);
+    pres_tgt_.upload(tgt);
+    prescribeKernel<T><<<gridFor(std::int64_t(idx.size())), kBlock, 0, stream_>>>(
+        pres_idx_.data(), pres_tgt_.data(), std::int64_t(idx.size()), kind_.data(), target_.data());
+    INC_CUDA_LAUNCH("mls prescribeKernel");
   }
   void release(const std::vector<std::int32_t>& particles) override {
     for (const std::int32_t i : particles) {
@@ -237,7 +279,7 @@ class MlsCudaSolver final : public MlsSolver {
       if (model_.kind[std::size_t(i)] == kMlsPrescribed) model_.kind[std::size_t(i)] = kMlsFree;
     }
     INC_CUDA(cudaStreamSynchronize(stream_));
-    kind_.upload(model_.kind);
+    kind_.upload(model_.kind);  // rare (a tool lets go): one upload of the kind array
   }
 
   void saveCheckpoint() override {
@@ -252,6 +294,7 @@ class MlsCudaSolver final : public MlsSolver {
     copy(u_, saved_u_);
     copy(v_, saved_v_);
     forces_valid_ = false;
+    forgetStiffening();
   }
 
   MemoryReport memory() const override {
@@ -260,6 +303,7 @@ class MlsCudaSolver final : public MlsSolver {
                      moment_inverse_.capacityBytes() + kind_.capacityBytes() + offsets_.capacityBytes() +
                      indices_.capacityBytes() + u_.capacityBytes() + v_.capacityBytes() + f_.capacityBytes() +
                      target_.capacityBytes() + stress_moment_.capacityBytes() + energy_.capacityBytes() +
+                     stiffening_buf_.capacityBytes() +
                      partials_.capacityBytes() + saved_u_.capacityBytes() + saved_v_.capacityBytes();
     m.host_bytes = model_.bytes();
     return m;
@@ -347,8 +391,10 @@ class MlsCudaSolver final : public MlsSolver {
   DeviceBuffer<std::int32_t> indices_;
   DeviceBuffer<Vec3<T>> u_, v_, f_, target_, saved_u_, saved_v_;
   DeviceBuffer<Mat3<T>> stress_moment_;
-  DeviceBuffer<T> energy_;
+  DeviceBuffer<T> energy_, stiffening_buf_;
   DeviceBuffer<Partial> partials_;
+  DeviceBuffer<std::int32_t> pres_idx_;
+  DeviceBuffer<Vec3<T>> pres_tgt_;
   cudaStream_t stream_ = nullptr;
   std::vector<cudaEvent_t> events_;
   bool forces_valid_ = false;

@@ -105,6 +105,26 @@ INC_HD void mlsDriftPass(const MlsView<T>& s, std::int64_t k, T dt, int remainin
   }
 }
 
+// How much stiffer than at rest the material is at particle i: SVK's tangent modulus along the most
+// stretched direction grows like (3 c - 1) / 2 with c the largest eigenvalue of C = F^T F (uniaxial SVK:
+// dP/dlambda = E (3 lambda^2 - 1) / 2), the volume penalty's like c^2. c is bounded by the largest absolute
+// row sum of C (Gershgorin), so this over-estimates; a rigid rotation gives exactly 1. The stable step
+// shrinks by sqrt of the largest factor (the rest-state limit assumes 1). Returns >= 1.
+template <typename T>
+INC_HD T mlsStiffening(const MlsView<T>& s, std::int64_t i) {
+  const Mat3<T> f = Mat3<T>::identity() + mlsDisplacementGradient(s, i);
+  const Mat3<T> c = transpose(f) * f;
+  T cmax = T(0);
+  for (int r = 0; r < 3; ++r) {
+    const T row = std::fabs(c.m[r][0]) + std::fabs(c.m[r][1]) + std::fabs(c.m[r][2]);
+    cmax = row > cmax ? row : cmax;
+  }
+  const T svk = T(0.5) * (T(3) * cmax - T(1));
+  const T vol = s.coeffs.k_volume > T(0) ? cmax * cmax : T(1);
+  const T k = svk > vol ? svk : vol;
+  return k > T(1) ? k : T(1);
+}
+
 // Per-particle terms of the frame reductions (energies in J, squared displacement in m^2).
 template <typename T>
 INC_HD T mlsKineticEnergy(const MlsView<T>& s, std::int64_t k) {

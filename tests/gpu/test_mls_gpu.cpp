@@ -121,6 +121,35 @@ TEST(MlsGpu, NonFiniteStateIsReportedWithParticleAndStage) {
   EXPECT_EQ(rg.bad_stage, rc.bad_stage);
 }
 
+TEST(MlsGpu, PrescribedParticlesMatchTheCpu) {
+  if (noDevice()) GTEST_SKIP() << "no CUDA device";
+  // The x = max layer is pulled 2 mm along +x and 1 mm down over a frame, then released for another frame.
+  const MlsBuildInput in = parityInput();
+  auto cpu = makeMlsSolver(in, BackendKind::Cpu, Precision::Float64);
+  auto gpu = makeMlsSolver(in, BackendKind::Cuda, Precision::Float64);
+  const std::vector<Vec3d> rest = cpu->restPositions();
+  double xmax = -1e30;
+  for (const auto& x : rest) xmax = std::max(xmax, x.x);
+  std::vector<std::int32_t> grabbed;
+  for (std::size_t i = 0; i < rest.size(); ++i)
+    if (rest[i].x > xmax - 0.004) grabbed.push_back(std::int32_t(i));
+  const std::vector<Vec3d> targets(grabbed.size(), Vec3d(2e-3, 0, -1e-3));
+  cpu->setPrescribed(grabbed, targets);
+  gpu->setPrescribed(grabbed, targets);
+  cpu->advance(1.0 / 60.0);
+  gpu->advance(1.0 / 60.0);
+  std::vector<Vec3d> uc, ug;
+  gpu->displacements(ug);
+  for (const std::int32_t i : grabbed) EXPECT_LT(norm(ug[std::size_t(i)] - targets[0]), 1e-12);
+  cpu->release(grabbed);
+  gpu->release(grabbed);
+  cpu->advance(1.0 / 60.0);
+  gpu->advance(1.0 / 60.0);
+  cpu->displacements(uc);
+  gpu->displacements(ug);
+  EXPECT_LT(maxDiff(uc, ug) / maxNorm(uc), 1e-10);
+}
+
 TEST(MlsGpu, SimulationRunsTheBeamSceneOnTheDevice) {
   if (noDevice()) GTEST_SKIP() << "no CUDA device";
   Scene s;
@@ -145,7 +174,7 @@ TEST(MlsGpu, SimulationRunsTheBeamSceneOnTheDevice) {
     rc = cpu->advance(s.solver.frame_dt);
   }
   EXPECT_TRUE(rg.finite);
-  EXPECT_EQ(rg.substeps, rc.substeps);
+  EXPECT_LE(std::abs(rg.substeps - rc.substeps), 1);  // planned from each backend's own stiffening (rounding)
   EXPECT_NEAR(rg.max_displacement / rc.max_displacement, 1.0, 1e-4);
   EXPECT_NEAR(rg.elastic_energy / rc.elastic_energy, 1.0, 1e-3);
   double stage_ms = 0;

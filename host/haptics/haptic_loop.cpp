@@ -1,0 +1,177 @@
+// Haptic loop implementation: scheduling (sleep then spin), safety chain, recording, statistics.
+#include "host/haptics/haptic_loop.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <memory>
+
+#include "host/input_error.h"
+#include "physics/haptic_safety.h"
+
+namespace inc {
+
+namespace {
+std::int64_t steadyNs() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  const std::size_t k = std::min(v.size() - 1, static_cast<std::size_t>(std::ceil(q * double(v.size())) - 1));
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+  return v[k];
+}
+}  // namespace
+
+SteadyClock::SteadyClock(double spin_margin_s) : spin_margin_s_(spin_margin_s), origin_ns_(steadyNs()) {}
+
+double SteadyClock::now_s() { return double(steadyNs() - origin_ns_) * 1e-9; }
+
+void SteadyClock::sleepUntil(double t_s) {
+  const double coarse = t_s - spin_margin_s_;
+  const double now = now_s();
+  if (coarse > now) std::this_thread::sleep_for(std::chrono::nanoseconds(std::int64_t((coarse - now) * 1e9)));
+  while (now_s() < t_s) {
+  }
+}
+
+HapticLoop::HapticLoop(HapticDevice& device, ForceModel model, HapticLoopConfig config, HapticClock* clock)
+    : device_(device), model_(std::move(model)), config_(config), clock_(clock) {
+  const char* f = "<haptic loop>";
+  if (!(config_.rate_hz > 0.0) || !std::isfinite(config_.rate_hz) || config_.rate_hz > 1e5)
+    throw InputError(f, "rate_hz", "must be in (0, 1e5]");
+  if (!(config_.max_force_rate_n_per_s > 0.0)) throw InputError(f, "max_force_rate_n_per_s", "must be > 0");
+  if (!(config_.stall_after_s > 0.0) || config_.stall_fade_s < 0.0)
+    throw InputError(f, "stall_after_s", "stall_after_s must be > 0 and stall_fade_s >= 0");
+  if (!(config_.late_tolerance >= 0.0)) throw InputError(f, "late_tolerance", "must be >= 0");
+  if (!model_) throw InputError(f, "model", "no force model given");
+  if (!clock_) {
+    owned_clock_ = std::make_unique<SteadyClock>(config_.spin_margin_s);
+    clock_ = owned_clock_.get();
+  }
+  period_s_ = 1.0 / config_.rate_hz;
+  records_.reserve(config_.record_capacity);
+}
+
+HapticLoop::~HapticLoop() { stop(); }
+
+void HapticLoop::tick() {
+  if (tick_ == 0 && last_wake_s_ < 0.0) {
+    t0_s_ = clock_->now_s();
+    next_deadline_s_ = t0_s_;
+  }
+  clock_->sleepUntil(next_deadline_s_);
+  const double wake = clock_->now_s() - t0_s_;
+  const double period = last_wake_s_ < 0.0 ? 0.0 : wake - last_wake_s_;
+  if (last_wake_s_ >= 0.0 && period > (1.0 + config_.late_tolerance) * period_s_) ++missed_;
+  last_wake_s_ = wake;
+
+  ForceRequest req;
+  req.tick = tick_;
+  req.t_s = wake;
+  req.dt_s = period_s_;
+  req.sample = device_.read(tick_, wake);
+  const ForceResult res = model_(req);
+  // Safety chain: stall fade, clamp to the device maximum, rate limit from the last output.
+  Vec3d f = res.force_n;
+  if (res.data_time_s >= 0.0) f = f * stallFadeGain(wake - res.data_time_s, config_.stall_after_s, config_.stall_fade_s);
+  f = clampForce(f, device_.maxForce_n());
+  f = rateLimitForce(last_force_n_, f, config_.max_force_rate_n_per_s, period_s_);
+  device_.writeForce(f);
+  last_force_n_ = f;
+  const double compute = clock_->now_s() - t0_s_ - wake;
+
+  if (records_.size() < records_.capacity()) {
+    TickRecord r;
+    r.t_s = wake;
+    r.period_s = period;
+    r.compute_s = compute;
+    r.sample = req.sample;
+    r.model_force_n = res.force_n;
+    r.force_n = f;
+    records_.push_back(r);
+  }
+  HapticStatus& st = status_.back();
+  st.tick = tick_;
+  st.t_s = wake;
+  st.sample = req.sample;
+  st.force_n = f;
+  st.last_period_s = period;
+  st.last_compute_s = compute;
+  st.missed = missed_;
+  status_.publish();
+
+  ++tick_;
+  next_deadline_s_ += period_s_;
+  // Fallen a whole period behind: drop the lost deadlines instead of firing a burst of late ticks.
+  const double now = clock_->now_s();
+  if (now > next_deadline_s_ + period_s_) {
+    const double lost = std::floor((now - next_deadline_s_) / period_s_);
+    skipped_ += static_cast<std::uint64_t>(lost);
+    next_deadline_s_ += lost * period_s_;
+  }
+}
+
+void HapticLoop::runTicks(std::uint64_t n) {
+  for (std::uint64_t i = 0; i < n; ++i) tick();
+}
+
+void HapticLoop::start() {
+  if (running_.exchange(true)) return;
+  stop_.store(false);
+  thread_ = std::thread([this] {
+    while (!stop_.load(std::memory_order_relaxed)) tick();
+  });
+}
+
+void HapticLoop::stop() {
+  stop_.store(true);
+  if (thread_.joinable()) thread_.join();
+  running_.store(false);
+}
+
+PeriodStats computePeriodStats(const std::vector<TickRecord>& records, double nominal_s, double late_tolerance) {
+  PeriodStats s;
+  s.nominal_s = nominal_s;
+  s.ticks = records.size();
+  std::vector<double> periods, computes;
+  periods.reserve(records.size());
+  computes.reserve(records.size());
+  double sum = 0.0;
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    computes.push_back(records[i].compute_s);
+    if (records[i].compute_s > nominal_s) ++s.overruns;
+    if (i == 0) continue;
+    periods.push_back(records[i].period_s);
+    sum += records[i].period_s;
+    if (records[i].period_s > (1.0 + late_tolerance) * nominal_s) ++s.missed;
+  }
+  s.p50_s = percentile(periods, 0.5);
+  s.p99_s = percentile(periods, 0.99);
+  s.max_s = periods.empty() ? 0.0 : *std::max_element(periods.begin(), periods.end());
+  s.mean_s = periods.empty() ? 0.0 : sum / double(periods.size());
+  s.compute_p50_s = percentile(computes, 0.5);
+  s.compute_p99_s = percentile(computes, 0.99);
+  s.compute_max_s = computes.empty() ? 0.0 : *std::max_element(computes.begin(), computes.end());
+  return s;
+}
+
+PeriodStats HapticLoop::stats() const {
+  PeriodStats s = computePeriodStats(records_, period_s_, config_.late_tolerance);
+  s.skipped = skipped_;
+  return s;
+}
+
+Trajectory HapticLoop::recordedTrajectory() const {
+  Trajectory tr;
+  tr.samples.reserve(records_.size());
+  for (std::size_t i = 0; i < records_.size(); ++i) {
+    DeviceSample s = records_[i].sample;
+    s.t_s = double(i) * period_s_;
+    tr.samples.push_back(s);
+  }
+  return tr;
+}
+
+}  // namespace inc

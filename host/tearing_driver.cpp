@@ -1,0 +1,143 @@
+// Tearing driver: PBD frame, tearing step (CPU or CUDA), model rebuild after a topology change, removal tools.
+#include "host/tearing_driver.h"
+
+#include <chrono>
+
+#include "cpu_fallback/pbd_solver_cpu.h"
+#include "cpu_fallback/tearing_cpu.h"
+#include "host/input_error.h"
+#if INCISION_HAVE_CUDA
+#include "kernels/tearing_cuda.h"
+#endif
+
+namespace inc {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+template <typename T>
+class TearStepCpu final : public TearStepBackend<T> {
+ public:
+  BackendKind kind() const override { return BackendKind::Cpu; }
+  int step(TearSheet<T>& s, const TearParams<T>& p, TearFrameStats& st) override {
+    const cpu::TearStepStats r = cpu::tearStepCpu<T>(s, p, nullptr, false);  // the driver rebuilds
+    st.splits += r.splits;
+    st.yielding += r.yielding;
+    st.deferred += r.deferred;
+    return r.splits;
+  }
+};
+}  // namespace
+
+template <typename T>
+std::unique_ptr<TearStepBackend<T>> makeTearStepBackend(BackendKind kind) {
+  const BackendChoice choice = resolveBackend(kind);
+#if INCISION_HAVE_CUDA
+  if (choice.kind == BackendKind::Cuda) return cuda::makeTearStepCuda<T>();
+#endif
+  (void)choice;
+  return std::make_unique<TearStepCpu<T>>();
+}
+
+template <typename T>
+TearingDriver<T>::TearingDriver(TearSheet<T> sheet, const TearParams<T>& tear, const TearModelOptions& model_opt,
+                                const PbdStepParams<T>& step, BackendKind kind)
+    : sheet_(std::move(sheet)), tear_(tear), model_opt_(model_opt), step_(step) {
+  model_opt_.coloring = step_.solver == PbdSolverKind::GaussSeidel;  // Jacobi never reads the colouring
+  if (!(tear_.random_range >= T(0)) || !(tear_.t_lo > T(0)) || !(tear_.t_hi < T(1)) || !(tear_.t_lo <= tear_.t_hi))
+    throw InputError("tearing", "random_range", "need range >= 0 and 0 < t_lo <= t_hi < 1");
+  if (!(tear_.break_strain > T(0))) throw InputError("tearing", "break_strain", "must be > 0");
+  if (!(tear_.min_area_ratio > T(0) && tear_.min_area_ratio < T(1)))
+    throw InputError("tearing", "min_area_ratio", "must be in (0, 1)");
+  for (std::size_t i = 0; i < sheet_.size(); ++i)
+    if (!(sheet_.k[i] > T(0)) || !(sheet_.tau_f[i] > T(0)))
+      throw InputError("tearing", "material", "k and tau_f must be > 0 (particle " + std::to_string(i) + ")");
+  tear_backend_ = makeTearStepBackend<T>(kind);
+  // The PBD solve: the CPU backend here; the CUDA PBD backend (branch pbd) plugs in through makePbdBackend
+  // once merged. The sheet's state stays authoritative on the host between frames for now.
+  pbd_ = cpu::makePbdCpuBackend<T>();
+  resetModel();
+}
+
+template <typename T>
+void TearingDriver<T>::resetModel() {
+  sheet_.rebuildTopology();
+  pbd_->setModel(buildTearPbdModel(sheet_, model_opt_));
+  const std::size_t n = sheet_.size();
+  state_.positions = sheet_.x;
+  state_.velocities = sheet_.v;
+  state_.radii.assign(n, T(0));
+  state_.rotations.assign(n, pbd::Quat<T>{});
+  pbd_->setState(state_);
+}
+
+template <typename T>
+TearFrameStats TearingDriver<T>::advance(const std::vector<std::int32_t>& grasp_ids, const std::vector<Vec3<T>>& grasp_to) {
+  TearFrameStats st;
+  if (grasp_ids.size() != grasp_to.size()) throw InputError("tearing", "grasp", "ids and targets must have equal sizes");
+  PbdFrameInput<T> in;
+  in.kinematic_ids = grasp_ids;
+  for (std::int32_t id : grasp_ids) {
+    if (id < 0 || std::size_t(id) >= sheet_.size()) throw InputError("tearing", "grasp", "particle out of range");
+    in.kinematic_from.push_back(sheet_.x[id]);
+  }
+  in.kinematic_to = grasp_to;
+  auto t0 = Clock::now();
+  st.pbd = pbd_->advanceFrame(step_, in);
+  pbd_->getState(state_);
+  sheet_.x = state_.positions;
+  sheet_.v = state_.velocities;
+  st.solve_ms = msSince(t0);
+  if (tearing_enabled && st.pbd.finite) {
+    t0 = Clock::now();
+    const int created = tear_backend_->step(sheet_, tear_, st);
+    st.tear_ms = msSince(t0);
+    if (created > 0) {
+      t0 = Clock::now();
+      resetModel();
+      st.rebuild_ms = msSince(t0);
+    }
+  }
+  return st;
+}
+
+template <typename T>
+int TearingDriver<T>::removeParticles(const std::vector<std::uint8_t>& mark, bool debris_fringe,
+                                      std::vector<std::int32_t>* remap) {
+  const int removed = removeTearParticles(sheet_, mark, debris_fringe, tear_, remap);
+  resetModel();
+  return removed;
+}
+
+template <typename T>
+int TearingDriver<T>::tearOut(const std::vector<std::uint8_t>& mark, const Vec3<T>& lift, int frames, int* removed) {
+  if (mark.size() != sheet_.size()) throw InputError("tearing", "mark", "one flag per particle");
+  if (frames < 1) throw InputError("tearing", "frames", "must be >= 1");
+  std::vector<std::int32_t> ids;
+  std::vector<Vec3<T>> base;
+  for (std::size_t i = 0; i < mark.size(); ++i)
+    if (mark[i]) {
+      ids.push_back(std::int32_t(i));
+      base.push_back(sheet_.x[i]);
+    }
+  int splits = 0;
+  std::vector<Vec3<T>> to(ids.size());
+  for (int f = 0; f < frames; ++f) {
+    const T s = T(f + 1) / T(frames);
+    for (std::size_t k = 0; k < ids.size(); ++k) to[k] = base[k] + lift * s;
+    splits += advance(ids, to).splits;  // splits append particles: the gripped ids stay valid
+  }
+  std::vector<std::uint8_t> grip(sheet_.size(), 0);
+  for (std::int32_t id : ids) grip[id] = 1;
+  const int r = removeParticles(grip, false);
+  if (removed) *removed = r;
+  return splits;
+}
+
+template class TearingDriver<float>;
+template class TearingDriver<double>;
+template std::unique_ptr<TearStepBackend<float>> makeTearStepBackend<float>(BackendKind);
+template std::unique_ptr<TearStepBackend<double>> makeTearStepBackend<double>(BackendKind);
+
+}  // namespace inc
