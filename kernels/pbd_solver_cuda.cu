@@ -486,8 +486,14 @@ class PbdCudaBackend final : public PbdBackend<T> {
         if (!graph_exec_ || !sameKey(key, graph_key_)) {
           destroyGraph();
           INC_CUDA(cudaStreamBeginCapture(stream_, cudaStreamCaptureModeThreadLocal));
-          recordFrame(p);
           cudaGraph_t graph = nullptr;
+          try {
+            recordFrame(p);
+          } catch (...) {
+            // leave the stream usable: end (and drop) the broken capture before reporting the failure
+            if (cudaStreamEndCapture(stream_, &graph) == cudaSuccess && graph) cudaGraphDestroy(graph);
+            throw;
+          }
           INC_CUDA(cudaStreamEndCapture(stream_, &graph));
           const cudaError_t inst = cudaGraphInstantiate(&graph_exec_, graph, 0);
           cudaGraphDestroy(graph);
