@@ -6,6 +6,7 @@
 #include <numeric>
 #include <parallel/algorithm>
 
+#include "cpu_fallback/parallel.h"
 #include "host/input_error.h"
 #include "physics/pbd_constraints.h"
 #include "physics/tearing_tresca.h"
@@ -217,25 +218,54 @@ PbdModel<T> buildTearPbdModel(const TearSheet<T>& s, const TearModelOptions& opt
     dist.offsets[e + 1] = std::int32_t(2 * e + 2);
     dist.rest[e] = norm(s.rest[s.edge_a[e]] - s.rest[s.edge_b[e]]);
   }
-  // Interior edges: (edge key, opposite vertex) sorted; exactly two entries -> one bending constraint.
-  std::vector<std::pair<std::uint64_t, std::int32_t>> half;
-  half.reserve(s.tris.size() * 3);
-  for (const auto& t : s.tris)
-    for (int c = 0; c < 3; ++c) half.push_back({edgeKey(t[c], t[(c + 1) % 3]), t[(c + 2) % 3]});
-  __gnu_parallel::sort(half.begin(), half.end());  // total order on (key, vertex): deterministic
-  for (std::size_t h = 0; h < half.size();) {
-    std::size_t e = h;
-    while (e < half.size() && half[e].first == half[h].first) ++e;
-    if (e - h == 2) {
-      const std::int32_t a = std::int32_t(half[h].first >> 32), b = std::int32_t(half[h].first & 0xffffffffu);
-      const std::int32_t ids[4] = {a, b, half[h].second, half[h + 1].second};
-      bend.ids.insert(bend.ids.end(), ids, ids + 4);
-      bend.offsets.push_back(std::int32_t(bend.ids.size()));
-      bend.rest.push_back(pbd::dihedralAngle(s.rest[a], s.rest[b], s.rest[ids[2]], s.rest[ids[3]]));
-      bend.compliance.push_back(T(opt.bending_compliance));
+  // Interior edges: an edge (a, b) whose particles share exactly two triangles gets one bending constraint,
+  // wings (the opposite vertices) ascending, in edge order. The shared triangles come from merging the sorted
+  // particle -> triangle lists of a and b (no sort of all half-edges); count, prefix sum, fill in parallel.
+  if (s.pt_offsets.size() != n + 1 || s.pe_offsets.size() != n + 1)
+    throw InputError("tearing", "topology", "the sheet's adjacency is stale: call rebuildTopology() first");
+  std::vector<std::int32_t> wings(2 * ne, -1);
+  std::vector<std::int32_t> has(ne + 1, 0);
+  cpu::parallelFor(std::int64_t(ne), [&](std::int64_t e) {
+    const std::int32_t a = s.edge_a[e], b = s.edge_b[e];
+    std::int32_t ia = s.pt_offsets[a], ib = s.pt_offsets[b], found = 0, w[2] = {-1, -1};
+    const std::int32_t ea = s.pt_offsets[a + 1], eb = s.pt_offsets[b + 1];
+    while (ia < ea && ib < eb) {
+      const std::int32_t ta = s.pt_tris[ia], tb = s.pt_tris[ib];
+      if (ta < tb) { ++ia; continue; }
+      if (tb < ta) { ++ib; continue; }
+      const auto& tr = s.tris[ta];
+      std::int32_t o = -1;
+      for (int c = 0; c < 3; ++c)
+        if (tr[c] != a && tr[c] != b) o = tr[c];
+      if (found < 2) w[found] = o;
+      ++found;
+      ++ia;
+      ++ib;
     }
-    h = e;
-  }
+    if (found == 2 && w[0] >= 0 && w[1] >= 0) {
+      wings[2 * e] = std::min(w[0], w[1]);
+      wings[2 * e + 1] = std::max(w[0], w[1]);
+      has[e + 1] = 1;
+    }
+  });
+  for (std::size_t e = 0; e < ne; ++e) has[e + 1] += has[e];
+  const std::size_t nb = std::size_t(has[ne]);
+  bend.ids.resize(4 * nb);
+  bend.offsets.resize(nb + 1);
+  bend.offsets[0] = 0;
+  bend.rest.resize(nb);
+  bend.compliance.assign(nb, T(opt.bending_compliance));
+  cpu::parallelFor(std::int64_t(ne), [&](std::int64_t e) {
+    if (has[e + 1] == has[e]) return;
+    const std::size_t c = std::size_t(has[e]);
+    const std::int32_t a = s.edge_a[e], b = s.edge_b[e], p2 = wings[2 * e], p3 = wings[2 * e + 1];
+    bend.ids[4 * c] = a;
+    bend.ids[4 * c + 1] = b;
+    bend.ids[4 * c + 2] = p2;
+    bend.ids[4 * c + 3] = p3;
+    bend.offsets[c + 1] = std::int32_t(4 * c + 4);
+    bend.rest[c] = pbd::dihedralAngle(s.rest[a], s.rest[b], s.rest[p2], s.rest[p3]);
+  });
   m.blocks.push_back(std::move(dist));
   if (bend.count() > 0) m.blocks.push_back(std::move(bend));
   m.overlap_offsets.assign(n + 1, 0);
