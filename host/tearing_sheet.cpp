@@ -58,32 +58,54 @@ T restArea(const TearSheet<T>& s, std::size_t t) {
 template <typename T>
 void TearSheet<T>::rebuildTopology() {
   const std::size_t n = x.size();
-  std::vector<std::uint64_t> keys;
-  keys.reserve(tris.size() * 3);
-  for (const auto& t : tris)
-    for (int c = 0; c < 3; ++c) keys.push_back(edgeKey(t[c], t[(c + 1) % 3]));
-  __gnu_parallel::sort(keys.begin(), keys.end());  // OpenMP sort of plain integers: same result as std::sort
-  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-  edge_a.resize(keys.size());
-  edge_b.resize(keys.size());
-  for (std::size_t e = 0; e < keys.size(); ++e) {
-    edge_a[e] = std::int32_t(keys[e] >> 32);
-    edge_b[e] = std::int32_t(keys[e] & 0xffffffffu);
-  }
-  // particle -> partners, ascending. Edges are sorted by (a, b); the counting sort in buildCsr keeps push
-  // order per owner, so pushing every (b <- a) first and then every (a <- b) lists, for each particle p, its
-  // partners below p ascending and then those above p ascending.
+  // particle -> triangles, ascending (counting sort over corners in triangle order).
   std::vector<std::int32_t> own, val;
-  own.reserve(keys.size() * 2);
-  val.reserve(keys.size() * 2);
-  for (std::size_t e = 0; e < keys.size(); ++e) { own.push_back(edge_b[e]); val.push_back(edge_a[e]); }
-  for (std::size_t e = 0; e < keys.size(); ++e) { own.push_back(edge_a[e]); val.push_back(edge_b[e]); }
-  buildCsr(n, own, val, pe_offsets, pe_partner);
-  own.clear();
-  val.clear();
+  own.reserve(tris.size() * 3);
+  val.reserve(tris.size() * 3);
   for (std::size_t t = 0; t < tris.size(); ++t)
     for (int c = 0; c < 3; ++c) { own.push_back(tris[t][c]); val.push_back(std::int32_t(t)); }
   buildCsr(n, own, val, pt_offsets, pt_tris);
+  // Unique bonds sorted by (a, b), a < b, without a global sort: particle a lists its larger neighbours over
+  // its own triangles (sorted, unique; a handful), counts them, and after a prefix sum writes them in place.
+  std::vector<std::int32_t> count(n + 1, 0);
+  auto upper = [&](std::size_t a, std::int32_t* buf, int cap) {
+    int m = 0;
+    for (std::int32_t q = pt_offsets[a]; q < pt_offsets[a + 1]; ++q)
+      for (int c = 0; c < 3; ++c) {
+        const std::int32_t b = tris[pt_tris[q]][c];
+        if (b > std::int32_t(a) && m < cap) buf[m++] = b;
+      }
+    std::sort(buf, buf + m);
+    return int(std::unique(buf, buf + m) - buf);
+  };
+  int max_ring = 0;
+  for (std::size_t a = 0; a < n; ++a) max_ring = std::max(max_ring, 2 * (pt_offsets[a + 1] - pt_offsets[a]));
+  cpu::parallelFor(std::int64_t(n), [&](std::int64_t a) {
+    thread_local std::vector<std::int32_t> buf;
+    buf.resize(std::size_t(max_ring) + 1);
+    count[a + 1] = upper(std::size_t(a), buf.data(), max_ring);
+  });
+  for (std::size_t a = 0; a < n; ++a) count[a + 1] += count[a];
+  const std::size_t ne = std::size_t(count[n]);
+  edge_a.resize(ne);
+  edge_b.resize(ne);
+  cpu::parallelFor(std::int64_t(n), [&](std::int64_t a) {
+    thread_local std::vector<std::int32_t> buf;
+    buf.resize(std::size_t(max_ring) + 1);
+    const int m = upper(std::size_t(a), buf.data(), max_ring);
+    for (int k = 0; k < m; ++k) {
+      edge_a[count[a] + k] = std::int32_t(a);
+      edge_b[count[a] + k] = buf[k];
+    }
+  });
+  // particle -> partners, ascending. Edges are sorted by (a, b); the counting sort in buildCsr keeps push
+  // order per owner, so pushing every (b <- a) first and then every (a <- b) lists, for each particle p, its
+  // partners below p ascending and then those above p ascending.
+  own.clear();
+  val.clear();
+  for (std::size_t e = 0; e < ne; ++e) { own.push_back(edge_b[e]); val.push_back(edge_a[e]); }
+  for (std::size_t e = 0; e < ne; ++e) { own.push_back(edge_a[e]); val.push_back(edge_b[e]); }
+  buildCsr(n, own, val, pe_offsets, pe_partner);
 }
 
 template <typename T>

@@ -435,3 +435,43 @@ TEST(Tearing, BendingBlockAfterSplitsMatchesHalfEdgeReference) {
   stale.pt_offsets.clear();
   EXPECT_THROW(buildTearPbdModel(stale, softSkin()), InputError);
 }
+
+// rebuildTopology builds the bonds per particle (no global sort): after splits and a removal it must equal the
+// sorted unique mesh edges, and the CSR lists must hold exactly each particle's partners and triangles, ascending.
+TEST(Tearing, RebuiltAdjacencyMatchesSortedEdgeReference) {
+  TearSheet<double> s = makeTearGrid<double>(25, 20, kH, kRhoA, Vec3d(0, 0, 0), kK, 120.0);
+  TearParams<double> p;
+  p.criterion = TearCriterion::Threshold;
+  p.break_strain = 0.12;
+  EXPECT_GT(tearManyTimes(s, p, 6, 3), 100);
+  std::vector<std::uint8_t> mark(s.size(), 0);
+  for (std::size_t i = 0; i < s.size(); ++i) mark[i] = s.rest[i].x > 0.15 && s.rest[i].y > 0.1;
+  removeTearParticles(s, mark, false, p);
+  s.rebuildTopology();
+  std::vector<std::pair<std::int32_t, std::int32_t>> ref;
+  std::vector<std::vector<std::int32_t>> partners(s.size()), tris_of(s.size());
+  for (std::size_t t = 0; t < s.tris.size(); ++t)
+    for (int c = 0; c < 3; ++c) {
+      const std::int32_t a = s.tris[t][c], b = s.tris[t][(c + 1) % 3];
+      ref.push_back({std::min(a, b), std::max(a, b)});
+      tris_of[a].push_back(std::int32_t(t));
+    }
+  std::sort(ref.begin(), ref.end());
+  ref.erase(std::unique(ref.begin(), ref.end()), ref.end());
+  ASSERT_EQ(s.edge_a.size(), ref.size());
+  for (std::size_t e = 0; e < ref.size(); ++e) {
+    EXPECT_EQ(s.edge_a[e], ref[e].first) << e;
+    EXPECT_EQ(s.edge_b[e], ref[e].second) << e;
+    partners[ref[e].first].push_back(ref[e].second);
+    partners[ref[e].second].push_back(ref[e].first);
+  }
+  ASSERT_EQ(s.pe_offsets.size(), s.size() + 1);
+  ASSERT_EQ(s.pt_offsets.size(), s.size() + 1);
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    std::sort(partners[i].begin(), partners[i].end());
+    EXPECT_EQ(std::vector<std::int32_t>(s.pe_partner.begin() + s.pe_offsets[i], s.pe_partner.begin() + s.pe_offsets[i + 1]),
+              partners[i]) << i;
+    EXPECT_EQ(std::vector<std::int32_t>(s.pt_tris.begin() + s.pt_offsets[i], s.pt_tris.begin() + s.pt_offsets[i + 1]),
+              tris_of[i]) << i;
+  }
+}
