@@ -234,12 +234,13 @@ PbdModel<T> buildTearPbdModel(const TearSheet<T>& s, const TearModelOptions& opt
   dist.offsets.resize(ne + 1);
   dist.rest.resize(ne);
   dist.compliance.assign(ne, T(opt.stretch_compliance));
-  for (std::size_t e = 0; e < ne; ++e) {
+  dist.offsets[0] = 0;
+  cpu::parallelFor(std::int64_t(ne), [&](std::int64_t e) {
     dist.ids[2 * e] = s.edge_a[e];
     dist.ids[2 * e + 1] = s.edge_b[e];
     dist.offsets[e + 1] = std::int32_t(2 * e + 2);
     dist.rest[e] = norm(s.rest[s.edge_a[e]] - s.rest[s.edge_b[e]]);
-  }
+  });
   // Interior edges: an edge (a, b) whose particles share exactly two triangles gets one bending constraint,
   // wings (the opposite vertices) ascending, in edge order. The shared triangles come from merging the sorted
   // particle -> triangle lists of a and b (no sort of all half-edges); count, prefix sum, fill in parallel.
@@ -304,7 +305,7 @@ PbdModel<T> buildTearPbdModel(const TearSheet<T>& s, const TearModelOptions& opt
     std::vector<std::int32_t> fill(b.particle_offsets.begin(), b.particle_offsets.end() - 1);
     for (std::size_t q = 0; q < b.ids.size(); ++q) b.particle_slots[fill[b.ids[q]]++] = std::int32_t(q);
     b.jacobi_scale.assign(b.ids.size(), T(1));
-    for (std::size_t c = 0; c < b.count(); ++c) {
+    cpu::parallelFor(std::int64_t(b.count()), [&](std::int64_t c) {
       int busiest = 1;
       for (std::int32_t q = b.offsets[c]; q < b.offsets[c + 1]; ++q) {
         const std::int32_t p = b.ids[q];
@@ -312,7 +313,7 @@ PbdModel<T> buildTearPbdModel(const TearSheet<T>& s, const TearModelOptions& opt
         busiest = std::max(busiest, b.particle_offsets[p + 1] - b.particle_offsets[p]);
       }
       for (std::int32_t q = b.offsets[c]; q < b.offsets[c + 1]; ++q) b.jacobi_scale[q] = T(1) / T(busiest);
-    }
+    });
     b.coloring = ConstraintColoring{};
   }
   return m;
