@@ -85,6 +85,24 @@ struct ToolSpec {
   std::vector<ToolKeyframe> path;  // piecewise-linear in time, sorted by t
 };
 
+// Tearing of the PBD sheet (models.tearing, issue 7; docs/tearing.md). A region overrides k and tau_f of the
+// particles whose rest position lies inside (later regions win); 0 there keeps the section's value.
+struct TearingRegionSpec {
+  Vec3d min{0, 0, 0}, max{0, 0, 0};  // axis-aligned box, m
+  double k_pa = 0.0;                 // Pa, >= 0; 0: the section's k
+  double tau_f_pa = 0.0;             // Pa, >= 0; 0: the section's tau_f
+};
+
+struct TearingSpec {
+  std::string criterion = "tresca";  // "traditional" | "tresca" | "tresca_principal"
+  double k_pa = 0.0;                 // Pa, >= 0: eq. 6 modulus; 0: material.youngs_modulus
+  double tau_f_pa = 0.0;             // Pa, >= 0: yield shear stress; 0: 0.1 k
+  double break_strain = 0.2;         // > 0: bond strain at which the traditional criterion breaks a bond
+  double random_range = 0.1;         // [0, 1): relative perturbation of the debris position (the paper's 10 %)
+  unsigned seed = 1;                 // the debris random stream
+  std::vector<TearingRegionSpec> regions;
+};
+
 struct OutputSpec {
   int every_frames = 0;         // 0: final state only; N: also every N frames
   bool particles_ply = true;
@@ -107,6 +125,7 @@ struct Scene {
   std::vector<FixedRegion> fixed;
   std::vector<ToolSpec> tools;
   OutputSpec output;
+  TearingSpec tearing;
 };
 
 }  // namespace inc

@@ -345,6 +345,46 @@ OutputSpec readOutput(const ObjectReader& top) {
   return o;
 }
 
+TearingSpec readTearing(const ObjectReader& top) {
+  TearingSpec t;
+  if (!top.has("tearing")) return t;
+  const ObjectReader r = top.object("tearing");
+  r.allowOnly({"criterion", "k_pa", "tau_f_pa", "break_strain", "random_range", "seed", "regions"});
+  t.criterion = r.choice("criterion", t.criterion, {"traditional", "tresca", "tresca_principal"});
+  t.k_pa = nonNegative(r, "k_pa", t.k_pa);
+  t.tau_f_pa = nonNegative(r, "tau_f_pa", t.tau_f_pa);
+  t.break_strain = positive(r, "break_strain", t.break_strain);
+  t.random_range = r.number("random_range", t.random_range);
+  if (!(t.random_range >= 0 && t.random_range < 1))
+    r.fail("random_range", "must lie in [0, 1) (a fraction of the debris position)" + got(t.random_range));
+  const long long seed = r.integer("seed", t.seed);
+  if (seed < 0 || seed > static_cast<long long>(std::numeric_limits<unsigned>::max()))
+    r.fail("seed", "must lie in [0, 4294967295] (got " + std::to_string(seed) + ")");
+  t.seed = static_cast<unsigned>(seed);
+  const nlohmann::json* arr = r.array("regions");
+  if (!arr) return t;
+  for (std::size_t i = 0; i < arr->size(); ++i) {
+    const ObjectReader rr((*arr)[i], r.file(), scene_json::indexPath(r.keyPath("regions"), i));
+    rr.allowOnly({"min_m", "max_m", "k_pa", "tau_f_pa"});
+    if (!rr.has("min_m")) rr.fail("min_m", "is required (the region's low corner, m)");
+    if (!rr.has("max_m")) rr.fail("max_m", "is required (the region's high corner, m)");
+    if (!rr.has("k_pa") && !rr.has("tau_f_pa")) rr.fail("k_pa", "a region needs k_pa or tau_f_pa (or both)");
+    TearingRegionSpec g;
+    g.min = rr.vec3("min_m", g.min);
+    g.max = rr.vec3("max_m", g.max);
+    for (int c = 0; c < 3; ++c) {
+      if (!(g.min[c] <= g.max[c])) {
+        rr.fail("max_m", "must be >= min_m in every component (component " + std::to_string(c) + ": " +
+                             formatNumber(g.max[c]) + " < " + formatNumber(g.min[c]) + ")");
+      }
+    }
+    g.k_pa = nonNegative(rr, "k_pa", g.k_pa);
+    g.tau_f_pa = nonNegative(rr, "tau_f_pa", g.tau_f_pa);
+    t.regions.push_back(g);
+  }
+  return t;
+}
+
 // nlohmann's indented dump puts each element of an array on its own line; a vec3 reads better as
 // [x, y, z]. Joins every array whose elements are all scalars. Safe on strings: a dumped string never
 // holds a raw newline, and the scan only acts on '[' that ends a line.
@@ -391,7 +431,7 @@ Scene parseScene(const std::string& json_text, const std::string& file_label, co
   const nlohmann::json doc = scene_json::parseChecked(json_text, file_label);
   const ObjectReader top(doc, file_label, "");
   top.allowOnly({"name", "description", "duration_s", "geometry", "material", "models", "mls", "pbd", "solver",
-                 "fixed", "tools", "output"});
+                 "fixed", "tools", "output", "tearing"});
   Scene s;
   s.file = file_label;
   s.name = top.string("name", std::filesystem::path(file_label).stem().string());
@@ -407,6 +447,7 @@ Scene parseScene(const std::string& json_text, const std::string& file_label, co
   s.fixed = readFixed(top);
   s.tools = readTools(top);
   s.output = readOutput(top);
+  s.tearing = readTearing(top);
   return s;
 }
 
@@ -504,6 +545,16 @@ std::string sceneToJson(const Scene& s) {
                   {"mesh_obj", s.output.mesh_obj},
                   {"vtk", s.output.vtk},
                   {"metrics_csv", s.output.metrics_csv}};
+  J regions = J::array();
+  for (const TearingRegionSpec& g : s.tearing.regions)
+    regions.push_back(J{{"min_m", vec(g.min)}, {"max_m", vec(g.max)}, {"k_pa", g.k_pa}, {"tau_f_pa", g.tau_f_pa}});
+  j["tearing"] = J{{"criterion", s.tearing.criterion},
+                   {"k_pa", s.tearing.k_pa},
+                   {"tau_f_pa", s.tearing.tau_f_pa},
+                   {"break_strain", s.tearing.break_strain},
+                   {"random_range", s.tearing.random_range},
+                   {"seed", s.tearing.seed},
+                   {"regions", regions}};
   return compactScalarArrays(j.dump(2)) + "\n";
 }
 

@@ -3,7 +3,6 @@
 
 #include <chrono>
 
-#include "cpu_fallback/pbd_solver_cpu.h"
 #include "cpu_fallback/tearing_cpu.h"
 #include "host/input_error.h"
 #if INCISION_HAVE_CUDA
@@ -54,9 +53,9 @@ TearingDriver<T>::TearingDriver(TearSheet<T> sheet, const TearParams<T>& tear, c
     if (!(sheet_.k[i] > T(0)) || !(sheet_.tau_f[i] > T(0)))
       throw InputError("tearing", "material", "k and tau_f must be > 0 (particle " + std::to_string(i) + ")");
   tear_backend_ = makeTearStepBackend<T>(kind);
-  // The PBD solve: the CPU backend here; the CUDA PBD backend (branch pbd) plugs in through makePbdBackend
-  // once merged. The sheet's state stays authoritative on the host between frames for now.
-  pbd_ = cpu::makePbdCpuBackend<T>();
+  // The PBD solve runs on the same kind as the tearing step (CUDA: positions, velocities and the constraint
+  // model stay on the device during the solve; the tearing step reads the frame's end state on the host).
+  pbd_ = makePbdBackend<T>(tear_backend_->kind());
   resetModel();
 }
 

@@ -6,6 +6,7 @@
 #include <numeric>
 #include <parallel/algorithm>
 
+#include "cpu_fallback/parallel.h"
 #include "host/input_error.h"
 #include "physics/pbd_constraints.h"
 #include "physics/tearing_tresca.h"
@@ -57,32 +58,54 @@ T restArea(const TearSheet<T>& s, std::size_t t) {
 template <typename T>
 void TearSheet<T>::rebuildTopology() {
   const std::size_t n = x.size();
-  std::vector<std::uint64_t> keys;
-  keys.reserve(tris.size() * 3);
-  for (const auto& t : tris)
-    for (int c = 0; c < 3; ++c) keys.push_back(edgeKey(t[c], t[(c + 1) % 3]));
-  __gnu_parallel::sort(keys.begin(), keys.end());  // OpenMP sort of plain integers: same result as std::sort
-  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-  edge_a.resize(keys.size());
-  edge_b.resize(keys.size());
-  for (std::size_t e = 0; e < keys.size(); ++e) {
-    edge_a[e] = std::int32_t(keys[e] >> 32);
-    edge_b[e] = std::int32_t(keys[e] & 0xffffffffu);
-  }
-  // particle -> partners, ascending. Edges are sorted by (a, b); the counting sort in buildCsr keeps push
-  // order per owner, so pushing every (b <- a) first and then every (a <- b) lists, for each particle p, its
-  // partners below p ascending and then those above p ascending.
+  // particle -> triangles, ascending (counting sort over corners in triangle order).
   std::vector<std::int32_t> own, val;
-  own.reserve(keys.size() * 2);
-  val.reserve(keys.size() * 2);
-  for (std::size_t e = 0; e < keys.size(); ++e) { own.push_back(edge_b[e]); val.push_back(edge_a[e]); }
-  for (std::size_t e = 0; e < keys.size(); ++e) { own.push_back(edge_a[e]); val.push_back(edge_b[e]); }
-  buildCsr(n, own, val, pe_offsets, pe_partner);
-  own.clear();
-  val.clear();
+  own.reserve(tris.size() * 3);
+  val.reserve(tris.size() * 3);
   for (std::size_t t = 0; t < tris.size(); ++t)
     for (int c = 0; c < 3; ++c) { own.push_back(tris[t][c]); val.push_back(std::int32_t(t)); }
   buildCsr(n, own, val, pt_offsets, pt_tris);
+  // Unique bonds sorted by (a, b), a < b, without a global sort: particle a lists its larger neighbours over
+  // its own triangles (sorted, unique; a handful), counts them, and after a prefix sum writes them in place.
+  std::vector<std::int32_t> count(n + 1, 0);
+  auto upper = [&](std::size_t a, std::int32_t* buf, int cap) {
+    int m = 0;
+    for (std::int32_t q = pt_offsets[a]; q < pt_offsets[a + 1]; ++q)
+      for (int c = 0; c < 3; ++c) {
+        const std::int32_t b = tris[pt_tris[q]][c];
+        if (b > std::int32_t(a) && m < cap) buf[m++] = b;
+      }
+    std::sort(buf, buf + m);
+    return int(std::unique(buf, buf + m) - buf);
+  };
+  int max_ring = 0;
+  for (std::size_t a = 0; a < n; ++a) max_ring = std::max(max_ring, 2 * (pt_offsets[a + 1] - pt_offsets[a]));
+  cpu::parallelFor(std::int64_t(n), [&](std::int64_t a) {
+    thread_local std::vector<std::int32_t> buf;
+    buf.resize(std::size_t(max_ring) + 1);
+    count[a + 1] = upper(std::size_t(a), buf.data(), max_ring);
+  });
+  for (std::size_t a = 0; a < n; ++a) count[a + 1] += count[a];
+  const std::size_t ne = std::size_t(count[n]);
+  edge_a.resize(ne);
+  edge_b.resize(ne);
+  cpu::parallelFor(std::int64_t(n), [&](std::int64_t a) {
+    thread_local std::vector<std::int32_t> buf;
+    buf.resize(std::size_t(max_ring) + 1);
+    const int m = upper(std::size_t(a), buf.data(), max_ring);
+    for (int k = 0; k < m; ++k) {
+      edge_a[count[a] + k] = std::int32_t(a);
+      edge_b[count[a] + k] = buf[k];
+    }
+  });
+  // particle -> partners, ascending. Edges are sorted by (a, b); the counting sort in buildCsr keeps push
+  // order per owner, so pushing every (b <- a) first and then every (a <- b) lists, for each particle p, its
+  // partners below p ascending and then those above p ascending.
+  own.clear();
+  val.clear();
+  for (std::size_t e = 0; e < ne; ++e) { own.push_back(edge_b[e]); val.push_back(edge_a[e]); }
+  for (std::size_t e = 0; e < ne; ++e) { own.push_back(edge_a[e]); val.push_back(edge_b[e]); }
+  buildCsr(n, own, val, pe_offsets, pe_partner);
 }
 
 template <typename T>
@@ -211,31 +234,61 @@ PbdModel<T> buildTearPbdModel(const TearSheet<T>& s, const TearModelOptions& opt
   dist.offsets.resize(ne + 1);
   dist.rest.resize(ne);
   dist.compliance.assign(ne, T(opt.stretch_compliance));
-  for (std::size_t e = 0; e < ne; ++e) {
+  dist.offsets[0] = 0;
+  cpu::parallelFor(std::int64_t(ne), [&](std::int64_t e) {
     dist.ids[2 * e] = s.edge_a[e];
     dist.ids[2 * e + 1] = s.edge_b[e];
     dist.offsets[e + 1] = std::int32_t(2 * e + 2);
     dist.rest[e] = norm(s.rest[s.edge_a[e]] - s.rest[s.edge_b[e]]);
-  }
-  // Interior edges: (edge key, opposite vertex) sorted; exactly two entries -> one bending constraint.
-  std::vector<std::pair<std::uint64_t, std::int32_t>> half;
-  half.reserve(s.tris.size() * 3);
-  for (const auto& t : s.tris)
-    for (int c = 0; c < 3; ++c) half.push_back({edgeKey(t[c], t[(c + 1) % 3]), t[(c + 2) % 3]});
-  __gnu_parallel::sort(half.begin(), half.end());  // total order on (key, vertex): deterministic
-  for (std::size_t h = 0; h < half.size();) {
-    std::size_t e = h;
-    while (e < half.size() && half[e].first == half[h].first) ++e;
-    if (e - h == 2) {
-      const std::int32_t a = std::int32_t(half[h].first >> 32), b = std::int32_t(half[h].first & 0xffffffffu);
-      const std::int32_t ids[4] = {a, b, half[h].second, half[h + 1].second};
-      bend.ids.insert(bend.ids.end(), ids, ids + 4);
-      bend.offsets.push_back(std::int32_t(bend.ids.size()));
-      bend.rest.push_back(pbd::dihedralAngle(s.rest[a], s.rest[b], s.rest[ids[2]], s.rest[ids[3]]));
-      bend.compliance.push_back(T(opt.bending_compliance));
+  });
+  // Interior edges: an edge (a, b) whose particles share exactly two triangles gets one bending constraint,
+  // wings (the opposite vertices) ascending, in edge order. The shared triangles come from merging the sorted
+  // particle -> triangle lists of a and b (no sort of all half-edges); count, prefix sum, fill in parallel.
+  if (s.pt_offsets.size() != n + 1 || s.pe_offsets.size() != n + 1)
+    throw InputError("tearing", "topology", "the sheet's adjacency is stale: call rebuildTopology() first");
+  std::vector<std::int32_t> wings(2 * ne, -1);
+  std::vector<std::int32_t> has(ne + 1, 0);
+  cpu::parallelFor(std::int64_t(ne), [&](std::int64_t e) {
+    const std::int32_t a = s.edge_a[e], b = s.edge_b[e];
+    std::int32_t ia = s.pt_offsets[a], ib = s.pt_offsets[b], found = 0, w[2] = {-1, -1};
+    const std::int32_t ea = s.pt_offsets[a + 1], eb = s.pt_offsets[b + 1];
+    while (ia < ea && ib < eb) {
+      const std::int32_t ta = s.pt_tris[ia], tb = s.pt_tris[ib];
+      if (ta < tb) { ++ia; continue; }
+      if (tb < ta) { ++ib; continue; }
+      const auto& tr = s.tris[ta];
+      std::int32_t o = -1;
+      for (int c = 0; c < 3; ++c)
+        if (tr[c] != a && tr[c] != b) o = tr[c];
+      if (found < 2) w[found] = o;
+      ++found;
+      ++ia;
+      ++ib;
     }
-    h = e;
-  }
+    if (found == 2 && w[0] >= 0 && w[1] >= 0) {
+      wings[2 * e] = std::min(w[0], w[1]);
+      wings[2 * e + 1] = std::max(w[0], w[1]);
+      has[e + 1] = 1;
+    }
+  });
+  for (std::size_t e = 0; e < ne; ++e) has[e + 1] += has[e];
+  const std::size_t nb = std::size_t(has[ne]);
+  bend.ids.resize(4 * nb);
+  bend.offsets.resize(nb + 1);
+  bend.offsets[0] = 0;
+  bend.rest.resize(nb);
+  bend.compliance.assign(nb, T(opt.bending_compliance));
+  cpu::parallelFor(std::int64_t(ne), [&](std::int64_t e) {
+    if (has[e + 1] == has[e]) return;
+    const std::size_t c = std::size_t(has[e]);
+    const std::int32_t a = s.edge_a[e], b = s.edge_b[e], p2 = wings[2 * e], p3 = wings[2 * e + 1];
+    bend.ids[4 * c] = a;
+    bend.ids[4 * c + 1] = b;
+    bend.ids[4 * c + 2] = p2;
+    bend.ids[4 * c + 3] = p3;
+    bend.offsets[c + 1] = std::int32_t(4 * c + 4);
+    bend.rest[c] = pbd::dihedralAngle(s.rest[a], s.rest[b], s.rest[p2], s.rest[p3]);
+  });
   m.blocks.push_back(std::move(dist));
   if (bend.count() > 0) m.blocks.push_back(std::move(bend));
   m.overlap_offsets.assign(n + 1, 0);
@@ -252,7 +305,7 @@ PbdModel<T> buildTearPbdModel(const TearSheet<T>& s, const TearModelOptions& opt
     std::vector<std::int32_t> fill(b.particle_offsets.begin(), b.particle_offsets.end() - 1);
     for (std::size_t q = 0; q < b.ids.size(); ++q) b.particle_slots[fill[b.ids[q]]++] = std::int32_t(q);
     b.jacobi_scale.assign(b.ids.size(), T(1));
-    for (std::size_t c = 0; c < b.count(); ++c) {
+    cpu::parallelFor(std::int64_t(b.count()), [&](std::int64_t c) {
       int busiest = 1;
       for (std::int32_t q = b.offsets[c]; q < b.offsets[c + 1]; ++q) {
         const std::int32_t p = b.ids[q];
@@ -260,7 +313,7 @@ PbdModel<T> buildTearPbdModel(const TearSheet<T>& s, const TearModelOptions& opt
         busiest = std::max(busiest, b.particle_offsets[p + 1] - b.particle_offsets[p]);
       }
       for (std::int32_t q = b.offsets[c]; q < b.offsets[c + 1]; ++q) b.jacobi_scale[q] = T(1) / T(busiest);
-    }
+    });
     b.coloring = ConstraintColoring{};
   }
   return m;

@@ -37,7 +37,9 @@ TearingSceneSetup tearingSetupFromScene(const Scene& scene) {
   const std::string& f = scene.file;
   TearingSceneSetup s;
   const GeometrySpec& g = scene.geometry;
-  const double k = scene.material.youngs_modulus, tau = 0.1 * k;
+  const TearingSpec& ts = scene.tearing;
+  const double k = ts.k_pa > 0 ? ts.k_pa : scene.material.youngs_modulus;
+  const double tau = ts.tau_f_pa > 0 ? ts.tau_f_pa : 0.1 * k;
   const double h = g.spacing;
   if (!(h > 0)) throw InputError(f, "geometry.spacing_m", "must be > 0");
   const double rho_a = scene.material.density * h;
@@ -87,10 +89,21 @@ TearingSceneSetup tearingSetupFromScene(const Scene& scene) {
   } else {
     throw InputError(f, "geometry.kind", "the tearing model needs a box (sheet), beam (tube) or mesh (skin surface)");
   }
+  std::vector<TearRegion> regions;
+  for (const auto& r : ts.regions) {
+    TearRegion q;
+    q.min = r.min;
+    q.max = r.max;
+    q.k_pa = r.k_pa > 0 ? r.k_pa : k;
+    q.tau_f_pa = r.tau_f_pa > 0 ? r.tau_f_pa : tau;
+    regions.push_back(q);
+  }
+  applyTearRegions(s.sheet, regions);
   for (const auto& fr : scene.fixed) fixTearParticles(s.sheet, fr.min, fr.max);
-  s.tear.criterion = TearCriterion::TrescaBonds;
-  s.tear.seed = g.seed;
-  s.tear.break_strain = 0.2;  // the traditional criterion at the same stress: k * 0.2 = 2 tau_f
+  s.tear.criterion = parseTearCriterion(ts.criterion, f, "tearing.criterion");
+  s.tear.seed = ts.seed;
+  s.tear.break_strain = ts.break_strain;  // default 0.2: the traditional criterion at the default stress, k 0.2 = 2 tau_f
+  s.tear.random_range = ts.random_range;
   s.model.stretch_compliance = scene.pbd.stretch_compliance;
   s.model.bending_compliance = 10.0;
   s.damping = scene.material.damping;

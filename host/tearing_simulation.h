@@ -14,9 +14,9 @@ namespace inc {
 //  geometry box  -> flat sheet of size_m.x by size_m.y in the plane z = center.z, spacing_m apart;
 //  geometry beam -> open tube (a leg's skin) along x: length size_m.x, radius size_m.y / 2;
 //  geometry mesh -> the mesh's own triangles (scaled by mesh_scale) as the skin;
-//  material: youngs_modulus_pa is eq. 6's k; tau_f = 0.1 k (no scene key for it yet); area density
-//  density * spacing; damping_per_s the PBD damping; pbd: iterations, xpbd, solver, stretch_compliance;
-//  geometry.seed seeds the debris; fixed boxes hold particles; tools: "grasper" grabs the particles within
+//  tearing: criterion, k_pa (0: material.youngs_modulus_pa), tau_f_pa (0: 0.1 k), break_strain,
+//  random_range, seed (the debris), regions (k and tau_f per box); material: area density density *
+//  spacing; damping_per_s the PBD damping; pbd: iterations, xpbd, solver, stretch_compliance; fixed boxes hold particles; tools: "grasper" grabs the particles within
 //  radius_m of its blade (position .. position + direction * length_m) at t = 0 and moves them along its
 //  path; "scalpel" removes the tissue within radius_m of its blade every frame between its first and last
 //  keyframe (the criterion tears around it).

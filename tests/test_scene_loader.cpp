@@ -115,6 +115,19 @@ void expectSceneEq(const Scene& a, const Scene& b) {
       expectVecEq(ta.path[k].direction, tb.path[k].direction, "tool direction");
     }
   }
+  EXPECT_EQ(a.tearing.criterion, b.tearing.criterion);
+  EXPECT_EQ(a.tearing.k_pa, b.tearing.k_pa);
+  EXPECT_EQ(a.tearing.tau_f_pa, b.tearing.tau_f_pa);
+  EXPECT_EQ(a.tearing.break_strain, b.tearing.break_strain);
+  EXPECT_EQ(a.tearing.random_range, b.tearing.random_range);
+  EXPECT_EQ(a.tearing.seed, b.tearing.seed);
+  ASSERT_EQ(a.tearing.regions.size(), b.tearing.regions.size());
+  for (std::size_t i = 0; i < a.tearing.regions.size(); ++i) {
+    expectVecEq(a.tearing.regions[i].min, b.tearing.regions[i].min, "tearing.regions.min");
+    expectVecEq(a.tearing.regions[i].max, b.tearing.regions[i].max, "tearing.regions.max");
+    EXPECT_EQ(a.tearing.regions[i].k_pa, b.tearing.regions[i].k_pa);
+    EXPECT_EQ(a.tearing.regions[i].tau_f_pa, b.tearing.regions[i].tau_f_pa);
+  }
   EXPECT_EQ(a.output.every_frames, b.output.every_frames);
   EXPECT_EQ(a.output.particles_ply, b.output.particles_ply);
   EXPECT_EQ(a.output.mesh_obj, b.output.mesh_obj);
@@ -673,3 +686,66 @@ TEST(SceneLoaderOrgans, SharedOrganMeshLoadsAsGeometry) {
 }
 
 }  // namespace
+
+// ---------------------------------------------------------------------------------------------------------
+// The tearing section
+
+namespace {
+const char* kTearScene = R"({"geometry": {"kind": "box", "size_m": [0.1, 0.1, 0.01], "spacing_m": 0.005},
+  "models": {"tearing": true},
+  "tearing": {"criterion": "tresca_principal", "k_pa": 2.5e4, "tau_f_pa": 1.25e3, "break_strain": 0.3,
+              "random_range": 0.05, "seed": 42,
+              "regions": [{"min_m": [-1, -1, -1], "max_m": [0, 1, 1], "tau_f_pa": 600},
+                          {"min_m": [0, 0, -1], "max_m": [1, 1, 1], "k_pa": 3e4, "tau_f_pa": 2e3}]}})";
+}  // namespace
+
+TEST(SceneLoaderTearing, ReadsEveryKeyAndRoundTrips) {
+  const Scene a = parseScene(kTearScene, kLabel, ".");
+  EXPECT_EQ(a.tearing.criterion, "tresca_principal");
+  EXPECT_EQ(a.tearing.k_pa, 2.5e4);
+  EXPECT_EQ(a.tearing.tau_f_pa, 1.25e3);
+  EXPECT_EQ(a.tearing.break_strain, 0.3);
+  EXPECT_EQ(a.tearing.random_range, 0.05);
+  EXPECT_EQ(a.tearing.seed, 42u);
+  ASSERT_EQ(a.tearing.regions.size(), 2u);
+  EXPECT_EQ(a.tearing.regions[0].k_pa, 0.0);  // absent: keeps the section's k
+  EXPECT_EQ(a.tearing.regions[0].tau_f_pa, 600.0);
+  EXPECT_EQ(a.tearing.regions[1].max.x, 1.0);
+  const std::string text = sceneToJson(a);
+  const Scene b = parseScene(text, kLabel, ".");
+  expectSceneEq(a, b);
+  EXPECT_EQ(sceneToJson(b), text);
+}
+
+TEST(SceneLoaderTearing, DefaultsAreTheDocumentedOnes) {
+  const Scene s = parseScene(minimal().dump(), kLabel, ".");
+  EXPECT_EQ(s.tearing.criterion, "tresca");
+  EXPECT_EQ(s.tearing.k_pa, 0.0);
+  EXPECT_EQ(s.tearing.tau_f_pa, 0.0);
+  EXPECT_EQ(s.tearing.break_strain, 0.2);
+  EXPECT_EQ(s.tearing.random_range, 0.1);
+  EXPECT_EQ(s.tearing.seed, 1u);
+  EXPECT_TRUE(s.tearing.regions.empty());
+}
+
+TEST(SceneLoaderTearing, BadValuesNameTheKey) {
+  expectErrorAt("/tearing/criterion", "von_mises", "tearing.criterion", "traditional");
+  expectErrorAt("/tearing/k_pa", -1.0, "tearing.k_pa", "must be >= 0");
+  expectErrorAt("/tearing/tau_f_pa", -5.0, "tearing.tau_f_pa", "must be >= 0");
+  expectErrorAt("/tearing/break_strain", 0.0, "tearing.break_strain", "must be > 0");
+  expectErrorAt("/tearing/random_range", 1.0, "tearing.random_range", "[0, 1)");
+  expectErrorAt("/tearing/random_range", -0.1, "tearing.random_range", "[0, 1)");
+  expectErrorAt("/tearing/seed", -3, "tearing.seed", "must lie in");
+  expectErrorAt("/tearing/sead", 3, "tearing.sead", "seed");
+  expectErrorAt("/tearing/regions", json::parse(R"([{"max_m": [1, 1, 1], "k_pa": 1}])"), "tearing.regions[0].min_m",
+                "is required");
+  expectErrorAt("/tearing/regions", json::parse(R"([{"min_m": [0, 0, 0], "max_m": [1, -1, 1], "k_pa": 1}])"),
+                "tearing.regions[0].max_m", "must be >= min_m");
+  expectErrorAt("/tearing/regions", json::parse(R"([{"min_m": [0, 0, 0], "max_m": [1, 1, 1]}])"),
+                "tearing.regions[0].k_pa", "needs k_pa or tau_f_pa");
+  expectErrorAt("/tearing/regions",
+                json::parse(R"([{"min_m": [0, 0, 0], "max_m": [1, 1, 1], "k_pa": 1}, {"min_m": [0, 0, 0], "max_m": [1, 1, 1], "tau_f_pa": -2}])"),
+                "tearing.regions[1].tau_f_pa", "must be >= 0");
+  expectErrorAt("/tearing/regions", json::parse(R"([{"min_m": [0, 0, 0], "max_m": [1, 1, 1], "k": 1}])"),
+                "tearing.regions[0].k", "k_pa");
+}

@@ -10,6 +10,8 @@
 #include <set>
 
 #include "cpu_fallback/tearing_cpu.h"
+#include "host/input_error.h"
+#include "physics/pbd_constraints.h"
 #include "host/tearing_driver.h"
 #include "host/tearing_sheet.h"
 #include "physics/tearing_tresca.h"
@@ -387,4 +389,89 @@ TEST(Tearing, BadInputIsRefused) {
   p.t_lo = 0.0;
   EXPECT_THROW(TearingDriver<double>(s, p, softSkin(), quietStep(), BackendKind::Cpu), InputError);
   EXPECT_THROW(removeTearParticles(s, std::vector<std::uint8_t>(3, 0), true, TearParams<double>()), InputError);
+}
+
+// The bending block comes from merging the particle -> triangle lists; after thousands of splits and a tissue
+// removal it must equal the straightforward reference: every edge key with exactly two (key, opposite vertex)
+// half-edges, in key order, wings ascending, rest angle from the rest positions (exact: same arithmetic).
+TEST(Tearing, BendingBlockAfterSplitsMatchesHalfEdgeReference) {
+  TearSheet<double> s = makeTearGrid<double>(30, 30, kH, kRhoA, Vec3d(0, 0, 0), kK, 120.0);
+  TearParams<double> p;
+  p.break_strain = 0.12;
+  EXPECT_GT(tearManyTimes(s, p, 8, 5), 200);
+  std::vector<std::uint8_t> mark(s.size(), 0);
+  for (std::size_t i = 0; i < s.size(); ++i) mark[i] = s.rest[i].x < 0.05 && s.rest[i].y < 0.05;
+  removeTearParticles(s, mark, true, p);
+  s.rebuildTopology();
+  const PbdModel<double> m = buildTearPbdModel(s, softSkin());
+  ASSERT_EQ(m.blocks.size(), 2u);
+  const PbdConstraintBlock<double>& bend = m.blocks[1];
+  std::vector<std::pair<std::uint64_t, std::int32_t>> half;
+  for (const auto& t : s.tris)
+    for (int c = 0; c < 3; ++c) {
+      std::int32_t a = t[c], b = t[(c + 1) % 3];
+      if (a > b) std::swap(a, b);
+      half.push_back({(std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b), t[(c + 2) % 3]});
+    }
+  std::sort(half.begin(), half.end());
+  std::vector<std::int32_t> ids;
+  std::vector<double> rest;
+  for (std::size_t h = 0; h < half.size();) {
+    std::size_t e = h;
+    while (e < half.size() && half[e].first == half[h].first) ++e;
+    if (e - h == 2) {
+      const std::int32_t a = std::int32_t(half[h].first >> 32), b = std::int32_t(half[h].first & 0xffffffffu);
+      for (std::int32_t q : {a, b, half[h].second, half[h + 1].second}) ids.push_back(q);
+      rest.push_back(pbd::dihedralAngle(s.rest[a], s.rest[b], s.rest[half[h].second], s.rest[half[h + 1].second]));
+    }
+    h = e;
+  }
+  EXPECT_EQ(bend.ids, ids);
+  EXPECT_EQ(bend.rest, rest);
+  ASSERT_EQ(bend.offsets.size(), rest.size() + 1);
+  for (std::size_t c = 0; c <= rest.size(); ++c) EXPECT_EQ(bend.offsets[c], std::int32_t(4 * c));
+  // A stale adjacency is refused rather than read out of bounds.
+  TearSheet<double> stale = s;
+  stale.pt_offsets.clear();
+  EXPECT_THROW(buildTearPbdModel(stale, softSkin()), InputError);
+}
+
+// rebuildTopology builds the bonds per particle (no global sort): after splits and a removal it must equal the
+// sorted unique mesh edges, and the CSR lists must hold exactly each particle's partners and triangles, ascending.
+TEST(Tearing, RebuiltAdjacencyMatchesSortedEdgeReference) {
+  TearSheet<double> s = makeTearGrid<double>(25, 20, kH, kRhoA, Vec3d(0, 0, 0), kK, 120.0);
+  TearParams<double> p;
+  p.criterion = TearCriterion::Threshold;
+  p.break_strain = 0.12;
+  EXPECT_GT(tearManyTimes(s, p, 6, 3), 100);
+  std::vector<std::uint8_t> mark(s.size(), 0);
+  for (std::size_t i = 0; i < s.size(); ++i) mark[i] = s.rest[i].x > 0.15 && s.rest[i].y > 0.1;
+  removeTearParticles(s, mark, false, p);
+  s.rebuildTopology();
+  std::vector<std::pair<std::int32_t, std::int32_t>> ref;
+  std::vector<std::vector<std::int32_t>> partners(s.size()), tris_of(s.size());
+  for (std::size_t t = 0; t < s.tris.size(); ++t)
+    for (int c = 0; c < 3; ++c) {
+      const std::int32_t a = s.tris[t][c], b = s.tris[t][(c + 1) % 3];
+      ref.push_back({std::min(a, b), std::max(a, b)});
+      tris_of[a].push_back(std::int32_t(t));
+    }
+  std::sort(ref.begin(), ref.end());
+  ref.erase(std::unique(ref.begin(), ref.end()), ref.end());
+  ASSERT_EQ(s.edge_a.size(), ref.size());
+  for (std::size_t e = 0; e < ref.size(); ++e) {
+    EXPECT_EQ(s.edge_a[e], ref[e].first) << e;
+    EXPECT_EQ(s.edge_b[e], ref[e].second) << e;
+    partners[ref[e].first].push_back(ref[e].second);
+    partners[ref[e].second].push_back(ref[e].first);
+  }
+  ASSERT_EQ(s.pe_offsets.size(), s.size() + 1);
+  ASSERT_EQ(s.pt_offsets.size(), s.size() + 1);
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    std::sort(partners[i].begin(), partners[i].end());
+    EXPECT_EQ(std::vector<std::int32_t>(s.pe_partner.begin() + s.pe_offsets[i], s.pe_partner.begin() + s.pe_offsets[i + 1]),
+              partners[i]) << i;
+    EXPECT_EQ(std::vector<std::int32_t>(s.pt_tris.begin() + s.pt_offsets[i], s.pt_tris.begin() + s.pt_offsets[i + 1]),
+              tris_of[i]) << i;
+  }
 }

@@ -96,3 +96,48 @@ TEST(TearingSimulation, BadScenesRefused) {
   s.tools[0].kind = "probe";
   EXPECT_THROW(makeTearingSimulation(s, BackendKind::Cpu, Precision::Float32), InputError);
 }
+
+TEST(TearingSimulation, TearingSectionSetsCriterionMaterialAndRegions) {
+  Scene s = sheetScene();
+  TearingSceneSetup d = tearingSetupFromScene(s);  // defaults: k = E, tau_f = 0.1 k, tresca, seed 1
+  EXPECT_EQ(d.tear.criterion, TearCriterion::TrescaBonds);
+  EXPECT_EQ(d.tear.seed, 1u);
+  EXPECT_DOUBLE_EQ(d.sheet.k[0], 1.5e3);
+  EXPECT_DOUBLE_EQ(d.sheet.tau_f[0], 150.0);
+  s.tearing.criterion = "traditional";
+  s.tearing.k_pa = 4e3;
+  s.tearing.tau_f_pa = 300;
+  s.tearing.break_strain = 0.35;
+  s.tearing.random_range = 0.02;
+  s.tearing.seed = 99;
+  TearingRegionSpec r;  // the right half of the sheet (x >= 0.1) is weaker: tau_f only
+  r.min = Vec3d(0.1, -1, -1);
+  r.max = Vec3d(1, 1, 1);
+  r.tau_f_pa = 50;
+  s.tearing.regions.push_back(r);
+  d = tearingSetupFromScene(s);
+  EXPECT_EQ(d.tear.criterion, TearCriterion::Threshold);
+  EXPECT_EQ(d.tear.seed, 99u);
+  EXPECT_DOUBLE_EQ(d.tear.break_strain, 0.35);
+  EXPECT_DOUBLE_EQ(d.tear.random_range, 0.02);
+  int in = 0, out = 0;
+  for (std::size_t i = 0; i < d.sheet.size(); ++i) {
+    EXPECT_DOUBLE_EQ(d.sheet.k[i], 4e3) << i;  // the region keeps the section's k
+    if (d.sheet.rest[i].x >= 0.1) {
+      EXPECT_DOUBLE_EQ(d.sheet.tau_f[i], 50.0) << i;
+      ++in;
+    } else {
+      EXPECT_DOUBLE_EQ(d.sheet.tau_f[i], 300.0) << i;
+      ++out;
+    }
+  }
+  EXPECT_GT(in, 0);
+  EXPECT_GT(out, 0);
+  s.tearing.criterion = "von_mises";  // a Scene built in code is checked too
+  try {
+    tearingSetupFromScene(s);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.key(), "tearing.criterion");
+  }
+}
