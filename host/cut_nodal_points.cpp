@@ -5,7 +5,7 @@
 #include <cmath>
 #include <numeric>
 
-#include "cpu_fallback/neighbor_bruteforce.h"
+#include "cpu_fallback/neighbor_search_cpu.h"
 #include "host/input_error.h"
 
 namespace inc {
@@ -79,7 +79,7 @@ SphereCutResult cutSpheres(const MetaballModel& model, const SweptSurface& surfa
 
 NeighborLists visibleNodalNeighbours(const NodalPoints& p, double h, const SweptSurface& surface, std::size_t* removed) {
   if (!(h > 0.0)) throw InputError("cut", "support_radius", "must be positive");
-  NeighborLists lists = cpu::bruteForceNeighbors(p.positions, p.positions, std::vector<double>{h}, true);
+  NeighborLists lists = cpu::GridNeighborSearch<double>(p.positions, h).querySelf(h);
   const std::size_t n = removeCrossingNeighbours(lists, p.positions, surface);
   if (removed) *removed = n;
   return lists;
@@ -100,12 +100,22 @@ std::size_t repackSpheres(MetaballModel& spheres, const NodalPoints& p, const Sw
   const std::size_t first_new = spheres.size();
   for (std::size_t oi : order) {
     if (covered[oi]) continue;
-    const Vec3d c = p.positions[oi];
-    const double rad = std::clamp(clearance[oi], r_min, r_max);
-    double mass = 0.0;
+    Vec3d c = p.positions[oi];
+    double rad = std::min(clearance[oi], r_max);
+    if (clearance[oi] < r_min) {
+      Vec3d k, nrm;
+      closestOnSweptSurface(surface, c, k, nrm);
+      const Vec3d away = c - k;
+      const double len = norm(away);
+      const Vec3d u = len > 1e-12 * r_min ? away * (1.0 / len) : nrm * double(p.side[oi]);
+      c = k + u * r_min;
+      rad = r_min;
+    }
+    double mass = p.masses[oi];
+    covered[oi] = 1;
     for (std::size_t j = 0; j < np; ++j) {
       if (covered[j] || p.side[j] != p.side[oi]) continue;
-      if (j != oi && norm2(p.positions[j] - c) >= rad * rad) continue;
+      if (norm2(p.positions[j] - c) >= rad * rad) continue;
       covered[j] = 1;
       mass += p.masses[j];
     }

@@ -1,6 +1,7 @@
 // Swept-surface construction and the segment / sphere / side queries the cut uses (CPU, O(triangles) per query).
 #include "host/cut_swept_surface.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -49,8 +50,18 @@ void extendSweptSurface(SweptSurface& s, const BladePose& next) {
 }
 
 bool segmentCrossesSweptSurface(const SweptSurface& s, const Vec3d& p, const Vec3d& q) {
-  for (const auto& t : s.triangles)
-    if (cut::segmentCrossesTriangle(p, q, s.vertices[t[0]], s.vertices[t[1]], s.vertices[t[2]])) return true;
+  for (const auto& t : s.triangles) {
+    const Vec3d& a = s.vertices[t[0]];
+    const Vec3d& b = s.vertices[t[1]];
+    const Vec3d& c = s.vertices[t[2]];
+    bool apart = false;  // bounding boxes disjoint (with a margin far above the widened barycentric bounds)
+    for (int k = 0; k < 3 && !apart; ++k) {
+      const double lo = std::min({a[k], b[k], c[k]}), hi = std::max({a[k], b[k], c[k]});
+      const double m = 1e-6 * (hi - lo) + 1e-12;
+      apart = std::max(p[k], q[k]) < lo - m || std::min(p[k], q[k]) > hi + m;
+    }
+    if (!apart && cut::segmentCrossesTriangle(p, q, a, b, c)) return true;
+  }
   return false;
 }
 
@@ -88,6 +99,15 @@ double distanceToSweptSurface(const SweptSurface& s, const Vec3d& p) {
   Vec3d k;
   if (closestTriangle(s, p, k) < 0) return std::numeric_limits<double>::infinity();
   return norm(k - p);
+}
+
+bool closestOnSweptSurface(const SweptSurface& s, const Vec3d& p, Vec3d& closest, Vec3d& normal) {
+  const int ti = closestTriangle(s, p, closest);
+  if (ti < 0) return false;
+  const auto& t = s.triangles[ti];
+  normal = cross(s.vertices[t[1]] - s.vertices[t[0]], s.vertices[t[2]] - s.vertices[t[0]]);
+  normal *= 1.0 / norm(normal);
+  return true;
 }
 
 std::vector<std::int32_t> findCutSpheres(const SweptSurface& s, const std::vector<Vec3d>& centres,

@@ -36,6 +36,9 @@ bool segmentCrossesSweptSurface(const SweptSurface& surface, const Vec3d& p, con
 int sideOfSweptSurface(const SweptSurface& surface, const Vec3d& p);
 // Unsigned distance from p to the swept surface (m).
 double distanceToSweptSurface(const SweptSurface& surface, const Vec3d& p);
+// The closest point of the swept surface to p in `closest` and the unit normal of its triangle in `normal`
+// (oriented as the strip); returns false for an empty surface.
+bool closestOnSweptSurface(const SweptSurface& surface, const Vec3d& p, Vec3d& closest, Vec3d& normal);
 
 // Indices (ascending) of the spheres whose open ball the swept surface enters.
 std::vector<std::int32_t> findCutSpheres(const SweptSurface& surface, const std::vector<Vec3d>& centres,

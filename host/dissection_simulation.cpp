@@ -237,7 +237,43 @@ class DissectionSimulation final : public SimulationModel {
       }
       backend_->setState(state_);
     }
-    skin_ = bindSkin(rest_surface_, spheres_, 4, scene_.file);
+    bindSurface();
+  }
+
+  // Binds the surface to the spheres. After a surface split each piece binds only to the spheres on its own
+  // side of the cut (no skin weight across the swept surface): piece + to spheres with side +1, piece - to -1.
+  void bindSurface() {
+    skin_ = Skin{};
+    if (pieces_.empty()) {
+      const SkinBinding b = bindSkin(rest_surface_, spheres_, 4, scene_.file);
+      skin_.k = b.k;
+      skin_.rest_vertices = b.rest_vertices;
+      skin_.sphere = b.sphere;
+      skin_.weight = b.weight;
+      return;
+    }
+    skin_.k = 4;
+    for (const auto& piece : pieces_) {
+      MetaballModel sub;
+      std::vector<std::int32_t> global;
+      for (std::size_t i = 0; i < spheres_.size(); ++i)
+        if (sideOfSweptSurface(cut_surface_, spheres_.rest_centers[i]) == piece.side) {
+          global.push_back(std::int32_t(i));
+          sub.rest_centers.push_back(spheres_.rest_centers[i]);
+          sub.rest_radii.push_back(spheres_.rest_radii[i]);
+          sub.masses.push_back(spheres_.masses[i]);
+        }
+      if (global.empty()) throw InputError(scene_.file, "cutting", "a cut piece has no spheres to bind its surface to");
+      const int k = std::min<int>(4, int(global.size()));
+      const SkinBinding b = bindSkin(piece.mesh, sub, k, scene_.file);
+      for (std::size_t v = 0; v < b.rest_vertices.size(); ++v) {
+        skin_.rest_vertices.push_back(b.rest_vertices[v]);
+        for (int j = 0; j < 4; ++j) {
+          skin_.sphere.push_back(j < k ? global[b.sphere[v * k + j]] : global[b.sphere[v * k]]);
+          skin_.weight.push_back(j < k ? b.weight[v * k + j] : 0.0);
+        }
+      }
+    }
   }
 
   void applyCut() {
@@ -255,7 +291,9 @@ class DissectionSimulation final : public SimulationModel {
     const double tol = 0.25 * scene_.geometry.spacing;
     if (planeOfSweptSurface(swept_, p, n, tol) && sweptSurfaceSpansSection(rest_surface_, swept_, p, n, tol)) {
       const CutMeshResult m = splitMeshByPlane(rest_surface_, p, n);
-      rest_surface_ = mergeMeshes(m.positive, m.negative);
+      rest_surface_ = mergeMeshes(m.positive, m.negative);  // same vertex order as the pieces below
+      pieces_ = {{m.positive, +1}, {m.negative, -1}};
+      cut_surface_ = swept_;
       surface_split_ = true;
     }
     surface_components_ = analyzeMesh(rest_surface_).components;
@@ -269,7 +307,18 @@ class DissectionSimulation final : public SimulationModel {
   bool has_scalpel_ = false;
   MetaballModel spheres_;
   TriangleMesh rest_surface_;
-  SkinBinding skin_;
+  struct Piece {
+    TriangleMesh mesh;
+    int side;
+  };
+  std::vector<Piece> pieces_;  // the surface pieces of the last split, in rest_surface_'s vertex order
+  SweptSurface cut_surface_;
+  struct Skin {  // translation skinning slots v * k + j (sphere index into spheres_, weight)
+    int k = 0;
+    std::vector<Vec3d> rest_vertices;
+    std::vector<std::int32_t> sphere;
+    std::vector<double> weight;
+  } skin_;
   PbdModel<T> model_;
   std::unique_ptr<PbdBackend<T>> backend_;
   PbdStepParams<T> params_;

@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
+#include <utility>
 
 #include "host/dissection_simulation.h"
 #include "host/input_error.h"
@@ -59,6 +61,55 @@ TEST(CutDissection, StraightCutSeparatesTheBlockAtRestWithAClosedSurface) {
   EXPECT_EQ(m.components, 2);
   EXPECT_NEAR(m.signed_volume, 0.06 * 0.04 * 0.03, 1e-9 * 0.06 * 0.04 * 0.03);
   for (const auto& v : surf.vertices) EXPECT_TRUE(isFinite(v));
+}
+
+// The side y < 2 mm is held (every sphere on it is fixed), the other falls under gravity once cut free: the held
+// piece's surface must not move at all (its vertices bind only to its own, fixed spheres), the free piece falls.
+TEST(CutDissection, NoSkinWeightCrossesTheCut) {
+  Scene s = blockCutScene();
+  s.solver.gravity = Vec3d(0, 0, -9.81);
+  s.fixed = {{Vec3d(-1, -1, -1), Vec3d(1, 0.002, 1)}};
+  auto sim = makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64);
+  for (int f = 0; f < 9; ++f) ASSERT_TRUE(sim->advance(1.0 / 60.0).finite);
+  ASSERT_EQ(sim->advance(1.0 / 60.0).counters["cuts_applied"], 1.0);
+  TriangleMesh at_cut, later;
+  ASSERT_TRUE(sim->currentSurface(at_cut));
+  for (int f = 0; f < 20; ++f) ASSERT_TRUE(sim->advance(1.0 / 60.0).finite);
+  ASSERT_TRUE(sim->currentSurface(later));
+  ASSERT_EQ(at_cut.vertices.size(), later.vertices.size());
+  // The two surface pieces (connected components over shared vertices); the held one has its centroid at y < 2 mm
+  // (the free one sagged before the cut, so single vertices may have crossed y = 2 mm).
+  std::vector<int> comp(later.vertices.size());
+  for (std::size_t v = 0; v < comp.size(); ++v) comp[v] = int(v);
+  const auto find = [&](int x) {
+    while (comp[x] != x) x = comp[x] = comp[comp[x]];
+    return x;
+  };
+  for (const auto& t : later.triangles) {
+    comp[find(t[0])] = find(t[1]);
+    comp[find(t[1])] = find(t[2]);
+  }
+  std::map<int, std::pair<double, int>> centroid_y;
+  for (std::size_t v = 0; v < comp.size(); ++v) {
+    auto& c = centroid_y[find(int(v))];
+    c.first += at_cut.vertices[v].y;
+    c.second += 1;
+  }
+  ASSERT_EQ(centroid_y.size(), 2u);
+  int held = 0, fell = 0;
+  for (std::size_t v = 0; v < later.vertices.size(); ++v) {
+    const auto& c = centroid_y[find(int(v))];
+    const double moved = norm(later.vertices[v] - at_cut.vertices[v]);
+    if (c.first / c.second < 0.002) {
+      ASSERT_LT(moved, 1e-12) << "held-side vertex " << v;
+      ++held;
+    } else {
+      EXPECT_LT(later.vertices[v].z, at_cut.vertices[v].z - 1e-3) << "free-side vertex " << v;
+      ++fell;
+    }
+  }
+  EXPECT_GT(held, 50);
+  EXPECT_GT(fell, 50);
 }
 
 TEST(CutDissection, MissingScalpelOrCuttingFlagIsAnInputError) {
