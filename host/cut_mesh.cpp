@@ -67,17 +67,29 @@ int earClip(const std::vector<std::array<double, 2>>& p, std::vector<int> poly, 
   const double eps = 1e-14 * std::max(scale * scale, 1e-30);
   while (poly.size() > 3) {
     const int n = int(poly.size());
+    // Among the valid ears (convex corner, no other vertex inside or on it) take the best shaped one, the largest
+    // height / longest edge ratio: a first-found rule leaves slivers along collinear runs of contour vertices.
     int best = -1;
-    for (int i = 0; i < n && best < 0; ++i) {
+    double best_quality = 0.0;
+    const auto len2 = [&](int u, int v) {
+      return (p[u][0] - p[v][0]) * (p[u][0] - p[v][0]) + (p[u][1] - p[v][1]) * (p[u][1] - p[v][1]);
+    };
+    for (int i = 0; i < n; ++i) {
       const int a = poly[(i + n - 1) % n], b = poly[i], c = poly[(i + 1) % n];
-      if (cross2(a, b, c) <= eps) continue;  // reflex or flat corner
+      const double area2 = cross2(a, b, c);
+      if (area2 <= eps) continue;  // reflex or flat corner
+      const double quality = area2 / std::max({len2(a, b), len2(b, c), len2(c, a)});
+      if (quality <= best_quality) continue;
       bool empty = true;
       for (int j = 0; j < n && empty; ++j) {
         const int q = poly[j];
         if (q == a || q == b || q == c) continue;
         if (cross2(a, b, q) >= -eps && cross2(b, c, q) >= -eps && cross2(c, a, q) >= -eps) empty = false;
       }
-      if (empty) best = i;
+      if (empty) {
+        best = i;
+        best_quality = quality;
+      }
     }
     if (best < 0) {  // no clean ear (numerical trouble): clip the most convex corner so the wall still closes
       ++forced;
@@ -103,12 +115,23 @@ CutMeshResult splitMeshByPlane(const TriangleMesh& mesh, const Vec3d& point, con
   const std::size_t nv = mesh.vertices.size();
   double size = 0.0;
   for (const auto& v : mesh.vertices) size = std::max(size, norm(v - point));
-  const double eps = 1e-9 * std::max(size, 1e-12);
+  // No vertex may lie within `snap` of the plane, else the split leaves slivers next to it: the plane is
+  // shifted along n by 3 snap steps until it clears every vertex (a sub-micrometre move of the cut for organ
+  // sizes; deterministic).
+  const double snap = 1e-7 * std::max(size, 1e-12);
+  double shift = 0.0;
   std::vector<double> s(nv);
-  for (std::size_t i = 0; i < nv; ++i) {
-    s[i] = dot(mesh.vertices[i] - point, n);
-    if (std::fabs(s[i]) < eps) s[i] = eps;  // symbolic perturbation: on-plane vertices count as + side
+  for (int attempt = 0; attempt < 64; ++attempt) {
+    bool clear = true;
+    for (std::size_t i = 0; i < nv; ++i) {
+      s[i] = dot(mesh.vertices[i] - point, n) - shift;
+      clear = clear && std::fabs(s[i]) >= snap;
+    }
+    if (clear) break;
+    shift += 3.0 * snap;
   }
+  for (std::size_t i = 0; i < nv; ++i)
+    if (std::fabs(s[i]) < snap) s[i] = s[i] < 0 ? -snap : snap;  // dense vertices after 64 shifts: push off
   // Contour vertices, one per crossed edge, numbered after the mesh vertices.
   std::map<Edge, int> cut_vertex;
   std::vector<Vec3d> contour;

@@ -27,8 +27,9 @@ bool sweptSurfaceSpansSection(const TriangleMesh& mesh, const SweptSurface& surf
 
 // Splits a closed, consistently oriented mesh by the plane (point, normal): triangles crossing the plane are
 // split at the edge intersections (shared per edge, so both walls reuse the same contour vertices) and each
-// closed contour is triangulated in the plane by ear clipping, oriented outward for its piece. Vertices closer
-// to the plane than 1e-9 of the mesh size are moved off it on the + side (symbolic perturbation).
+// closed contour is triangulated in the plane by ear clipping, oriented outward for its piece. When a vertex lies
+// within 1e-7 of the mesh size of the plane, the plane is shifted along the normal by that much until it clears
+// every vertex (so no sliver triangles; the cut moves by well under a micrometre on an organ).
 CutMeshResult splitMeshByPlane(const TriangleMesh& mesh, const Vec3d& point, const Vec3d& normal);
 
 // Concatenation (vertex indices of b shifted), for drawing both pieces as one surface.

@@ -2,6 +2,8 @@
 #include "host/cut_nodal_points.h"
 
 #include <algorithm>
+#include <array>
+#include <map>
 #include <cmath>
 #include <numeric>
 
@@ -86,39 +88,33 @@ NeighborLists visibleNodalNeighbours(const NodalPoints& p, double h, const Swept
 }
 
 std::size_t repackSpheres(MetaballModel& spheres, const NodalPoints& p, const SweptSurface& surface,
-                          double converted_max_radius, const RepackOptions& options) {
+                          double converted_max_radius, const RepackOptions& options,
+                          const std::vector<SweptSurface>& earlier) {
   const std::size_t np = p.size();
   if (np == 0) return 0;
-  const double r_min = std::max(1e-9, options.min_radius_factor * p.spacing);
-  const double r_max = std::max(r_min, options.max_radius > 0.0 ? options.max_radius : converted_max_radius);
-  std::vector<double> clearance(np);
-  for (std::size_t i = 0; i < np; ++i) clearance[i] = distanceToSweptSurface(surface, p.positions[i]);
-  std::vector<std::size_t> order(np);
-  std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return clearance[a] > clearance[b]; });
-  std::vector<char> covered(np, 0);
+  const double r_max = std::max(std::max(1e-9, p.spacing), options.max_radius > 0.0 ? options.max_radius : converted_max_radius);
+  // One sphere per (side, cell) of a grid of cell size h = r_max / 0.75 (the lattice spacing that gave the
+  // converted spheres their radius 0.75 h), so the re-packed region has the sphere density of the original one.
+  const double cell = r_max / 0.75;
+  std::map<std::vector<std::int64_t>, std::vector<std::size_t>> groups;  // ordered: deterministic
+  for (std::size_t i = 0; i < np; ++i) {
+    const Vec3d& x = p.positions[i];
+    std::vector<std::int64_t> key{std::int64_t(std::floor(x.x / cell)), std::int64_t(std::floor(x.y / cell)),
+                                  std::int64_t(std::floor(x.z / cell)), std::int64_t(p.side[i])};
+    for (const auto& e : earlier) key.push_back(sideOfSweptSurface(e, x));
+    groups[key].push_back(i);
+  }
   const std::size_t first_new = spheres.size();
-  for (std::size_t oi : order) {
-    if (covered[oi]) continue;
-    Vec3d c = p.positions[oi];
-    double rad = std::min(clearance[oi], r_max);
-    if (clearance[oi] < r_min) {
-      Vec3d k, nrm;
-      closestOnSweptSurface(surface, c, k, nrm);
-      const Vec3d away = c - k;
-      const double len = norm(away);
-      const Vec3d u = len > 1e-12 * r_min ? away * (1.0 / len) : nrm * double(p.side[oi]);
-      c = k + u * r_min;
-      rad = r_min;
+  for (const auto& g : groups) {
+    double mass = 0.0;
+    Vec3d c;
+    for (std::size_t i : g.second) {
+      mass += p.masses[i];
+      c += p.positions[i] * p.masses[i];
     }
-    double mass = p.masses[oi];
-    covered[oi] = 1;
-    for (std::size_t j = 0; j < np; ++j) {
-      if (covered[j] || p.side[j] != p.side[oi]) continue;
-      if (norm2(p.positions[j] - c) >= rad * rad) continue;
-      covered[j] = 1;
-      mass += p.masses[j];
-    }
+    c *= 1.0 / mass;  // the centroid of points on one side of a locally planar cut stays on that side
+    double rad = 0.5 * r_max;
+    for (std::size_t i : g.second) rad = std::max(rad, norm(p.positions[i] - c));
     spheres.rest_centers.push_back(c);
     spheres.rest_radii.push_back(rad);
     spheres.masses.push_back(mass);
@@ -130,6 +126,10 @@ std::size_t repackSpheres(MetaballModel& spheres, const NodalPoints& p, const Sw
       const double d = norm(spheres.rest_centers[i] - spheres.rest_centers[j]);
       if (!(d < spheres.rest_radii[i] + spheres.rest_radii[j])) continue;
       if (segmentCrossesSweptSurface(surface, spheres.rest_centers[i], spheres.rest_centers[j])) continue;
+      bool across = false;
+      for (std::size_t e = 0; e < earlier.size() && !across; ++e)
+        across = segmentCrossesSweptSurface(earlier[e], spheres.rest_centers[i], spheres.rest_centers[j]);
+      if (across) continue;
       spheres.links.push_back({std::int32_t(j), std::int32_t(i)});
       spheres.link_rest_lengths.push_back(d);
     }

@@ -43,21 +43,20 @@ NeighborLists visibleNodalNeighbours(const NodalPoints& points, double support_r
                                      std::size_t* removed = nullptr);
 
 struct RepackOptions {
-  double min_radius_factor = 2.0;  // r_min = factor * nodal spacing (2 with 4 samples per diameter: r_min = r)
   double max_radius = 0.0;         // m; <= 0: the largest radius among the converted spheres
 };
 
-// Re-packs the nodal points into spheres side by side (a documented local greedy cover, docs/cutting.md): points
-// are visited by decreasing clearance d to the swept surface (ties by index); an uncovered point p seeds a
-// sphere: radius min(d, r_max) centred at p when d >= r_min, else radius r_min centred at k + r_min * u (k the
-// closest point of the cut, u the unit direction from k to p, or the side's normal when p lies on the cut), so
-// the sphere touches the cut without crossing it (Algorithm 1's radius = distance to the boundary, bounded
-// below so the count stays bounded). The seed and every uncovered point of the same side inside the sphere are
-// assigned to it, and the sphere's mass is the sum of its points' masses (exact mass conservation). The new
-// spheres are appended to `spheres`; links are added between overlapping spheres (new-new and new-old) whose
-// centre segment does not cross the swept surface. Returns the number of spheres added.
+// Re-packs the nodal points into spheres side by side (a documented local cover, docs/cutting.md): the points of
+// each side are grouped by the cells of a grid of size h = r_max / 0.75 (r_max: the largest converted radius
+// unless options.max_radius > 0; 0.75 h is the lattice's sphere radius), one sphere per non-empty (side, cell)
+// group: centre = the group's mass centroid, radius = max(0.5 r_max, distance to its farthest point), so every
+// nodal point lies in the sphere that took its mass (exact mass conservation, complete cover) and the re-packed
+// region keeps the original sphere density. With earlier cuts given, points are also grouped by their side of
+// each earlier cut, and links are refused across any of them (successive cuts). New spheres are appended to `spheres`; links join overlapping spheres
+// (new-new, new-old) whose centre segment does not cross the swept surface. Returns the number of spheres added.
 std::size_t repackSpheres(MetaballModel& spheres, const NodalPoints& points, const SweptSurface& surface,
-                          double converted_max_radius, const RepackOptions& options = {});
+                          double converted_max_radius, const RepackOptions& options = {},
+                          const std::vector<SweptSurface>& earlier_cuts = {});
 
 double totalMass(const MetaballModel& model);
 double totalMass(const NodalPoints& points);
