@@ -1,0 +1,54 @@
+// The scalpel's swept surface (the blade segment swept between poses) and the cut decisions made against it.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "host/metaball_model.h"
+#include "host/neighbor_lists.h"
+#include "physics/vec3.h"
+
+namespace inc {
+
+// The blade: a segment from `base` to `tip` (m) at one instant.
+struct BladePose {
+  Vec3d base, tip;
+};
+
+// A triangle strip: pose k contributes vertices 2k (base) and 2k+1 (tip); the quad between poses k and k+1 is
+// split into triangles (2k, 2k+2, 2k+1) and (2k+1, 2k+2, 2k+3), so every normal is (motion) x (blade) and
+// consistently oriented along the strip.
+struct SweptSurface {
+  std::vector<Vec3d> vertices;
+  std::vector<std::array<int, 3>> triangles;
+  bool empty() const { return triangles.empty(); }
+};
+
+// Throws InputError("cut", "blade", reason) on fewer than 2 poses, a degenerate blade or a non-finite pose.
+SweptSurface sweepSurface(const std::vector<BladePose>& poses);
+// Appends the strip between the last pose already swept and `next` (the per-frame incremental update).
+void extendSweptSurface(SweptSurface& surface, const BladePose& next);
+
+// Visibility criterion: the segment p-q crosses a triangle of the swept surface.
+bool segmentCrossesSweptSurface(const SweptSurface& surface, const Vec3d& p, const Vec3d& q);
+// +1 / -1: the side of p (sign of the oriented normal offset to the closest swept triangle); 0 never returned.
+int sideOfSweptSurface(const SweptSurface& surface, const Vec3d& p);
+// Unsigned distance from p to the swept surface (m).
+double distanceToSweptSurface(const SweptSurface& surface, const Vec3d& p);
+// The closest point of the swept surface to p in `closest` and the unit normal of its triangle in `normal`
+// (oriented as the strip); returns false for an empty surface.
+bool closestOnSweptSurface(const SweptSurface& surface, const Vec3d& p, Vec3d& closest, Vec3d& normal);
+
+// Indices (ascending) of the spheres whose open ball the swept surface enters.
+std::vector<std::int32_t> findCutSpheres(const SweptSurface& surface, const std::vector<Vec3d>& centres,
+                                         const std::vector<double>& radii);
+
+// Removes from `lists` every pair (q, j) whose segment crosses the swept surface; returns the number removed.
+std::size_t removeCrossingNeighbours(NeighborLists& lists, const std::vector<Vec3d>& positions,
+                                     const SweptSurface& surface);
+
+// Removes PBD links whose rest segment crosses the swept surface (in place); returns the number removed.
+std::size_t removeCrossingLinks(MetaballModel& model, const SweptSurface& surface);
+
+}  // namespace inc

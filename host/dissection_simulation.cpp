@@ -1,0 +1,342 @@
+// DissectionSimulation: PBD metaballs + scripted scalpel; the cut pipeline of section 5 applied when the blade stops.
+#include "host/dissection_simulation.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include "host/cut_mesh.h"
+#include "host/cut_nodal_points.h"
+#include "host/cut_swept_surface.h"
+#include "host/grasper.h"
+#include "host/input_error.h"
+#include "host/metaball_simulation.h"
+#include "host/organ_shapes.h"
+#include "host/pbd_builders.h"
+#include "host/pbd_model.h"
+#include "host/skin_binding.h"
+
+namespace inc {
+
+TriangleMesh sceneSurfaceMesh(const Scene& scene) {
+  const GeometrySpec& g = scene.geometry;
+  const double h = g.spacing > 0 ? g.spacing : 0.005;
+  switch (g.kind) {
+    case GeometrySpec::Kind::Box:
+    case GeometrySpec::Kind::Beam: {
+      const double longest = std::max({g.size.x, g.size.y, g.size.z});
+      const int div = std::clamp(int(std::ceil(longest / h)), 2, 64);
+      return makeBoxMesh(g.size * 0.5, div, g.center);
+    }
+    case GeometrySpec::Kind::Sphere:
+      return makeSphereMesh(g.radius, std::clamp(int(std::ceil(g.radius / h)) * 2, 4, 40), g.center);
+    case GeometrySpec::Kind::Ellipsoid: {
+      const double rmax = std::max({g.radii.x, g.radii.y, g.radii.z});
+      TriangleMesh m = makeSphereMesh(1.0, std::clamp(int(std::ceil(rmax / h)) * 2, 4, 40));
+      for (auto& v : m.vertices) v = g.center + Vec3d(v.x * g.radii.x, v.y * g.radii.y, v.z * g.radii.z);
+      return m;
+    }
+    case GeometrySpec::Kind::Mesh: {
+      TriangleMesh m = loadMesh(g.mesh_path);
+      for (auto& v : m.vertices) v *= g.mesh_scale;
+      requireClosedMesh(m, scene.file, "geometry.mesh");
+      return m;
+    }
+  }
+  throw InputError(scene.file, "geometry.kind", "unknown geometry");
+}
+
+namespace {
+
+double msSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+template <typename T>
+class DissectionSimulation final : public SimulationModel {
+ public:
+  DissectionSimulation(const Scene& scene, BackendKind backend) : scene_(scene), kind_(backend) {
+    const std::string& f = scene.file;
+    if (!scene.models.cutting) throw InputError(f, "models.cutting", "the dissection model needs cutting: true");
+    if (!scene.models.pbd_metaballs) throw InputError(f, "models.pbd_metaballs", "cutting needs the PBD metaball organ");
+    if (scene.pbd.iterations < 1) throw InputError(f, "pbd.iterations", "must be >= 1");
+    for (const ToolSpec& t : scene.tools)
+      if (t.kind == "scalpel") {
+        scalpel_ = t;
+        has_scalpel_ = true;
+        break;
+      }
+    if (!has_scalpel_) throw InputError(f, "tools", "cutting needs a tool of kind \"scalpel\"");
+    if (scalpel_.path.size() < 2) throw InputError(f, "tools." + scalpel_.name + ".path", "a scalpel needs >= 2 keyframes");
+    if (!(scalpel_.length > 0)) throw InputError(f, "tools." + scalpel_.name + ".length_m", "must be > 0");
+    params_.solver = parsePbdSolver(scene.pbd.solver, f, "pbd.solver");
+    params_.iterations = scene.pbd.iterations;
+    params_.xpbd = scene.pbd.xpbd;
+    params_.gravity = Vec3<T>(scene.solver.gravity);
+    params_.damping = T(scene.material.damping);
+    params_.volume_preservation = scene.pbd.volume_preservation;
+    params_.volume_influence = T(2.0 * scene.geometry.spacing);
+    base_substeps_ = scene.solver.substeps > 0 ? scene.solver.substeps : 4;
+    spheres_ = buildSceneMetaballs(scene);
+    rest_surface_ = sceneSurfaceMesh(scene);
+    backend_ = makePbdBackend<T>(backend);
+    rebuild(nullptr);
+    saveCheckpoint();
+  }
+
+  std::string name() const override { return "dissection"; }
+  BackendKind backend() const override { return backend_->kind(); }
+  std::size_t particleCount() const override { return model_.size(); }
+
+  FrameReport advance(double frame_dt) override {
+    FrameReport rep;
+    const double t0 = time_, t1 = time_ + frame_dt;
+    const double ts = scalpel_.path.front().t, te = scalpel_.path.back().t;
+    double sweep_ms = 0.0, apply_ms = 0.0;
+    if (!cut_applied_ && t1 >= ts) {
+      const auto c0 = std::chrono::steady_clock::now();
+      // One strip per frame from the blade at max(t0, ts) to the blade at min(t1, te) (eq.-free: section 5.1).
+      const BladePose b1 = blade(std::min(t1, te));
+      if (swept_.vertices.empty()) {
+        const BladePose b0 = blade(std::max(t0, ts));
+        swept_.vertices = {b0.base, b0.tip};
+      }
+      const Vec3d last = swept_.vertices[swept_.vertices.size() - 2];
+      if (norm(b1.base - last) > 1e-12) extendSweptSurface(swept_, b1);
+      pending_ = swept_.empty() ? 0 : findCutSpheres(swept_, spheres_.rest_centers, spheres_.rest_radii).size();
+      sweep_ms = msSince(c0);
+      if (t1 >= te) {
+        const auto c1 = std::chrono::steady_clock::now();
+        applyCut();
+        apply_ms = msSince(c1);
+      }
+    }
+    PbdFrameInput<T> in;
+    PbdStepParams<T> p = params_;
+    p.frame_dt = T(frame_dt);
+    p.substeps = std::max(1, int(std::ceil(base_substeps_ * substep_scale_ - 1e-9)));
+    const PbdFrameStats st = backend_->advanceFrame(p, in);
+    backend_->getState(state_);
+    time_ = t1;
+    rep.substeps = p.substeps;
+    rep.dt = frame_dt / p.substeps;
+    rep.stages = st.stages;
+    rep.stages.push_back({"cut_sweep", sweep_ms});
+    rep.stages.push_back({"cut_apply", apply_ms});
+    rep.finite = st.finite;
+    if (!st.finite) {
+      rep.failure_stage = "pbd";
+      rep.failure_particle = st.failure_particle;
+    }
+    double ke = 0, pe = 0, disp = 0;
+    for (std::size_t i = 0; i < model_.size(); ++i) {
+      const Vec3d x(state_.positions[i]), x0(model_.rest_positions[i]), v(state_.velocities[i]);
+      ke += 0.5 * double(model_.masses[i]) * norm2(v);
+      pe -= double(model_.masses[i]) * dot(scene_.solver.gravity, x - x0);
+      disp = std::max(disp, norm(x - x0));
+    }
+    rep.kinetic_energy = ke;
+    rep.potential_energy = pe;
+    rep.max_displacement = disp;
+    rep.counters["spheres"] = double(model_.size());
+    rep.counters["cut_spheres_pending"] = double(pending_);
+    rep.counters["cuts_applied"] = cut_applied_ ? 1.0 : 0.0;
+    rep.counters["nodal_points_last_cut"] = double(last_points_);
+    rep.counters["spheres_added_last_cut"] = double(last_added_);
+    rep.counters["surface_split"] = surface_split_ ? 1.0 : 0.0;
+    rep.counters["surface_components"] = double(surface_components_);
+    rep.counters["sweep_ms"] = sweep_ms;
+    rep.counters["cut_apply_ms"] = apply_ms;
+    return rep;
+  }
+
+  void saveCheckpoint() override {
+    saved_state_ = state_;
+    saved_time_ = time_;
+    saved_ = cut_applied_;
+  }
+  void restoreCheckpoint() override {
+    // A checkpoint taken before the cut cannot be restored after it (the topology changed); the guard then
+    // retries from the current state, which the runner treats like a restored one.
+    time_ = saved_time_;
+    if (saved_ == cut_applied_) {
+      state_ = saved_state_;
+      backend_->setState(state_);
+    }
+  }
+  void scaleTimeStep(double factor) override {
+    if (factor > 0 && std::isfinite(factor)) substep_scale_ /= factor;
+  }
+  void currentPositions(std::vector<Vec3d>& out) const override {
+    out.resize(state_.positions.size());
+    for (std::size_t i = 0; i < out.size(); ++i) out[i] = Vec3d(state_.positions[i]);
+  }
+  // Translation skinning: v = v0 + sum_j w_j (x_j - c_j) over the vertex's bound spheres.
+  bool currentSurface(TriangleMesh& out) const override {
+    out = rest_surface_;
+    const int k = skin_.k;
+    for (std::size_t v = 0; v < out.vertices.size(); ++v) {
+      Vec3d d;
+      for (int j = 0; j < k; ++j) {
+        const int s = skin_.sphere[v * k + j];
+        d += (Vec3d(state_.positions[s]) - spheres_.rest_centers[s]) * skin_.weight[v * k + j];
+      }
+      out.vertices[v] = skin_.rest_vertices[v] + d;
+    }
+    return true;
+  }
+  MemoryReport memory() const override {
+    MemoryReport m = backend_->memory();
+    m.host_bytes += model_.size() * (sizeof(Vec3<T>) * 3 + sizeof(T) * 4) +
+                    rest_surface_.vertices.size() * sizeof(Vec3d) + rest_surface_.triangles.size() * 12;
+    return m;
+  }
+
+ private:
+  BladePose blade(double t) const {
+    const ToolPose pose = toolPoseAt(scalpel_, t);
+    const Vec3d d = pose.direction * (0.5 * scalpel_.length / std::max(norm(pose.direction), 1e-300));
+    return {pose.position - d, pose.position + d};
+  }
+
+  // (Re)builds the PBD model from spheres_; `carry` maps new sphere -> old state index (-1: new sphere).
+  void rebuild(const std::vector<std::int32_t>* carry) {
+    MetaballPbdOptions opt;
+    opt.youngs_modulus = scene_.material.youngs_modulus;
+    opt.stretch_compliance = scene_.pbd.stretch_compliance;
+    opt.laplacian_compliance = scene_.pbd.laplacian_compliance;
+    opt.fixed = scene_.fixed;
+    opt.volume_samples = scene_.pbd.volume_preservation ? 64 : 0;
+    const PbdState<T> old = state_;
+    model_ = buildMetaballPbdModel<T>(spheres_, opt);
+    backend_->setModel(model_);
+    backend_->getState(state_);
+    if (carry) {
+      // Kept spheres keep their state; a new sphere takes the displacement and velocity of the nearest kept
+      // sphere on its side of the cut (the nodal points it replaces moved with their neighbours).
+      for (std::size_t i = 0; i < carry->size(); ++i)
+        if ((*carry)[i] >= 0) {
+          state_.positions[i] = old.positions[(*carry)[i]];
+          state_.velocities[i] = old.velocities[(*carry)[i]];
+        }
+      for (std::size_t i = 0; i < carry->size(); ++i) {
+        if ((*carry)[i] >= 0) continue;
+        double best = std::numeric_limits<double>::infinity();
+        int src = -1;
+        const Vec3d c = spheres_.rest_centers[i];
+        for (std::size_t j = 0; j < carry->size(); ++j) {
+          if ((*carry)[j] < 0) continue;
+          const double d = norm2(spheres_.rest_centers[j] - c);
+          if (d < best && !segmentCrossesSweptSurface(swept_, c, spheres_.rest_centers[j])) best = d, src = int(j);
+        }
+        if (src >= 0) {
+          state_.positions[i] = Vec3<T>(c + (Vec3d(state_.positions[src]) - spheres_.rest_centers[src]));
+          state_.velocities[i] = state_.velocities[src];
+        }
+      }
+      backend_->setState(state_);
+    }
+    bindSurface();
+  }
+
+  // Binds the surface to the spheres. After a surface split each piece binds only to the spheres on its own
+  // side of the cut (no skin weight across the swept surface): piece + to spheres with side +1, piece - to -1.
+  void bindSurface() {
+    skin_ = Skin{};
+    if (pieces_.empty()) {
+      const SkinBinding b = bindSkin(rest_surface_, spheres_, 4, scene_.file);
+      skin_.k = b.k;
+      skin_.rest_vertices = b.rest_vertices;
+      skin_.sphere = b.sphere;
+      skin_.weight = b.weight;
+      return;
+    }
+    skin_.k = 4;
+    for (const auto& piece : pieces_) {
+      MetaballModel sub;
+      std::vector<std::int32_t> global;
+      for (std::size_t i = 0; i < spheres_.size(); ++i)
+        if (sideOfSweptSurface(cut_surface_, spheres_.rest_centers[i]) == piece.side) {
+          global.push_back(std::int32_t(i));
+          sub.rest_centers.push_back(spheres_.rest_centers[i]);
+          sub.rest_radii.push_back(spheres_.rest_radii[i]);
+          sub.masses.push_back(spheres_.masses[i]);
+        }
+      if (global.empty()) throw InputError(scene_.file, "cutting", "a cut piece has no spheres to bind its surface to");
+      const int k = std::min<int>(4, int(global.size()));
+      const SkinBinding b = bindSkin(piece.mesh, sub, k, scene_.file);
+      for (std::size_t v = 0; v < b.rest_vertices.size(); ++v) {
+        skin_.rest_vertices.push_back(b.rest_vertices[v]);
+        for (int j = 0; j < 4; ++j) {
+          skin_.sphere.push_back(j < k ? global[b.sphere[v * k + j]] : global[b.sphere[v * k]]);
+          skin_.weight.push_back(j < k ? b.weight[v * k + j] : 0.0);
+        }
+      }
+    }
+  }
+
+  void applyCut() {
+    cut_applied_ = true;
+    if (swept_.empty()) return;
+    SphereCutResult r = cutSpheres(spheres_, swept_);
+    double rmax = 0.0;
+    for (auto i : r.cut) rmax = std::max(rmax, spheres_.rest_radii[i]);
+    last_points_ = r.points.size();
+    last_added_ = repackSpheres(r.spheres, r.points, swept_, rmax);
+    std::vector<std::int32_t> carry(r.kept.begin(), r.kept.end());
+    carry.resize(r.spheres.size(), -1);
+    // The surface: split along the swept plane when the sweep is planar and spans the whole section.
+    Vec3d p, n;
+    const double tol = 0.25 * scene_.geometry.spacing;
+    if (planeOfSweptSurface(swept_, p, n, tol) && sweptSurfaceSpansSection(rest_surface_, swept_, p, n, tol)) {
+      const CutMeshResult m = splitMeshByPlane(rest_surface_, p, n);
+      rest_surface_ = mergeMeshes(m.positive, m.negative);  // same vertex order as the pieces below
+      pieces_ = {{m.positive, +1}, {m.negative, -1}};
+      cut_surface_ = swept_;
+      surface_split_ = true;
+    }
+    surface_components_ = analyzeMesh(rest_surface_).components;
+    spheres_ = std::move(r.spheres);
+    rebuild(&carry);
+  }
+
+  Scene scene_;
+  BackendKind kind_;
+  ToolSpec scalpel_;
+  bool has_scalpel_ = false;
+  MetaballModel spheres_;
+  TriangleMesh rest_surface_;
+  struct Piece {
+    TriangleMesh mesh;
+    int side;
+  };
+  std::vector<Piece> pieces_;  // the surface pieces of the last split, in rest_surface_'s vertex order
+  SweptSurface cut_surface_;
+  struct Skin {  // translation skinning slots v * k + j (sphere index into spheres_, weight)
+    int k = 0;
+    std::vector<Vec3d> rest_vertices;
+    std::vector<std::int32_t> sphere;
+    std::vector<double> weight;
+  } skin_;
+  PbdModel<T> model_;
+  std::unique_ptr<PbdBackend<T>> backend_;
+  PbdStepParams<T> params_;
+  PbdState<T> state_, saved_state_;
+  SweptSurface swept_;
+  std::size_t pending_ = 0, last_points_ = 0, last_added_ = 0;
+  bool cut_applied_ = false, saved_ = false, surface_split_ = false;
+  int surface_components_ = 1;
+  int base_substeps_ = 4;
+  double substep_scale_ = 1.0;
+  double time_ = 0, saved_time_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<SimulationModel> makeDissectionSimulation(const Scene& scene, BackendKind backend, Precision precision) {
+  if (precision == Precision::Float64) return std::make_unique<DissectionSimulation<double>>(scene, backend);
+  return std::make_unique<DissectionSimulation<float>>(scene, backend);
+}
+
+}  // namespace inc

@@ -1,0 +1,27 @@
+// The dissection model: PBD metaball organ cut by a scripted scalpel (nodal points, re-packing, cut surface).
+#pragma once
+
+#include <memory>
+
+#include "host/backend.h"
+#include "host/mesh.h"
+#include "host/scene.h"
+#include "host/simulation_model.h"
+
+namespace inc {
+
+// The organ's closed rest surface for a scene: box/beam (makeBoxMesh), sphere, ellipsoid (scaled geodesic
+// sphere), mesh (loaded, scaled, checked closed). Throws InputError(scene.file, "geometry...", reason).
+TriangleMesh sceneSurfaceMesh(const Scene& scene);
+
+// Needs models.cutting and models.pbd_metaballs and one tool of kind "scalpel" (the first is used): the blade
+// is the segment of tool.length centred on the path position along the path direction. While the path runs
+// the blade sweeps a surface (one strip per frame, in the rest configuration); when the path ends the cut is
+// applied: cut spheres -> nodal points (visibility-filtered) -> re-packed spheres, PBD model rebuilt without
+// links across the cut, surface split along the swept plane and both walls capped, skin re-bound.
+// currentSurface() is the (cut) surface moved by the spheres (translation skinning). Counters: spheres,
+// cut_spheres_pending, cuts_applied, nodal_points_last_cut, spheres_added_last_cut, surface_split,
+// cut_apply_ms, sweep_ms, surface_components.
+std::unique_ptr<SimulationModel> makeDissectionSimulation(const Scene& scene, BackendKind backend, Precision precision);
+
+}  // namespace inc
