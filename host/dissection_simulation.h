@@ -6,13 +6,10 @@
 #include "host/backend.h"
 #include "host/mesh.h"
 #include "host/scene.h"
+#include "host/scene_surface.h"
 #include "host/simulation_model.h"
 
 namespace inc {
-
-// The organ's closed rest surface for a scene: box/beam (makeBoxMesh), sphere, ellipsoid (scaled geodesic
-// sphere), mesh (loaded, scaled, checked closed). Throws InputError(scene.file, "geometry...", reason).
-TriangleMesh sceneSurfaceMesh(const Scene& scene);
 
 // Needs models.cutting and models.pbd_metaballs and one tool of kind "scalpel" (the first is used): the blade
 // is the segment of tool.length centred on the path position along the path direction. While the path runs

@@ -1,4 +1,4 @@
-// PBD metaball organ as a SimulationModel: lattice sphere fill, constraint model, scripted probes and graspers, frame reports.
+// PBD metaball organ as a SimulationModel: sphere fill (lattice or packer), constraint model, skinned surface, tools, frame reports.
 #include "host/metaball_simulation.h"
 
 #include <algorithm>
@@ -8,6 +8,10 @@
 #include "host/grasper.h"
 #include "host/input_error.h"
 #include "host/mesh.h"
+#include "host/metaball_packing.h"
+#include "cpu_fallback/skinning_cpu.h"
+#include "host/scene_surface.h"
+#include "host/skin_binding.h"
 #include "host/particle_sampling.h"
 #include "host/pbd_builders.h"
 #include "host/pbd_model.h"
@@ -86,6 +90,9 @@ class MetaballSimulation final : public SimulationModel {
     opt.fixed = scene.fixed;
     opt.volume_samples = scene.pbd.volume_preservation ? 64 : 0;
     model_ = buildMetaballPbdModel<T>(mb, opt);
+    // The organ's surface rides on the spheres (linear-blend skinning, k = 4 nearest spheres).
+    rest_surface_ = sceneSurfaceMesh(scene);
+    skin_ = skinArrays<T>(bindSkin(rest_surface_, mb, std::min<int>(4, int(mb.size())), f));
     backend_ = makePbdBackend<T>(backend);
     backend_->setModel(model_);
     backend_->getState(state_);
@@ -180,9 +187,23 @@ class MetaballSimulation final : public SimulationModel {
     out.resize(state_.positions.size());
     for (std::size_t i = 0; i < out.size(); ++i) out[i] = Vec3d(state_.positions[i]);
   }
+  // Skinned with each sphere's translation and its shape-matching rotation (identity when the model keeps none).
+  bool currentSurface(TriangleMesh& out) const override {
+    const int n = int(model_.size());
+    rotations_.resize(model_.size());
+    skinned_.resize(skin_.rest_vertices.size());
+    cpu::quatsToMatricesCpu<T>(n, state_.rotations.data(), rotations_.data());
+    cpu::skinSurfaceCpu<T>(skin_.view(), state_.positions.data(), rotations_.data(), skinned_.data());
+    out.vertices.resize(skinned_.size());
+    for (std::size_t v = 0; v < skinned_.size(); ++v) out.vertices[v] = Vec3d(skinned_[v]);
+    out.triangles = rest_surface_.triangles;
+    return true;
+  }
   MemoryReport memory() const override {
     MemoryReport m = backend_->memory();
-    m.host_bytes += model_.size() * (sizeof(Vec3<T>) * 3 + sizeof(T) * 4);
+    m.host_bytes += model_.size() * (sizeof(Vec3<T>) * 3 + sizeof(T) * 4) +
+                    skin_.rest_vertices.size() * (sizeof(Vec3<T>) * 2 + skin_.k * (sizeof(T) + 4)) +
+                    rest_surface_.triangles.size() * 12;
     return m;
   }
 
@@ -242,6 +263,10 @@ class MetaballSimulation final : public SimulationModel {
   std::vector<Grasper> graspers_, saved_graspers_;
   std::vector<ToolSpec> probes_;
   std::vector<std::uint8_t> movable_;
+  TriangleMesh rest_surface_;
+  SkinArrays<T> skin_;
+  mutable std::vector<Mat3<T>> rotations_;  // scratch for currentSurface
+  mutable std::vector<Vec3<T>> skinned_;
   int base_substeps_ = kDefaultSubsteps;
   double substep_scale_ = 1.0;
   double time_ = 0, saved_time_ = 0;
@@ -254,6 +279,13 @@ MetaballModel buildSceneMetaballs(const Scene& scene) {
   const std::string& f = scene.file;
   if (!(std::isfinite(g.spacing) && g.spacing > 0)) throw InputError(f, "geometry.spacing_m", "must be a positive number");
   if (!(scene.material.density > 0)) throw InputError(f, "material.density_kg_m3", "must be > 0");
+  if (scene.pbd.target_spheres > 0) {
+    // The packer (paper, section 4): overlapping spheres fitted to the closed surface, masses from power cells.
+    PackingOptions o;
+    o.target_spheres = scene.pbd.target_spheres;
+    o.density_kg_m3 = scene.material.density;
+    return packOrgan(sceneSurfaceMesh(scene), o, scene.file).model;
+  }
   std::vector<Vec3d> centers;
   if (g.kind == GeometrySpec::Kind::Mesh) {
     if (!(std::isfinite(g.mesh_scale) && g.mesh_scale > 0))

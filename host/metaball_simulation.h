@@ -10,8 +10,8 @@
 
 namespace inc {
 
-// The sphere set of the scene's organ. The one place that decides how the body is filled with spheres, so
-// the sphere packer (packOrgan, issue 5) can replace it. Now: a cubic lattice fill of the primitive (box,
+// The sphere set of the scene's organ. With pbd.target_spheres > 0: the sphere packer (packOrgan) fitted to
+// the scene's closed surface (sceneSurfaceMesh), masses from power cells. Otherwise: a cubic lattice fill of the primitive (box,
 // beam, sphere, ellipsoid; a closed mesh by winding number) at geometry.spacing, one sphere per lattice
 // cell centre inside the body, radius 0.75 * spacing (face and edge neighbours overlap, corner ones do not),
 // mass density * spacing^3 (so the total mass is the density times the sampled cell volume); spheres are

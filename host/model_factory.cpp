@@ -1,5 +1,5 @@
 // Builds the models a scene switches on, and nothing else (a scene pays only for what it uses).
-#include "host/input_error.h"
+#include "host/dissection_simulation.h"
 #include "host/metaball_simulation.h"
 #include "host/mls_simulation.h"
 #include "host/runner.h"
@@ -10,7 +10,11 @@ namespace inc {
 std::vector<std::unique_ptr<SimulationModel>> createSceneModels(const Scene& scene, BackendKind backend) {
   std::vector<std::unique_ptr<SimulationModel>> models;
   if (scene.models.mls) models.push_back(makeMlsSimulation(scene, backend, scene.solver.precision));
-  if (scene.models.pbd_metaballs) models.push_back(makeMetaballSimulation(scene, backend, scene.solver.precision));
+  // A cutting scene's organ is the PBD metaball organ itself: build one or the other, never both.
+  if (scene.models.cutting)
+    models.push_back(makeDissectionSimulation(scene, backend, scene.solver.precision));
+  else if (scene.models.pbd_metaballs)
+    models.push_back(makeMetaballSimulation(scene, backend, scene.solver.precision));
   if (scene.models.tearing) models.push_back(makeTearingSimulation(scene, backend, scene.solver.precision));
   return models;
 }
