@@ -142,7 +142,7 @@ Row runCpu(std::size_t n, int repeats, bool morton, double cell_factor) {
 
 #if INCISION_HAVE_CUDA
 template <typename T>
-Row runCuda(std::size_t n, int repeats, bool morton, double cell_factor, double peak_gbs) {
+Row runCuda(std::size_t n, int repeats, bool morton, double cell_factor, double peak_gbs, bool profile) {
   const auto pts = jitteredLattice<T>(n, 1234);
   const T r = T(kRadius);
   cuda::DeviceBuffer<Vec3<T>> d_pts;
@@ -172,6 +172,26 @@ Row runCuda(std::size_t n, int repeats, bool morton, double cell_factor, double 
   INC_CUDA(cudaEventDestroy(e0));
   INC_CUDA(cudaEventDestroy(e1));
   INC_CUDA(cudaEventDestroy(e2));
+  if (profile) {
+    // Separate profiled runs (events between the stages add a little host work, so the table above is
+    // timed without them): median milliseconds per stage.
+    s.setProfiling(true);
+    std::vector<std::string> names;
+    std::vector<std::vector<double>> ms;
+    for (int rep = 0; rep < std::max(repeats, 3); ++rep) {
+      s.build(d_pts.data(), n, T(kRadius * cell_factor), morton);
+      s.querySelf(r, out);
+      const auto stages = s.takeProfile();
+      if (names.empty())
+        for (const auto& st : stages) names.push_back(st.first);
+      ms.resize(names.size());
+      for (std::size_t i = 0; i < stages.size() && i < names.size(); ++i) ms[i].push_back(stages[i].second);
+    }
+    s.setProfiling(false);
+    std::printf("profile cuda n=%zu:", n);
+    for (std::size_t i = 0; i < names.size(); ++i) std::printf(" %s=%.4f", names[i].c_str(), median(ms[i]));
+    std::printf(" (ms, median)\n");
+  }
   Row row;
   row.backend = "cuda";
   row.n = n;
@@ -225,7 +245,7 @@ int main(int argc, char** argv) {
   std::string backend_text = "auto", precision = "float", csv;
   std::size_t lo = 10000, hi = 1000000, cpu_max = 0;
   int repeats = 0, cpu_threads = 0;
-  bool quick = false, morton = false;
+  bool quick = false, morton = false, profile = false;
   double cell_factor = 1.0;
   app.add_option("--backend", backend_text, "cpu | cuda | auto");
   app.add_option("--min", lo, "smallest particle count");
@@ -239,6 +259,7 @@ int main(int argc, char** argv) {
   app.add_flag("--morton", morton, "store the grid in Z order");
   app.add_flag("--shuffle", g_shuffle, "list the particles in random order instead of lattice order");
   app.add_option("--csv", csv, "write the rows as CSV here");
+  app.add_flag("--profile", profile, "GPU: also print the median time of every build / query stage (CUDA events)");
   app.add_flag("--quick", quick, "a short run: at most three sizes, three repeats");
   CLI11_PARSE(app, argc, argv);
 
@@ -266,8 +287,8 @@ int main(int argc, char** argv) {
       Row r;
 #if INCISION_HAVE_CUDA
       if (on_gpu)
-        r = precision == "double" ? runCuda<double>(n, reps, morton, cell_factor, peak)
-                                    : runCuda<float>(n, reps, morton, cell_factor, peak);
+        r = precision == "double" ? runCuda<double>(n, reps, morton, cell_factor, peak, profile)
+                                    : runCuda<float>(n, reps, morton, cell_factor, peak, profile);
 #endif
       if (!on_gpu) r = precision == "double" ? runCpu<double>(n, reps, morton, cell_factor)
                                         : runCpu<float>(n, reps, morton, cell_factor);

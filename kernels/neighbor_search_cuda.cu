@@ -290,18 +290,67 @@ __device__ void sortRow(std::int32_t* a, std::int32_t k) {
   }
 }
 
+// Rows of at most kRowCap entries (the usual case: ~30 neighbours) are built in shared memory, kept sorted
+// while they grow (insertion of each new index), and written out by the whole warp, one row after another,
+// so that the global writes are coalesced. Longer rows (the count pass says which) take the old path:
+// written to global memory in traversal order, then sorted there (heap sort above 32 entries).
+constexpr int kFillThreads = 128;
+constexpr int kRowCap = 48;
+constexpr int kRowStride = kFillThreads + 1;  // odd stride: the warp's column reads hit 32 distinct banks
+
+struct SharedSortedVisit {
+  std::int32_t* col;  // this thread's column: entry i at col[i * kRowStride]
+  const std::int32_t* perm;
+  std::int32_t k;
+  __device__ void operator()(std::int32_t j) {
+    if (k >= kRowCap) return;  // unreachable: the count pass bounds k by kRowCap (guards shared memory only)
+    const std::int32_t v = perm[j];
+    std::int32_t i = k;
+    for (; i > 0; --i) {
+      const std::int32_t u = col[(i - 1) * kRowStride];
+      if (u <= v) break;
+      col[i * kRowStride] = u;
+    }
+    col[i * kRowStride] = v;
+    ++k;
+  }
+};
+
 template <typename T>
-__global__ void fillKernel(QuerySpec<T> s, const std::int64_t* offsets, std::int32_t* indices) {
+__global__ void __launch_bounds__(kFillThreads) fillKernel(QuerySpec<T> s, const std::int64_t* offsets,
+                                                           std::int32_t* indices) {
+  __shared__ std::int32_t buf[kRowCap * kRowStride];
   const int t = blockIdx.x * blockDim.x + threadIdx.x;
-  if (t >= s.nq) return;
-  int q;
-  Vec3<T> x;
-  T r;
-  std::int32_t skip;
-  queryOf(s, t, q, x, r, skip);
-  WriteVisit v{indices + offsets[q], s.perm, 0};
-  forEachGridNeighbor(s.g, x, r, skip, v);
-  sortRow(v.row, v.k);
+  const bool active = t < s.nq;  // no early return: the whole warp takes part in the write-out below
+  std::int64_t begin = 0;
+  std::int32_t small_k = 0;
+  if (active) {
+    int q;
+    Vec3<T> x;
+    T r;
+    std::int32_t skip;
+    queryOf(s, t, q, x, r, skip);
+    begin = offsets[q];
+    const std::int64_t k = offsets[q + 1] - begin;
+    if (k <= kRowCap) {
+      SharedSortedVisit v{buf + threadIdx.x, s.perm, 0};
+      forEachGridNeighbor(s.g, x, r, skip, v);
+      small_k = v.k;
+    } else {
+      WriteVisit v{indices + begin, s.perm, 0};
+      forEachGridNeighbor(s.g, x, r, skip, v);
+      sortRow(v.row, v.k);
+    }
+  }
+  __syncwarp();
+  const int lane = threadIdx.x & 31;
+  const int warp_base = threadIdx.x & ~31;
+  for (int l = 0; l < 32; ++l) {
+    const std::int64_t b = __shfl_sync(0xffffffffu, begin, l);
+    const std::int32_t kk = __shfl_sync(0xffffffffu, small_k, l);
+    const std::int32_t* col = buf + warp_base + l;
+    for (std::int32_t i = lane; i < kk; i += 32) indices[b + i] = col[i * kRowStride];
+  }
 }
 
 template <typename T>
@@ -318,6 +367,31 @@ NeighborLists DeviceNeighborLists::download() const {
   l.indices = indices.download();
   if (l.offsets.empty()) l.offsets.assign(1, 0);
   return l;
+}
+
+template <typename T>
+void GridNeighborSearch<T>::mark(const char* stage) const {
+  if (!profiling_) return;
+  cudaEvent_t e = nullptr;
+  INC_CUDA(cudaEventCreate(&e));
+  marks_.emplace_back(stage, std::shared_ptr<void>(e, [](void* p) { cudaEventDestroy(static_cast<cudaEvent_t>(p)); }));
+  INC_CUDA(cudaEventRecord(e));
+}
+
+template <typename T>
+std::vector<std::pair<std::string, double>> GridNeighborSearch<T>::takeProfile() const {
+  std::vector<std::pair<std::string, double>> r;
+  if (marks_.size() >= 2) {
+    INC_CUDA(cudaEventSynchronize(static_cast<cudaEvent_t>(marks_.back().second.get())));
+    for (std::size_t i = 1; i < marks_.size(); ++i) {
+      float ms = 0.0f;
+      INC_CUDA(cudaEventElapsedTime(&ms, static_cast<cudaEvent_t>(marks_[i - 1].second.get()),
+                                    static_cast<cudaEvent_t>(marks_[i].second.get())));
+      r.emplace_back(marks_[i].first, double(ms));
+    }
+  }
+  marks_.clear();
+  return r;
 }
 
 template <typename T>
@@ -348,6 +422,7 @@ void GridNeighborSearch<T>::build(const Vec3<T>* d_points, std::size_t n, T cell
     return;
   }
   const int ni = int(n);
+  mark("build:start");
 
   // 1. Bounding box and first non-finite point, reduced on the device into the grid parameters.
   const int parts = int(std::min<std::size_t>(kReduceBlocks, blocksFor(n)));
@@ -374,6 +449,7 @@ void GridNeighborSearch<T>::build(const Vec3<T>* d_points, std::size_t n, T cell
   std::uint64_t used = buckets;
   if (params_.dense) used = std::uint64_t(params_.dims[0]) * std::uint64_t(params_.dims[1]) * std::uint64_t(params_.dims[2]);
   used_buckets_ = std::size_t(used);
+  mark("build:box+params+sync");
   const int bucket_bits = keyBits(used);
 
   sorted_.resize(n);
@@ -405,10 +481,12 @@ void GridNeighborSearch<T>::build(const Vec3<T>* d_points, std::size_t n, T cell
     gatherKernel<T><<<blocksFor(n), kThreads>>>(d_points, perm_.data(), ni, sorted_.data(), inv_perm_.data());
     INC_CUDA_LAUNCH("gatherKernel(morton)");
     keyed = sorted_.data();
+    mark("build:morton keys+sort+gather");
   }
   cellKeysKernel<T><<<blocksFor(n), kThreads>>>(params_, keyed, ni, false, keys_.data(), iota_.data(),
                                                 cell_count_.data());
   INC_CUDA_LAUNCH("cellKeysKernel(bucket)");
+  mark("build:bucket keys+histogram");
   if (morton_order) {
     // entries: storage slots in bucket order (the lookup table into the Z-ordered points)
     entries_.resize(n);
@@ -418,6 +496,7 @@ void GridNeighborSearch<T>::build(const Vec3<T>* d_points, std::size_t n, T cell
     gatherKernel<T><<<blocksFor(n), kThreads>>>(d_points, perm_.data(), ni, sorted_.data(), inv_perm_.data());
     INC_CUDA_LAUNCH("gatherKernel");
   }
+  mark("build:sort+gather");
 
   // 3. Cell table: start[b] = number of points in buckets < b (exclusive scan of the histogram; its last
   // entry, zeroed by the memset, makes start[used] = n).
@@ -427,6 +506,7 @@ void GridNeighborSearch<T>::build(const Vec3<T>* d_points, std::size_t n, T cell
   void* tmp = scratch(bytes);
   INC_CUDA(cub::DeviceScan::ExclusiveScan(tmp, bytes, cell_count_.data(), bucket_start_.data(),
                                           ::cuda::std::plus<std::int32_t>{}, std::int32_t(0), used_buckets_ + 1));
+  mark("build:cell table scan");
   n_ = n;
 }
 
@@ -484,6 +564,7 @@ void GridNeighborSearch<T>::run(const Vec3<T>* d_queries, std::size_t nq, T radi
     return;
   }
   const int nqi = int(nq);
+  mark("query:start");
   status_.resize(3);
   INC_CUDA(cudaMemsetAsync(status_.data(), 0xff, status_.bytes()));  // "none" = all ones
   const Vec3<T>* check_queries = self ? nullptr : d_queries;  // self-query points were checked by build
@@ -512,6 +593,7 @@ void GridNeighborSearch<T>::run(const Vec3<T>* d_queries, std::size_t nq, T radi
   INC_CUDA(cudaMemsetAsync(counts_.data() + nq, 0, sizeof(std::int32_t)));
   countKernel<T><<<blocksFor(nq), kThreads>>>(s, counts_.data());
   INC_CUDA_LAUNCH("countKernel");
+  mark("query:validate+count");
   std::size_t bytes = 0;
   INC_CUDA(cub::DeviceScan::ExclusiveScan(nullptr, bytes, counts_.data(), out.offsets.data(),
                                           ::cuda::std::plus<std::int64_t>{}, std::int64_t(0), nq + 1));
@@ -520,6 +602,7 @@ void GridNeighborSearch<T>::run(const Vec3<T>* d_queries, std::size_t nq, T radi
                                           ::cuda::std::plus<std::int64_t>{}, std::int64_t(0), nq + 1));
   totalKernel<<<1, 1>>>(out.offsets.data(), nq, reinterpret_cast<unsigned long long*>(status_.data()));
   INC_CUDA_LAUNCH("totalKernel");
+  mark("query:offsets scan");
 
   // Host sync 1 of 1 in a query: the total sizes the index array (exact, so nothing is truncated), and an
   // invalid query or radius found by validateKernel is reported before any list is handed out.
@@ -546,9 +629,11 @@ void GridNeighborSearch<T>::run(const Vec3<T>* d_queries, std::size_t nq, T radi
     throw InputError("", "radius", "the neighbour lists (" + std::to_string(total) +
                                        " entries) do not fit in device memory; use a smaller radius");
   }
+  mark("query:sync+alloc");
   if (total == 0) return;
-  fillKernel<T><<<blocksFor(nq), kThreads>>>(s, out.offsets.data(), out.indices.data());
+  fillKernel<T><<<unsigned((nq + kFillThreads - 1) / kFillThreads), kFillThreads>>>(s, out.offsets.data(), out.indices.data());
   INC_CUDA_LAUNCH("fillKernel");
+  mark("query:fill+sort");
 }
 
 template class GridNeighborSearch<float>;

@@ -3,6 +3,9 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "host/neighbor_lists.h"
@@ -65,10 +68,17 @@ class GridNeighborSearch {
   // Cell-table entries actually used (occupied-cell box for dense grids, bucket count for hashed ones).
   std::size_t bucketTableSize() const { return used_buckets_; }
 
+  // Per-stage device timing for benchmarks (CUDA events between the stages of build and query). Off by
+  // default: nothing is recorded and no synchronisation is added. takeProfile() waits for the last event and
+  // returns (stage, milliseconds) for every stage recorded since the previous takeProfile(), then forgets them.
+  void setProfiling(bool on) { profiling_ = on; marks_.clear(); }
+  std::vector<std::pair<std::string, double>> takeProfile() const;
+
  private:
   void run(const Vec3<T>* d_queries, std::size_t nq, T radius, const T* d_radii, std::size_t radii_count,
            bool self, DeviceNeighborLists& out) const;
   void* scratch(std::size_t bytes) const;
+  void mark(const char* stage) const;  // records an event named after the stage that ends here (profiling only)
 
   std::size_t n_ = 0;
   T cell_size_ = T(0);
@@ -89,6 +99,8 @@ class GridNeighborSearch {
   mutable DeviceBuffer<unsigned char> temp_;        // CUB temporary storage
   DeviceBuffer<Vec3<T>> partial_lo_, partial_hi_;   // bounding-box partials per block
   DeviceBuffer<std::int64_t> partial_bad_;
+  bool profiling_ = false;
+  mutable std::vector<std::pair<std::string, std::shared_ptr<void>>> marks_;  // cudaEvent_t, destroyed by the deleter
 };
 
 }  // namespace inc::cuda
