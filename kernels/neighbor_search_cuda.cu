@@ -303,7 +303,11 @@ struct SharedSortedVisit {
   const std::int32_t* perm;
   std::int32_t k;
   __device__ void operator()(std::int32_t j) {
-    if (k >= kRowCap) return;  // unreachable: the count pass bounds k by kRowCap (guards shared memory only)
+    // Beyond kRowCap entries the row is only counted (the caller then rebuilds it in global memory).
+    if (k >= kRowCap) {
+      ++k;
+      return;
+    }
     const std::int32_t v = perm[j];
     std::int32_t i = k;
     for (; i > 0; --i) {
@@ -316,9 +320,45 @@ struct SharedSortedVisit {
   }
 };
 
+// Fused first pass: one traversal per query counts its neighbours (counts[q]) and, for rows of at most
+// kRowCap entries, leaves the sorted row in staged[t * kRowCap ...] (t = the thread's storage slot, so a
+// warp writes one contiguous block). Longer rows are only counted; fillKernel rebuilds them.
+template <typename T>
+__global__ void __launch_bounds__(kFillThreads) countStageKernel(QuerySpec<T> s, std::int32_t* counts,
+                                                                 std::int32_t* staged) {
+  __shared__ std::int32_t buf[kRowCap * kRowStride];
+  const int t = blockIdx.x * blockDim.x + threadIdx.x;
+  std::int32_t small_k = 0;
+  if (t < s.nq) {  // no early return: the whole warp takes part in the write-out below
+    int q;
+    Vec3<T> x;
+    T r;
+    std::int32_t skip;
+    queryOf(s, t, q, x, r, skip);
+    SharedSortedVisit v{buf + threadIdx.x, s.perm, 0};
+    forEachGridNeighbor(s.g, x, r, skip, v);
+    counts[q] = v.k;
+    small_k = v.k <= kRowCap ? v.k : 0;
+  }
+  __syncwarp();
+  const int lane = threadIdx.x & 31;
+  const int warp_base = threadIdx.x & ~31;
+  const std::int64_t slot0 = std::int64_t(blockIdx.x) * blockDim.x + warp_base;
+  for (int l = 0; l < 32; ++l) {
+    const std::int32_t kk = __shfl_sync(0xffffffffu, small_k, l);
+    const std::int32_t* col = buf + warp_base + l;
+    std::int32_t* dst = staged + (slot0 + l) * kRowCap;
+    for (std::int32_t i = lane; i < kk; i += 32) dst[i] = col[i * kRowStride];
+  }
+}
+
+// Second pass. staged == nullptr (two-pass mode, after countKernel): traverse again, building rows of at
+// most kRowCap entries sorted in shared memory. staged != nullptr (after countStageKernel): rows of at most
+// kRowCap entries are copied from staged. Either way rows are written by the whole warp (coalesced), and
+// longer rows are traversed again into global memory and sorted there.
 template <typename T>
 __global__ void __launch_bounds__(kFillThreads) fillKernel(QuerySpec<T> s, const std::int64_t* offsets,
-                                                           std::int32_t* indices) {
+                                                           const std::int32_t* staged, std::int32_t* indices) {
   __shared__ std::int32_t buf[kRowCap * kRowStride];
   const int t = blockIdx.x * blockDim.x + threadIdx.x;
   const bool active = t < s.nq;  // no early return: the whole warp takes part in the write-out below
@@ -333,9 +373,11 @@ __global__ void __launch_bounds__(kFillThreads) fillKernel(QuerySpec<T> s, const
     begin = offsets[q];
     const std::int64_t k = offsets[q + 1] - begin;
     if (k <= kRowCap) {
-      SharedSortedVisit v{buf + threadIdx.x, s.perm, 0};
-      forEachGridNeighbor(s.g, x, r, skip, v);
-      small_k = v.k;
+      if (!staged) {
+        SharedSortedVisit v{buf + threadIdx.x, s.perm, 0};
+        forEachGridNeighbor(s.g, x, r, skip, v);
+      }
+      small_k = std::int32_t(k);
     } else {
       WriteVisit v{indices + begin, s.perm, 0};
       forEachGridNeighbor(s.g, x, r, skip, v);
@@ -345,11 +387,17 @@ __global__ void __launch_bounds__(kFillThreads) fillKernel(QuerySpec<T> s, const
   __syncwarp();
   const int lane = threadIdx.x & 31;
   const int warp_base = threadIdx.x & ~31;
+  const std::int64_t slot0 = std::int64_t(blockIdx.x) * blockDim.x + warp_base;
   for (int l = 0; l < 32; ++l) {
     const std::int64_t b = __shfl_sync(0xffffffffu, begin, l);
     const std::int32_t kk = __shfl_sync(0xffffffffu, small_k, l);
-    const std::int32_t* col = buf + warp_base + l;
-    for (std::int32_t i = lane; i < kk; i += 32) indices[b + i] = col[i * kRowStride];
+    if (staged) {
+      const std::int32_t* src = staged + (slot0 + l) * kRowCap;
+      for (std::int32_t i = lane; i < kk; i += 32) indices[b + i] = src[i];
+    } else {
+      const std::int32_t* col = buf + warp_base + l;
+      for (std::int32_t i = lane; i < kk; i += 32) indices[b + i] = col[i * kRowStride];
+    }
   }
 }
 
@@ -591,9 +639,19 @@ void GridNeighborSearch<T>::run(const Vec3<T>* d_queries, std::size_t nq, T radi
   // Count pass, then offsets = exclusive scan of the counts (int64: totals beyond 2^31 stay exact).
   counts_.resize(nq + 1);
   INC_CUDA(cudaMemsetAsync(counts_.data() + nq, 0, sizeof(std::int32_t)));
-  countKernel<T><<<blocksFor(nq), kThreads>>>(s, counts_.data());
-  INC_CUDA_LAUNCH("countKernel");
-  mark("query:validate+count");
+  // Fused mode (the default while the staging area stays within the staging limit): one traversal counts
+  // and stages the sorted rows; the second pass only copies them to their CSR place.
+  const bool fused = nq * std::size_t(kRowCap) * sizeof(std::int32_t) <= staged_limit_bytes_;
+  const unsigned fill_blocks = unsigned((nq + kFillThreads - 1) / kFillThreads);
+  if (fused) {
+    staged_.resize(std::size_t(fill_blocks) * kFillThreads * kRowCap);
+    countStageKernel<T><<<fill_blocks, kFillThreads>>>(s, counts_.data(), staged_.data());
+    INC_CUDA_LAUNCH("countStageKernel");
+  } else {
+    countKernel<T><<<blocksFor(nq), kThreads>>>(s, counts_.data());
+    INC_CUDA_LAUNCH("countKernel");
+  }
+  mark(fused ? "query:validate+count+stage" : "query:validate+count");
   std::size_t bytes = 0;
   INC_CUDA(cub::DeviceScan::ExclusiveScan(nullptr, bytes, counts_.data(), out.offsets.data(),
                                           ::cuda::std::plus<std::int64_t>{}, std::int64_t(0), nq + 1));
@@ -631,9 +689,10 @@ void GridNeighborSearch<T>::run(const Vec3<T>* d_queries, std::size_t nq, T radi
   }
   mark("query:sync+alloc");
   if (total == 0) return;
-  fillKernel<T><<<unsigned((nq + kFillThreads - 1) / kFillThreads), kFillThreads>>>(s, out.offsets.data(), out.indices.data());
+  fillKernel<T><<<fill_blocks, kFillThreads>>>(s, out.offsets.data(), fused ? staged_.data() : nullptr,
+                                               out.indices.data());
   INC_CUDA_LAUNCH("fillKernel");
-  mark("query:fill+sort");
+  mark(fused ? "query:copy staged rows" : "query:fill+sort");
 }
 
 template class GridNeighborSearch<float>;

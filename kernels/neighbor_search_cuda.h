@@ -71,6 +71,10 @@ class GridNeighborSearch {
   // Per-stage device timing for benchmarks (CUDA events between the stages of build and query). Off by
   // default: nothing is recorded and no synchronisation is added. takeProfile() waits for the last event and
   // returns (stage, milliseconds) for every stage recorded since the previous takeProfile(), then forgets them.
+  // Queries stage rows of up to 48 neighbours during the count pass (48 x 4 bytes per query of scratch), so the
+  // neighbourhoods are traversed once; above this many scratch bytes they fall back to count + re-traverse.
+  // Default 4 GiB (1.6e7 queries need 3.1 GB); 0 forces the two-pass path (tests use it to cover both).
+  void setStagingLimitBytes(std::size_t bytes) { staged_limit_bytes_ = bytes; }
   void setProfiling(bool on) { profiling_ = on; marks_.clear(); }
   std::vector<std::pair<std::string, double>> takeProfile() const;
 
@@ -95,6 +99,8 @@ class GridNeighborSearch {
   DeviceBuffer<std::uint32_t> keys_, keys_sorted_;
   DeviceBuffer<std::int32_t> iota_;
   mutable DeviceBuffer<std::int32_t> counts_;       // per query
+  mutable DeviceBuffer<std::int32_t> staged_;       // fused query: sorted short rows, kRowCap per storage slot
+  std::size_t staged_limit_bytes_ = std::size_t(4) << 30;
   mutable DeviceBuffer<std::uint64_t> status_;      // {first bad query, first bad radius, total}
   mutable DeviceBuffer<unsigned char> temp_;        // CUB temporary storage
   DeviceBuffer<Vec3<T>> partial_lo_, partial_hi_;   // bounding-box partials per block
