@@ -15,6 +15,12 @@
 
 namespace inc::cuda {
 
+// 16-byte aligned record of a float point for the query kernels (float4 layout; host code needs no CUDA types).
+template <typename T>
+struct alignas(4 * sizeof(T)) Packed4 {
+  T v[4];
+};
+
 // Device copy of host/neighbor_lists.h: row q is indices[offsets[q] .. offsets[q + 1]), ascending original
 // point index, closed ball (distance2Exact <= r * r), self-queries leave q out.
 struct DeviceNeighborLists {
@@ -92,6 +98,7 @@ class GridNeighborSearch {
   DeviceBuffer<Vec3<T>> upload_;                // host-vector build only
   DeviceBuffer<NeighborGridParams<T>> d_params_;
   DeviceBuffer<Vec3<T>> sorted_;                // points in storage order
+  DeviceBuffer<Packed4<T>> packed_;             // float only: the same points as 16-byte records (x, y, z, 0)
   DeviceBuffer<std::int32_t> perm_, inv_perm_;  // slot -> original, original -> slot
   DeviceBuffer<std::int32_t> bucket_start_;     // used_buckets_ + 1
   DeviceBuffer<std::int32_t> cell_count_;       // used_buckets_ + 1 (histogram before the scan)
