@@ -319,35 +319,40 @@ __device__ void sortRow(std::int32_t* a, std::int32_t k) {
   }
 }
 
-// Rows of at most kRowCap entries (the usual case: ~30 neighbours) are built in shared memory, kept sorted
-// while they grow (insertion of each new index), and written out by the whole warp, one row after another,
+// Rows of at most kRowCap entries (the usual case: ~30 neighbours) are built in shared memory (appended
+// during the traversal, sorted after it), and written out by the whole warp, one row after another,
 // so that the global writes are coalesced. Longer rows (the count pass says which) take the old path:
 // written to global memory in traversal order, then sorted there (heap sort above 32 entries).
 constexpr int kFillThreads = 128;
 constexpr int kRowCap = 48;
 constexpr int kRowStride = kFillThreads + 1;  // odd stride: the warp's column reads hit 32 distinct banks
 
-struct SharedSortedVisit {
+// Appends during the traversal (a store and an increment: lanes of a warp hit at different candidates, so
+// whatever the visitor does runs for the whole warp at almost every candidate), sorts once afterwards.
+struct SharedAppendVisit {
   std::int32_t* col;  // this thread's column: entry i at col[i * kRowStride]
   const std::int32_t* perm;
   std::int32_t k;
   __device__ void operator()(std::int32_t j) {
     // Beyond kRowCap entries the row is only counted (the caller then rebuilds it in global memory).
-    if (k >= kRowCap) {
-      ++k;
-      return;
-    }
-    const std::int32_t v = perm[j];
-    std::int32_t i = k;
-    for (; i > 0; --i) {
-      const std::int32_t u = col[(i - 1) * kRowStride];
-      if (u <= v) break;
-      col[i * kRowStride] = u;
-    }
-    col[i * kRowStride] = v;
+    if (k < kRowCap) col[k * kRowStride] = perm[j];
     ++k;
   }
 };
+
+// Insertion sort of a column of k <= kRowCap entries in shared memory.
+__device__ void sortColumn(std::int32_t* col, std::int32_t k) {
+  for (std::int32_t i = 1; i < k; ++i) {
+    const std::int32_t v = col[i * kRowStride];
+    std::int32_t j = i;
+    for (; j > 0; --j) {
+      const std::int32_t u = col[(j - 1) * kRowStride];
+      if (u <= v) break;
+      col[j * kRowStride] = u;
+    }
+    col[j * kRowStride] = v;
+  }
+}
 
 // Fused first pass: one traversal per query counts its neighbours (counts[q]) and, for rows of at most
 // kRowCap entries, leaves the sorted row in staged[t * kRowCap ...] (t = the thread's storage slot, so a
@@ -364,10 +369,11 @@ __global__ void __launch_bounds__(kFillThreads) countStageKernel(QuerySpec<T> s,
     T r;
     std::int32_t skip;
     queryOf(s, t, q, x, r, skip);
-    SharedSortedVisit v{buf + threadIdx.x, s.perm, 0};
+    SharedAppendVisit v{buf + threadIdx.x, s.perm, 0};
     forEachGridNeighbor(s.g, x, r, skip, v);
     counts[q] = v.k;
     small_k = v.k <= kRowCap ? v.k : 0;
+    sortColumn(buf + threadIdx.x, small_k);
   }
   __syncwarp();
   const int lane = threadIdx.x & 31;
@@ -403,8 +409,9 @@ __global__ void __launch_bounds__(kFillThreads) fillKernel(QuerySpec<T> s, const
     const std::int64_t k = offsets[q + 1] - begin;
     if (k <= kRowCap) {
       if (!staged) {
-        SharedSortedVisit v{buf + threadIdx.x, s.perm, 0};
+        SharedAppendVisit v{buf + threadIdx.x, s.perm, 0};
         forEachGridNeighbor(s.g, x, r, skip, v);
+        sortColumn(buf + threadIdx.x, v.k <= kRowCap ? v.k : 0);  // v.k == k <= kRowCap (same traversal)
       }
       small_k = std::int32_t(k);
     } else {
