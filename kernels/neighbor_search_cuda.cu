@@ -329,19 +329,20 @@ constexpr int kRowStride = kFillThreads + 1;  // odd stride: the warp's column r
 
 // Appends during the traversal (a store and an increment: lanes of a warp hit at different candidates, so
 // whatever the visitor does runs for the whole warp at almost every candidate), sorts once afterwards.
+// The storage index is kept; finishColumn maps it to the original index after the loop.
 struct SharedAppendVisit {
   std::int32_t* col;  // this thread's column: entry i at col[i * kRowStride]
-  const std::int32_t* perm;
   std::int32_t k;
   __device__ void operator()(std::int32_t j) {
     // Beyond kRowCap entries the row is only counted (the caller then rebuilds it in global memory).
-    if (k < kRowCap) col[k * kRowStride] = perm[j];
+    if (k < kRowCap) col[k * kRowStride] = j;
     ++k;
   }
 };
 
-// Insertion sort of a column of k <= kRowCap entries in shared memory.
-__device__ void sortColumn(std::int32_t* col, std::int32_t k) {
+// Maps a column of k <= kRowCap storage indices to original indices and insertion-sorts it in shared memory.
+__device__ void finishColumn(std::int32_t* col, std::int32_t k, const std::int32_t* perm) {
+  for (std::int32_t i = 0; i < k; ++i) col[i * kRowStride] = perm[col[i * kRowStride]];
   for (std::int32_t i = 1; i < k; ++i) {
     const std::int32_t v = col[i * kRowStride];
     std::int32_t j = i;
@@ -369,11 +370,11 @@ __global__ void __launch_bounds__(kFillThreads) countStageKernel(QuerySpec<T> s,
     T r;
     std::int32_t skip;
     queryOf(s, t, q, x, r, skip);
-    SharedAppendVisit v{buf + threadIdx.x, s.perm, 0};
+    SharedAppendVisit v{buf + threadIdx.x, 0};
     forEachGridNeighbor(s.g, x, r, skip, v);
     counts[q] = v.k;
     small_k = v.k <= kRowCap ? v.k : 0;
-    sortColumn(buf + threadIdx.x, small_k);
+    finishColumn(buf + threadIdx.x, small_k, s.perm);
   }
   __syncwarp();
   const int lane = threadIdx.x & 31;
@@ -409,9 +410,9 @@ __global__ void __launch_bounds__(kFillThreads) fillKernel(QuerySpec<T> s, const
     const std::int64_t k = offsets[q + 1] - begin;
     if (k <= kRowCap) {
       if (!staged) {
-        SharedAppendVisit v{buf + threadIdx.x, s.perm, 0};
+        SharedAppendVisit v{buf + threadIdx.x, 0};
         forEachGridNeighbor(s.g, x, r, skip, v);
-        sortColumn(buf + threadIdx.x, v.k <= kRowCap ? v.k : 0);  // v.k == k <= kRowCap (same traversal)
+        finishColumn(buf + threadIdx.x, v.k <= kRowCap ? v.k : 0, s.perm);  // v.k == k <= kRowCap (same traversal)
       }
       small_k = std::int32_t(k);
     } else {
