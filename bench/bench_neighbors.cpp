@@ -64,9 +64,12 @@ struct TrafficModel {
   double build, query;
 };
 
+// gpu: the CUDA pipeline (float points also get a 16-byte packed copy for the queries, and the query is one
+// traversal that stages sorted rows, then a copy); otherwise the CPU's (one traversal straight into lists).
 TrafficModel trafficModel(std::size_t point_bytes, double neighbours, double buckets_per_point, int bucket_bits,
-                          int morton_bits, bool morton) {
+                          int morton_bits, bool morton, bool gpu) {
   const double P = double(point_bytes);
+  const double Q = gpu && point_bytes == 12 ? 16.0 : P;  // the point record the query reads
   auto sortPairs = [](int bits) {  // CUB onesweep: a key histogram pass, then 8-bit digit passes over key+value
     return 4.0 + 16.0 * double((bits + 7) / 8);
   };
@@ -75,11 +78,16 @@ TrafficModel trafficModel(std::size_t point_bytes, double neighbours, double buc
   build += P + 4.0 + 4.0 + 8.0;          // bucket keys: read point, write key and iota, histogram atomic (r+w)
   build += sortPairs(bucket_bits);       // sort (key, index) pairs by bucket
   build += 4.0 + 2.0 * P + 4.0;          // gather: read perm and point, write sorted point and inverse
+  if (Q != P) build += Q;                // ... and the packed copy
   build += 8.0 * buckets_per_point;      // exclusive scan of the histogram: read + write
   if (morton) build += (P + 8.0) + sortPairs(morton_bits);  // Morton keys + their sort before the rest
-  double query = P + 4.0 + 4.0;          // count: read own point and perm, write count
+  if (!gpu) {
+    // traversal: read own point and perm, append the list to a block buffer; then copy it into place
+    return {build, P + 4.0 + 4.0 * neighbours + 8.0 + 8.0 * neighbours};
+  }
+  double query = Q + 4.0 + 4.0 + 4.0 * neighbours;  // count+stage: own point, perm; write count, staged row
   query += 4.0 + 8.0;                    // scan: read count, write int64 offset
-  query += P + 4.0 + 8.0 + 4.0 * neighbours;  // fill: read point, perm, offset; write the indices
+  query += 4.0 + 8.0 + 8.0 * neighbours;  // copy: perm, offset; read the staged row, write the indices
   return {build, query};
 }
 
@@ -133,7 +141,7 @@ Row runCpu(std::size_t n, int repeats, bool morton, double cell_factor) {
   const auto& p = s.params();
   const double used = p.dense ? double(p.dims[0]) * p.dims[1] * p.dims[2] : double(p.bucket_mask) + 1.0;
   const TrafficModel m = trafficModel(sizeof(Vec3<T>), row.neighbours, used / double(n), keyBits(std::uint64_t(used)),
-                                      30, morton);
+                                      30, morton, false);
   row.bytes = m.build + m.query;
   row.gbs = row.bytes * double(n) / (row.total_ms * 1e-3) / 1e9;
   row.target_ms = targetMs(false, n);
@@ -142,7 +150,7 @@ Row runCpu(std::size_t n, int repeats, bool morton, double cell_factor) {
 
 #if INCISION_HAVE_CUDA
 template <typename T>
-Row runCuda(std::size_t n, int repeats, bool morton, double cell_factor, double peak_gbs) {
+Row runCuda(std::size_t n, int repeats, bool morton, double cell_factor, double peak_gbs, bool profile) {
   const auto pts = jitteredLattice<T>(n, 1234);
   const T r = T(kRadius);
   cuda::DeviceBuffer<Vec3<T>> d_pts;
@@ -172,6 +180,26 @@ Row runCuda(std::size_t n, int repeats, bool morton, double cell_factor, double 
   INC_CUDA(cudaEventDestroy(e0));
   INC_CUDA(cudaEventDestroy(e1));
   INC_CUDA(cudaEventDestroy(e2));
+  if (profile) {
+    // Separate profiled runs (events between the stages add a little host work, so the table above is
+    // timed without them): median milliseconds per stage.
+    s.setProfiling(true);
+    std::vector<std::string> names;
+    std::vector<std::vector<double>> ms;
+    for (int rep = 0; rep < std::max(repeats, 3); ++rep) {
+      s.build(d_pts.data(), n, T(kRadius * cell_factor), morton);
+      s.querySelf(r, out);
+      const auto stages = s.takeProfile();
+      if (names.empty())
+        for (const auto& st : stages) names.push_back(st.first);
+      ms.resize(names.size());
+      for (std::size_t i = 0; i < stages.size() && i < names.size(); ++i) ms[i].push_back(stages[i].second);
+    }
+    s.setProfiling(false);
+    std::printf("profile cuda n=%zu:", n);
+    for (std::size_t i = 0; i < names.size(); ++i) std::printf(" %s=%.4f", names[i].c_str(), median(ms[i]));
+    std::printf(" (ms, median)\n");
+  }
   Row row;
   row.backend = "cuda";
   row.n = n;
@@ -185,7 +213,7 @@ Row runCuda(std::size_t n, int repeats, bool morton, double cell_factor, double 
   const int max_dim = std::max(p.dims[0], std::max(p.dims[1], p.dims[2]));
   const int morton_bits = std::max(1, std::min(30, 3 * (keyBits(std::uint64_t(max_dim)) - p.morton_shift)));
   const TrafficModel m = trafficModel(sizeof(Vec3<T>), row.neighbours, used / double(n), keyBits(std::uint64_t(used)),
-                                      morton_bits, morton);
+                                      morton_bits, morton, true);
   row.bytes = m.build + m.query;
   row.gbs = row.bytes * double(n) / (row.total_ms * 1e-3) / 1e9;
   row.peak_fraction = peak_gbs > 0 ? row.gbs / peak_gbs : 0.0;
@@ -225,7 +253,7 @@ int main(int argc, char** argv) {
   std::string backend_text = "auto", precision = "float", csv;
   std::size_t lo = 10000, hi = 1000000, cpu_max = 0;
   int repeats = 0, cpu_threads = 0;
-  bool quick = false, morton = false;
+  bool quick = false, morton = false, profile = false;
   double cell_factor = 1.0;
   app.add_option("--backend", backend_text, "cpu | cuda | auto");
   app.add_option("--min", lo, "smallest particle count");
@@ -239,6 +267,7 @@ int main(int argc, char** argv) {
   app.add_flag("--morton", morton, "store the grid in Z order");
   app.add_flag("--shuffle", g_shuffle, "list the particles in random order instead of lattice order");
   app.add_option("--csv", csv, "write the rows as CSV here");
+  app.add_flag("--profile", profile, "GPU: also print the median time of every build / query stage (CUDA events)");
   app.add_flag("--quick", quick, "a short run: at most three sizes, three repeats");
   CLI11_PARSE(app, argc, argv);
 
@@ -266,8 +295,8 @@ int main(int argc, char** argv) {
       Row r;
 #if INCISION_HAVE_CUDA
       if (on_gpu)
-        r = precision == "double" ? runCuda<double>(n, reps, morton, cell_factor, peak)
-                                    : runCuda<float>(n, reps, morton, cell_factor, peak);
+        r = precision == "double" ? runCuda<double>(n, reps, morton, cell_factor, peak, profile)
+                                    : runCuda<float>(n, reps, morton, cell_factor, peak, profile);
 #endif
       if (!on_gpu) r = precision == "double" ? runCpu<double>(n, reps, morton, cell_factor)
                                         : runCpu<float>(n, reps, morton, cell_factor);

@@ -72,6 +72,78 @@ void sortList(std::int32_t* a, std::size_t k) {
   }
 }
 
+// Dense-grid fast path of forEachGridNeighbor (same cell range, same rows, same d^2 decision, so the same
+// set; the caller sorts it): each (y, z) row of the range is one contiguous run of bucket slots, scanned over
+// separate coordinate arrays with a branch-free append into `out` (room for every candidate: `capacity`
+// grows as needed). Returns false where the generic traversal must be used (hashed grid, or a range with
+// more cells than points); otherwise the number of neighbours written.
+// No FMA contraction: d^2 must round exactly like distance2Exact ((dx^2 + dy^2) + dz^2, each rounded).
+#if defined(__clang__)
+#define INC_NO_CONTRACT_BEGIN  // clang: the pragma at the top of the function body
+#define INC_NO_CONTRACT_END
+#elif defined(__GNUC__)
+#define INC_NO_CONTRACT_BEGIN _Pragma("GCC push_options") _Pragma("GCC optimize(\"fp-contract=off\")")
+#define INC_NO_CONTRACT_END _Pragma("GCC pop_options")
+#else
+#define INC_NO_CONTRACT_BEGIN
+#define INC_NO_CONTRACT_END
+#endif
+
+struct DenseRowsResult {
+  bool handled;
+  std::size_t count;
+};
+
+INC_NO_CONTRACT_BEGIN
+template <typename T>
+DenseRowsResult denseRows(const NeighborGridParams<T>& p, const std::int32_t* start, const T* xs, const T* ys,
+                          const T* zs, const std::int32_t* orig, std::int32_t n, const Vec3<T>& x, T r,
+                          std::int32_t skip_orig, std::vector<std::int32_t>& out) {
+#if defined(__clang__)
+#pragma clang fp contract(off)
+#endif
+  if (!p.dense) return {false, 0};
+  if (n <= 0) return {true, 0};
+  const T r2 = r * r;
+  const T reach = neighborSearchReach(r);
+  std::int32_t lo[3], hi[3];
+  std::uint64_t cells = 1;
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = neighborCellCoord(x[a] - reach, p.origin[a], p.inv_cell);
+    const std::int32_t h = neighborCellCoord(x[a] + reach, p.origin[a], p.inv_cell);
+    hi[a] = h < p.dims[a] - 1 ? h : p.dims[a] - 1;
+    if (lo[a] > hi[a]) return {true, 0};
+    cells *= std::uint64_t(hi[a] - lo[a] + 1);
+  }
+  if (cells > std::uint64_t(n)) return {false, 0};
+  // Room for every candidate (rows are few: one start lookup pair each).
+  std::size_t candidates = 0;
+  for (std::int32_t cz = lo[2]; cz <= hi[2]; ++cz)
+    for (std::int32_t cy = lo[1]; cy <= hi[1]; ++cy) {
+      const std::uint32_t b0 = neighborBucket(p, lo[0], cy, cz);
+      candidates += std::size_t(start[b0 + std::uint32_t(hi[0] - lo[0]) + 1u] - start[b0]);
+    }
+  if (out.size() < candidates) out.resize(candidates);
+  std::int32_t* dst = out.data();
+  std::size_t m = 0;
+  const T qx = x.x, qy = x.y, qz = x.z;
+  for (std::int32_t cz = lo[2]; cz <= hi[2]; ++cz)
+    for (std::int32_t cy = lo[1]; cy <= hi[1]; ++cy) {
+      const std::uint32_t b0 = neighborBucket(p, lo[0], cy, cz);
+      const std::int32_t e1 = start[b0 + std::uint32_t(hi[0] - lo[0]) + 1u];
+      for (std::int32_t e = start[b0]; e < e1; ++e) {
+        const T dx = qx - xs[e], dy = qy - ys[e], dz = qz - zs[e];
+        const T xx = dx * dx, yy = dy * dy, zz = dz * dz;
+        const T d2 = (xx + yy) + zz;
+        const std::int32_t o = orig[e];
+        dst[m] = o;
+        m += std::size_t((d2 <= r2) & (o != skip_orig));
+      }
+    }
+  return {true, m};
+}
+INC_NO_CONTRACT_END
+
 struct AppendOriginal {
   std::vector<std::int32_t>* out;
   const std::int32_t* perm;
@@ -133,6 +205,17 @@ void GridNeighborSearch<T>::build(const std::vector<Vec3<T>>& points, T cell_siz
   }
   inv_perm_.resize(n);
   parallelFor(std::int64_t(n), [&](std::int64_t s) { inv_perm_[std::size_t(perm_[std::size_t(s)])] = std::int32_t(s); });
+  slot_x_.resize(n);
+  slot_y_.resize(n);
+  slot_z_.resize(n);
+  slot_orig_.resize(n);
+  parallelFor(std::int64_t(n), [&](std::int64_t e) {
+    const std::size_t s = entries_.empty() ? std::size_t(e) : std::size_t(entries_[std::size_t(e)]);
+    slot_x_[std::size_t(e)] = sorted_[s].x;
+    slot_y_[std::size_t(e)] = sorted_[s].y;
+    slot_z_[std::size_t(e)] = sorted_[s].z;
+    slot_orig_[std::size_t(e)] = perm_[s];
+  });
 }
 
 template <typename T>
@@ -196,15 +279,25 @@ NeighborLists GridNeighborSearch<T>::run(const Vec3<T>* queries, std::size_t nq,
   auto blockBegin = [&](std::int64_t b) { return std::size_t(b * std::int64_t(nq) / blocks); };
   parallelFor(blocks, [&](std::int64_t b) {
     std::vector<std::int32_t>& buf = buffers[std::size_t(b)];
+    std::vector<std::int32_t> row;  // the dense fast path's candidates / hits of one query
     AppendOriginal visit{&buf, perm_.data()};
     try {
+      buf.reserve(std::size_t(blockBegin(b + 1) - blockBegin(b)) * 32);
       for (std::size_t i = blockBegin(b); i < blockBegin(b + 1); ++i) {
         const std::size_t q = self ? std::size_t(perm_[i]) : i;
         const Vec3<T>& x = self ? sorted_[i] : queries[i];
         const T r = per_query ? radii[q] : radii[0];
         const std::size_t first = buf.size();
-        forEachGridNeighbor(g, x, r, self ? std::int32_t(i) : -1, visit);
-        sortList(buf.data() + first, buf.size() - first);
+        const DenseRowsResult fast =
+            denseRows(g.p, g.bucket_start, slot_x_.data(), slot_y_.data(), slot_z_.data(), slot_orig_.data(), g.n,
+                      x, r, self ? std::int32_t(q) : -1, row);
+        if (fast.handled) {
+          sortList(row.data(), fast.count);
+          buf.insert(buf.end(), row.begin(), row.begin() + std::ptrdiff_t(fast.count));
+        } else {
+          forEachGridNeighbor(g, x, r, self ? std::int32_t(i) : -1, visit);
+          sortList(buf.data() + first, buf.size() - first);
+        }
         out.offsets[q + 1] = std::int64_t(buf.size() - first);
       }
     } catch (const std::bad_alloc&) {

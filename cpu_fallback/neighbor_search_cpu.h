@@ -55,6 +55,10 @@ class GridNeighborSearch {
   std::vector<std::int32_t> inv_perm_;      // original index -> storage slot
   std::vector<std::int32_t> bucket_start_;  // bucket count + 1
   std::vector<std::int32_t> entries_;       // Morton mode: storage index per bucket slot (else empty)
+  // The points in bucket-slot order as separate coordinate arrays plus their original indices: the dense
+  // fast path of the query streams these (one contiguous run of slots per (y, z) row of cells).
+  std::vector<T> slot_x_, slot_y_, slot_z_;
+  std::vector<std::int32_t> slot_orig_;
 };
 
 }  // namespace inc::cpu

@@ -9,6 +9,7 @@
 #include <limits>
 #include <sstream>
 #include <string>
+#include <type_traits>
 
 #include "host/input_error.h"
 #include "kernels/cuda_check.h"
@@ -180,13 +181,41 @@ __global__ void cellKeysKernel(NeighborGridParams<T> p, const Vec3<T>* pts, int 
   iota[i] = i;
 }
 
-// sorted[s] = pts[perm[s]]; inv[perm[s]] = s.
+// The coordinates the query kernels read: float points as float4 (one 16-byte load per candidate instead of
+// three 4-byte ones; w unused), double points as they are.
+template <typename T> struct PackedPoint { using type = Vec3<T>; };
+template <> struct PackedPoint<float> { using type = float4; };
+
+__device__ inline Vec3<float> unpackPoint(const float4* p, std::int32_t j) {
+  const float4 v = __ldg(p + j);
+  return Vec3<float>(v.x, v.y, v.z);
+}
+__device__ inline Vec3<double> unpackPoint(const Vec3<double>* p, std::int32_t j) { return p[j]; }
+
+__device__ inline void packPoint(float4* p, int s, const Vec3<float>& x) { p[s] = make_float4(x.x, x.y, x.z, 0.0f); }
+__device__ inline void packPoint(Vec3<double>*, int, const Vec3<double>&) {}  // doubles are read from `sorted`
+
+// The grid as the kernels see it: NeighborGridView's members, points read from the packed copy.
 template <typename T>
-__global__ void gatherKernel(const Vec3<T>* pts, const std::int32_t* perm, int n, Vec3<T>* sorted, std::int32_t* inv) {
+struct DeviceGridView {
+  NeighborGridParams<T> p;
+  const typename PackedPoint<T>::type* points;
+  const std::int32_t* bucket_start;
+  const std::int32_t* entries;
+  std::int32_t n;
+  __device__ Vec3<T> point(std::int32_t j) const { return unpackPoint(points, j); }
+};
+
+// sorted[s] = pts[perm[s]] (and its packed copy when there is one); inv[perm[s]] = s.
+template <typename T>
+__global__ void gatherKernel(const Vec3<T>* pts, const std::int32_t* perm, int n, Vec3<T>* sorted,
+                             typename PackedPoint<T>::type* packed, std::int32_t* inv) {
   const int s = blockIdx.x * blockDim.x + threadIdx.x;
   if (s >= n) return;
   const std::int32_t o = perm[s];
-  sorted[s] = pts[o];
+  const Vec3<T> x = pts[o];
+  sorted[s] = x;
+  if (packed) packPoint(packed, s, x);
   inv[o] = s;
 }
 
@@ -217,7 +246,7 @@ struct WriteVisit {
 // neighbouring cells) and write to the query's original index.
 template <typename T>
 struct QuerySpec {
-  NeighborGridView<T> g;
+  DeviceGridView<T> g;
   const Vec3<T>* queries;  // nullptr: self-query
   const std::int32_t* perm;
   const T* radii;  // nullptr: `radius` for all; else radii[q * radii_stride]
@@ -234,7 +263,7 @@ __device__ void queryOf(const QuerySpec<T>& s, int t, int& q, Vec3<T>& x, T& r, 
     skip = -1;
   } else {
     q = s.perm[t];
-    x = s.g.points[t];
+    x = s.g.point(t);
     skip = t;
   }
   r = s.radii ? s.radii[q * s.radii_stride] : s.radius;
@@ -290,18 +319,123 @@ __device__ void sortRow(std::int32_t* a, std::int32_t k) {
   }
 }
 
+// Rows of at most kRowCap entries (the usual case: ~30 neighbours) are built in shared memory (appended
+// during the traversal, sorted after it), and written out by the whole warp, one row after another,
+// so that the global writes are coalesced. Longer rows (the count pass says which) take the old path:
+// written to global memory in traversal order, then sorted there (heap sort above 32 entries).
+constexpr int kFillThreads = 128;
+constexpr int kRowCap = 48;
+constexpr int kRowStride = kFillThreads + 1;  // odd stride: the warp's column reads hit 32 distinct banks
+
+// Appends during the traversal (a store and an increment: lanes of a warp hit at different candidates, so
+// whatever the visitor does runs for the whole warp at almost every candidate), sorts once afterwards.
+// The storage index is kept; finishColumn maps it to the original index after the loop.
+struct SharedAppendVisit {
+  std::int32_t* col;  // this thread's column: entry i at col[i * kRowStride]
+  std::int32_t k;
+  __device__ void operator()(std::int32_t j) {
+    // Beyond kRowCap entries the row is only counted (the caller then rebuilds it in global memory).
+    if (k < kRowCap) col[k * kRowStride] = j;
+    ++k;
+  }
+};
+
+// Maps a column of k <= kRowCap storage indices to original indices and insertion-sorts it in shared memory.
+__device__ void finishColumn(std::int32_t* col, std::int32_t k, const std::int32_t* perm) {
+  for (std::int32_t i = 0; i < k; ++i) col[i * kRowStride] = perm[col[i * kRowStride]];
+  for (std::int32_t i = 1; i < k; ++i) {
+    const std::int32_t v = col[i * kRowStride];
+    std::int32_t j = i;
+    for (; j > 0; --j) {
+      const std::int32_t u = col[(j - 1) * kRowStride];
+      if (u <= v) break;
+      col[j * kRowStride] = u;
+    }
+    col[j * kRowStride] = v;
+  }
+}
+
+// Fused first pass: one traversal per query counts its neighbours (counts[q]) and, for rows of at most
+// kRowCap entries, leaves the sorted row in staged[t * kRowCap ...] (t = the thread's storage slot, so a
+// warp writes one contiguous block). Longer rows are only counted; fillKernel rebuilds them.
 template <typename T>
-__global__ void fillKernel(QuerySpec<T> s, const std::int64_t* offsets, std::int32_t* indices) {
+__global__ void __launch_bounds__(kFillThreads) countStageKernel(QuerySpec<T> s, std::int32_t* counts,
+                                                                 std::int32_t* staged) {
+  __shared__ std::int32_t buf[kRowCap * kRowStride];
   const int t = blockIdx.x * blockDim.x + threadIdx.x;
-  if (t >= s.nq) return;
-  int q;
-  Vec3<T> x;
-  T r;
-  std::int32_t skip;
-  queryOf(s, t, q, x, r, skip);
-  WriteVisit v{indices + offsets[q], s.perm, 0};
-  forEachGridNeighbor(s.g, x, r, skip, v);
-  sortRow(v.row, v.k);
+  std::int32_t small_k = 0;
+  if (t < s.nq) {  // no early return: the whole warp takes part in the write-out below
+    int q;
+    Vec3<T> x;
+    T r;
+    std::int32_t skip;
+    queryOf(s, t, q, x, r, skip);
+    SharedAppendVisit v{buf + threadIdx.x, 0};
+    forEachGridNeighbor(s.g, x, r, skip, v);
+    counts[q] = v.k;
+    small_k = v.k <= kRowCap ? v.k : 0;
+    finishColumn(buf + threadIdx.x, small_k, s.perm);
+  }
+  __syncwarp();
+  const int lane = threadIdx.x & 31;
+  const int warp_base = threadIdx.x & ~31;
+  const std::int64_t slot0 = std::int64_t(blockIdx.x) * blockDim.x + warp_base;
+  for (int l = 0; l < 32; ++l) {
+    const std::int32_t kk = __shfl_sync(0xffffffffu, small_k, l);
+    const std::int32_t* col = buf + warp_base + l;
+    std::int32_t* dst = staged + (slot0 + l) * kRowCap;
+    for (std::int32_t i = lane; i < kk; i += 32) dst[i] = col[i * kRowStride];
+  }
+}
+
+// Second pass. staged == nullptr (two-pass mode, after countKernel): traverse again, building rows of at
+// most kRowCap entries sorted in shared memory. staged != nullptr (after countStageKernel): rows of at most
+// kRowCap entries are copied from staged. Either way rows are written by the whole warp (coalesced), and
+// longer rows are traversed again into global memory and sorted there.
+template <typename T>
+__global__ void __launch_bounds__(kFillThreads) fillKernel(QuerySpec<T> s, const std::int64_t* offsets,
+                                                           const std::int32_t* staged, std::int32_t* indices) {
+  __shared__ std::int32_t buf[kRowCap * kRowStride];
+  const int t = blockIdx.x * blockDim.x + threadIdx.x;
+  const bool active = t < s.nq;  // no early return: the whole warp takes part in the write-out below
+  std::int64_t begin = 0;
+  std::int32_t small_k = 0;
+  if (active) {
+    int q;
+    Vec3<T> x;
+    T r;
+    std::int32_t skip;
+    queryOf(s, t, q, x, r, skip);
+    begin = offsets[q];
+    const std::int64_t k = offsets[q + 1] - begin;
+    if (k <= kRowCap) {
+      if (!staged) {
+        SharedAppendVisit v{buf + threadIdx.x, 0};
+        forEachGridNeighbor(s.g, x, r, skip, v);
+        finishColumn(buf + threadIdx.x, v.k <= kRowCap ? v.k : 0, s.perm);  // v.k == k <= kRowCap (same traversal)
+      }
+      small_k = std::int32_t(k);
+    } else {
+      WriteVisit v{indices + begin, s.perm, 0};
+      forEachGridNeighbor(s.g, x, r, skip, v);
+      sortRow(v.row, v.k);
+    }
+  }
+  __syncwarp();
+  const int lane = threadIdx.x & 31;
+  const int warp_base = threadIdx.x & ~31;
+  const std::int64_t slot0 = std::int64_t(blockIdx.x) * blockDim.x + warp_base;
+  for (int l = 0; l < 32; ++l) {
+    const std::int64_t b = __shfl_sync(0xffffffffu, begin, l);
+    const std::int32_t kk = __shfl_sync(0xffffffffu, small_k, l);
+    if (staged) {
+      const std::int32_t* src = staged + (slot0 + l) * kRowCap;
+      for (std::int32_t i = lane; i < kk; i += 32) indices[b + i] = src[i];
+    } else {
+      const std::int32_t* col = buf + warp_base + l;
+      for (std::int32_t i = lane; i < kk; i += 32) indices[b + i] = col[i * kRowStride];
+    }
+  }
 }
 
 template <typename T>
@@ -318,6 +452,31 @@ NeighborLists DeviceNeighborLists::download() const {
   l.indices = indices.download();
   if (l.offsets.empty()) l.offsets.assign(1, 0);
   return l;
+}
+
+template <typename T>
+void GridNeighborSearch<T>::mark(const char* stage) const {
+  if (!profiling_) return;
+  cudaEvent_t e = nullptr;
+  INC_CUDA(cudaEventCreate(&e));
+  marks_.emplace_back(stage, std::shared_ptr<void>(e, [](void* p) { cudaEventDestroy(static_cast<cudaEvent_t>(p)); }));
+  INC_CUDA(cudaEventRecord(e));
+}
+
+template <typename T>
+std::vector<std::pair<std::string, double>> GridNeighborSearch<T>::takeProfile() const {
+  std::vector<std::pair<std::string, double>> r;
+  if (marks_.size() >= 2) {
+    INC_CUDA(cudaEventSynchronize(static_cast<cudaEvent_t>(marks_.back().second.get())));
+    for (std::size_t i = 1; i < marks_.size(); ++i) {
+      float ms = 0.0f;
+      INC_CUDA(cudaEventElapsedTime(&ms, static_cast<cudaEvent_t>(marks_[i - 1].second.get()),
+                                    static_cast<cudaEvent_t>(marks_[i].second.get())));
+      r.emplace_back(marks_[i].first, double(ms));
+    }
+  }
+  marks_.clear();
+  return r;
 }
 
 template <typename T>
@@ -348,6 +507,7 @@ void GridNeighborSearch<T>::build(const Vec3<T>* d_points, std::size_t n, T cell
     return;
   }
   const int ni = int(n);
+  mark("build:start");
 
   // 1. Bounding box and first non-finite point, reduced on the device into the grid parameters.
   const int parts = int(std::min<std::size_t>(kReduceBlocks, blocksFor(n)));
@@ -374,9 +534,15 @@ void GridNeighborSearch<T>::build(const Vec3<T>* d_points, std::size_t n, T cell
   std::uint64_t used = buckets;
   if (params_.dense) used = std::uint64_t(params_.dims[0]) * std::uint64_t(params_.dims[1]) * std::uint64_t(params_.dims[2]);
   used_buckets_ = std::size_t(used);
+  mark("build:box+params+sync");
   const int bucket_bits = keyBits(used);
 
   sorted_.resize(n);
+  typename PackedPoint<T>::type* packed = nullptr;
+  if constexpr (std::is_same_v<T, float>) {
+    packed_.resize(n);
+    packed = reinterpret_cast<float4*>(packed_.data());
+  }
   perm_.resize(n);
   inv_perm_.resize(n);
   keys_.resize(n);
@@ -402,22 +568,25 @@ void GridNeighborSearch<T>::build(const Vec3<T>* d_points, std::size_t n, T cell
     const int max_dim = std::max(params_.dims[0], std::max(params_.dims[1], params_.dims[2]));
     const int axis_bits = keyBits(std::uint64_t(max_dim)) - params_.morton_shift;
     radixSort(keys_.data(), keys_sorted_.data(), iota_.data(), perm_.data(), std::max(1, std::min(30, 3 * axis_bits)));
-    gatherKernel<T><<<blocksFor(n), kThreads>>>(d_points, perm_.data(), ni, sorted_.data(), inv_perm_.data());
+    gatherKernel<T><<<blocksFor(n), kThreads>>>(d_points, perm_.data(), ni, sorted_.data(), packed, inv_perm_.data());
     INC_CUDA_LAUNCH("gatherKernel(morton)");
     keyed = sorted_.data();
+    mark("build:morton keys+sort+gather");
   }
   cellKeysKernel<T><<<blocksFor(n), kThreads>>>(params_, keyed, ni, false, keys_.data(), iota_.data(),
                                                 cell_count_.data());
   INC_CUDA_LAUNCH("cellKeysKernel(bucket)");
+  mark("build:bucket keys+histogram");
   if (morton_order) {
     // entries: storage slots in bucket order (the lookup table into the Z-ordered points)
     entries_.resize(n);
     radixSort(keys_.data(), keys_sorted_.data(), iota_.data(), entries_.data(), bucket_bits);
   } else {
     radixSort(keys_.data(), keys_sorted_.data(), iota_.data(), perm_.data(), bucket_bits);
-    gatherKernel<T><<<blocksFor(n), kThreads>>>(d_points, perm_.data(), ni, sorted_.data(), inv_perm_.data());
+    gatherKernel<T><<<blocksFor(n), kThreads>>>(d_points, perm_.data(), ni, sorted_.data(), packed, inv_perm_.data());
     INC_CUDA_LAUNCH("gatherKernel");
   }
+  mark("build:sort+gather");
 
   // 3. Cell table: start[b] = number of points in buckets < b (exclusive scan of the histogram; its last
   // entry, zeroed by the memset, makes start[used] = n).
@@ -427,6 +596,7 @@ void GridNeighborSearch<T>::build(const Vec3<T>* d_points, std::size_t n, T cell
   void* tmp = scratch(bytes);
   INC_CUDA(cub::DeviceScan::ExclusiveScan(tmp, bytes, cell_count_.data(), bucket_start_.data(),
                                           ::cuda::std::plus<std::int32_t>{}, std::int32_t(0), used_buckets_ + 1));
+  mark("build:cell table scan");
   n_ = n;
 }
 
@@ -484,6 +654,7 @@ void GridNeighborSearch<T>::run(const Vec3<T>* d_queries, std::size_t nq, T radi
     return;
   }
   const int nqi = int(nq);
+  mark("query:start");
   status_.resize(3);
   INC_CUDA(cudaMemsetAsync(status_.data(), 0xff, status_.bytes()));  // "none" = all ones
   const Vec3<T>* check_queries = self ? nullptr : d_queries;  // self-query points were checked by build
@@ -496,7 +667,10 @@ void GridNeighborSearch<T>::run(const Vec3<T>* d_queries, std::size_t nq, T radi
 
   QuerySpec<T> s;
   s.g.p = params_;
-  s.g.points = sorted_.data();
+  if constexpr (std::is_same_v<T, float>)
+    s.g.points = reinterpret_cast<const float4*>(packed_.data());
+  else
+    s.g.points = sorted_.data();
   s.g.bucket_start = bucket_start_.data();
   s.g.entries = morton_ ? entries_.data() : nullptr;
   s.g.n = std::int32_t(n_);
@@ -510,8 +684,19 @@ void GridNeighborSearch<T>::run(const Vec3<T>* d_queries, std::size_t nq, T radi
   // Count pass, then offsets = exclusive scan of the counts (int64: totals beyond 2^31 stay exact).
   counts_.resize(nq + 1);
   INC_CUDA(cudaMemsetAsync(counts_.data() + nq, 0, sizeof(std::int32_t)));
-  countKernel<T><<<blocksFor(nq), kThreads>>>(s, counts_.data());
-  INC_CUDA_LAUNCH("countKernel");
+  // Fused mode (the default while the staging area stays within the staging limit): one traversal counts
+  // and stages the sorted rows; the second pass only copies them to their CSR place.
+  const bool fused = nq * std::size_t(kRowCap) * sizeof(std::int32_t) <= staged_limit_bytes_;
+  const unsigned fill_blocks = unsigned((nq + kFillThreads - 1) / kFillThreads);
+  if (fused) {
+    staged_.resize(std::size_t(fill_blocks) * kFillThreads * kRowCap);
+    countStageKernel<T><<<fill_blocks, kFillThreads>>>(s, counts_.data(), staged_.data());
+    INC_CUDA_LAUNCH("countStageKernel");
+  } else {
+    countKernel<T><<<blocksFor(nq), kThreads>>>(s, counts_.data());
+    INC_CUDA_LAUNCH("countKernel");
+  }
+  mark(fused ? "query:validate+count+stage" : "query:validate+count");
   std::size_t bytes = 0;
   INC_CUDA(cub::DeviceScan::ExclusiveScan(nullptr, bytes, counts_.data(), out.offsets.data(),
                                           ::cuda::std::plus<std::int64_t>{}, std::int64_t(0), nq + 1));
@@ -520,6 +705,7 @@ void GridNeighborSearch<T>::run(const Vec3<T>* d_queries, std::size_t nq, T radi
                                           ::cuda::std::plus<std::int64_t>{}, std::int64_t(0), nq + 1));
   totalKernel<<<1, 1>>>(out.offsets.data(), nq, reinterpret_cast<unsigned long long*>(status_.data()));
   INC_CUDA_LAUNCH("totalKernel");
+  mark("query:offsets scan");
 
   // Host sync 1 of 1 in a query: the total sizes the index array (exact, so nothing is truncated), and an
   // invalid query or radius found by validateKernel is reported before any list is handed out.
@@ -546,9 +732,12 @@ void GridNeighborSearch<T>::run(const Vec3<T>* d_queries, std::size_t nq, T radi
     throw InputError("", "radius", "the neighbour lists (" + std::to_string(total) +
                                        " entries) do not fit in device memory; use a smaller radius");
   }
+  mark("query:sync+alloc");
   if (total == 0) return;
-  fillKernel<T><<<blocksFor(nq), kThreads>>>(s, out.offsets.data(), out.indices.data());
+  fillKernel<T><<<fill_blocks, kFillThreads>>>(s, out.offsets.data(), fused ? staged_.data() : nullptr,
+                                               out.indices.data());
   INC_CUDA_LAUNCH("fillKernel");
+  mark(fused ? "query:copy staged rows" : "query:fill+sort");
 }
 
 template class GridNeighborSearch<float>;

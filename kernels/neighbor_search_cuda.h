@@ -3,6 +3,9 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "host/neighbor_lists.h"
@@ -11,6 +14,12 @@
 #include "physics/vec3.h"
 
 namespace inc::cuda {
+
+// 16-byte aligned record of a float point for the query kernels (float4 layout; host code needs no CUDA types).
+template <typename T>
+struct alignas(4 * sizeof(T)) Packed4 {
+  T v[4];
+};
 
 // Device copy of host/neighbor_lists.h: row q is indices[offsets[q] .. offsets[q + 1]), ascending original
 // point index, closed ball (distance2Exact <= r * r), self-queries leave q out.
@@ -65,10 +74,21 @@ class GridNeighborSearch {
   // Cell-table entries actually used (occupied-cell box for dense grids, bucket count for hashed ones).
   std::size_t bucketTableSize() const { return used_buckets_; }
 
+  // Per-stage device timing for benchmarks (CUDA events between the stages of build and query). Off by
+  // default: nothing is recorded and no synchronisation is added. takeProfile() waits for the last event and
+  // returns (stage, milliseconds) for every stage recorded since the previous takeProfile(), then forgets them.
+  // Queries stage rows of up to 48 neighbours during the count pass (48 x 4 bytes per query of scratch), so the
+  // neighbourhoods are traversed once; above this many scratch bytes they fall back to count + re-traverse.
+  // Default 4 GiB (1.6e7 queries need 3.1 GB); 0 forces the two-pass path (tests use it to cover both).
+  void setStagingLimitBytes(std::size_t bytes) { staged_limit_bytes_ = bytes; }
+  void setProfiling(bool on) { profiling_ = on; marks_.clear(); }
+  std::vector<std::pair<std::string, double>> takeProfile() const;
+
  private:
   void run(const Vec3<T>* d_queries, std::size_t nq, T radius, const T* d_radii, std::size_t radii_count,
            bool self, DeviceNeighborLists& out) const;
   void* scratch(std::size_t bytes) const;
+  void mark(const char* stage) const;  // records an event named after the stage that ends here (profiling only)
 
   std::size_t n_ = 0;
   T cell_size_ = T(0);
@@ -78,6 +98,7 @@ class GridNeighborSearch {
   DeviceBuffer<Vec3<T>> upload_;                // host-vector build only
   DeviceBuffer<NeighborGridParams<T>> d_params_;
   DeviceBuffer<Vec3<T>> sorted_;                // points in storage order
+  DeviceBuffer<Packed4<T>> packed_;             // float only: the same points as 16-byte records (x, y, z, 0)
   DeviceBuffer<std::int32_t> perm_, inv_perm_;  // slot -> original, original -> slot
   DeviceBuffer<std::int32_t> bucket_start_;     // used_buckets_ + 1
   DeviceBuffer<std::int32_t> cell_count_;       // used_buckets_ + 1 (histogram before the scan)
@@ -85,10 +106,14 @@ class GridNeighborSearch {
   DeviceBuffer<std::uint32_t> keys_, keys_sorted_;
   DeviceBuffer<std::int32_t> iota_;
   mutable DeviceBuffer<std::int32_t> counts_;       // per query
+  mutable DeviceBuffer<std::int32_t> staged_;       // fused query: sorted short rows, kRowCap per storage slot
+  std::size_t staged_limit_bytes_ = std::size_t(4) << 30;
   mutable DeviceBuffer<std::uint64_t> status_;      // {first bad query, first bad radius, total}
   mutable DeviceBuffer<unsigned char> temp_;        // CUB temporary storage
   DeviceBuffer<Vec3<T>> partial_lo_, partial_hi_;   // bounding-box partials per block
   DeviceBuffer<std::int64_t> partial_bad_;
+  bool profiling_ = false;
+  mutable std::vector<std::pair<std::string, std::shared_ptr<void>>> marks_;  // cudaEvent_t, destroyed by the deleter
 };
 
 }  // namespace inc::cuda

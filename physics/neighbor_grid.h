@@ -142,6 +142,7 @@ struct NeighborGridView {
   const std::int32_t* bucket_start;  // slots of bucket b: [bucket_start[b], bucket_start[b + 1])
   const std::int32_t* entries;       // storage index of each slot; nullptr means slot == storage index
   std::int32_t n;
+  INC_HD Vec3<T> point(std::int32_t j) const { return points[j]; }
 };
 
 // Half-width of the per-axis cell range searched for radius r. Any pair accepted by
@@ -154,10 +155,9 @@ INC_HD T neighborSearchReach(T r) {
 }
 
 namespace detail {
-template <typename T, typename Visit>
-INC_HD void neighborTest(const NeighborGridView<T>& g, const Vec3<T>& x, T r2, std::int32_t j, std::int32_t skip,
-                         Visit& visit) {
-  if (j != skip && distance2Exact(x, g.points[j]) <= r2) visit(j);
+template <typename T, typename View, typename Visit>
+INC_HD void neighborTest(const View& g, const Vec3<T>& x, T r2, std::int32_t j, std::int32_t skip, Visit& visit) {
+  if (j != skip && distance2Exact(x, g.point(j)) <= r2) visit(j);
 }
 }  // namespace detail
 
@@ -169,12 +169,13 @@ INC_HD void neighborTest(const NeighborGridView<T>& g, const Vec3<T>& x, T r2, s
 //  - hashed grids: two cells of the range can share a bucket; a slot is only taken when its point's own
 //    cell is the cell being visited, so a point is never listed twice.
 //  - when the range has more cells than there are points, every point is scanned instead.
-template <typename T, typename Visit>
-INC_HD void forEachGridNeighbor(const NeighborGridView<T>& view, const Vec3<T>& query, T r, std::int32_t skip,
-                                Visit& visit) {
+// View is NeighborGridView<T> or a device view with the same members whose point(j) reads a packed copy
+// of the same coordinates (kernels/neighbor_search_cuda.cu: float4 loads).
+template <typename T, typename View, typename Visit>
+INC_HD void forEachGridNeighbor(const View& view, const Vec3<T>& query, T r, std::int32_t skip, Visit& visit) {
   // Local copies: the visitor writes memory, and without them the compiler must assume that those writes
   // may change the view or the query point, reloading them for every candidate.
-  const NeighborGridView<T> g = view;
+  const View g = view;
   const Vec3<T> x = query;
   if (g.n <= 0) return;
   const NeighborGridParams<T>& p = g.p;
@@ -211,7 +212,7 @@ INC_HD void forEachGridNeighbor(const NeighborGridView<T>& view, const Vec3<T>& 
         const std::int32_t e1 = g.bucket_start[b + 1u];
         for (std::int32_t e = g.bucket_start[b]; e < e1; ++e) {
           const std::int32_t j = g.entries ? g.entries[e] : e;
-          const Vec3<T>& y = g.points[j];
+          const Vec3<T> y = g.point(j);
           if (neighborCellCoord(y.x, p.origin.x, p.inv_cell) != cx ||
               neighborCellCoord(y.y, p.origin.y, p.inv_cell) != cy ||
               neighborCellCoord(y.z, p.origin.z, p.inv_cell) != cz)
