@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "kernels/cuda_check.h"
@@ -19,6 +20,18 @@ constexpr int kThreads = 128;
 constexpr int kReduceBlocks = 256;  // fixed grid of the reductions: partials are summed on the host in order
 
 inline unsigned blocksFor(std::int64_t n) { return unsigned((n + kThreads - 1) / kThreads); }
+
+// Profile labels (local: this library does not link the host library's pbdConstraintKindName).
+inline const char* kindName(PbdConstraintKind k) {
+  switch (k) {
+    case PbdConstraintKind::Distance: return "distance";
+    case PbdConstraintKind::Bending: return "bending";
+    case PbdConstraintKind::TetVolume: return "tet_volume";
+    case PbdConstraintKind::Laplacian: return "laplacian";
+    case PbdConstraintKind::ShapeMatching: return "shape_matching";
+  }
+  return "block";
+}
 
 // ----------------------------------------------------------------------------------------------
 // Kernels: each is one loop of the CPU backend (cpu_fallback/pbd_solver_cpu.cpp) with the same physics calls.
@@ -511,14 +524,21 @@ class PbdCudaBackend final : public PbdBackend<T> {
       recordFrame(p);
       profile_ = false;
       INC_CUDA(cudaStreamSynchronize(stream_));
+      // Five stages ("constraints" includes every block, attachments and rotations), then one entry per
+      // solved block, "<kind>#<block index>", so the lead can see which constraint kind costs the time.
       const char* names[] = {"predict", "constraints", "collisions", "velocities", "volume"};
-      double ms[5] = {0, 0, 0, 0, 0};
+      std::vector<double> ms(5 + blocks_.size(), 0.0);
       for (const ProfRecord& r : prof_) {
         float e = 0.f;
         INC_CUDA(cudaEventElapsedTime(&e, events_[r.start], events_[r.stop]));
-        ms[r.stage] += double(e);
+        ms[std::size_t(r.stage)] += double(e);
       }
-      for (int k = 0; k < 5; ++k) st.stages.push_back({names[k], ms[k]});
+      for (std::size_t bi = 0; bi < blocks_.size(); ++bi) ms[1] += ms[5 + bi];
+      for (int k = 0; k < 5; ++k) st.stages.push_back({names[k], ms[std::size_t(k)]});
+      for (std::size_t bi = 0; bi < blocks_.size(); ++bi)
+        if (blocks_[bi].solve && blocks_[bi].count > 0)
+          st.stages.push_back({std::string(kindName(blocks_[bi].kind)) + "#" + std::to_string(bi),
+                               ms[5 + bi]});
     } else {
       ensureEvents(2);
       INC_CUDA(cudaEventRecord(events_[0], stream_));
@@ -714,9 +734,10 @@ class PbdCudaBackend final : public PbdBackend<T> {
       stageEnd(0, ev);
 
       for (int it = 0; it < p.iterations; ++it) {
-        ev = stageBegin();
-        for (DeviceBlock<T>& d : blocks_) {
+        for (std::size_t bi = 0; bi < blocks_.size(); ++bi) {
+          DeviceBlock<T>& d = blocks_[bi];
           if (!d.solve || d.count == 0) continue;
+          ev = stageBegin();  // profiling: each block is its own record (stage 5 + block index)
           const pbd::BlockView<T> b = view(d);
           if (ctx.jacobi) {
             projectAllKernel<T><<<blocksFor(d.count), kThreads, 0, stream_>>>(b, ctx);
@@ -731,7 +752,9 @@ class PbdCudaBackend final : public PbdBackend<T> {
               INC_CUDA_LAUNCH("pbd project (colour)");
             }
           }
+          stageEnd(5 + int(bi), ev);
         }
+        ev = stageBegin();
         if (n_att_ > 0) {
           attachKernel<T><<<blocksFor(n_att_), kThreads, 0, stream_>>>(n_att_, x_.data(), w_.data(), att_ids_.data(),
                                                                        att_from_.data(), att_to_.data(),
