@@ -434,8 +434,9 @@ class PbdCudaBackend final : public PbdBackend<T> {
     INC_CUDA(cudaDeviceGetAttribute(&optin, cudaDevAttrMaxSharedMemoryPerBlockOptin, dev));
     stage_bytes_ = fusedStageBytes<T>(n_);
     staged_ = n_ > 0 && stage_bytes_ <= std::size_t(optin);
-    if (staged_)
-      INC_CUDA(cudaFuncSetAttribute(fusedFrameKernel<T>, cudaFuncAttributeMaxDynamicSharedMemorySize, int(stage_bytes_)));
+    // The attribute belongs to the kernel, not to this backend: set it to the device limit so that a second
+    // live backend with a smaller model cannot lower it below what this one launches with.
+    if (staged_) INC_CUDA(cudaFuncSetAttribute(fusedFrameKernel<T>, cudaFuncAttributeMaxDynamicSharedMemorySize, optin));
     blocks_.clear();
     blocks_.resize(m.blocks.size());
     for (std::size_t bi = 0; bi < m.blocks.size(); ++bi) {
