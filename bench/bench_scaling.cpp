@@ -194,6 +194,13 @@ int main(int argc, char** argv) {
     if (precision == "float32" || precision == "both") precs.push_back(Precision::Float32);
     if (precision == "float64" || precision == "both") precs.push_back(Precision::Float64);
     if (precs.empty()) throw InputError("", "--precision", "float32 | float64 | both");
+    // The CSV is written row by row, so a run stopped by a time limit keeps what it measured.
+    std::ofstream f;
+    if (!csv.empty()) {
+      f.open(csv);
+      f << "suite,backend,precision,n,ms_median,ms_min,ms_max,items_per_s,mbytes,gbytes_per_s,host_peak_mib,device_mib\n";
+      if (!f) throw InputError(csv, "--csv", "cannot write the file");
+    }
     std::printf("%-9s %-5s %-8s %10s %10s %10s %10s %12s %9s %10s %10s\n", "suite", "backend", "precision", "n",
                 "ms median", "min", "max", "items/s", "GB/s", "host MiB", "dev MiB");
     for (const std::string suite : {"skinning", "frame"}) {
@@ -213,20 +220,16 @@ int main(int argc, char** argv) {
                         r.items_per_s, r.gbytes_per_s, r.host_peak_mib, r.device_mib);
             std::fflush(stdout);
             rows.push_back(r);
+            if (f.is_open()) {
+              f << r.suite << ',' << r.backend << ',' << r.precision << ',' << r.n << ',' << r.ms_median << ','
+                << r.ms_min << ',' << r.ms_max << ',' << r.items_per_s << ',' << r.mbytes << ',' << r.gbytes_per_s
+                << ',' << r.host_peak_mib << ',' << r.device_mib << std::endl;
+            }
             // The next point is ~4x the work: skip it when it would not fit the budget.
             if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() * 4.0 > budget_s / 2.0) break;
             if (n < top && n * 4 > top) n = top / 4;  // end exactly at the top count
           }
         }
-    }
-    if (!csv.empty()) {
-      std::ofstream f(csv);
-      f << "suite,backend,precision,n,ms_median,ms_min,ms_max,items_per_s,mbytes,gbytes_per_s,host_peak_mib,device_mib\n";
-      for (const Row& r : rows)
-        f << r.suite << ',' << r.backend << ',' << r.precision << ',' << r.n << ',' << r.ms_median << ',' << r.ms_min
-          << ',' << r.ms_max << ',' << r.items_per_s << ',' << r.mbytes << ',' << r.gbytes_per_s << ','
-          << r.host_peak_mib << ',' << r.device_mib << '\n';
-      if (!f) throw InputError(csv, "--csv", "cannot write the file");
     }
   } catch (const InputError& e) {
     std::fprintf(stderr, "bench_scaling: %s\n", e.what());
