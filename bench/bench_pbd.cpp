@@ -80,8 +80,17 @@ double median(std::vector<double> v) {
   return v.empty() ? 0.0 : v[v.size() / 2];
 }
 
-// Frame time: CUDA events (the backend's "frame" stage) on the GPU, wall clock on the CPU; median of `repeats`
-// frames after 3 warm-up frames (graph capture, first touch).
+// Time bounds of the whole run: each timed point stops after g_row_seconds of wall time (at least 3 timed
+// frames), and points that would start after g_deadline are skipped (counted in g_skipped).
+double g_row_seconds = 2.0;
+bool g_profile = false;
+std::chrono::steady_clock::time_point g_deadline = std::chrono::steady_clock::time_point::max();
+int g_skipped = 0;
+bool pastDeadline() { return std::chrono::steady_clock::now() > g_deadline; }
+
+// Frame time: CUDA events (the backend's "frame" stage) on the GPU, wall clock on the CPU; median of up to
+// `repeats` frames (fewer when a point's time budget runs out) after up to 3 warm-up frames (graph capture,
+// first touch). --profile: one more frame with per-stage CUDA events (no graph, no fusion) gives the stage split.
 template <typename T>
 Row timeFrames(BackendKind kind, PbdSolverKind solver, std::int64_t n, int iterations, int substeps, int repeats,
                int fused_max = 4096) {
@@ -97,9 +106,13 @@ Row timeFrames(BackendKind kind, PbdSolverKind solver, std::int64_t n, int itera
   p.fused_max_particles = fused_max;
   const PbdFrameInput<T> in = probeInput<T>(size);
   PbdFrameStats st;
-  for (int k = 0; k < 3; ++k) st = be->advanceFrame(p, in);
+  const auto row_start = std::chrono::steady_clock::now();
+  const auto spent = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - row_start).count();
+  };
+  for (int k = 0; k < 3 && (k == 0 || spent() < 0.25 * g_row_seconds); ++k) st = be->advanceFrame(p, in);
   std::vector<double> ms;
-  for (int k = 0; k < repeats; ++k) {
+  for (int k = 0; k < repeats && (k < 3 || spent() < g_row_seconds); ++k) {
     const auto t0 = std::chrono::steady_clock::now();
     st = be->advanceFrame(p, in);
     const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -123,6 +136,10 @@ Row timeFrames(BackendKind kind, PbdSolverKind solver, std::int64_t n, int itera
   r.constraints_per_s = double(r.constraints) * iterations * substeps / (r.ms_frame * 1e-3);
   r.residual_max = st.residual_max;
   r.residual_rms = st.residual_rms;
+  if (g_profile) {
+    p.profile_stages = true;
+    st = be->advanceFrame(p, in);
+  }
   for (const auto& s : st.stages) {
     char buf[64];
     std::snprintf(buf, sizeof buf, "%s%s=%.3f", r.stages.empty() ? "" : " ", s.stage.c_str(), s.ms);
@@ -146,7 +163,10 @@ double tipDeflection(BackendKind kind, PbdSolverKind solver, std::int64_t n, int
   p.substeps = substeps;
   p.damping = T(5);
   p.volume_preservation = false;
-  for (int f = 0; f < frames; ++f) st = be->advanceFrame(p, PbdFrameInput<T>());
+  for (int f = 0; f < frames; ++f) {
+    if (pastDeadline()) return std::nan("");  // cut by --budget: no deflection reported
+    st = be->advanceFrame(p, PbdFrameInput<T>());
+  }
   PbdState<T> s;
   be->getState(s);
   double tip = 0;
@@ -190,6 +210,10 @@ int main(int argc, char** argv) {
   app.add_option("--fused-max", fused_max, "CUDA: largest sphere count run by the fused single-block kernel (0: never)");
   app.add_option("--csv", csv, "write every row to this CSV file");
   app.add_flag("--quick", quick, "short run: up to 10^4 spheres, 5 repeats");
+  double budget_s = 130.0;
+  app.add_option("--row-seconds", g_row_seconds, "wall-time budget of one timed point (at least 3 frames are timed)");
+  app.add_option("--budget", budget_s, "whole run: points that would start after this many seconds are skipped");
+  app.add_flag("--profile", g_profile, "add a per-stage CUDA-event split (one extra unfused, ungraphed frame) to each row");
   CLI11_PARSE(app, argc, argv);
   try {
     const BackendKind requested = parseBackend(backend);
@@ -201,6 +225,11 @@ int main(int argc, char** argv) {
     }
     if (min_n < 8 || max_n < min_n || iterations < 1 || substeps < 1 || repeats < 1)
       throw InputError("bench_pbd", "arguments", "need 8 <= min <= max, iterations, substeps, repeats >= 1");
+    if (!(g_row_seconds > 0) || !(budget_s > 0))
+      throw InputError("bench_pbd", "--row-seconds/--budget", "must be positive");
+    if (quick) g_row_seconds = std::min(g_row_seconds, 0.5);
+    g_deadline = std::chrono::steady_clock::now() +
+                 std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(budget_s));
     std::vector<BackendKind> kinds;
     if (requested != BackendKind::Cuda) kinds.push_back(BackendKind::Cpu);
 #if INCISION_HAVE_CUDA
@@ -227,11 +256,15 @@ int main(int argc, char** argv) {
       for (std::int64_t n : sizes) {
         if (k == BackendKind::Cpu && n > cpu_max) continue;
         for (PbdSolverKind s : {PbdSolverKind::Jacobi, PbdSolverKind::GaussSeidel}) {
+          if (pastDeadline()) {
+            ++g_skipped;
+            continue;
+          }
           const Row r = f64 ? timeFrames<double>(k, s, n, iterations, substeps, repeats, fused_max)
                             : timeFrames<float>(k, s, n, iterations, substeps, repeats, fused_max);
           printRow(r);
           rows.push_back(r);
-          if (k == BackendKind::Cuda && r.path == "fused") {  // the same on per-phase launches, for comparison
+          if (k == BackendKind::Cuda && r.path == "fused" && !pastDeadline()) {  // the same on per-phase launches, for comparison
             const Row u = f64 ? timeFrames<double>(k, s, n, iterations, substeps, repeats, 0)
                               : timeFrames<float>(k, s, n, iterations, substeps, repeats, 0);
             printRow(u);
@@ -247,11 +280,19 @@ int main(int argc, char** argv) {
     std::printf("%-6s %-8s %-12s %8s %4s %4s %10s %10s %10s %10s %10s\n", "backend", "prec", "solver", "spheres", "it",
                 "sub", "ms/frame", "resid_max", "resid_rms", "tip_m", "err");
     for (BackendKind k : kinds) {
+      if (pastDeadline()) {
+        g_skipped += 12;
+        continue;
+      }
       PbdFrameStats st;
       const double ref = f64 ? tipDeflection<double>(k, PbdSolverKind::GaussSeidel, accuracy_n, 200, substeps, frames, st)
                              : tipDeflection<float>(k, PbdSolverKind::GaussSeidel, accuracy_n, 200, substeps, frames, st);
       for (PbdSolverKind s : {PbdSolverKind::Jacobi, PbdSolverKind::GaussSeidel})
         for (int it : {1, 2, 5, 10, 20, 50}) {
+          if (pastDeadline()) {
+            ++g_skipped;
+            continue;
+          }
           Row r = f64 ? timeFrames<double>(k, s, accuracy_n, it, substeps, std::max(3, repeats / 2), fused_max)
                       : timeFrames<float>(k, s, accuracy_n, it, substeps, std::max(3, repeats / 2), fused_max);
           r.table = "accuracy";
@@ -260,6 +301,7 @@ int main(int argc, char** argv) {
           r.residual_max = st.residual_max;
           r.residual_rms = st.residual_rms;
           r.deflection_err = ref > 0 ? std::fabs(r.deflection_m - ref) / ref : 0.0;
+          if (std::isnan(r.deflection_m) || std::isnan(ref)) ++g_skipped;
           printRow(r);
           rows.push_back(r);
         }
@@ -293,6 +335,11 @@ int main(int argc, char** argv) {
         std::snprintf(buf, sizeof buf, " %s %.3f ms/frame (%s);", backendName(k), best, which.c_str());
         summary += buf;
       }
+    }
+    if (g_skipped > 0) {
+      char buf[96];
+      std::snprintf(buf, sizeof buf, " %d points skipped (--budget %.0f s);", g_skipped, budget_s);
+      summary += buf;
     }
     std::printf("%s\n", summary.c_str());
   } catch (const InputError& e) {

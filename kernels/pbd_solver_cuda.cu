@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "kernels/cuda_check.h"
@@ -19,6 +20,18 @@ constexpr int kThreads = 128;
 constexpr int kReduceBlocks = 256;  // fixed grid of the reductions: partials are summed on the host in order
 
 inline unsigned blocksFor(std::int64_t n) { return unsigned((n + kThreads - 1) / kThreads); }
+
+// Profile labels (local: this library does not link the host library's pbdConstraintKindName).
+inline const char* kindName(PbdConstraintKind k) {
+  switch (k) {
+    case PbdConstraintKind::Distance: return "distance";
+    case PbdConstraintKind::Bending: return "bending";
+    case PbdConstraintKind::TetVolume: return "tet_volume";
+    case PbdConstraintKind::Laplacian: return "laplacian";
+    case PbdConstraintKind::ShapeMatching: return "shape_matching";
+  }
+  return "block";
+}
 
 // ----------------------------------------------------------------------------------------------
 // Kernels: each is one loop of the CPU backend (cpu_fallback/pbd_solver_cpu.cpp) with the same physics calls.
@@ -161,7 +174,7 @@ __global__ void residualKernel(pbd::BlockView<T> b, const Vec3<T>* x, bool xpbd,
 // Per-block partials over particles: first non-finite particle (n if none), active count, max radius ratio.
 template <typename T>
 __global__ void summaryKernel(int n, const Vec3<T>* x, const Vec3<T>* v, const T* r, const T* rest_r,
-                              const std::uint8_t* active, long long* part_bad, long long* part_active,
+                              const std::uint8_t* active, double* part_bad, double* part_active,
                               double* part_ratio) {
   __shared__ long long sbad[kThreads];
   __shared__ long long sact[kThreads];
@@ -190,8 +203,8 @@ __global__ void summaryKernel(int n, const Vec3<T>* x, const Vec3<T>* v, const T
     __syncthreads();
   }
   if (threadIdx.x == 0) {
-    part_bad[blockIdx.x] = sbad[0];
-    part_active[blockIdx.x] = sact[0];
+    part_bad[blockIdx.x] = double(sbad[0]);  // exact: indices and counts are far below 2^53
+    part_active[blockIdx.x] = double(sact[0]);
     part_ratio[blockIdx.x] = srat[0];
   }
 }
@@ -240,52 +253,92 @@ struct FusedFrame {
   const pbd::CapsuleCollider<T>* tools_from = nullptr;
   const pbd::CapsuleCollider<T>* tools_to = nullptr;
   int np = 0, nb = 0, nt = 0;
+  bool staged = false;  // positions, inverse masses, masses and rotations copied to dynamic shared memory
 };
+
+// Dynamic shared memory the fused kernel needs to stage n particles (rotations, positions, w, mass).
+template <typename T>
+std::size_t fusedStageBytes(int n) {
+  return std::size_t(n) * (sizeof(pbd::Quat<T>) + sizeof(Vec3<T>) + 2 * sizeof(T));
+}
+
+extern __shared__ __align__(16) unsigned char fused_stage[];
 
 template <typename T>
 __global__ void __launch_bounds__(kFusedThreads) fusedFrameKernel(FusedFrame<T> f) {
   const int tid = threadIdx.x, nth = blockDim.x;
+  // The projections are latency-bound chains of gathers (a few constraints per colour, one thread each):
+  // with staging, every particle read and in-place write of the frame hits shared memory instead of
+  // global memory. The arithmetic is unchanged, so the result is the same bit for bit.
+  Vec3<T>* x = f.x;
+  const T* w = f.w;
+  pbd::SolveContext<T> ctx = f.ctx;
+  if (f.staged) {
+    pbd::Quat<T>* srot = reinterpret_cast<pbd::Quat<T>*>(fused_stage);
+    Vec3<T>* sx = reinterpret_cast<Vec3<T>*>(srot + f.n);
+    T* sw = reinterpret_cast<T*>(sx + f.n);
+    T* sm = sw + f.n;
+    for (int i = tid; i < f.n; i += nth) {
+      sx[i] = f.x[i];
+      sw[i] = f.w[i];
+      sm[i] = f.ctx.mass[i];
+      if (f.ctx.rotation) srot[i] = f.ctx.rotation[i];
+    }
+    __syncthreads();
+    x = sx;
+    w = sw;
+    ctx.x = sx;
+    ctx.w = sw;
+    ctx.mass = sm;
+    if (f.ctx.rotation) ctx.rotation = srot;
+  }
   for (int s = 0; s < f.substeps; ++s) {
     const T t_end = T(s + 1) / T(f.substeps);
-    for (int i = tid; i < f.n; i += nth) pbd::predictParticle(f.x[i], f.v[i], f.x_prev[i], f.w[i], f.g, f.damp, f.dt);
+    for (int i = tid; i < f.n; i += nth) pbd::predictParticle(x[i], f.v[i], f.x_prev[i], w[i], f.g, f.damp, f.dt);
     for (int b = 0; b < f.nblocks; ++b)
       for (int k = tid; k < f.blocks[b].multipliers; k += nth) f.blocks[b].view.lambda[k] = Vec3<T>();
     for (int k = tid; k < f.n_att; k += nth) f.att_lambda[k] = Vec3<T>();
     __syncthreads();
-    for (int q = tid; q < f.n_kin; q += nth) f.x[f.kin_ids[q]] = pbd::lerp(f.kin_from[q], f.kin_to[q], t_end);
+    for (int q = tid; q < f.n_kin; q += nth) x[f.kin_ids[q]] = pbd::lerp(f.kin_from[q], f.kin_to[q], t_end);
     __syncthreads();
     for (int it = 0; it < f.iterations; ++it) {
       for (int b = 0; b < f.nblocks; ++b) {
         const FusedBlock<T>& fb = f.blocks[b];
         if (!fb.solve || fb.view.count == 0) continue;
-        if (f.ctx.jacobi) {
-          for (int c = tid; c < fb.view.count; c += nth) pbd::projectConstraint(fb.view, c, f.ctx);
+        if (ctx.jacobi) {
+          for (int c = tid; c < fb.view.count; c += nth) pbd::projectConstraint(fb.view, c, ctx);
           __syncthreads();
-          for (int i = tid; i < f.n; i += nth) f.x[i] += pbd::gatherCorrection(fb.view, std::int32_t(i));
+          for (int i = tid; i < f.n; i += nth) x[i] += pbd::gatherCorrection(fb.view, std::int32_t(i));
           __syncthreads();
         } else {
           for (int k = 0; k < fb.colors; ++k) {
             const int c0 = fb.color_offsets[k], c1 = fb.color_offsets[k + 1];
-            for (int q = c0 + tid; q < c1; q += nth) pbd::projectConstraint(fb.view, fb.order[q], f.ctx);
+            for (int q = c0 + tid; q < c1; q += nth) pbd::projectConstraint(fb.view, fb.order[q], ctx);
             __syncthreads();
           }
         }
       }
       for (int q = tid; q < f.n_att; q += nth) {
         const std::int32_t id = f.att_ids[q];
-        pbd::projectAttachment(f.x[id], f.w[id], pbd::lerp(f.att_from[q], f.att_to[q], t_end), f.att_comp[q],
-                               f.ctx.xpbd, f.dt, f.att_lambda[q]);
+        pbd::projectAttachment(x[id], w[id], pbd::lerp(f.att_from[q], f.att_to[q], t_end), f.att_comp[q],
+                               ctx.xpbd, f.dt, f.att_lambda[q]);
       }
       __syncthreads();
       for (int i = tid; i < f.n; i += nth)
-        if (f.w[i] > T(0))
-          f.x[i] = pbd::resolveContacts(f.x[i], f.r[i], f.planes, f.np, f.boxes, f.nb, f.tools_from, f.tools_to, f.nt,
+        if (w[i] > T(0))
+          x[i] = pbd::resolveContacts(x[i], f.r[i], f.planes, f.np, f.boxes, f.nb, f.tools_from, f.tools_to, f.nt,
                                         t_end);
       __syncthreads();
     }
     const T inv_dt = T(1) / f.dt;
-    for (int i = tid; i < f.n; i += nth) f.v[i] = (f.x[i] - f.x_prev[i]) * inv_dt;
+    for (int i = tid; i < f.n; i += nth) f.v[i] = (x[i] - f.x_prev[i]) * inv_dt;
     __syncthreads();
+  }
+  if (f.staged) {
+    for (int i = tid; i < f.n; i += nth) {
+      f.x[i] = x[i];
+      if (f.ctx.rotation) f.ctx.rotation[i] = ctx.rotation[i];
+    }
   }
 }
 
@@ -374,6 +427,16 @@ class PbdCudaBackend final : public PbdBackend<T> {
     samples_.upload(m.ball_samples);
     have_volume_data_ = m.rest_cell_volume.size() == m.size() && !m.ball_samples.empty() &&
                         m.overlap_offsets.size() == m.size() + 1;
+    // Shared-memory staging of the fused kernel: used when the model fits this device's per-block opt-in limit
+    // (float: up to ~6,000 particles on an H100); the attribute is set here, outside any graph capture.
+    int dev = 0, optin = 0;
+    INC_CUDA(cudaGetDevice(&dev));
+    INC_CUDA(cudaDeviceGetAttribute(&optin, cudaDevAttrMaxSharedMemoryPerBlockOptin, dev));
+    stage_bytes_ = fusedStageBytes<T>(n_);
+    staged_ = n_ > 0 && stage_bytes_ <= std::size_t(optin);
+    // The attribute belongs to the kernel, not to this backend: set it to the device limit so that a second
+    // live backend with a smaller model cannot lower it below what this one launches with.
+    if (staged_) INC_CUDA(cudaFuncSetAttribute(fusedFrameKernel<T>, cudaFuncAttributeMaxDynamicSharedMemorySize, optin));
     blocks_.clear();
     blocks_.resize(m.blocks.size());
     for (std::size_t bi = 0; bi < m.blocks.size(); ++bi) {
@@ -399,11 +462,11 @@ class PbdCudaBackend final : public PbdBackend<T> {
       d.slot_corr.resize(s.slotCount());
       d.slot_corr.fillZero();
     }
-    part_max_.resize(kReduceBlocks);
-    part_sum_.resize(kReduceBlocks);
-    part_bad_.resize(kReduceBlocks);
-    part_active_.resize(kReduceBlocks);
-    part_ratio_.resize(kReduceBlocks);
+    int reduced_blocks = 0;
+    for (const DeviceBlock<T>& d : blocks_)
+      if (d.kind == PbdConstraintKind::Distance && d.solve && d.count > 0) ++reduced_blocks;
+    partials_.resize(std::size_t(2 * reduced_blocks + 3) * kReduceBlocks);
+    partials_.fillZero();
     INC_CUDA(cudaDeviceSynchronize());
   }
 
@@ -462,14 +525,21 @@ class PbdCudaBackend final : public PbdBackend<T> {
       recordFrame(p);
       profile_ = false;
       INC_CUDA(cudaStreamSynchronize(stream_));
+      // Five stages ("constraints" includes every block, attachments and rotations), then one entry per
+      // solved block, "<kind>#<block index>", so the lead can see which constraint kind costs the time.
       const char* names[] = {"predict", "constraints", "collisions", "velocities", "volume"};
-      double ms[5] = {0, 0, 0, 0, 0};
+      std::vector<double> ms(5 + blocks_.size(), 0.0);
       for (const ProfRecord& r : prof_) {
         float e = 0.f;
         INC_CUDA(cudaEventElapsedTime(&e, events_[r.start], events_[r.stop]));
-        ms[r.stage] += double(e);
+        ms[std::size_t(r.stage)] += double(e);
       }
-      for (int k = 0; k < 5; ++k) st.stages.push_back({names[k], ms[k]});
+      for (std::size_t bi = 0; bi < blocks_.size(); ++bi) ms[1] += ms[5 + bi];
+      for (int k = 0; k < 5; ++k) st.stages.push_back({names[k], ms[std::size_t(k)]});
+      for (std::size_t bi = 0; bi < blocks_.size(); ++bi)
+        if (blocks_[bi].solve && blocks_[bi].count > 0)
+          st.stages.push_back({std::string(kindName(blocks_[bi].kind)) + "#" + std::to_string(bi),
+                               ms[5 + bi]});
     } else {
       ensureEvents(2);
       INC_CUDA(cudaEventRecord(events_[0], stream_));
@@ -642,7 +712,8 @@ class PbdCudaBackend final : public PbdBackend<T> {
       f.np = n_planes_;
       f.nb = n_boxes_;
       f.nt = n_tools_;
-      fusedFrameKernel<T><<<1, kFusedThreads, 0, stream_>>>(f);
+      f.staged = staged_;
+      fusedFrameKernel<T><<<1, kFusedThreads, staged_ ? stage_bytes_ : 0, stream_>>>(f);
       INC_CUDA_LAUNCH("pbd fused frame");
     }
     for (int s = 0; s < (fused ? 0 : p.substeps); ++s) {
@@ -664,9 +735,10 @@ class PbdCudaBackend final : public PbdBackend<T> {
       stageEnd(0, ev);
 
       for (int it = 0; it < p.iterations; ++it) {
-        ev = stageBegin();
-        for (DeviceBlock<T>& d : blocks_) {
+        for (std::size_t bi = 0; bi < blocks_.size(); ++bi) {
+          DeviceBlock<T>& d = blocks_[bi];
           if (!d.solve || d.count == 0) continue;
+          ev = stageBegin();  // profiling: each block is its own record (stage 5 + block index)
           const pbd::BlockView<T> b = view(d);
           if (ctx.jacobi) {
             projectAllKernel<T><<<blocksFor(d.count), kThreads, 0, stream_>>>(b, ctx);
@@ -681,7 +753,9 @@ class PbdCudaBackend final : public PbdBackend<T> {
               INC_CUDA_LAUNCH("pbd project (colour)");
             }
           }
+          stageEnd(5 + int(bi), ev);
         }
+        ev = stageBegin();
         if (n_att_ > 0) {
           attachKernel<T><<<blocksFor(n_att_), kThreads, 0, stream_>>>(n_att_, x_.data(), w_.data(), att_ids_.data(),
                                                                        att_from_.data(), att_to_.data(),
@@ -742,37 +816,49 @@ class PbdCudaBackend final : public PbdBackend<T> {
   // Residual, finiteness and volume statistics: small partial reductions downloaded once per frame (the
   // frame's one synchronisation, needed to report them).
   void summarize(const PbdStepParams<T>& p, PbdFrameStats& st) {
+    // All partials go to slices of one buffer: the frame's one synchronisation and one small download.
     const T dt = p.frame_dt / T(p.substeps);
-    double rmax = 0, rsum = 0;
+    double* part = partials_.data();
     std::size_t rcount = 0;
+    int nd = 0;
     for (DeviceBlock<T>& d : blocks_) {
       if (d.kind != PbdConstraintKind::Distance || !d.solve || d.count == 0) continue;
-      residualKernel<T><<<kReduceBlocks, kThreads, 0, stream_>>>(view(d), x_.data(), p.xpbd, dt, part_max_.data(),
-                                                                  part_sum_.data());
+      residualKernel<T><<<kReduceBlocks, kThreads, 0, stream_>>>(view(d), x_.data(), p.xpbd, dt,
+                                                                  part + std::size_t(2 * nd) * kReduceBlocks,
+                                                                  part + std::size_t(2 * nd + 1) * kReduceBlocks);
       INC_CUDA_LAUNCH("pbd residual");
-      const std::vector<double> pm = part_max_.download(), ps = part_sum_.download();
-      for (int k = 0; k < kReduceBlocks; ++k) {
-        rmax = std::max(rmax, pm[k]);
-        rsum += ps[k];
-      }
       rcount += std::size_t(d.count);
+      ++nd;
     }
+    double* sum_part = part + std::size_t(2 * nd) * kReduceBlocks;
+    if (n_ > 0) {
+      summaryKernel<T><<<kReduceBlocks, kThreads, 0, stream_>>>(n_, x_.data(), v_.data(), radii_.data(),
+                                                                 rest_radii_.data(), active_.data(), sum_part,
+                                                                 sum_part + kReduceBlocks, sum_part + 2 * kReduceBlocks);
+      INC_CUDA_LAUNCH("pbd summary");
+    }
+    INC_CUDA(cudaStreamSynchronize(stream_));
+    if (nd == 0 && n_ == 0) return;
+    const std::size_t used = std::size_t(2 * nd + (n_ > 0 ? 3 : 0)) * kReduceBlocks;
+    host_partials_.resize(used);
+    INC_CUDA(cudaMemcpy(host_partials_.data(), part, used * sizeof(double), cudaMemcpyDeviceToHost));
+    const double* h = host_partials_.data();
+    double rmax = 0, rsum = 0;
+    for (int b = 0; b < nd; ++b)
+      for (int k = 0; k < kReduceBlocks; ++k) {
+        rmax = std::max(rmax, h[std::size_t(2 * b) * kReduceBlocks + k]);
+        rsum += h[std::size_t(2 * b + 1) * kReduceBlocks + k];
+      }
     st.residual_max = rmax;
     st.residual_rms = rcount ? std::sqrt(rsum / double(rcount)) : 0.0;
     if (n_ > 0) {
-      summaryKernel<T><<<kReduceBlocks, kThreads, 0, stream_>>>(n_, x_.data(), v_.data(), radii_.data(),
-                                                                 rest_radii_.data(), active_.data(), part_bad_.data(),
-                                                                 part_active_.data(), part_ratio_.data());
-      INC_CUDA_LAUNCH("pbd summary");
-      INC_CUDA(cudaStreamSynchronize(stream_));
-      const std::vector<long long> pb = part_bad_.download(), pa = part_active_.download();
-      const std::vector<double> pr = part_ratio_.download();
+      const double* hs = h + std::size_t(2 * nd) * kReduceBlocks;
       long long bad = n_, act = 0;
       double rat = 1.0;
       for (int k = 0; k < kReduceBlocks; ++k) {
-        bad = std::min(bad, pb[k]);
-        act += pa[k];
-        rat = std::max(rat, pr[k]);
+        bad = std::min(bad, (long long)hs[k]);
+        act += (long long)hs[kReduceBlocks + k];
+        rat = std::max(rat, hs[2 * kReduceBlocks + k]);
       }
       st.volume_active = int(act);
       st.max_radius_ratio = rat;
@@ -801,8 +887,10 @@ class PbdCudaBackend final : public PbdBackend<T> {
   DeviceBuffer<pbd::PlaneCollider<T>> planes_;
   DeviceBuffer<pbd::BoxCollider<T>> boxes_;
   DeviceBuffer<pbd::CapsuleCollider<T>> tools_from_, tools_to_;
-  DeviceBuffer<double> part_max_, part_sum_, part_ratio_;
-  DeviceBuffer<long long> part_bad_, part_active_;
+  DeviceBuffer<double> partials_;           // reduction partials: per distance block (max, sum), then summary
+  std::vector<double> host_partials_;
+  bool staged_ = false;                     // fused kernel stages particles in shared memory
+  std::size_t stage_bytes_ = 0;
   std::vector<DeviceBlock<T>> blocks_;
 };
 

@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "host/backend.h"
+#include "host/cli/tradeoff_command.h"
 #include "host/cli/view_command.h"
 #include "host/embedded_scenes.h"
 #include "host/input_error.h"
@@ -77,6 +78,15 @@ int main(int argc, char** argv) {
   auto* scenes = app.add_subcommand("scenes", "List the embedded scenes");
   auto* devices = app.add_subcommand("devices", "Report the CUDA devices this build can use");
 
+  std::string tradeoff_arg, tradeoff_budgets = "1,16", tradeoff_out = "tradeoff", tradeoff_backend, tradeoff_models;
+  bool tradeoff_quick = false;
+  auto* tradeoff = app.add_subcommand("tradeoff", "Sweep the scene's model knobs: ms per frame vs error (CSV, table, plot)");
+  tradeoff->add_option("scene", tradeoff_arg, "Scene file (JSON) or embedded scene name; default: the embedded default");
+  tradeoff->add_option("--budget-ms", tradeoff_budgets, "Comma list of frame budgets in ms for the Pareto tables");
+  tradeoff->add_option("--out", tradeoff_out, "Output folder (tradeoff.csv, tradeoff.md, tradeoff.png)");
+  tradeoff->add_option("--backend", tradeoff_backend, "auto | cuda | cpu (default cpu)");
+  tradeoff->add_option("--models", tradeoff_models, "Comma list (mls,pbd) swept instead of the scene's models");
+  tradeoff->add_flag("--quick", tradeoff_quick, "Few settings, short runs (checks it runs)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -103,6 +113,15 @@ int main(int argc, char** argv) {
       vo.screenshot = screenshot;
       vo.splats = view_splats;
       return inc::cli::runViewCommand(resolveScene(view_arg), vo);
+    }
+    if (*tradeoff) {
+      inc::cli::TradeoffCommandOptions to;
+      to.sweep.budgets_ms = inc::parseBudgets(tradeoff_budgets);
+      to.sweep.quick = tradeoff_quick;
+      if (!tradeoff_backend.empty()) to.sweep.backend = inc::parseBackend(tradeoff_backend);
+      to.out_dir = tradeoff_out;
+      to.models = tradeoff_models;
+      return inc::cli::runTradeoffCommand(resolveScene(tradeoff_arg), to);
     }
     if (*run) {
       const inc::Scene scene = resolveScene(scene_arg);

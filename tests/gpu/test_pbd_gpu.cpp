@@ -150,7 +150,14 @@ TEST(PbdGpu, FusedGraphDirectAndProfiledFramesAreIdentical) {
         const PbdFrameStats st = gpu->advanceFrame(p, parityInput(m, f));
         ASSERT_TRUE(st.finite);
         if (mode == 2) {
-          EXPECT_EQ(st.stages.size(), 5u);
+          // five stages, then one per solved block
+          std::size_t solved = 0;
+          for (const auto& b : m.blocks) solved += (b.solve && b.count() > 0) ? 1 : 0;
+          ASSERT_EQ(st.stages.size(), 5u + solved);
+          EXPECT_EQ(st.stages[1].stage, "constraints");
+          double blocks_ms = 0;
+          for (std::size_t k = 5; k < st.stages.size(); ++k) blocks_ms += st.stages[k].ms;
+          EXPECT_LE(blocks_ms, st.stages[1].ms * (1 + 1e-9));
         }
       }
       gpu->getState(s[mode]);

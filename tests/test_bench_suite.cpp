@@ -1,0 +1,44 @@
+// The scaling suite (tools/bench-suite) runs end to end in --quick mode on the CPU: merged CSV, table and plots.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace fs = std::filesystem;
+
+TEST(BenchSuite, QuickCpuRunProducesMergedCsvTableAndPlots) {
+  const std::string bin = INCISION_BINARY_DIR, src = INCISION_SOURCE_DIR;
+  for (const char* b : {"bench_neighbors", "bench_mls", "bench_pbd", "bench_scaling"})
+    if (!fs::exists(fs::path(bin) / b)) GTEST_SKIP() << b << " not built (cmake --build build builds it)";
+  const fs::path out = fs::temp_directory_path() / "incision_bench_suite_quick";
+  fs::remove_all(out);
+  const std::string cmd = "OMP_NUM_THREADS=2 bash '" + src + "/tools/bench-suite' --quick --cpu-only --build '" + bin +
+                          "' --out '" + out.string() + "' > '" + out.string() + ".log' 2>&1";
+  const int rc = std::system(cmd.c_str());
+  std::ifstream log(out.string() + ".log");
+  std::stringstream ss;
+  ss << log.rdbuf();
+  ASSERT_EQ(rc, 0) << ss.str();
+  // Every suite contributed rows for both precisions.
+  std::ifstream csv(out / "suite.csv");
+  ASSERT_TRUE(csv) << ss.str();
+  std::string line, all;
+  std::getline(csv, line);
+  EXPECT_EQ(line, "suite,backend,precision,n,ms,items_per_s,gbytes_per_s");
+  while (std::getline(csv, line)) all += line + "\n";
+  for (const char* s : {"neighbor_search,cpu,float32", "neighbor_search,cpu,float64", "mls_step,cpu,float32",
+                        "mls_step,cpu,float64", "pbd_iteration,cpu,float32", "pbd_iteration,cpu,float64",
+                        "skinning,cpu,float32", "skinning,cpu,float64", "frame_default_scene,cpu,float32",
+                        "frame_default_scene,cpu,float64"})
+    EXPECT_NE(all.find(s), std::string::npos) << "missing rows " << s << "\n" << all;
+  EXPECT_TRUE(fs::exists(out / "suite.md"));
+  if (std::system("/usr/bin/python3 -c 'import matplotlib' > /dev/null 2>&1") == 0) {
+    for (const char* p : {"neighbor_search.png", "mls_step.png", "pbd_iteration.png", "skinning.png", "frame_default_scene.png"}) {
+      EXPECT_TRUE(fs::exists(out / p)) << p;
+    }
+  }
+  fs::remove_all(out);
+}
