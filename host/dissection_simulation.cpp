@@ -44,6 +44,9 @@ class DissectionSimulation final : public SimulationModel {
     if (!(scalpel_.length > 0)) throw InputError(f, "tools." + scalpel_.name + ".length_m", "must be > 0");
     params_.solver = parsePbdSolver(scene.pbd.solver, f, "pbd.solver");
     params_.iterations = scene.pbd.iterations;
+    // CUDA single-block fused frame: measured on an H100 (docs/BENCHMARKS.md) it beats per-phase launches for
+    // Gauss-Seidel up to thousands of spheres, but for Jacobi only below ~300 spheres.
+    params_.fused_max_particles = params_.solver == PbdSolverKind::Jacobi ? 256 : 4096;
     params_.xpbd = scene.pbd.xpbd;
     params_.gravity = Vec3<T>(scene.solver.gravity);
     params_.damping = T(scene.material.damping);
