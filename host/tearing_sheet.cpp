@@ -108,27 +108,23 @@ void TearSheet<T>::rebuildTopology() {
   buildCsr(n, own, val, pe_offsets, pe_partner);
 }
 
+// Two triangles of the quad a-b-c-d (counter-clockwise), split along a-c or b-d; alternating the diagonal
+// keeps the lattice free of a preferred tearing direction.
 template <typename T>
-TearSheet<T> makeTearGrid(int nx, int ny, double h, double rho_a, const Vec3d& origin, double k_pa, double tau_f_pa) {
-  const char* f = "tear grid";
-  if (nx < 2 || ny < 2) throw InputError(f, "size", "need at least 2 x 2 particles");
-  if (!(h > 0) || !(rho_a > 0)) throw InputError(f, "spacing", "spacing and area density must be > 0");
-  if (!(k_pa > 0) || !(tau_f_pa > 0)) throw InputError(f, "material", "k and tau_f must be > 0");
-  TearSheet<T> s;
-  auto id = [&](int i, int j) { return std::int32_t(j * nx + i); };
-  for (int j = 0; j < ny; ++j)
-    for (int i = 0; i < nx; ++i) s.rest.push_back(Vec3<T>(origin + Vec3d(i * h, j * h, 0.0)));
-  for (int j = 0; j + 1 < ny; ++j)
-    for (int i = 0; i + 1 < nx; ++i) {
-      const std::int32_t a = id(i, j), b = id(i + 1, j), c = id(i + 1, j + 1), d = id(i, j + 1);
-      if ((i + j) % 2 == 0) {
-        s.tris.push_back({a, b, c});
-        s.tris.push_back({a, c, d});
-      } else {
-        s.tris.push_back({a, b, d});
-        s.tris.push_back({b, c, d});
-      }
-    }
+void pushQuad(TearSheet<T>& s, std::int32_t a, std::int32_t b, std::int32_t c, std::int32_t d, bool diagonal_ac) {
+  if (diagonal_ac) {
+    s.tris.push_back({a, b, c});
+    s.tris.push_back({a, c, d});
+  } else {
+    s.tris.push_back({a, b, d});
+    s.tris.push_back({b, c, d});
+  }
+}
+
+// State at rest, uniform material, lumped masses (a third of each triangle's areal mass per corner),
+// reference normals, and the bond/bending topology.
+template <typename T>
+void finishSheet(TearSheet<T>& s, double rho_a, double k_pa, double tau_f_pa) {
   const std::size_t n = s.rest.size();
   s.x = s.rest;
   s.v.assign(n, Vec3<T>());
@@ -143,6 +139,24 @@ TearSheet<T> makeTearGrid(int nx, int ny, double h, double rho_a, const Vec3d& o
     for (int c = 0; c < 3; ++c) s.mass[tr[c]] += T(rho_a) * norm(av) / T(3);
   }
   s.rebuildTopology();
+}
+
+template <typename T>
+TearSheet<T> makeTearGrid(int nx, int ny, double h, double rho_a, const Vec3d& origin, double k_pa, double tau_f_pa) {
+  const char* f = "tear grid";
+  if (nx < 2 || ny < 2) throw InputError(f, "size", "need at least 2 x 2 particles");
+  if (!(h > 0) || !(rho_a > 0)) throw InputError(f, "spacing", "spacing and area density must be > 0");
+  if (!(k_pa > 0) || !(tau_f_pa > 0)) throw InputError(f, "material", "k and tau_f must be > 0");
+  TearSheet<T> s;
+  auto id = [&](int i, int j) { return std::int32_t(j * nx + i); };
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) s.rest.push_back(Vec3<T>(origin + Vec3d(i * h, j * h, 0.0)));
+  for (int j = 0; j + 1 < ny; ++j)
+    for (int i = 0; i + 1 < nx; ++i) {
+      const std::int32_t a = id(i, j), b = id(i + 1, j), c = id(i + 1, j + 1), d = id(i, j + 1);
+      pushQuad(s, a, b, c, d, (i + j) % 2 == 0);
+    }
+  finishSheet(s, rho_a, k_pa, tau_f_pa);
   return s;
 }
 
@@ -165,28 +179,9 @@ TearSheet<T> makeTearTube(int n_around, int n_along, double radius, double lengt
     for (int i = 0; i < n_around; ++i) {
       // around = +theta, along = +z: (theta, z) counter-clockwise seen from outside gives outward normals.
       const std::int32_t a = id(i, j), b = id(i + 1, j), c = id(i + 1, j + 1), d = id(i, j + 1);
-      if ((i + j) % 2 == 0) {
-        s.tris.push_back({a, b, c});
-        s.tris.push_back({a, c, d});
-      } else {
-        s.tris.push_back({a, b, d});
-        s.tris.push_back({b, c, d});
-      }
+      pushQuad(s, a, b, c, d, (i + j) % 2 == 0);
     }
-  const std::size_t n = s.rest.size();
-  s.x = s.rest;
-  s.v.assign(n, Vec3<T>());
-  s.mass.assign(n, T(0));
-  s.fixed.assign(n, 0);
-  s.k.assign(n, T(k_pa));
-  s.tau_f.assign(n, T(tau_f_pa));
-  for (std::size_t t = 0; t < s.tris.size(); ++t) {
-    const auto& tr = s.tris[t];
-    const Vec3<T> av = tear::triangleAreaVector(s.rest[tr[0]], s.rest[tr[1]], s.rest[tr[2]]);
-    s.ref_normal.push_back(av * (T(1) / norm(av)));
-    for (int c = 0; c < 3; ++c) s.mass[tr[c]] += T(rho_a) * norm(av) / T(3);
-  }
-  s.rebuildTopology();
+  finishSheet(s, rho_a, k_pa, tau_f_pa);
   return s;
 }
 
