@@ -23,6 +23,15 @@ namespace {
 
 constexpr double kRadiusFactor = 0.75;  // sphere radius / lattice spacing
 constexpr int kDefaultSubsteps = 4;
+// Longest PBD substep h allowed: gravity moves a free sphere by |g| h^2 per substep before projection; past a
+// tenth of the lattice spacing the projection's corrections turn into large velocities (v = dx / h) and
+// one-substep frames were measured to fling a 40 mm bar by 0.11-1.5 m (tests/stability_matrix.h).
+constexpr double kMaxSagPerSubstep = 0.1;  // fraction of geometry.spacing
+
+double maxPbdSubstep(const Scene& scene) {
+  const double g = norm(scene.solver.gravity);
+  return g > 0 ? std::sqrt(kMaxSagPerSubstep * scene.geometry.spacing / g) : 1.0e300;
+}
 
 // Links between overlapping spheres through a hash grid of cell 2 r_max (each pair tested once).
 void linkOverlapping(MetaballModel& mb) {
@@ -83,7 +92,18 @@ class MetaballSimulation final : public SimulationModel {
     params_.damping = T(scene.material.damping);
     params_.volume_preservation = scene.pbd.volume_preservation;
     params_.volume_influence = T(2.0 * scene.geometry.spacing);
+    max_substep_s_ = maxPbdSubstep(scene);
+    const double fdt = scene.solver.frame_dt;
+    if (scene.solver.substeps > 0 && fdt / scene.solver.substeps > max_substep_s_) {
+      const int need = int(std::ceil(fdt / max_substep_s_ - 1e-9));
+      throw InputError(f, "solver.substeps",
+                       std::to_string(scene.solver.substeps) + " substep(s) of a " + std::to_string(fdt) +
+                           " s frame exceed the longest stable PBD substep here, " + std::to_string(max_substep_s_) +
+                           " s (gravity sag per substep under a tenth of geometry.spacing): use at least " +
+                           std::to_string(need) + ", or 0 to choose automatically");
+    }
     base_substeps_ = scene.solver.substeps > 0 ? scene.solver.substeps : kDefaultSubsteps;
+    auto_substeps_ = scene.solver.substeps == 0;
 
     const MetaballModel mb = buildSceneMetaballs(scene);
     MetaballPbdOptions opt;
@@ -146,6 +166,8 @@ class MetaballSimulation final : public SimulationModel {
     PbdStepParams<T> p = params_;
     p.frame_dt = T(frame_dt);
     p.substeps = substeps();
+    // Automatic substepping also covers frames longer than the scene's (a slowed-down viewer, a retry).
+    if (auto_substeps_) p.substeps = std::max(p.substeps, int(std::ceil(frame_dt / max_substep_s_ - 1e-9)));
     const PbdFrameStats st = backend_->advanceFrame(p, in);
     backend_->getState(state_);
     time_ = t1;
@@ -271,6 +293,8 @@ class MetaballSimulation final : public SimulationModel {
   mutable std::vector<Mat3<T>> rotations_;  // scratch for currentSurface
   mutable std::vector<Vec3<T>> skinned_;
   int base_substeps_ = kDefaultSubsteps;
+  bool auto_substeps_ = true;
+  double max_substep_s_ = 1.0e300;
   double substep_scale_ = 1.0;
   double time_ = 0, saved_time_ = 0;
 };

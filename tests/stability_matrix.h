@@ -184,17 +184,23 @@ inline void pbdTimeStepCase(BackendKind be) {
   }
 }
 
-// One substep of 1/60 s or 0.1 s: found to fling the PBD bar (max displacement 0.11 m and 1.5 m for a 40 mm
-// bar, reported energy 0.27 J and 205 J; nothing non-finite, so no guard fires). Kept as a DISABLED_ test
-// until the PBD model clamps its substep (docs/tradeoff.md, "Stability matrix").
+// One substep of 1/60 s or 0.1 s was found to fling the PBD bar (max displacement 0.11 m and 1.5 m for a
+// 40 mm bar, nothing non-finite). The model now refuses an explicit substep count whose substep lets gravity
+// sag a sphere by more than a tenth of the spacing (solver.substeps named), and with solver.substeps = 0
+// chooses enough substeps itself: both frame lengths then stay bounded.
 inline void pbdLongSubstepCase(BackendKind be) {
   for (double fdt : {1.0 / 60.0, 0.1}) {
     Scene s = bar(false, 1.0e4, 0.45);
     s.solver.frame_dt = fdt;
     s.solver.substeps = 1;
+    const Outcome refused = runScene(s, be, 10);
+    EXPECT_TRUE(refused.refused) << "pbd one explicit substep of " << fdt << " s must be refused";
+    EXPECT_EQ(refused.refused_key, "solver.substeps");
+    s.solver.substeps = 0;
     const Outcome o = runScene(s, be, 10);
-    EXPECT_FALSE(o.refused || o.reported_failure) << "pbd frame_dt " << fdt << " " << o.refused_key << o.failure;
-    expectBounded(o, s, "pbd one substep of " + std::to_string(fdt) + " s");
+    EXPECT_FALSE(o.refused || o.reported_failure) << "pbd automatic substeps, frame " << fdt << " " << o.refused_key
+                                                   << o.failure;
+    expectBounded(o, s, "pbd automatic substeps of a " + std::to_string(fdt) + " s frame");
   }
 }
 

@@ -9,7 +9,7 @@ TEST(StabilityMatrix, PbdExtremeMaterials) { materialsCase(BackendKind::Cpu, fal
 TEST(StabilityMatrix, MlsTimeStepUpToTwiceTheLimitIsStableOrRefused) { mlsTimeStepCase(BackendKind::Cpu); }
 TEST(StabilityMatrix, PbdLargeTimeStepsStayBounded) { pbdTimeStepCase(BackendKind::Cpu); }
 // Known problem (reported): one long PBD substep flings the bar. Run by hand to see it.
-TEST(StabilityMatrix, DISABLED_PbdOneLongSubstepStaysBounded) { pbdLongSubstepCase(BackendKind::Cpu); }
+TEST(StabilityMatrix, PbdLongFrameRefusedOrAutoSubstepped) { pbdLongSubstepCase(BackendKind::Cpu); }
 TEST(StabilityMatrix, MlsCoarseToFineSpacing) { spacingCase(BackendKind::Cpu, true); }
 TEST(StabilityMatrix, PbdCoarseToFineSpacing) { spacingCase(BackendKind::Cpu, false); }
 TEST(StabilityMatrix, MlsJitteredRestPositions) { jitterCase(BackendKind::Cpu, true); }
