@@ -74,7 +74,7 @@ TearingSceneSetup tearingSetupFromScene(const Scene& scene) {
       t.ref_normal.push_back(av * (1.0 / a));
       for (int c = 0; c < 3; ++c) t.mass[tr[c]] += rho_a * a / 3.0;
     }
-    // Vertices no triangle uses carry no mass: drop them by compaction.
+    // Vertices no triangle uses carry no mass: removeTearParticles drops particles left without triangles.
     std::vector<std::uint8_t> none(n, 0);
     t.x = t.rest;
     t.v.assign(n, Vec3d());
@@ -82,7 +82,7 @@ TearingSceneSetup tearingSetupFromScene(const Scene& scene) {
     t.k.assign(n, k);
     t.tau_f.assign(n, tau);
     for (std::size_t i = 0; i < n; ++i)
-      if (!(t.mass[i] > 0)) t.mass[i] = 1.0;  // placeholder, removed just below
+      if (!(t.mass[i] > 0)) t.mass[i] = 1.0;  // keeps rebuildTopology valid; these unused vertices are dropped next
     t.rebuildTopology();
     removeTearParticles(t, none, false, TearParams<double>());
     s.sheet = std::move(t);
