@@ -25,4 +25,14 @@ expect 2 "--backend" -- "$exe" run --backend quantum --out "$tmp/o"
 expect 2 "--precision" -- "$exe" run --precision float16 --out "$tmp/o"
 expect 0 "beam" -- "$exe" scenes
 expect 0 "CUDA backend compiled" -- "$exe" devices
+# The viewer on the default scene: a scripted run writes a real picture; without a display (or a build
+# without the viewer) it exits 1 and points to `incision run`.
+if [ -n "${DISPLAY:-}" ] && ! "$exe" view --frames 1 --screenshot "$tmp/probe.png" 2>&1 | grep -q "no viewer"; then
+  expect 0 "" -- "$exe" view --backend cpu --frames 3 --screenshot "$tmp/view.png"
+  size=$(stat -c %s "$tmp/view.png" 2>/dev/null || echo 0)
+  if [ "$size" -lt 20000 ]; then echo "FAIL: view screenshot missing or blank ($size bytes)"; fails=$((fails + 1));
+  else echo "ok: view screenshot $size bytes"; fi
+else
+  expect 1 "incision run" -- env -u DISPLAY "$exe" view --backend cpu --frames 3
+fi
 [ "$fails" = 0 ] && echo "all CLI exit-code checks passed" || { echo "$fails CLI check(s) failed"; exit 1; }
