@@ -63,13 +63,7 @@ TearStepStats tearStepCpu(TearSheet<T>& s, const TearParams<T>& p, TearCandidate
   }
   // Phase 4: new particles.
   const std::size_t m = n + std::size_t(splits);
-  s.rest.resize(m);
-  s.x.resize(m);
-  s.v.resize(m);
-  s.mass.resize(m);
-  s.fixed.resize(m);
-  s.k.resize(m);
-  s.tau_f.resize(m);
+  s.resizeParticles(m);
   view = sheetView(s);
   std::vector<std::int32_t> split_bonds(n, 0), backed(n, 0);
   const bool debris = p.criterion != TearCriterion::Threshold;

@@ -57,6 +57,16 @@ struct TearSheet {
   std::uint32_t step = 0;  // tearing steps taken (the random stream's counter)
 
   std::size_t size() const { return x.size(); }
+  // Every per-particle array to m entries (new particles appended by a split; both backends fill them).
+  void resizeParticles(std::size_t m) {
+    rest.resize(m);
+    x.resize(m);
+    v.resize(m);
+    mass.resize(m);
+    fixed.resize(m);
+    k.resize(m);
+    tau_f.resize(m);
+  }
   void rebuildTopology();
 };
 

@@ -165,13 +165,7 @@ class TearCudaWorkspace {
       INC_CUDA_LAUNCH("tear triangles");
     }
     const std::size_t m = n + std::size_t(splits);
-    s.rest.resize(m);
-    s.x.resize(m);
-    s.v.resize(m);
-    s.mass.resize(m);
-    s.fixed.resize(m);
-    s.k.resize(m);
-    s.tau_f.resize(m);
+    s.resizeParticles(m);
     rest_.download(s.rest.data(), m);
     x_.download(s.x.data(), m);
     v_.download(s.v.data(), m);
