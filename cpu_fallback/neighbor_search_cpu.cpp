@@ -116,30 +116,40 @@ DenseRowsResult denseRows(const NeighborGridParams<T>& p, const std::int32_t* st
     cells *= std::uint64_t(hi[a] - lo[a] + 1);
   }
   if (cells > std::uint64_t(n)) return {false, 0};
-  // Room for every candidate (rows are few: one start lookup pair each).
+  // The slot run of each row after trimming (the same rows and ranges as forEachGridNeighbor), and room
+  // for every candidate.
+  const std::int32_t qc[3] = {neighborCellCoord(x.x, p.origin.x, p.inv_cell),
+                              neighborCellCoord(x.y, p.origin.y, p.inv_cell),
+                              neighborCellCoord(x.z, p.origin.z, p.inv_cell)};
+  std::int32_t runs[2 * 64];
+  int nrun = 0;
   std::size_t candidates = 0;
+  if (std::uint64_t(hi[1] - lo[1] + 1) * std::uint64_t(hi[2] - lo[2] + 1) > 64) return {false, 0};
   for (std::int32_t cz = lo[2]; cz <= hi[2]; ++cz)
     for (std::int32_t cy = lo[1]; cy <= hi[1]; ++cy) {
-      const std::uint32_t b0 = neighborBucket(p, lo[0], cy, cz);
-      candidates += std::size_t(start[b0 + std::uint32_t(hi[0] - lo[0]) + 1u] - start[b0]);
+      std::int32_t xl = lo[0], xh = hi[0];
+      if (!neighborRowXRange(p, x, reach, qc, cy, cz, xl, xh)) continue;
+      const std::uint32_t b0 = neighborBucket(p, xl, cy, cz);
+      runs[2 * nrun] = start[b0];
+      runs[2 * nrun + 1] = start[b0 + std::uint32_t(xh - xl) + 1u];
+      candidates += std::size_t(runs[2 * nrun + 1] - runs[2 * nrun]);
+      ++nrun;
     }
   if (out.size() < candidates) out.resize(candidates);
   std::int32_t* dst = out.data();
   std::size_t m = 0;
   const T qx = x.x, qy = x.y, qz = x.z;
-  for (std::int32_t cz = lo[2]; cz <= hi[2]; ++cz)
-    for (std::int32_t cy = lo[1]; cy <= hi[1]; ++cy) {
-      const std::uint32_t b0 = neighborBucket(p, lo[0], cy, cz);
-      const std::int32_t e1 = start[b0 + std::uint32_t(hi[0] - lo[0]) + 1u];
-      for (std::int32_t e = start[b0]; e < e1; ++e) {
-        const T dx = qx - xs[e], dy = qy - ys[e], dz = qz - zs[e];
-        const T xx = dx * dx, yy = dy * dy, zz = dz * dz;
-        const T d2 = (xx + yy) + zz;
-        const std::int32_t o = orig[e];
-        dst[m] = o;
-        m += std::size_t((d2 <= r2) & (o != skip_orig));
-      }
+  for (int k = 0; k < nrun; ++k) {
+    const std::int32_t e1 = runs[2 * k + 1];
+    for (std::int32_t e = runs[2 * k]; e < e1; ++e) {
+      const T dx = qx - xs[e], dy = qy - ys[e], dz = qz - zs[e];
+      const T xx = dx * dx, yy = dy * dy, zz = dz * dz;
+      const T d2 = (xx + yy) + zz;
+      const std::int32_t o = orig[e];
+      dst[m] = o;
+      m += std::size_t((d2 <= r2) & (o != skip_orig));
     }
+  }
   return {true, m};
 }
 INC_NO_CONTRACT_END

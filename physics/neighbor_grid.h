@@ -154,6 +154,44 @@ INC_HD T neighborSearchReach(T r) {
   return r * (T(1) + T(16) * NeighborFloatTraits<T>::epsilon) + NeighborFloatTraits<T>::sqrt_min_normal;
 }
 
+// Lower bound on |c - y| for every y whose cell coordinate along one axis is `cell`, where `c_cell` is the
+// query coordinate's own cell (0 when they are equal). Cell `cell` holds values with fl((y - o) h^-1) in
+// [cell, cell + 1) (or clamped there from outside); the boundary o + cell h is then exact to within a few
+// roundings of |o| + |c| + (|cell| + 1) h, and 8 eps of that is subtracted so the bound never overshoots.
+template <typename T>
+INC_HD T neighborAxisGap(T c, std::int32_t c_cell, std::int32_t cell, T origin, T h) {
+  if (cell == c_cell) return T(0);
+  const T ac = c < T(0) ? -c : c, ao = origin < T(0) ? -origin : origin;
+  const T slack = T(8) * NeighborFloatTraits<T>::epsilon * (ao + ac + T(cell + 1) * h) +
+                  NeighborFloatTraits<T>::sqrt_min_normal;
+  const T gap = cell > c_cell ? (origin + T(cell) * h) - c : c - (origin + T(cell + 1) * h);
+  const T g = gap - slack;
+  return g > T(0) ? g : T(0);
+}
+
+// Trims the x-range [lo_x, hi_x] of cells searched in the (cy, cz) row of cells for a query at x with search
+// reach `reach`: a point of that row is at least gy, gz away in y and z, so it can only be accepted if its x
+// lies within sqrt(reach^2 - gy^2 - gz^2) of x. Returns false when no point of the row can be accepted.
+// The reach^2 term is inflated by 32 eps to absorb the rounding of the subtraction, and the square root by
+// 4 eps; the x bounds then go through the same monotone cell function (exact argument: fl is monotone and
+// every point coordinate is a float, see forEachGridNeighbor). Rows are only ever trimmed, never widened.
+template <typename T>
+INC_HD bool neighborRowXRange(const NeighborGridParams<T>& p, const Vec3<T>& x, T reach, const std::int32_t qc[3],
+                              std::int32_t cy, std::int32_t cz, std::int32_t& lo_x, std::int32_t& hi_x) {
+  const T h = T(1) / p.inv_cell;
+  const T gy = neighborAxisGap(x.y, qc[1], cy, p.origin.y, h);
+  const T gz = neighborAxisGap(x.z, qc[2], cz, p.origin.z, h);
+  if (gy == T(0) && gz == T(0)) return true;  // the query's own row: the full reach applies
+  const T w2 = reach * reach * (T(1) + T(32) * NeighborFloatTraits<T>::epsilon) - gy * gy - gz * gz;
+  if (w2 < T(0)) return false;
+  const T w = std::sqrt(w2) * (T(1) + T(4) * NeighborFloatTraits<T>::epsilon) + NeighborFloatTraits<T>::sqrt_min_normal;
+  const std::int32_t a = neighborCellCoord(x.x - w, p.origin.x, p.inv_cell);
+  const std::int32_t b = neighborCellCoord(x.x + w, p.origin.x, p.inv_cell);
+  if (a > lo_x) lo_x = a;
+  if (b < hi_x) hi_x = b;
+  return lo_x <= hi_x;
+}
+
 namespace detail {
 template <typename T, typename View, typename Visit>
 INC_HD void neighborTest(const View& g, const Vec3<T>& x, T r2, std::int32_t j, std::int32_t skip, Visit& visit) {
@@ -194,11 +232,17 @@ INC_HD void forEachGridNeighbor(const View& view, const Vec3<T>& query, T r, std
     for (std::int32_t j = 0; j < g.n; ++j) detail::neighborTest(g, x, r2, j, skip, visit);
     return;
   }
+  // The query's own cell (the rows that share its y or z are not trimmed in that axis).
+  const std::int32_t qc[3] = {neighborCellCoord(x.x, p.origin.x, p.inv_cell),
+                              neighborCellCoord(x.y, p.origin.y, p.inv_cell),
+                              neighborCellCoord(x.z, p.origin.z, p.inv_cell)};
   if (p.dense) {
     for (std::int32_t cz = lo[2]; cz <= hi[2]; ++cz)
       for (std::int32_t cy = lo[1]; cy <= hi[1]; ++cy) {
-        const std::uint32_t b0 = neighborBucket(p, lo[0], cy, cz);
-        const std::uint32_t b1 = b0 + std::uint32_t(hi[0] - lo[0]) + 1u;
+        std::int32_t xl = lo[0], xh = hi[0];
+        if (!neighborRowXRange(p, x, reach, qc, cy, cz, xl, xh)) continue;
+        const std::uint32_t b0 = neighborBucket(p, xl, cy, cz);
+        const std::uint32_t b1 = b0 + std::uint32_t(xh - xl) + 1u;
         const std::int32_t e1 = g.bucket_start[b1];
         for (std::int32_t e = g.bucket_start[b0]; e < e1; ++e)
           detail::neighborTest(g, x, r2, g.entries ? g.entries[e] : e, skip, visit);
@@ -206,8 +250,10 @@ INC_HD void forEachGridNeighbor(const View& view, const Vec3<T>& query, T r, std
     return;
   }
   for (std::int32_t cz = lo[2]; cz <= hi[2]; ++cz)
-    for (std::int32_t cy = lo[1]; cy <= hi[1]; ++cy)
-      for (std::int32_t cx = lo[0]; cx <= hi[0]; ++cx) {
+    for (std::int32_t cy = lo[1]; cy <= hi[1]; ++cy) {
+      std::int32_t xl = lo[0], xh = hi[0];
+      if (!neighborRowXRange(p, x, reach, qc, cy, cz, xl, xh)) continue;
+      for (std::int32_t cx = xl; cx <= xh; ++cx) {
         const std::uint32_t b = neighborBucket(p, cx, cy, cz);
         const std::int32_t e1 = g.bucket_start[b + 1u];
         for (std::int32_t e = g.bucket_start[b]; e < e1; ++e) {
@@ -220,6 +266,7 @@ INC_HD void forEachGridNeighbor(const View& view, const Vec3<T>& query, T r, std
           detail::neighborTest(g, x, r2, j, skip, visit);
         }
       }
+    }
 }
 
 }  // namespace inc

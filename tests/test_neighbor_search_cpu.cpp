@@ -74,6 +74,57 @@ TYPED_TEST(NeighborSearchCpu, CellSizeSmallerOrLargerThanRadius) {
                       "cell " + std::to_string(double(cell)));
 }
 
+// Row trimming (neighborRowXRange) may only drop cells that hold no point within reach: random points near
+// the reach of random queries, far from the origin (coordinates ~1e3, where float roundings of cell boundaries
+// are largest relative to the cell), at cell sizes of r/3 to r. Every point within r of the query must have its
+// row kept and its x cell inside the trimmed range; and with cells of r/2 the far corner rows are dropped.
+TYPED_TEST(NeighborSearchCpu, RowTrimmingNeverDropsAPointWithinReach) {
+  using T = TypeParam;
+  std::mt19937 rng(41);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::size_t tested = 0, trimmed_rows = 0;
+  for (double factor : {1.0 / 3.0, 0.5, 0.77, 1.0}) {
+    const T r = T(0.0371), h = T(double(r) * factor);
+    const Vec3<T> lo(T(1000.0), T(-1000.5), T(0.25)), hi(T(1001.0), T(-999.5), T(1.25));
+    const NeighborGridParams<T> p = makeNeighborGridParams(lo, hi, h, neighborBucketCount(1 << 20), 1, true);
+    const T reach = neighborSearchReach(r);
+    for (int q = 0; q < 4000; ++q) {
+      const Vec3<T> x(T(1000.5 + 0.4 * u(rng)), T(-1000.0 + 0.4 * u(rng)), T(0.75 + 0.4 * u(rng)));
+      const std::int32_t qc[3] = {neighborCellCoord(x.x, p.origin.x, p.inv_cell),
+                                  neighborCellCoord(x.y, p.origin.y, p.inv_cell),
+                                  neighborCellCoord(x.z, p.origin.z, p.inv_cell)};
+      // a point at distance in [0.9 r, r] (plus exact ties along a diagonal) in a random direction
+      Vec3<double> d(u(rng), u(rng), u(rng));
+      const double len = std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+      if (len < 1e-3) continue;
+      const double s = double(r) * (0.9 + 0.1 * (u(rng) * 0.5 + 0.5)) / len;
+      const Vec3<T> y(T(double(x.x) + d.x * s), T(double(x.y) + d.y * s), T(double(x.z) + d.z * s));
+      if (distance2Exact(x, y) > r * r) continue;
+      const std::int32_t cy = neighborCellCoord(y.y, p.origin.y, p.inv_cell);
+      const std::int32_t cz = neighborCellCoord(y.z, p.origin.z, p.inv_cell);
+      std::int32_t xl = neighborCellCoord(x.x - reach, p.origin.x, p.inv_cell);
+      std::int32_t xh = neighborCellCoord(x.x + reach, p.origin.x, p.inv_cell);
+      ASSERT_TRUE(neighborRowXRange(p, x, reach, qc, cy, cz, xl, xh)) << "factor " << factor << " query " << q;
+      const std::int32_t cx = neighborCellCoord(y.x, p.origin.x, p.inv_cell);
+      ASSERT_LE(xl, cx) << "factor " << factor << " query " << q;
+      ASSERT_GE(xh, cx) << "factor " << factor << " query " << q;
+      ++tested;
+    }
+    if (factor == 0.5) {  // a query at a cell centre: the (+-2, +-2) rows are at least 1.5 cells = 0.75 r away
+      // in both y and z, i.e. 1.06 r: dropped.
+      const Vec3<T> c = p.origin + Vec3<T>(T(10.5), T(10.5), T(10.5)) * h;
+      const std::int32_t qc[3] = {10, 10, 10};
+      for (int dy : {-2, 2})
+        for (int dz : {-2, 2}) {
+          std::int32_t xl = 8, xh = 12;
+          trimmed_rows += !neighborRowXRange(p, c, reach, qc, 10 + dy, 10 + dz, xl, xh);
+        }
+    }
+  }
+  EXPECT_GT(tested, 10000u);
+  EXPECT_EQ(trimmed_rows, 4u);
+}
+
 TYPED_TEST(NeighborSearchCpu, PerQueryRadiiLargerThanTheCellSize) {
   using T = TypeParam;
   const auto pts = clusteredCloud<T>(2500, 5);
