@@ -9,6 +9,7 @@
 
 #include "kernels/cuda_check.h"
 #include "kernels/device_buffer.h"
+#include "kernels/pbd_group_projection.cuh"
 #include "physics/pbd_block.h"
 #include "physics/pbd_volume.h"
 
@@ -75,6 +76,18 @@ __global__ void projectColorKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx
   if (q >= count) return;
   pbd::projectConstraint(b, order[q], ctx);
 }
+
+// Cluster kinds (shape matching, Laplacian): kGroup lanes per constraint (kernels/pbd_group_projection.cuh).
+// order == nullptr: constraints 0 .. count (Jacobi); else the colour's constraints order[0 .. count).
+template <typename T>
+__global__ void projectGroupKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx, const std::int32_t* order, int count) {
+  const long long g = (long long)blockIdx.x * blockDim.x + threadIdx.x;
+  const int q = int(g / pbdgroup::kGroup);
+  const bool valid = q < count;  // no early return: the whole warp takes part in the shuffles
+  pbdgroup::projectGroup(b, valid ? (order ? order[q] : q) : 0, valid, ctx, int(threadIdx.x) % pbdgroup::kGroup);
+}
+
+inline unsigned groupBlocksFor(std::int64_t n) { return blocksFor(n * pbdgroup::kGroup); }
 
 // Jacobi gather: each particle sums its own slots' corrections (no atomics, fixed order).
 template <typename T>
@@ -305,15 +318,28 @@ __global__ void __launch_bounds__(kFusedThreads) fusedFrameKernel(FusedFrame<T> 
       for (int b = 0; b < f.nblocks; ++b) {
         const FusedBlock<T>& fb = f.blocks[b];
         if (!fb.solve || fb.view.count == 0) continue;
+        const bool group = pbdgroup::usesGroup(fb.view.kind);
+        const int per_pass = nth / pbdgroup::kGroup, lane = tid % pbdgroup::kGroup;
         if (ctx.jacobi) {
-          for (int c = tid; c < fb.view.count; c += nth) pbd::projectConstraint(fb.view, c, ctx);
+          if (group)  // the same trip count for every thread: all lanes of a warp reach the shuffles
+            for (int base = 0; base < fb.view.count; base += per_pass)
+              pbdgroup::projectGroup(fb.view, base + tid / pbdgroup::kGroup, base + tid / pbdgroup::kGroup < fb.view.count,
+                                     ctx, lane);
+          else
+            for (int c = tid; c < fb.view.count; c += nth) pbd::projectConstraint(fb.view, c, ctx);
           __syncthreads();
           for (int i = tid; i < f.n; i += nth) x[i] += pbd::gatherCorrection(fb.view, std::int32_t(i));
           __syncthreads();
         } else {
           for (int k = 0; k < fb.colors; ++k) {
             const int c0 = fb.color_offsets[k], c1 = fb.color_offsets[k + 1];
-            for (int q = c0 + tid; q < c1; q += nth) pbd::projectConstraint(fb.view, fb.order[q], ctx);
+            if (group)
+              for (int base = c0; base < c1; base += per_pass) {
+                const int q = base + tid / pbdgroup::kGroup;
+                pbdgroup::projectGroup(fb.view, q < c1 ? fb.order[q] : 0, q < c1, ctx, lane);
+              }
+            else
+              for (int q = c0 + tid; q < c1; q += nth) pbd::projectConstraint(fb.view, fb.order[q], ctx);
             __syncthreads();
           }
         }
@@ -741,7 +767,10 @@ class PbdCudaBackend final : public PbdBackend<T> {
           ev = stageBegin();  // profiling: each block is its own record (stage 5 + block index)
           const pbd::BlockView<T> b = view(d);
           if (ctx.jacobi) {
-            projectAllKernel<T><<<blocksFor(d.count), kThreads, 0, stream_>>>(b, ctx);
+            if (pbdgroup::usesGroup(b.kind))
+              projectGroupKernel<T><<<groupBlocksFor(d.count), kThreads, 0, stream_>>>(b, ctx, nullptr, d.count);
+            else
+              projectAllKernel<T><<<blocksFor(d.count), kThreads, 0, stream_>>>(b, ctx);
             INC_CUDA_LAUNCH("pbd project (jacobi)");
             gatherKernel<T><<<gn, kThreads, 0, stream_>>>(n_, b, x_.data());
             INC_CUDA_LAUNCH("pbd gather");
@@ -749,7 +778,10 @@ class PbdCudaBackend final : public PbdBackend<T> {
             for (std::size_t k = 0; k + 1 < d.color_offsets.size(); ++k) {
               const int c0 = d.color_offsets[k], cnt = d.color_offsets[k + 1] - c0;
               if (cnt == 0) continue;
-              projectColorKernel<T><<<blocksFor(cnt), kThreads, 0, stream_>>>(b, ctx, d.order.data() + c0, cnt);
+              if (pbdgroup::usesGroup(b.kind))
+                projectGroupKernel<T><<<groupBlocksFor(cnt), kThreads, 0, stream_>>>(b, ctx, d.order.data() + c0, cnt);
+              else
+                projectColorKernel<T><<<blocksFor(cnt), kThreads, 0, stream_>>>(b, ctx, d.order.data() + c0, cnt);
               INC_CUDA_LAUNCH("pbd project (colour)");
             }
           }

@@ -55,6 +55,71 @@ INC_HD void emitCorrection(const BlockView<T>& b, const SolveContext<T>& ctx, st
     ctx.x[b.ids[slot]] += d;
 }
 
+// ---- Shape matching, split into per-member terms: projectConstraint loops over the members one after another;
+// the CUDA group projection (kernels/pbd_group_projection.cuh) gives each member a lane and sums the same
+// terms with a fixed-order tree reduction. Same formulas, different loop.
+
+// The cluster's rotation from its moment matrix, warm-started from (and stored as) the centre's rotation.
+template <typename T>
+INC_HD Mat3<T> shapeMatchRotation(const SolveContext<T>& ctx, std::int32_t centre, const Mat3<T>& a_pq) {
+  const Quat<T> q = extractRotation(a_pq, ctx.rotation[centre], ctx.rotation_iterations);
+  ctx.rotation[centre] = q;
+  return quatToMatrix(q);
+}
+
+template <typename T>
+INC_HD T slotScale(const BlockView<T>& b, const SolveContext<T>& ctx, std::int32_t s) {
+  return ctx.jacobi ? ctx.omega * b.jacobi_scale[s] : T(1);
+}
+
+template <typename T>
+INC_HD GoalCorrection<T> shapeMatchGoal(const BlockView<T>& b, const SolveContext<T>& ctx, std::int32_t s,
+                                        const Mat3<T>& rot, const Vec3<T>& x_cm) {
+  const std::int32_t p = b.ids[s];
+  const XpbdTerm<T> term = xpbdTerm(ctx.xpbd, b.compliance[s], b.stiffness, ctx.dt);
+  return projectGoal(ctx.x[p], ctx.w[p], rot * b.rest_vec[s] + x_cm, term, b.lambda[s]);
+}
+
+// Pass 1, one member: its share of the net momentum change sum_k m_k dp_k. With equal compliance-to-mass
+// ratios the sum is zero (sum_k m_k q_k = 0), but per-member compliances and Jacobi scales differ at the
+// boundary; the sum is removed by a uniform shift of the movable members, so internal shape matching never
+// creates momentum (the shift is a rigid translation: it does not change the shape error).
+template <typename T>
+INC_HD void shapeMatchMomentum(const BlockView<T>& b, const SolveContext<T>& ctx, std::int32_t s, const Mat3<T>& rot,
+                               const Vec3<T>& x_cm, Vec3<T>& dmom, T& mov_mass) {
+  const std::int32_t p = b.ids[s];
+  if (!(ctx.w[p] > T(0))) return;
+  const GoalCorrection<T> r = shapeMatchGoal(b, ctx, s, rot, x_cm);
+  dmom += r.dp * (slotScale(b, ctx, s) * ctx.mass[p]);
+  mov_mass += ctx.mass[p];
+}
+
+template <typename T>
+INC_HD Vec3<T> shapeMatchShift(const Vec3<T>& dmom, T mov_mass) {
+  return mov_mass > T(0) ? dmom * (-T(1) / mov_mass) : Vec3<T>();
+}
+
+// Pass 2, one member: its correction (slot output for Jacobi, in place for Gauss-Seidel) and multiplier.
+template <typename T>
+INC_HD void shapeMatchApply(const BlockView<T>& b, const SolveContext<T>& ctx, std::int32_t s, const Mat3<T>& rot,
+                            const Vec3<T>& x_cm, const Vec3<T>& shift) {
+  const std::int32_t p = b.ids[s];
+  const T sc = slotScale(b, ctx, s);
+  const GoalCorrection<T> r = shapeMatchGoal(b, ctx, s, rot, x_cm);
+  const Vec3<T> d = ctx.w[p] > T(0) ? r.dp * sc + shift : Vec3<T>();
+  if (ctx.jacobi)
+    b.slot_corr[s] = d;
+  else
+    ctx.x[p] += d;
+  b.lambda[s] += r.dlambda * sc;
+}
+
+// The Laplacian's rest offset, turned by the centre's rotation when rotations are tracked.
+template <typename T>
+INC_HD Vec3<T> laplacianRest(const BlockView<T>& b, int c, const SolveContext<T>& ctx) {
+  return ctx.rotation ? quatToMatrix(ctx.rotation[b.ids[b.offsets[c]]]) * b.rest_vec[c] : b.rest_vec[c];
+}
+
 // Projects constraint c once. Jacobi: corrections (scaled by omega * jacobi_scale) go to slot_corr and the
 // multiplier advances by the same scaled amount, so lambda always matches the displacement actually applied
 // and XPBD's equilibrium is kept; Gauss-Seidel: positions move in place (the colouring makes that race-free).
@@ -96,8 +161,7 @@ INC_HD void projectConstraint(const BlockView<T>& b, int c, const SolveContext<T
       break;
     }
     case kLaplacian: {
-      const std::int32_t centre = b.ids[s0];
-      const Vec3<T> rest = ctx.rotation ? quatToMatrix(ctx.rotation[centre]) * b.rest_vec[c] : b.rest_vec[c];
+      const Vec3<T> rest = laplacianRest(b, c, ctx);
       const XpbdTerm<T> term = xpbdTerm(ctx.xpbd, b.compliance[c], b.stiffness, ctx.dt);
       const LaplacianCorrection<T> r = projectLaplacian(x, w, b.ids + s0, s1 - s0, rest, term, b.lambda[c]);
       emitCorrection(b, ctx, s0, r.d_center, scale);
@@ -108,40 +172,15 @@ INC_HD void projectConstraint(const BlockView<T>& b, int c, const SolveContext<T
     case kShapeMatching: {
       const std::int32_t centre = b.ids[s0];
       const ClusterFrame<T> f = clusterFrame(x, ctx.mass, b.ids + s0, b.rest_vec + s0, s1 - s0);
-      const Quat<T> q = extractRotation(f.a_pq, ctx.rotation[centre], ctx.rotation_iterations);
-      ctx.rotation[centre] = q;
-      const Mat3<T> rot = quatToMatrix(q);
-      // Pass 1: the cluster's net momentum change sum_k m_k dp_k. With equal compliance-to-mass ratios it is
-      // zero (sum_k m_k q_k = 0), but per-member compliances and Jacobi scales differ at the boundary; the
-      // change is removed below by a uniform shift of the movable members, so internal shape matching never
-      // creates momentum (the shift is a rigid translation: it does not change the shape error).
+      const Mat3<T> rot = shapeMatchRotation(ctx, centre, f.a_pq);
+      // Pass 1: the cluster's net momentum change (see shapeMatchMomentum), removed in pass 2 by a shift.
       Vec3<T> dmom;
       T mov_mass = T(0);
-      for (std::int32_t s = s0; s < s1; ++s) {
-        const std::int32_t p = b.ids[s];
-        if (!(w[p] > T(0))) continue;
-        const T sc = ctx.jacobi ? ctx.omega * b.jacobi_scale[s] : T(1);
-        const XpbdTerm<T> term = xpbdTerm(ctx.xpbd, b.compliance[s], b.stiffness, ctx.dt);
-        const GoalCorrection<T> r = projectGoal(x[p], w[p], rot * b.rest_vec[s] + f.x_cm, term, b.lambda[s]);
-        dmom += r.dp * (sc * ctx.mass[p]);
-        mov_mass += ctx.mass[p];
-      }
-      const Vec3<T> shift = mov_mass > T(0) ? dmom * (-T(1) / mov_mass) : Vec3<T>();
+      for (std::int32_t s = s0; s < s1; ++s) shapeMatchMomentum(b, ctx, s, rot, f.x_cm, dmom, mov_mass);
+      const Vec3<T> shift = shapeMatchShift(dmom, mov_mass);
       // Pass 2: goals from the cluster frame computed above; a member's goal does not depend on its own
       // update, so Gauss-Seidel may write each member in place.
-      for (std::int32_t s = s0; s < s1; ++s) {
-        const std::int32_t p = b.ids[s];
-        const Vec3<T> goal = rot * b.rest_vec[s] + f.x_cm;
-        const T sc = ctx.jacobi ? ctx.omega * b.jacobi_scale[s] : T(1);
-        const XpbdTerm<T> term = xpbdTerm(ctx.xpbd, b.compliance[s], b.stiffness, ctx.dt);
-        const GoalCorrection<T> r = projectGoal(x[p], w[p], goal, term, b.lambda[s]);
-        const Vec3<T> d = w[p] > T(0) ? r.dp * sc + shift : Vec3<T>();
-        if (ctx.jacobi)
-          b.slot_corr[s] = d;
-        else
-          ctx.x[p] += d;
-        b.lambda[s] += r.dlambda * sc;
-      }
+      for (std::int32_t s = s0; s < s1; ++s) shapeMatchApply(b, ctx, s, rot, f.x_cm, shift);
       break;
     }
     default:

@@ -175,29 +175,39 @@ struct LaplacianCorrection {
   Vec3<T> c;           // constraint value before the correction (m)
 };
 
-// ids[0] is the centre sphere, ids[1..count) its neighbours.
+// The Laplacian correction from the sums over the neighbours (mean_sum = sum_j x_j, wn = sum_j w_j over the
+// count - 1 neighbours): the serial loop below and the CUDA group projection (kernels/pbd_group_projection.cuh)
+// both reduce to these sums and finish here.
 template <typename T>
-INC_HD LaplacianCorrection<T> projectLaplacian(const Vec3<T>* x, const T* w, const std::int32_t* ids, int count,
-                                               const Vec3<T>& rest_delta_rotated, const XpbdTerm<T>& term,
-                                               const Vec3<T>& lambda) {
+INC_HD LaplacianCorrection<T> laplacianFromSums(const Vec3<T>& x_center, T wc, const Vec3<T>& mean_sum, T wn, int count,
+                                                const Vec3<T>& rest_delta_rotated, const XpbdTerm<T>& term,
+                                                const Vec3<T>& lambda) {
   LaplacianCorrection<T> out;
   if (count < 2) return out;
   const T inv_n = T(1) / T(count - 1);
-  Vec3<T> mean;
-  T wn = T(0);
-  for (int k = 1; k < count; ++k) {
-    mean += x[ids[k]];
-    wn += w[ids[k]];
-  }
-  mean *= inv_n;
-  const T wc = w[ids[0]];
+  const Vec3<T> mean = mean_sum * inv_n;
   out.inv_n = inv_n;
-  out.c = x[ids[0]] - mean - rest_delta_rotated;
+  out.c = x_center - mean - rest_delta_rotated;
   const T wg = wc + wn * inv_n * inv_n;
   out.dlambda = Vec3<T>(deltaLambda(out.c.x, wg, term, lambda.x), deltaLambda(out.c.y, wg, term, lambda.y),
                         deltaLambda(out.c.z, wg, term, lambda.z));
   out.d_center = out.dlambda * wc;
   return out;
+}
+
+// ids[0] is the centre sphere, ids[1..count) its neighbours.
+template <typename T>
+INC_HD LaplacianCorrection<T> projectLaplacian(const Vec3<T>* x, const T* w, const std::int32_t* ids, int count,
+                                               const Vec3<T>& rest_delta_rotated, const XpbdTerm<T>& term,
+                                               const Vec3<T>& lambda) {
+  if (count < 2) return LaplacianCorrection<T>();
+  Vec3<T> mean_sum;
+  T wn = T(0);
+  for (int k = 1; k < count; ++k) {
+    mean_sum += x[ids[k]];
+    wn += w[ids[k]];
+  }
+  return laplacianFromSums(x[ids[0]], w[ids[0]], mean_sum, wn, count, rest_delta_rotated, term, lambda);
 }
 
 // ---------------------------------------------------------------------------------------------
