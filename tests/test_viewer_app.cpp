@@ -8,6 +8,7 @@
 
 #include <stb_image.h>
 
+#include "host/dissection_simulation.h"
 #include "host/input_error.h"
 #include "host/mesh.h"
 #include "tests/viewer_test_model.h"
@@ -89,6 +90,58 @@ TEST_F(ViewerApp, CutSceneShowsCutWallColour) {
     } else {
       EXPECT_LT(cutWallFraction(p), 1e-4);
     }
+    EXPECT_GT(tissueFraction(p), 0.03);
+  }
+}
+
+// A real dissection model (a 6 x 4 x 3 cm block of 1 cm metaballs, the half at y < 2 mm held) cut by a
+// mouse-style scalpel stroke through the tool API: the free half falls away and the held half's cut wall
+// (flagged by cutWallTriangles, facing +y, towards the default camera) shows in the cut-wall colour; the same
+// scene without the cut shows none.
+TEST_F(ViewerApp, RealCutSceneShowsCutWallColour) {
+  for (bool cut : {false, true}) {
+    Scene s;
+    s.file = "<test:viewer_cut_block>";
+    s.geometry.kind = GeometrySpec::Kind::Box;
+    s.geometry.size = Vec3d(0.06, 0.04, 0.03);
+    s.geometry.spacing = 0.01;
+    s.models.pbd_metaballs = true;
+    s.models.cutting = true;
+    s.solver.substeps = 2;
+    s.pbd.iterations = 5;
+    s.fixed = {{Vec3d(-1, -1, -1), Vec3d(1, 0.002, 1)}};
+    ToolSpec t;  // the scene's scripted scalpel never runs here (its path starts at t = 100 s)
+    t.name = "scalpel";
+    t.kind = "scalpel";
+    t.length = 0.08;
+    t.path = {{100.0, Vec3d(-0.05, 0.002, 0.0), Vec3d(0, 0, 1)}, {101.0, Vec3d(0.05, 0.002, 0.0), Vec3d(0, 0, 1)}};
+    s.tools = {t};
+    std::unique_ptr<SimulationModel> m = makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float32);
+    if (cut) {
+      ToolEvent e;
+      e.kind = ToolKind::Cut;
+      e.axis = Vec3d(0, 0, -1);
+      e.blade_length_m = 0.08;
+      for (int k = 0; k <= 4; ++k) {
+        e.phase = k == 0 ? ToolPhase::Press : k == 4 ? ToolPhase::Release : ToolPhase::Drag;
+        e.tip = Vec3d(-0.05 + 0.025 * k, 0.002, 0.0);
+        ASSERT_TRUE(m->applyTool(e).supported);
+      }
+    }
+    for (int f = 0; f < 6; ++f) ASSERT_TRUE(m->advance(1.0 / 60.0).finite);  // the free half falls ~5 cm
+    ViewerOptions o;
+    o.model = std::move(m);
+    o.width = 640;
+    o.height = 400;
+    o.frames = 3;
+    o.screenshot_path = outPath(cut ? "viewer_test_real_cut.png" : "viewer_test_real_uncut.png");
+    ASSERT_EQ(runViewer(o), 0);
+    const Png p = loadPng(o.screenshot_path);
+    ASSERT_EQ(p.w, 640);
+    if (cut)
+      EXPECT_GT(cutWallFraction(p), 0.01);
+    else
+      EXPECT_LT(cutWallFraction(p), 1e-4);
     EXPECT_GT(tissueFraction(p), 0.03);
   }
 }
