@@ -317,7 +317,9 @@ class DissectionSimulation final : public SimulationModel {
     double rmax = 0.0;
     for (auto i : r.cut) rmax = std::max(rmax, spheres_.rest_radii[i]);
     last_points_ = r.points.size();
-    last_added_ = repackSpheres(r.spheres, r.points, cut, rmax);
+    // Earlier cuts: the new spheres are grouped and linked only on their own side of each (successive cuts).
+    last_added_ = repackSpheres(r.spheres, r.points, cut, rmax, RepackOptions{}, earlier_cuts_);
+    earlier_cuts_.push_back(cut);
     std::vector<std::int32_t> carry(r.kept.begin(), r.kept.end());
     carry.resize(r.spheres.size(), -1);
     // The surface: split along the swept plane when the sweep is planar and spans the whole section. Only
@@ -388,6 +390,7 @@ class DissectionSimulation final : public SimulationModel {
   std::vector<std::uint8_t> wall_flags_;  // per rest_surface_ triangle: 1 = cut wall
   PbdMouseGrasp mouse_;                   // the viewer's grasp
   SweptSurface stroke_;                   // the mouse scalpel's stroke so far (rest configuration)
+  std::vector<SweptSurface> earlier_cuts_;  // every cut applied so far (rest configuration)
   double mouse_cut_ms_ = 0.0;
   int base_substeps_ = 4;
   double substep_scale_ = 1.0;

@@ -104,7 +104,9 @@ TEST(InteractiveTool, MetaballGraspDragsTheRegionAndReleaseLetsItRelax) {
   ASSERT_FALSE(region.empty());
   graspDragRelease(*m, tip, 0.006, 1.5e-3, region);
   EXPECT_FALSE(m->toolSupport().cut);
-  EXPECT_FALSE(m->applyTool(ToolEvent{ToolKind::Cut}).supported);
+  ToolEvent cut;
+  cut.kind = ToolKind::Cut;
+  EXPECT_FALSE(m->applyTool(cut).supported);
 }
 
 // Dissection model: the same grasp machinery on its organ.
@@ -206,13 +208,14 @@ TEST(InteractiveTool, MouseStrokeCutsTheDissectionModel) {
   ASSERT_GT(m->applyTool(grasp(ToolPhase::Press, Vec3d(0.025, 0.01, 0.0), 0.006)).grasped, 0);
   for (int k = 0; k <= 1; ++k) {
     e.phase = k == 0 ? ToolPhase::Press : ToolPhase::Release;
-    e.tip = Vec3d(0.015, -0.05 + 0.1 * k, 0.0);
+    e.tip = Vec3d(0.012, -0.05 + 0.1 * k, 0.0);
     m->applyTool(e);
   }
   rep = m->advance(kDt);
   EXPECT_EQ(rep.counters["cuts_applied"], 2.0);
   EXPECT_EQ(rep.counters["grasped"], 0.0);
-  EXPECT_GE(rep.counters["sphere_components"], 3.0);
+  EXPECT_GE(rep.counters["sphere_components"], 3.0) << rep.counters["nodal_points_last_cut"] << " nodal points, "
+                                                    << rep.counters["spheres"] << " spheres";
 }
 
 TEST(InteractiveTool, BadToolEventsAreInputErrors) {

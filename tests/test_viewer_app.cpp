@@ -134,6 +134,7 @@ TEST_F(ViewerApp, RealCutSceneShowsCutWallColour) {
     o.width = 640;
     o.height = 400;
     o.frames = 3;
+    o.show_ui = false;
     o.screenshot_path = outPath(cut ? "viewer_test_real_cut.png" : "viewer_test_real_uncut.png");
     ASSERT_EQ(runViewer(o), 0);
     const Png p = loadPng(o.screenshot_path);
