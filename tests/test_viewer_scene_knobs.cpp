@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "host/input_error.h"
 #include "viewer/scene_knobs.h"
@@ -12,7 +13,7 @@ namespace inc::viewer {
 namespace {
 
 // An 8 x 2 x 2 cm MLS cantilever (5 mm lattice, 256 particles) clamped at x < 5 mm, sagging under gravity,
-// heavily damped so that it settles within a second of simulated time.
+// heavily damped so that it settles within 0.7 s of simulated time (slowest mode decays at 13.8 / s).
 Scene smallBeam() {
   Scene s;
   s.file = "<test:knob_beam>";
@@ -71,8 +72,8 @@ TEST(ViewerSceneKnobs, PanelsComeFromTheScene) {
 }
 
 // Doubling E through the UI's path halves the small-deflection tip sag (Euler-Bernoulli: delta = q L^4 / 8 E I,
-// proportional to 1 / E). Tolerance 5 %: gravity is reduced to 2 m/s^2 so that the sag is 2 % of the length
-// at E = 2e5 Pa (geometric nonlinearity well under the tolerance); both runs settle (damping 150 / s, 1.2 s).
+// proportional to 1 / E). Tolerance 2 % (measured 0.08 %): gravity is reduced to 2 m/s^2 so that the sag is 2 % of the length
+// at E = 2e5 Pa (geometric nonlinearity well under the tolerance); both runs settle (damping 150 / s, 0.67 s: the slowest mode to e^-9).
 TEST(ViewerSceneKnobs, YoungsModulusChangeRebuildsAndScalesTheDeflection) {
   SceneViewerSetup setup = makeSceneViewerSetup(smallBeam());
   SimRunner run(nullptr, setup.factory, setup.knobs, 1.0 / 60.0, /*threaded=*/false);
@@ -82,7 +83,7 @@ TEST(ViewerSceneKnobs, YoungsModulusChangeRebuildsAndScalesTheDeflection) {
   std::uint64_t ver = 0;
   run.latest(s, ver);
   const std::vector<Vec3d> rest = s.positions;  // frame 0: the rest configuration (a rebuild starts there too)
-  const double d1 = tipDeflection(run, rest, 72);
+  const double d1 = tipDeflection(run, rest, 40);
   ASSERT_LT(d1, -1e-4);  // it sags
   run.setKnob(ei, 4.0e5);
   run.pump();  // applies the edit (a rebuild from the edited scene) and advances one frame
@@ -90,8 +91,9 @@ TEST(ViewerSceneKnobs, YoungsModulusChangeRebuildsAndScalesTheDeflection) {
   EXPECT_EQ(s.rebuilds, 1u);
   EXPECT_EQ(s.frame, 1u);
   EXPECT_DOUBLE_EQ(setup.scene->material.youngs_modulus, 4.0e5);
-  const double d2 = tipDeflection(run, rest, 71);
-  EXPECT_NEAR(d2 / d1, 0.5, 0.025) << "d1 " << d1 << " d2 " << d2;
+  const double d2 = tipDeflection(run, rest, 39);
+  std::printf("tip sag %.6g m at E = 2e5 Pa, %.6g m at 4e5 Pa, ratio %.4f\n", d1, d2, d2 / d1);
+  EXPECT_NEAR(d2 / d1, 0.5, 0.01) << "d1 " << d1 << " d2 " << d2;
 }
 
 // A rebuild that fails (an unstable fixed substep count) keeps the running model, undoes the scene edit and
@@ -115,6 +117,46 @@ TEST(ViewerSceneKnobs, FailedRebuildIsUndoneAndTimeStepIsLive) {
   run.latest(s, ver);
   EXPECT_EQ(s.rebuilds, 0u);
   EXPECT_NEAR(s.report.dt * s.report.substeps, 0.005, 1e-12);
+}
+
+// The UI's tool path: events queued on the runner reach the model before the next frame. A grasp on the free
+// end of the beam, dragged 10 mm up, holds the grasped nodes there (MLS: prescribed, exact to 1e-9 m) and the
+// snapshot reports what is held; a cut event on a model that cannot cut is reported, not applied.
+TEST(ViewerRunnerTool, QueuedGraspReachesTheModel) {
+  SceneViewerSetup setup = makeSceneViewerSetup(smallBeam());
+  SimRunner run(nullptr, setup.factory, {}, 1.0 / 60.0, false);
+  SimSnapshot s;
+  std::uint64_t ver = 0;
+  run.latest(s, ver);
+  EXPECT_TRUE(s.tool_support.grasp);
+  EXPECT_FALSE(s.tool_support.cut);
+  const std::vector<Vec3d> rest = s.positions;
+  ToolEvent e;
+  e.kind = ToolKind::Grasp;
+  e.phase = ToolPhase::Press;
+  e.tip = Vec3d(0.08, 0.0, 0.0);
+  e.radius_m = 0.006;
+  run.queueTool(e);
+  e.phase = ToolPhase::Drag;
+  e.tip = Vec3d(0.08, 0.0, 0.01);
+  run.queueTool(e);
+  for (int i = 0; i < 3; ++i) run.pump();
+  run.latest(s, ver);
+  ASSERT_GT(s.last_tool.grasped, 0);
+  int held = 0;
+  for (std::size_t i = 0; i < rest.size(); ++i)
+    if (norm(rest[i] - Vec3d(0.08, 0.0, 0.0)) <= 0.006) {
+      EXPECT_NEAR(s.positions[i].z - rest[i].z, 0.01, 1e-9);
+      ++held;
+    }
+  EXPECT_EQ(held, s.last_tool.grasped);
+  e.kind = ToolKind::Cut;
+  e.phase = ToolPhase::Press;
+  run.queueTool(e);
+  run.pump();
+  run.latest(s, ver);
+  EXPECT_FALSE(s.last_tool.supported);
+  EXPECT_NE(s.message.find("does not support"), std::string::npos) << s.message;
 }
 
 }  // namespace
