@@ -283,10 +283,20 @@ int runViewer(const ViewerOptions& opt) {
       // --- input: camera and shortcuts (unless ImGui has the mouse/keyboard) ---
       double mx, my;
       glfwGetCursorPos(win, &mx, &my);
-      const bool scripted_cursor = opt.cursor_x >= 0.0 && opt.cursor_y >= 0.0;
+      bool scripted_cursor = opt.cursor_x >= 0.0 && opt.cursor_y >= 0.0;
       if (scripted_cursor) {
         mx = opt.cursor_x * win_w;
         my = opt.cursor_y * win_h;
+      }
+      bool scripted_down = false;
+      if (opt.scripted_mouse) {
+        double sx = -1, sy = -1;
+        scripted_down = opt.scripted_mouse(frame_index, sx, sy);
+        if (sx >= 0.0 && sy >= 0.0) {
+          scripted_cursor = true;
+          mx = sx * win_w;
+          my = sy * win_h;
+        }
       }
       if (!io.WantCaptureMouse) {
         const double dx = mx - last_x, dy = my - last_y;
@@ -375,7 +385,19 @@ int runViewer(const ViewerOptions& opt) {
                                : tool_mode == ToolMode::Cut ? snap.tool_support.cut
                                                             : false;
         const bool alt = glfwGetKey(win, GLFW_KEY_LEFT_ALT) == GLFW_PRESS;
-        const bool down = glfwGetMouseButton(win, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS && !alt;
+        const bool down = opt.scripted_mouse ? scripted_down
+                                             : glfwGetMouseButton(win, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS && !alt;
+        // Off the organ a stroke (or a grasp) starts in the view plane through the orbit target, so a cut can
+        // begin outside the tissue like a real scalpel's.
+        if (supported && !tool_active && !tool_valid && cx >= 0 && cy >= 0 && cx < f.fb_w && cy < f.fb_h) {
+          Vec3d o, dir;
+          f.cam.pixelRay(cx, cy, o, dir);
+          const double along = dot(dir, f.cam.forward);
+          if (along > 1e-9) {
+            tool_tip = o + dir * ((f.cam.viewDepth(orbit.target) - dot(o - f.cam.eye, f.cam.forward)) / along);
+            tool_valid = true;
+          }
+        }
         ToolEvent ev;
         ev.kind = tool_mode == ToolMode::Cut ? ToolKind::Cut : ToolKind::Grasp;
         ev.axis = f.cam.forward;
@@ -391,7 +413,7 @@ int runViewer(const ViewerOptions& opt) {
             tool_valid = true;
           }
         }
-        if (supported && down && !tool_active && tool_valid && !io.WantCaptureMouse) {
+        if (supported && down && !tool_active && tool_valid && (scripted_cursor || !io.WantCaptureMouse)) {
           tool_active = true;
           tool_view_depth = f.cam.viewDepth(tool_tip);
           ev.phase = ToolPhase::Press;

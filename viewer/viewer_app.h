@@ -68,6 +68,10 @@ struct ViewerOptions {
   // Scripted cursor in window fractions (0, 0 top-left .. 1, 1 bottom-right); negative: the real mouse.
   double cursor_x = -1.0, cursor_y = -1.0;
   double press_depth_m = 0.0;      // m, the tool tip below the surface under the cursor (negative: above)
+  // Scripted mouse for tests and captures: called every frame with the frame index; returns whether the left
+  // button is down and may set the cursor (window fractions; negative: unchanged). Overrides the real button
+  // for the grasp / cut tool.
+  std::function<bool(int frame, double& cursor_x, double& cursor_y)> scripted_mouse;
   std::function<void(const ViewerFrameInfo&)> on_frame;  // called after each frame is drawn
   bool verbose = false;            // print the GL version and progress to stdout
 };
