@@ -117,6 +117,17 @@ TEST(ViewerSceneKnobs, FailedRebuildIsUndoneAndTimeStepIsLive) {
   run.latest(s, ver);
   EXPECT_EQ(s.rebuilds, 0u);
   EXPECT_NEAR(s.report.dt * s.report.substeps, 0.005, 1e-12);
+  // 64 fixed substeps are stable for 5 ms frames but not for 50 ms ones: the model refuses the longer frame
+  // (InputError from advance), the runner keeps the state, pauses and says so.
+  run.setKnob(knobIndex(knobs, "substeps (0 = auto)"), 64);
+  run.pump();
+  run.latest(s, ver);
+  ASSERT_EQ(s.rebuilds, 1u) << s.message;
+  run.setKnob(knobIndex(knobs, "time step [s]"), 0.05);
+  run.pump();
+  run.latest(s, ver);
+  EXPECT_TRUE(run.paused());
+  EXPECT_NE(s.message.find("frame refused"), std::string::npos) << s.message;
 }
 
 // The UI's tool path: events queued on the runner reach the model before the next frame. A grasp on the free

@@ -60,6 +60,7 @@ SceneViewerSetup makeSceneViewerSetup(const Scene& scene_in, std::optional<Backe
     k.value = std::clamp(s.solver.frame_dt, k.min_value, k.max_value);
     k.logarithmic = true;
     k.frame_dt = true;
+    k.edit = [sc](double v) { sc->solver.frame_dt = v; };
     out.knobs.push_back(std::move(k));
   }
   {

@@ -22,7 +22,8 @@ struct SceneViewerSetup {
 // Knobs (all but the time step rebuild the model from the edited scene; the state restarts from rest):
 //   Material: "Young's modulus [Pa]" (log, E/100 .. 100 E), "Poisson ratio" (MLS scenes, 0 .. 0.49);
 //   Solver:   "PBD iterations" (PBD scenes, 1 .. 100), "substeps (0 = auto)" (0 .. 64),
-//             "time step [s]" (frame_dt, live: 1e-4 .. 0.05 s), "precision" (float32 | float64),
+//             "time step [s]" (frame_dt, live, also written to the scene: 1e-4 .. 0.05 s),
+//             "precision" (float32 | float64),
 //             "backend" (cpu | cuda; cuda only in CUDA builds, a rebuild without a device is refused).
 // `backend` overrides the scene's (the CLI's --backend). Throws InputError when the scene builds no model.
 SceneViewerSetup makeSceneViewerSetup(const Scene& scene, std::optional<BackendKind> backend = std::nullopt);

@@ -143,20 +143,29 @@ void SimRunner::applyPending() {
       if (!knob_dirty_[i]) continue;
       knob_dirty_[i] = 0;
       changed.push_back(i);
-      if (knobs_[i].edit && knobs_[i].value != knob_applied_[i]) rebuild = bool(factory_);
-      if (knobs_[i].frame_dt && knobs_[i].value > 0.0) frame_dt_s_ = knobs_[i].value;
+      if (knobs_[i].frame_dt) {
+        if (knobs_[i].value > 0.0) frame_dt_s_ = knobs_[i].value;
+      } else if (knobs_[i].edit && knobs_[i].value != knob_applied_[i]) {
+        rebuild = bool(factory_);
+      }
     }
     tools.swap(tool_queue_);
     safety = step_safety_;
     safety_ratio = step_safety_ / applied_step_safety_;
     applied_step_safety_ = step_safety_;
   }
+  // The time step also goes into the scene (later rebuilds check their substeps against it), with no rebuild.
+  for (std::size_t i : changed)
+    if (knobs_[i].frame_dt && knobs_[i].edit) {
+      knobs_[i].edit(values[i]);
+      knob_applied_[i] = values[i];
+    }
   bool fresh = false;
   if (do_reset || rebuild) {
     // Scene edits first, then one model built from the edited scene; a failed build undoes the edits.
     std::vector<std::pair<std::size_t, double>> undo;
     for (std::size_t i = 0; i < knobs_.size(); ++i)
-      if (knobs_[i].edit && values[i] != knob_applied_[i]) {
+      if (knobs_[i].edit && !knobs_[i].frame_dt && values[i] != knob_applied_[i]) {
         knobs_[i].edit(values[i]);
         undo.emplace_back(i, knob_applied_[i]);
       }
@@ -223,7 +232,20 @@ void SimRunner::advanceFrame() {
     dt = frame_dt_s_ * time_scale_;
   }
   const auto t0 = Clock::now();
-  const FrameReport report = model_->advance(dt);
+  FrameReport report;
+  try {
+    report = model_->advance(dt);
+  } catch (const std::exception& e) {
+    // A model that refuses the frame (e.g. a fixed substep count unstable for a longer time step): keep the
+    // last good state, pause and say why instead of taking the UI down.
+    model_->restoreCheckpoint();
+    std::lock_guard<std::mutex> lock(mutex_);
+    paused_ = true;
+    snapshot_.message = std::string("frame refused, paused: ") + e.what();
+    ++version_;
+    cv_.notify_all();
+    return;
+  }
   const double ms = msSince(t0);
   if (!report.finite) {
     // Never show a lie: roll back to the last good state and stop until the user changes something.

@@ -25,7 +25,8 @@ using ModelFactory = std::function<std::unique_ptr<SimulationModel>()>;
 // - `edit`: changes the scene the factory builds from; the runner then rebuilds the model (camera and UI
 //   kept, the state restarts from rest). When the rebuild throws, the old model stays, the edit is undone
 //   with the previous value and the snapshot's `message` says why;
-// - `frame_dt`: the value is the simulated time per frame (s), the runner's time step.
+// - `frame_dt`: the value is the simulated time per frame (s), the runner's time step, applied live (its
+//   `edit`, if any, also runs, without a rebuild: later rebuilds see the new time step).
 struct ViewerKnob {
   std::string label;  // with units: "Young's modulus [Pa]"
   double min_value = 0.0;
