@@ -441,6 +441,13 @@ int runViewer(const ViewerOptions& opt) {
         tool_style.on_top = true;  // the tip stays visible when pressed into the tissue
         const Mat4f model = frameMatrix({r, 0, 0}, {0, r, 0}, {0, 0, r}, tool_tip);
         tool.draw(f.cam, tool_style, model);
+        if (tool_mode == ToolMode::Grasp && snap.tool_support.grasp) {  // the grasp's reach, as a wire ball
+          const double g = grasp_radius_m;
+          SurfaceStyle reach = tool_style;
+          reach.wireframe = true;
+          reach.on_top = false;
+          tool.draw(f.cam, reach, frameMatrix({g, 0, 0}, {0, g, 0}, {0, 0, g}, tool_tip));
+        }
       }
 
       // --- panels ---
