@@ -229,6 +229,7 @@ int runViewer(const ViewerOptions& opt) {
     double grasp_radius_m = opt.grasp_radius_m > 0 ? opt.grasp_radius_m : 0.08 * scene_radius;
     double blade_length_m = opt.blade_length_m > 0 ? opt.blade_length_m : 2.0 * scene_radius;
     bool tool_active = false;     // the left button is down in grasp / cut mode and an event was sent
+    ToolKind active_kind = ToolKind::Grasp;  // of the press (a mode switch mid-drag still releases it)
     double tool_view_depth = 0;   // m, the pressed tip's view depth: the drag moves the tip in that plane
     Vec3d tool_sent;              // the last tip sent
     std::map<std::size_t, double> knob_editing;  // rebuild knobs: the slider's value until released
@@ -399,7 +400,7 @@ int runViewer(const ViewerOptions& opt) {
           }
         }
         ToolEvent ev;
-        ev.kind = tool_mode == ToolMode::Cut ? ToolKind::Cut : ToolKind::Grasp;
+        ev.kind = tool_active ? active_kind : tool_mode == ToolMode::Cut ? ToolKind::Cut : ToolKind::Grasp;
         ev.axis = f.cam.forward;
         ev.radius_m = grasp_radius_m;
         ev.blade_length_m = blade_length_m;
@@ -415,6 +416,7 @@ int runViewer(const ViewerOptions& opt) {
         }
         if (supported && down && !tool_active && tool_valid && (scripted_cursor || !io.WantCaptureMouse)) {
           tool_active = true;
+          active_kind = ev.kind;
           tool_view_depth = f.cam.viewDepth(tool_tip);
           ev.phase = ToolPhase::Press;
           ev.tip = tool_sent = tool_tip;
