@@ -11,6 +11,7 @@
 #include "host/cut_swept_surface.h"
 #include "host/grasper.h"
 #include "host/input_error.h"
+#include "host/interactive_tool.h"
 #include "host/metaball_simulation.h"
 #include "host/organ_shapes.h"
 #include "host/pbd_builders.h"
@@ -57,6 +58,7 @@ class DissectionSimulation final : public SimulationModel {
     rest_surface_ = sceneSurfaceMesh(scene);
     backend_ = makePbdBackend<T>(backend);
     rebuild(nullptr);
+    sphere_components_ = sphereGraphComponents(spheres_);
     saveCheckpoint();
   }
 
@@ -83,16 +85,21 @@ class DissectionSimulation final : public SimulationModel {
       sweep_ms = msSince(c0);
       if (t1 >= te) {
         const auto c1 = std::chrono::steady_clock::now();
-        applyCut();
+        cut_applied_ = true;
+        applyCut(swept_);
         apply_ms = msSince(c1);
       }
     }
+    apply_ms += mouse_cut_ms_;
+    mouse_cut_ms_ = 0.0;
     PbdFrameInput<T> in;
+    appendMouseAttachments(mouse_, in);
     PbdStepParams<T> p = params_;
     p.frame_dt = T(frame_dt);
     p.substeps = std::max(1, int(std::ceil(base_substeps_ * substep_scale_ - 1e-9)));
     const PbdFrameStats st = backend_->advanceFrame(p, in);
     backend_->getState(state_);
+    mouse_.frameDone();
     time_ = t1;
     rep.substeps = p.substeps;
     rep.dt = frame_dt / p.substeps;
@@ -116,7 +123,9 @@ class DissectionSimulation final : public SimulationModel {
     rep.max_displacement = disp;
     rep.counters["spheres"] = double(model_.size());
     rep.counters["cut_spheres_pending"] = double(pending_);
-    rep.counters["cuts_applied"] = cut_applied_ ? 1.0 : 0.0;
+    rep.counters["cuts_applied"] = double(cuts_done_);
+    rep.counters["sphere_components"] = double(sphere_components_);
+    rep.counters["grasped"] = double(mouse_.held());
     rep.counters["nodal_points_last_cut"] = double(last_points_);
     rep.counters["spheres_added_last_cut"] = double(last_added_);
     rep.counters["surface_split"] = surface_split_ ? 1.0 : 0.0;
@@ -129,13 +138,13 @@ class DissectionSimulation final : public SimulationModel {
   void saveCheckpoint() override {
     saved_state_ = state_;
     saved_time_ = time_;
-    saved_ = cut_applied_;
+    saved_cuts_ = cuts_done_;
   }
   void restoreCheckpoint() override {
     // A checkpoint taken before the cut cannot be restored after it (the topology changed); the guard then
     // retries from the current state, which the runner treats like a restored one.
     time_ = saved_time_;
-    if (saved_ == cut_applied_) {
+    if (saved_cuts_ == cuts_done_) {
       state_ = saved_state_;
       backend_->setState(state_);
     }
@@ -167,6 +176,53 @@ class DissectionSimulation final : public SimulationModel {
                     rest_surface_.vertices.size() * sizeof(Vec3d) + rest_surface_.triangles.size() * 12;
     return m;
   }
+  void cutWallTriangles(std::vector<std::uint8_t>& out) const override { out = wall_flags_; }
+
+  ToolSupport toolSupport() const override { return {true, true}; }
+  // Grasp & drag (host/interactive_tool.h) and the mouse scalpel: each blade pose is taken back to the rest
+  // configuration (restPointFromCurrent: the material point under it) and extends the stroke's swept
+  // surface; Release applies the cut exactly as the scripted scalpel's end does (applyCut). A cut changes
+  // the sphere indices, so it releases any grasp.
+  ToolResult applyTool(const ToolEvent& e) override {
+    std::vector<Vec3d> x(model_.size());
+    for (std::size_t i = 0; i < x.size(); ++i) x[i] = Vec3d(state_.positions[i]);
+    if (e.kind == ToolKind::Grasp) {
+      std::vector<double> r(model_.size());
+      std::vector<std::uint8_t> movable(model_.size());
+      for (std::size_t i = 0; i < r.size(); ++i) {
+        r[i] = double(state_.radii[i]);
+        movable[i] = model_.inv_mass[i] > T(0) ? 1 : 0;
+      }
+      return mouse_.apply(e, x, r, movable);
+    }
+    ToolResult res;
+    res.supported = true;
+    const BladePose world = bladeFromToolEvent(e);
+    const BladePose rest{restPointFromCurrent(world.base, x, spheres_.rest_centers),
+                         restPointFromCurrent(world.tip, x, spheres_.rest_centers)};
+    if (e.phase == ToolPhase::Press || stroke_.vertices.empty()) {
+      stroke_ = SweptSurface{};
+      stroke_.vertices = {rest.base, rest.tip};
+    } else {
+      const std::size_t n = stroke_.vertices.size();
+      // A blade that has not moved adds nothing (extendSweptSurface also drops zero-area triangles).
+      if (norm(rest.base - stroke_.vertices[n - 2]) > 1e-9 || norm(rest.tip - stroke_.vertices[n - 1]) > 1e-9)
+        extendSweptSurface(stroke_, rest);
+    }
+    if (e.phase == ToolPhase::Release) {
+      const auto c0 = std::chrono::steady_clock::now();
+      if (!stroke_.empty()) {
+        applyCut(stroke_);
+        res.cut_applied = true;
+      } else {
+        res.message = "the stroke swept no surface (the blade did not move)";
+      }
+      stroke_ = SweptSurface{};
+      mouse_cut_ms_ += msSince(c0);
+    }
+    res.grasped = mouse_.held();
+    return res;
+  }
 
  private:
   BladePose blade(double t) const {
@@ -175,8 +231,9 @@ class DissectionSimulation final : public SimulationModel {
     return {pose.position - d, pose.position + d};
   }
 
-  // (Re)builds the PBD model from spheres_; `carry` maps new sphere -> old state index (-1: new sphere).
-  void rebuild(const std::vector<std::int32_t>* carry) {
+  // (Re)builds the PBD model from spheres_; `carry` maps new sphere -> old state index (-1: new sphere), and a
+  // new sphere takes its state from the nearest kept one not across `cut`.
+  void rebuild(const std::vector<std::int32_t>* carry, const SweptSurface* cut = nullptr) {
     MetaballPbdOptions opt;
     opt.youngs_modulus = scene_.material.youngs_modulus;
     opt.stretch_compliance = scene_.pbd.stretch_compliance;
@@ -203,7 +260,7 @@ class DissectionSimulation final : public SimulationModel {
         for (std::size_t j = 0; j < carry->size(); ++j) {
           if ((*carry)[j] < 0) continue;
           const double d = norm2(spheres_.rest_centers[j] - c);
-          if (d < best && !segmentCrossesSweptSurface(swept_, c, spheres_.rest_centers[j])) best = d, src = int(j);
+          if (d < best && !(cut && segmentCrossesSweptSurface(*cut, c, spheres_.rest_centers[j]))) best = d, src = int(j);
         }
         if (src >= 0) {
           state_.positions[i] = Vec3<T>(c + (Vec3d(state_.positions[src]) - spheres_.rest_centers[src]));
@@ -251,29 +308,56 @@ class DissectionSimulation final : public SimulationModel {
     }
   }
 
-  void applyCut() {
-    cut_applied_ = true;
-    if (swept_.empty()) return;
-    SphereCutResult r = cutSpheres(spheres_, swept_);
+  // The cut pipeline of section 5 for one finished swept surface (scripted or drawn with the mouse).
+  void applyCut(const SweptSurface& cut) {
+    ++cuts_done_;
+    if (cut.empty()) return;
+    mouse_.release();  // sphere indices change
+    SphereCutResult r = cutSpheres(spheres_, cut);
     double rmax = 0.0;
     for (auto i : r.cut) rmax = std::max(rmax, spheres_.rest_radii[i]);
     last_points_ = r.points.size();
-    last_added_ = repackSpheres(r.spheres, r.points, swept_, rmax);
+    // Earlier cuts: the new spheres are grouped and linked only on their own side of each (successive cuts).
+    last_added_ = repackSpheres(r.spheres, r.points, cut, rmax, RepackOptions{}, earlier_cuts_);
+    earlier_cuts_.push_back(cut);
     std::vector<std::int32_t> carry(r.kept.begin(), r.kept.end());
     carry.resize(r.spheres.size(), -1);
-    // The surface: split along the swept plane when the sweep is planar and spans the whole section.
+    // The surface: split along the swept plane when the sweep is planar and spans the whole section. Only
+    // the first such cut splits it (the pieces' skin binding knows one cut surface); later cuts separate
+    // the spheres and their links, and the surface follows its bound spheres.
     Vec3d p, n;
     const double tol = 0.25 * scene_.geometry.spacing;
-    if (planeOfSweptSurface(swept_, p, n, tol) && sweptSurfaceSpansSection(rest_surface_, swept_, p, n, tol)) {
+    if (!surface_split_ && planeOfSweptSurface(cut, p, n, tol) &&
+        sweptSurfaceSpansSection(rest_surface_, cut, p, n, tol)) {
       const CutMeshResult m = splitMeshByPlane(rest_surface_, p, n);
       rest_surface_ = mergeMeshes(m.positive, m.negative);  // same vertex order as the pieces below
       pieces_ = {{m.positive, +1}, {m.negative, -1}};
-      cut_surface_ = swept_;
+      cut_surface_ = cut;
       surface_split_ = true;
+      wall_flags_ = wallTriangles(rest_surface_, p, n);
     }
     surface_components_ = analyzeMesh(rest_surface_).components;
     spheres_ = std::move(r.spheres);
-    rebuild(&carry);
+    sphere_components_ = sphereGraphComponents(spheres_);
+    rebuild(&carry, &cut);
+  }
+
+  // The cap triangles splitMeshByPlane added: all three vertices on one plane parallel to the cut plane (the
+  // split plane may be shifted by a few 1e-7 of the mesh size to clear vertices; every original vertex then
+  // lies at least that far from it, while the contour vertices agree to rounding).
+  static std::vector<std::uint8_t> wallTriangles(const TriangleMesh& m, const Vec3d& p, const Vec3d& n) {
+    Vec3d lo = m.vertices.front(), hi = lo;
+    for (const auto& v : m.vertices)
+      for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], v[k]), hi[k] = std::max(hi[k], v[k]);
+    const double size = norm(hi - lo), nn = norm(n);
+    std::vector<std::uint8_t> flags(m.triangles.size(), 0);
+    for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+      double d[3];
+      for (int k = 0; k < 3; ++k) d[k] = dot(m.vertices[m.triangles[t][k]] - p, n) / nn;
+      const double spread = std::max({d[0], d[1], d[2]}) - std::min({d[0], d[1], d[2]});
+      flags[t] = (spread < 1e-9 * size && std::fabs(d[0]) < 1e-4 * size) ? 1 : 0;
+    }
+    return flags;
   }
 
   Scene scene_;
@@ -300,8 +384,14 @@ class DissectionSimulation final : public SimulationModel {
   PbdState<T> state_, saved_state_;
   SweptSurface swept_;
   std::size_t pending_ = 0, last_points_ = 0, last_added_ = 0;
-  bool cut_applied_ = false, saved_ = false, surface_split_ = false;
-  int surface_components_ = 1;
+  bool cut_applied_ = false, surface_split_ = false;
+  int cuts_done_ = 0, saved_cuts_ = 0;  // cuts applied (scripted and mouse)
+  int surface_components_ = 1, sphere_components_ = 1;
+  std::vector<std::uint8_t> wall_flags_;  // per rest_surface_ triangle: 1 = cut wall
+  PbdMouseGrasp mouse_;                   // the viewer's grasp
+  SweptSurface stroke_;                   // the mouse scalpel's stroke so far (rest configuration)
+  std::vector<SweptSurface> earlier_cuts_;  // every cut applied so far (rest configuration)
+  double mouse_cut_ms_ = 0.0;
   int base_substeps_ = 4;
   double substep_scale_ = 1.0;
   double time_ = 0, saved_time_ = 0;

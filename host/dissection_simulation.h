@@ -18,7 +18,10 @@ namespace inc {
 // links across the cut, surface split along the swept plane and both walls capped, skin re-bound.
 // currentSurface() is the (cut) surface moved by the spheres (translation skinning). Counters: spheres,
 // cut_spheres_pending, cuts_applied, nodal_points_last_cut, spheres_added_last_cut, surface_split,
-// cut_apply_ms, sweep_ms, surface_components.
+// cut_apply_ms, sweep_ms, surface_components, sphere_components (of the link graph), grasped.
+// The interactive tool (SimulationModel::applyTool): grasp & drag, and mouse scalpel strokes that are cut by
+// the same pipeline when they end (any number of cuts; only the first planar one that spans the section
+// splits the surface, whose cap triangles cutWallTriangles() flags).
 std::unique_ptr<SimulationModel> makeDissectionSimulation(const Scene& scene, BackendKind backend, Precision precision);
 
 }  // namespace inc

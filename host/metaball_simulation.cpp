@@ -6,6 +6,7 @@
 #include <unordered_map>
 
 #include "host/grasper.h"
+#include "host/interactive_tool.h"
 #include "host/input_error.h"
 #include "host/mesh.h"
 #include "host/metaball_packing.h"
@@ -163,6 +164,7 @@ class MetaballSimulation final : public SimulationModel {
       in.tools_from.push_back(capsule(toolCapsule(t, toolPoseAt(t, t0))));
       in.tools_to.push_back(capsule(toolCapsule(t, toolPoseAt(t, t1))));
     }
+    appendMouseAttachments(mouse_, in);
     PbdStepParams<T> p = params_;
     p.frame_dt = T(frame_dt);
     p.substeps = substeps();
@@ -170,6 +172,7 @@ class MetaballSimulation final : public SimulationModel {
     if (auto_substeps_) p.substeps = std::max(p.substeps, int(std::ceil(frame_dt / max_substep_s_ - 1e-9)));
     const PbdFrameStats st = backend_->advanceFrame(p, in);
     backend_->getState(state_);
+    mouse_.frameDone();
     time_ = t1;
 
     rep.substeps = p.substeps;
@@ -183,6 +186,7 @@ class MetaballSimulation final : public SimulationModel {
     energies(rep, double(p.frame_dt) / p.substeps);
     int grasped = 0;
     for (const Grasper& g : graspers_) grasped += int(g.grasped().size());
+    grasped += mouse_.held();
     rep.counters["residual_max_m"] = st.residual_max;
     rep.counters["residual_rms_m"] = st.residual_rms;
     rep.counters["colors"] = st.colors;
@@ -198,6 +202,18 @@ class MetaballSimulation final : public SimulationModel {
     saved_state_ = state_;
     saved_time_ = time_;
     saved_graspers_ = graspers_;
+  }
+  ToolSupport toolSupport() const override { return {true, false}; }
+  // Grasp & drag with the mouse (host/interactive_tool.h); cutting belongs to the dissection model.
+  ToolResult applyTool(const ToolEvent& e) override {
+    if (e.kind != ToolKind::Grasp) return SimulationModel::applyTool(e);
+    std::vector<Vec3d> c(model_.size());
+    std::vector<double> r(model_.size());
+    for (std::size_t i = 0; i < model_.size(); ++i) {
+      c[i] = Vec3d(state_.positions[i]);
+      r[i] = double(state_.radii[i]);
+    }
+    return mouse_.apply(e, c, r, movable_);
   }
   void restoreCheckpoint() override {
     state_ = saved_state_;
@@ -287,6 +303,7 @@ class MetaballSimulation final : public SimulationModel {
   PbdState<T> state_, saved_state_;
   std::vector<Grasper> graspers_, saved_graspers_;
   std::vector<ToolSpec> probes_;
+  PbdMouseGrasp mouse_;  // the viewer's grasp (not part of checkpoints: the user holds it)
   std::vector<std::uint8_t> movable_;
   TriangleMesh rest_surface_;
   SkinArrays<T> skin_;

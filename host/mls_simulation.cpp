@@ -77,6 +77,13 @@ class MlsSimulation final : public SimulationModel {
       const Vec3d d = toolPosition(tool, t1) - tool.path.front().position;
       solver_->setPrescribed(g.particles, std::vector<Vec3d>(g.particles.size(), d));
     }
+    // The mouse grasp: held particles are prescribed to their displacement at the grasp plus the tip's
+    // motion since, reached at the end of this frame (the nodes are pinned to the tool and dragged).
+    if (!mouse_ids_.empty()) {
+      std::vector<Vec3d> targets(mouse_ids_.size());
+      for (std::size_t k = 0; k < mouse_ids_.size(); ++k) targets[k] = mouse_u0_[k] + (mouse_tip_ - mouse_tip0_);
+      solver_->setPrescribed(mouse_ids_, targets);
+    }
     const MlsFrameStats st = solver_->advance(frame_dt, fixed_substeps_);
     if (st.totals.finite) time_ = t1;
     FrameReport r;
@@ -105,6 +112,7 @@ class MlsSimulation final : public SimulationModel {
     r.counters["max_condition"] = m.max_condition;
     double grasped = 0;
     for (const Grasp& g : grasps_) grasped += double(g.particles.size());
+    grasped += double(mouse_ids_.size());
     r.counters["grasped_particles"] = grasped;
     return r;
   }
@@ -127,7 +135,42 @@ class MlsSimulation final : public SimulationModel {
   void currentPositions(std::vector<Vec3d>& out) const override { solver_->positions(out); }
   MemoryReport memory() const override { return solver_->memory(); }
 
+  ToolSupport toolSupport() const override { return {true, false}; }
+  // Grasp & drag: Press pins the particles within radius_m of the tip (fixed ones stay fixed), Drag moves
+  // their prescribed displacement with the tip, Release returns them to free dynamics. No cutting here.
+  ToolResult applyTool(const ToolEvent& e) override {
+    if (e.kind != ToolKind::Grasp) return SimulationModel::applyTool(e);
+    if (!isFinite(e.tip)) throw InputError("tool", "tip", "must be finite");
+    ToolResult r;
+    r.supported = true;
+    if (e.phase == ToolPhase::Press || e.phase == ToolPhase::Release) {
+      if (!mouse_ids_.empty()) solver_->release(mouse_ids_);
+      mouse_ids_.clear();
+      mouse_u0_.clear();
+    }
+    if (e.phase == ToolPhase::Press) {
+      if (!(e.radius_m > 0) || !std::isfinite(e.radius_m)) throw InputError("tool", "radius_m", "must be > 0");
+      std::vector<Vec3d> x, u;
+      solver_->positions(x);
+      solver_->displacements(u);
+      for (std::size_t i = 0; i < x.size(); ++i)
+        if (norm2(x[i] - e.tip) <= e.radius_m * e.radius_m) {
+          mouse_ids_.push_back(std::int32_t(i));
+          mouse_u0_.push_back(u[i]);
+        }
+      mouse_tip0_ = mouse_tip_ = e.tip;
+      if (mouse_ids_.empty()) r.message = "no particle within reach of the tip";
+    } else if (e.phase == ToolPhase::Drag) {
+      mouse_tip_ = e.tip;
+    }
+    r.grasped = int(mouse_ids_.size());
+    return r;
+  }
+
  private:
+  std::vector<std::int32_t> mouse_ids_;  // the viewer's grasp: held particles
+  std::vector<Vec3d> mouse_u0_;          // their displacements at the grasp (m)
+  Vec3d mouse_tip0_, mouse_tip_;         // tip at the grasp and now (m)
   std::unique_ptr<MlsSolver> solver_;
   int fixed_substeps_ = 0;
   std::vector<ToolSpec> tools_;

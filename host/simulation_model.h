@@ -33,6 +33,37 @@ struct FrameReport {
   std::map<std::string, double> counters;  // model-specific ("degenerate_neighbourhoods", "broken_bonds", ...)
 };
 
+// The interactive tool (the viewer's mouse): what a model can do with it.
+struct ToolSupport {
+  bool grasp = false;  // grasp & drag: particles / spheres near the tip follow it until released
+  bool cut = false;    // a scalpel stroke (successive blade poses) cuts the model when it ends
+};
+
+enum class ToolKind { Grasp, Cut };
+enum class ToolPhase {
+  Press,    // grasp: catch what lies within radius_m of the tip; cut: the stroke's first blade pose
+  Drag,     // grasp: the caught region's target follows the tip; cut: the next blade pose
+  Release,  // grasp: let go; cut: the last blade pose, then the cut is applied (as the scripted scalpel's)
+};
+
+// One tool event in world coordinates (m). The blade of a cut is the segment of blade_length_m centred on
+// `tip` along `axis` (the viewer uses its view direction).
+struct ToolEvent {
+  ToolKind kind = ToolKind::Grasp;
+  ToolPhase phase = ToolPhase::Press;
+  Vec3d tip;
+  Vec3d axis{0, 0, -1};
+  double radius_m = 0.005;        // grasp reach around the tip
+  double blade_length_m = 0.05;   // cut
+};
+
+struct ToolResult {
+  bool supported = false;  // false: this model cannot do this (message says why); nothing changed
+  int grasped = 0;         // particles / spheres held after the event
+  bool cut_applied = false;
+  std::string message;
+};
+
 struct MemoryReport {
   std::size_t device_bytes = 0;
   std::size_t host_bytes = 0;
@@ -56,6 +87,20 @@ class SimulationModel {
   virtual void currentPositions(std::vector<Vec3d>& out) const = 0;
   virtual bool currentSurface(TriangleMesh& /*out*/) const { return false; }
   virtual MemoryReport memory() const = 0;
+
+  // --- The interactive tool. Called between frames on the thread that advances the model (the viewer
+  // queues the mouse's events and applies them before the next advance()). The effect of a grasp shows in
+  // the following advance() frames (the held region moves to the tip over the frame); a cut's Release
+  // changes the topology at once. Models that cannot do it keep the defaults: nothing is supported.
+  virtual ToolSupport toolSupport() const { return {}; }
+  virtual ToolResult applyTool(const ToolEvent& /*event*/) {
+    ToolResult r;
+    r.message = name() + " does not support this tool";
+    return r;
+  }
+  // One flag per triangle of currentSurface(): 1 for a cut wall (drawn in the cut-wall colour). Empty
+  // (the default): no triangle is a cut wall.
+  virtual void cutWallTriangles(std::vector<std::uint8_t>& out) const { out.clear(); }
 };
 
 }  // namespace inc

@@ -1,6 +1,7 @@
 // The whole viewer in a real window (xvfb-run -a with Mesa): scripted frames, screenshot contents, recording.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -8,6 +9,7 @@
 
 #include <stb_image.h>
 
+#include "host/dissection_simulation.h"
 #include "host/input_error.h"
 #include "host/mesh.h"
 #include "tests/viewer_test_model.h"
@@ -91,6 +93,124 @@ TEST_F(ViewerApp, CutSceneShowsCutWallColour) {
     }
     EXPECT_GT(tissueFraction(p), 0.03);
   }
+}
+
+// A real dissection model (a 6 x 4 x 3 cm block of 1 cm metaballs, the half at y < 2 mm held) cut by a
+// mouse-style scalpel stroke through the tool API: the free half falls away and the held half's cut wall
+// (flagged by cutWallTriangles, facing +y, towards the default camera) shows in the cut-wall colour; the same
+// scene without the cut shows none.
+TEST_F(ViewerApp, RealCutSceneShowsCutWallColour) {
+  for (bool cut : {false, true}) {
+    Scene s;
+    s.file = "<test:viewer_cut_block>";
+    s.geometry.kind = GeometrySpec::Kind::Box;
+    s.geometry.size = Vec3d(0.06, 0.04, 0.03);
+    s.geometry.spacing = 0.01;
+    s.models.pbd_metaballs = true;
+    s.models.cutting = true;
+    s.solver.substeps = 2;
+    s.pbd.iterations = 5;
+    s.fixed = {{Vec3d(-1, -1, -1), Vec3d(1, 0.002, 1)}};
+    ToolSpec t;  // the scene's scripted scalpel never runs here (its path starts at t = 100 s)
+    t.name = "scalpel";
+    t.kind = "scalpel";
+    t.length = 0.08;
+    t.path = {{100.0, Vec3d(-0.05, 0.002, 0.0), Vec3d(0, 0, 1)}, {101.0, Vec3d(0.05, 0.002, 0.0), Vec3d(0, 0, 1)}};
+    s.tools = {t};
+    std::unique_ptr<SimulationModel> m = makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float32);
+    if (cut) {
+      ToolEvent e;
+      e.kind = ToolKind::Cut;
+      e.axis = Vec3d(0, 0, -1);
+      e.blade_length_m = 0.08;
+      for (int k = 0; k <= 4; ++k) {
+        e.phase = k == 0 ? ToolPhase::Press : k == 4 ? ToolPhase::Release : ToolPhase::Drag;
+        e.tip = Vec3d(-0.05 + 0.025 * k, 0.002, 0.0);
+        ASSERT_TRUE(m->applyTool(e).supported);
+      }
+    }
+    for (int f = 0; f < 6; ++f) ASSERT_TRUE(m->advance(1.0 / 60.0).finite);  // the free half falls ~5 cm
+    ViewerOptions o;
+    o.model = std::move(m);
+    o.width = 640;
+    o.height = 400;
+    o.frames = 3;
+    o.show_ui = false;
+    o.screenshot_path = outPath(cut ? "viewer_test_real_cut.png" : "viewer_test_real_uncut.png");
+    ASSERT_EQ(runViewer(o), 0);
+    const Png p = loadPng(o.screenshot_path);
+    ASSERT_EQ(p.w, 640);
+    if (cut)
+      EXPECT_GT(cutWallFraction(p), 0.01);
+    else
+      EXPECT_LT(cutWallFraction(p), 1e-4);
+    EXPECT_GT(tissueFraction(p), 0.03);
+  }
+}
+
+// A 6 x 4 x 3 cm dissection block (1 cm metaballs), no gravity; its scripted scalpel never runs (t >= 100 s).
+std::unique_ptr<SimulationModel> dissectionBlock() {
+  Scene s;
+  s.file = "<test:viewer_mouse_block>";
+  s.geometry.kind = GeometrySpec::Kind::Box;
+  s.geometry.size = Vec3d(0.06, 0.04, 0.03);
+  s.geometry.spacing = 0.01;
+  s.models.pbd_metaballs = true;
+  s.models.cutting = true;
+  s.solver.gravity = Vec3d(0, 0, 0);
+  s.solver.substeps = 2;
+  s.pbd.iterations = 5;
+  ToolSpec t;
+  t.name = "scalpel";
+  t.kind = "scalpel";
+  t.length = 0.08;
+  t.path = {{100.0, Vec3d(-0.05, 0.002, 0.0), Vec3d(0, 0, 1)}, {101.0, Vec3d(0.05, 0.002, 0.0), Vec3d(0, 0, 1)}};
+  s.tools = {t};
+  return makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float32);
+}
+
+// The viewer's own mouse path in cut mode: the button goes down left of the block (off the tissue: the stroke
+// starts in the target's view plane), the cursor sweeps across the middle of the window and the button comes
+// up right of it. The model then holds the cut: two sphere-graph components.
+TEST_F(ViewerApp, MouseStrokeInCutModeCutsTheModel) {
+  ViewerOptions o;
+  o.model = dissectionBlock();
+  o.width = 480;
+  o.height = 300;
+  o.frames = 16;
+  o.show_ui = false;
+  o.tool_mode = ToolMode::Cut;
+  o.scripted_mouse = [](int frame, double& x, double& y) {
+    y = 0.5;
+    x = std::clamp(0.05 + 0.09 * (frame - 2), 0.05, 0.95);
+    return frame >= 2 && frame <= 12;
+  };
+  ASSERT_EQ(runViewer(o), 0);
+  const FrameReport rep = o.model->advance(1.0 / 60.0);
+  EXPECT_EQ(rep.counters.at("cuts_applied"), 1.0);
+  EXPECT_EQ(rep.counters.at("sphere_components"), 2.0);
+}
+
+// Grasp mode: pressing on the middle of the block and dragging the cursor up by a tenth of the window lifts
+// the grasped spheres (max displacement > 3 mm while held; the window's tenth is ~1 cm at the block).
+TEST_F(ViewerApp, MouseGraspInGraspModeDragsTheModel) {
+  ViewerOptions o;
+  o.model = dissectionBlock();
+  o.width = 480;
+  o.height = 300;
+  o.frames = 14;
+  o.show_ui = false;
+  o.tool_mode = ToolMode::Grasp;
+  o.grasp_radius_m = 0.01;
+  o.scripted_mouse = [](int frame, double& x, double& y) {
+    x = 0.5;
+    y = 0.5 - 0.1 * std::clamp((frame - 3) / 6.0, 0.0, 1.0);
+    return frame >= 2;
+  };
+  ASSERT_EQ(runViewer(o), 0);
+  const FrameReport rep = o.model->advance(1.0 / 60.0);
+  EXPECT_GT(rep.counters.at("grasped"), 0.0);
+  EXPECT_GT(rep.max_displacement, 3e-3);  // 0 without the grasp: no gravity, nothing else moves it
 }
 
 // The organ (a ball of radius R framed by its bounding box) covers its analytic share of the picture.

@@ -23,11 +23,21 @@ SimRunner::SimRunner(std::unique_ptr<SimulationModel> model, ModelFactory factor
   if (!model_ && factory_) model_ = factory_();
   if (!model_) throw InputError("viewer", "model", "no model and no factory to build one");
   for (auto& k : knobs_) {
+    if (!k.choices.empty()) {
+      k.min_value = 0.0;
+      k.max_value = double(k.choices.size() - 1);
+      k.integer = true;
+      k.logarithmic = false;
+    }
     if (!(k.min_value <= k.max_value)) throw InputError("viewer", "knob " + k.label, "min exceeds max");
     if (k.logarithmic && !(k.min_value > 0.0)) throw InputError("viewer", "knob " + k.label, "logarithmic needs min > 0");
     k.value = std::clamp(k.value, k.min_value, k.max_value);
   }
   knob_dirty_.assign(knobs_.size(), 0);
+  for (const auto& k : knobs_) {
+    knob_applied_.push_back(k.value);
+    if (k.frame_dt && k.value > 0.0) frame_dt_s_ = k.value;
+  }
   model_->saveCheckpoint();
   publish(nullptr, 0.0);
   if (threaded_) worker_ = std::thread([this] { loop(); });
@@ -105,38 +115,114 @@ std::vector<ViewerKnob> SimRunner::knobs() const {
   return knobs_;
 }
 
-void SimRunner::applyPending() {
-  bool do_reset;
-  std::vector<std::pair<std::size_t, double>> changes;
-  double safety_ratio;
+double SimRunner::frameDt() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return frame_dt_s_;
+}
+
+void SimRunner::queueTool(const ToolEvent& event) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    do_reset = reset_requested_;
+    tool_queue_.push_back(event);
+  }
+  cv_.notify_all();
+}
+
+void SimRunner::applyPending() {
+  bool do_reset, rebuild = false;
+  std::vector<std::size_t> changed;
+  std::vector<double> values;
+  std::vector<ToolEvent> tools;
+  double safety, safety_ratio;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    do_reset = reset_requested_ && bool(factory_);
     reset_requested_ = false;
-    for (std::size_t i = 0; i < knobs_.size(); ++i)
-      if (knob_dirty_[i] || do_reset) {
-        changes.emplace_back(i, knobs_[i].value);
-        knob_dirty_[i] = 0;
+    for (std::size_t i = 0; i < knobs_.size(); ++i) {
+      values.push_back(knobs_[i].value);
+      if (!knob_dirty_[i]) continue;
+      knob_dirty_[i] = 0;
+      changed.push_back(i);
+      if (knobs_[i].frame_dt) {
+        if (knobs_[i].value > 0.0) frame_dt_s_ = knobs_[i].value;
+      } else if (knobs_[i].edit && knobs_[i].value != knob_applied_[i]) {
+        rebuild = bool(factory_);
       }
-    safety_ratio = do_reset ? step_safety_ : step_safety_ / applied_step_safety_;
+    }
+    tools.swap(tool_queue_);
+    safety = step_safety_;
+    safety_ratio = step_safety_ / applied_step_safety_;
     applied_step_safety_ = step_safety_;
   }
-  if (do_reset) {
-    model_ = factory_();
+  // The time step also goes into the scene (later rebuilds check their substeps against it), with no rebuild.
+  for (std::size_t i : changed)
+    if (knobs_[i].frame_dt && knobs_[i].edit) {
+      knobs_[i].edit(values[i]);
+      knob_applied_[i] = values[i];
+    }
+  bool fresh = false;
+  if (do_reset || rebuild) {
+    // Scene edits first, then one model built from the edited scene; a failed build undoes the edits.
+    std::vector<std::pair<std::size_t, double>> undo;
+    for (std::size_t i = 0; i < knobs_.size(); ++i)
+      if (knobs_[i].edit && !knobs_[i].frame_dt && values[i] != knob_applied_[i]) {
+        knobs_[i].edit(values[i]);
+        undo.emplace_back(i, knob_applied_[i]);
+      }
+    std::string error;
+    try {
+      std::unique_ptr<SimulationModel> m = factory_();
+      if (!m) throw InputError("viewer", "model", "the factory built no model");
+      model_ = std::move(m);
+      fresh = true;
+      for (const auto& [i, old] : undo) knob_applied_[i] = values[i];
+    } catch (const std::exception& e) {
+      error = e.what();
+      for (const auto& [i, old] : undo) {
+        knobs_[i].edit(old);
+        values[i] = old;
+      }
+    }
     std::lock_guard<std::mutex> lock(mutex_);
-    snapshot_.frame = 0;
-    snapshot_.sim_time_s = 0.0;
-    snapshot_.failed = false;
-    snapshot_.failure.clear();
-    snapshot_.report = FrameReport{};
+    if (fresh) {
+      snapshot_.frame = 0;
+      snapshot_.sim_time_s = 0.0;
+      snapshot_.failed = false;
+      snapshot_.failure.clear();
+      snapshot_.report = FrameReport{};
+      snapshot_.message.clear();
+      ++snapshot_.rebuilds;
+    } else {
+      snapshot_.message = "model not rebuilt (kept the previous one): " + error;
+      for (const auto& [i, old] : undo) knobs_[i].value = old;
+    }
   }
-  for (const auto& [i, v] : changes)
-    if (knobs_[i].apply) knobs_[i].apply(*model_, v);
+  // Live knobs: every one on a fresh model, the changed ones otherwise.
+  for (std::size_t i = 0; i < knobs_.size(); ++i) {
+    const bool touched = fresh || std::find(changed.begin(), changed.end(), i) != changed.end();
+    if (touched && knobs_[i].apply) knobs_[i].apply(*model_, values[i]);
+  }
+  if (fresh) safety_ratio = safety;
   if (safety_ratio != 1.0) model_->scaleTimeStep(safety_ratio);
-  if (do_reset) {
-    model_->saveCheckpoint();
-    publish(nullptr, 0.0);
+  if (fresh) model_->saveCheckpoint();
+  // The interactive tool's events, in order, before the frame is advanced.
+  for (const ToolEvent& e : tools) {
+    try {
+      const ToolResult r = model_->applyTool(e);
+      std::lock_guard<std::mutex> lock(mutex_);
+      snapshot_.last_tool = r;
+      if (!r.supported) snapshot_.message = r.message;
+    } catch (const std::exception& ex) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      snapshot_.message = std::string("tool: ") + ex.what();
+    }
   }
+  bool show_now = fresh;
+  if (!tools.empty()) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    show_now = show_now || (paused_ && steps_requested_ == 0);  // a cut while paused shows at once
+  }
+  if (show_now) publish(nullptr, 0.0);
 }
 
 void SimRunner::advanceFrame() {
@@ -146,7 +232,20 @@ void SimRunner::advanceFrame() {
     dt = frame_dt_s_ * time_scale_;
   }
   const auto t0 = Clock::now();
-  const FrameReport report = model_->advance(dt);
+  FrameReport report;
+  try {
+    report = model_->advance(dt);
+  } catch (const std::exception& e) {
+    // A model that refuses the frame (e.g. a fixed substep count unstable for a longer time step): keep the
+    // last good state, pause and say why instead of taking the UI down.
+    model_->restoreCheckpoint();
+    std::lock_guard<std::mutex> lock(mutex_);
+    paused_ = true;
+    snapshot_.message = std::string("frame refused, paused: ") + e.what();
+    ++version_;
+    cv_.notify_all();
+    return;
+  }
   const double ms = msSince(t0);
   if (!report.finite) {
     // Never show a lie: roll back to the last good state and stop until the user changes something.
@@ -183,6 +282,8 @@ void SimRunner::publish(const FrameReport* report, double advance_ms) {
   snapshot_.name = model_->name();
   snapshot_.backend = model_->backend();
   snapshot_.particles = model_->particleCount();
+  snapshot_.tool_support = model_->toolSupport();
+  model_->cutWallTriangles(snapshot_.cut_walls);
   ++version_;
   cv_.notify_all();
 }
@@ -205,7 +306,7 @@ void SimRunner::loop() {
     {
       std::unique_lock<std::mutex> lock(mutex_);
       cv_.wait(lock, [&] {
-        return stop_ || !paused_ || steps_requested_ > 0 || reset_requested_ ||
+        return stop_ || !paused_ || steps_requested_ > 0 || reset_requested_ || !tool_queue_.empty() ||
                std::find(knob_dirty_.begin(), knob_dirty_.end(), 1) != knob_dirty_.end();
       });
       if (stop_) return;

@@ -19,8 +19,14 @@ namespace inc::viewer {
 
 using ModelFactory = std::function<std::unique_ptr<SimulationModel>()>;
 
-// A live parameter the UI shows as a slider (Young's modulus, iterations, substeps, ...): the scene wiring
-// supplies `apply`, which runs on the simulation thread between frames. Values are clamped to [min, max].
+// A live parameter the UI shows as a slider (Young's modulus, iterations, substeps, ...). Values are clamped
+// to [min, max]; all effects run on the simulation thread between frames. A knob has one or more of:
+// - `apply`: changes the running model in place;
+// - `edit`: changes the scene the factory builds from; the runner then rebuilds the model (camera and UI
+//   kept, the state restarts from rest). When the rebuild throws, the old model stays, the edit is undone
+//   with the previous value and the snapshot's `message` says why;
+// - `frame_dt`: the value is the simulated time per frame (s), the runner's time step, applied live (its
+//   `edit`, if any, also runs, without a rebuild: later rebuilds see the new time step).
 struct ViewerKnob {
   std::string label;  // with units: "Young's modulus [Pa]"
   double min_value = 0.0;
@@ -29,6 +35,10 @@ struct ViewerKnob {
   bool logarithmic = false;
   bool integer = false;
   std::function<void(SimulationModel&, double)> apply;
+  std::function<void(double)> edit;
+  bool frame_dt = false;
+  std::vector<std::string> choices;  // non-empty: a combo box; value = index into choices
+  std::string group;                 // panel header ("Material", "Solver"); empty: "Speed / accuracy"
 };
 
 struct SimSnapshot {
@@ -44,6 +54,11 @@ struct SimSnapshot {
   std::size_t particles = 0;
   bool failed = false;      // a frame was non-finite: the state was rolled back and the run paused
   std::string failure;
+  ToolSupport tool_support;         // what the model's interactive tool can do
+  ToolResult last_tool;             // result of the last tool event applied
+  std::vector<std::uint8_t> cut_walls;  // per surface triangle: 1 = cut wall (SimulationModel::cutWallTriangles)
+  std::string message;              // the last knob rebuild or tool error, empty when none
+  std::uint64_t rebuilds = 0;       // models built by resets and scene edits
 };
 
 class SimRunner {
@@ -68,6 +83,11 @@ class SimRunner {
   double stepSafety() const;
   void setKnob(std::size_t index, double value);
   std::vector<ViewerKnob> knobs() const;
+  double frameDt() const;
+  // The interactive tool: events are queued (UI thread) and applied in order at the start of the next frame
+  // on the simulation thread (SimulationModel::applyTool). An event the model rejects (InputError) is
+  // dropped and reported in the snapshot's `message`.
+  void queueTool(const ToolEvent& event);
 
   void pump();  // synchronous mode: one frame unless paused (applies pending commands first)
   // Copies the newest snapshot when its version differs from `version` (and updates it); false otherwise.
@@ -90,6 +110,8 @@ class SimRunner {
   mutable std::condition_variable cv_;
   std::vector<ViewerKnob> knobs_;
   std::vector<char> knob_dirty_;
+  std::vector<double> knob_applied_;  // last value whose edit reached the scene (undo on a failed rebuild)
+  std::vector<ToolEvent> tool_queue_;
   bool paused_ = false;
   int steps_requested_ = 0;
   bool reset_requested_ = false;

@@ -76,7 +76,7 @@ SurfaceRenderer::~SurfaceRenderer() {
   glDeleteProgram(program_);
 }
 
-void SurfaceRenderer::upload(const TriangleMesh& mesh) {
+void SurfaceRenderer::upload(const TriangleMesh& mesh, const std::vector<std::uint8_t>& cut_walls) {
   const std::vector<Vec3d> normals = vertexNormals(mesh);
   std::vector<float> v(mesh.vertices.size() * 6);
   for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
@@ -84,10 +84,13 @@ void SurfaceRenderer::upload(const TriangleMesh& mesh) {
       v[6 * i + k] = float(mesh.vertices[i][k]);
       v[6 * i + 3 + k] = float(normals[i][k]);
     }
-  std::vector<GLuint> idx;
+  std::vector<GLuint> idx, walls;
   idx.reserve(mesh.triangles.size() * 3);
-  for (const auto& t : mesh.triangles)
-    for (int k = 0; k < 3; ++k) idx.push_back(GLuint(t[k]));
+  const bool flagged = cut_walls.size() == mesh.triangles.size();
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f)
+    for (int k = 0; k < 3; ++k) (flagged && cut_walls[f] ? walls : idx).push_back(GLuint(mesh.triangles[f][k]));
+  wall_index_count_ = GLsizei(walls.size());
+  idx.insert(idx.end(), walls.begin(), walls.end());
   glBindVertexArray(vao_);
   glBindBuffer(GL_ARRAY_BUFFER, vbo_);
   glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(v.size() * sizeof(float)), v.data(), GL_DYNAMIC_DRAW);
@@ -112,7 +115,13 @@ void SurfaceRenderer::draw(const ViewCamera& cam, const SurfaceStyle& style, con
   glDisable(GL_CULL_FACE);
   glPolygonMode(GL_FRONT_AND_BACK, style.wireframe ? GL_LINE : GL_FILL);
   glBindVertexArray(vao_);
-  glDrawElements(GL_TRIANGLES, index_count_, GL_UNSIGNED_INT, nullptr);
+  const GLsizei tissue = index_count_ - wall_index_count_;
+  if (tissue > 0) glDrawElements(GL_TRIANGLES, tissue, GL_UNSIGNED_INT, nullptr);
+  if (wall_index_count_ > 0) {  // cut walls: the cut-wall colour on both sides
+    glUniform3fv(uniform(program_, "u_front"), 1, style.back.data());
+    glDrawElements(GL_TRIANGLES, wall_index_count_, GL_UNSIGNED_INT,
+                   reinterpret_cast<const void*>(std::size_t(tissue) * sizeof(GLuint)));
+  }
   glBindVertexArray(0);
   glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
   glDepthFunc(GL_LESS);

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <vector>
 
 #include "host/mesh.h"
@@ -30,8 +31,9 @@ class SurfaceRenderer {
   SurfaceRenderer(const SurfaceRenderer&) = delete;
   SurfaceRenderer& operator=(const SurfaceRenderer&) = delete;
 
-  // Re-uploads positions and recomputed normals (every frame while the model deforms).
-  void upload(const TriangleMesh& mesh);
+  // Re-uploads positions and recomputed normals (every frame while the model deforms). `cut_walls` (one
+  // flag per triangle, or empty): flagged triangles are cut walls, drawn on both sides in the back colour.
+  void upload(const TriangleMesh& mesh, const std::vector<std::uint8_t>& cut_walls = {});
   // model: placement of the mesh in the world (identity for organs; the tool's frame for tools).
   void draw(const ViewCamera& cam, const SurfaceStyle& style, const Mat4f& model = Mat4f::identity()) const;
   std::size_t triangleCount() const { return index_count_ / 3; }
@@ -39,6 +41,7 @@ class SurfaceRenderer {
  private:
   GLuint program_ = 0, vao_ = 0, vbo_ = 0, ebo_ = 0;
   GLsizei index_count_ = 0;
+  GLsizei wall_index_count_ = 0;  // the last wall_index_count_ indices are cut-wall triangles
 };
 
 }  // namespace inc::viewer

@@ -42,6 +42,9 @@ class BorrowedModel : public SimulationModel {
   void currentPositions(std::vector<Vec3d>& out) const override { m_.currentPositions(out); }
   bool currentSurface(TriangleMesh& out) const override { return m_.currentSurface(out); }
   MemoryReport memory() const override { return m_.memory(); }
+  ToolSupport toolSupport() const override { return m_.toolSupport(); }
+  ToolResult applyTool(const ToolEvent& e) override { return m_.applyTool(e); }
+  void cutWallTriangles(std::vector<std::uint8_t>& out) const override { m_.cutWallTriangles(out); }
 
  private:
   SimulationModel& m_;
@@ -76,6 +79,48 @@ struct Frame {
   ViewCamera cam;
   int fb_w = 1, fb_h = 1;
 };
+
+// The knobs of one panel group as sliders (combo boxes for choices). Knobs that rebuild the model send their
+// value when the slider is released, not while it is dragged.
+void drawKnobs(SimRunner& runner, const std::string& group, std::map<std::size_t, double>& editing) {
+  const std::vector<ViewerKnob> knobs = runner.knobs();
+  for (std::size_t i = 0; i < knobs.size(); ++i) {
+    const ViewerKnob& k = knobs[i];
+    if (k.group != group) continue;
+    auto it = editing.find(i);
+    double v = it != editing.end() ? it->second : k.value;
+    bool changed;
+    if (!k.choices.empty()) {
+      int c = std::clamp(int(v), 0, int(k.choices.size()) - 1);
+      changed = false;
+      if (ImGui::BeginCombo(k.label.c_str(), k.choices[std::size_t(c)].c_str())) {
+        for (std::size_t j = 0; j < k.choices.size(); ++j)
+          if (ImGui::Selectable(k.choices[j].c_str(), int(j) == c)) {
+            c = int(j);
+            changed = true;
+          }
+        ImGui::EndCombo();
+      }
+      if (changed) runner.setKnob(i, c);
+      continue;
+    }
+    const ImGuiSliderFlags fl = k.logarithmic ? ImGuiSliderFlags_Logarithmic : 0;
+    if (k.integer) {
+      int iv = int(v);
+      changed = ImGui::SliderInt(k.label.c_str(), &iv, int(k.min_value), int(k.max_value), "%d", fl);
+      v = iv;
+    } else {
+      changed = ImGui::SliderScalar(k.label.c_str(), ImGuiDataType_Double, &v, &k.min_value, &k.max_value, "%.4g", fl);
+    }
+    if (!k.edit) {
+      if (changed) runner.setKnob(i, v);
+      continue;
+    }
+    if (changed) editing[i] = v;
+    if (ImGui::IsItemDeactivatedAfterEdit()) runner.setKnob(i, v);
+    if (!ImGui::IsItemActive()) editing.erase(i);
+  }
+}
 
 std::string numbered(const std::string& stem, int n) {
   char buf[32];
@@ -180,6 +225,14 @@ int runViewer(const ViewerOptions& opt) {
     std::map<std::string, History> stage_hist, counter_hist;
     History fps_hist, advance_hist, ke_hist, ee_hist, pe_hist, disp_hist;
     double press_depth_m = opt.press_depth_m;
+    ToolMode tool_mode = opt.tool_mode;
+    double grasp_radius_m = opt.grasp_radius_m > 0 ? opt.grasp_radius_m : 0.08 * scene_radius;
+    double blade_length_m = opt.blade_length_m > 0 ? opt.blade_length_m : 2.0 * scene_radius;
+    bool tool_active = false;     // the left button is down in grasp / cut mode and an event was sent
+    ToolKind active_kind = ToolKind::Grasp;  // of the press (a mode switch mid-drag still releases it)
+    double tool_view_depth = 0;   // m, the pressed tip's view depth: the drag moves the tip in that plane
+    Vec3d tool_sent;              // the last tip sent
+    std::map<std::size_t, double> knob_editing;  // rebuild knobs: the slider's value until released
     bool show_help = false, recording = !opt.record_dir.empty();
     int shot_counter = 0, record_counter = 0, frame_index = 0;
     double last_x = 0, last_y = 0;
@@ -204,7 +257,7 @@ int runViewer(const ViewerOptions& opt) {
       }
       if (need_upload) {
         if (snap.has_surface) {
-          surface.upload(snap.surface);
+          surface.upload(snap.surface, snap.cut_walls);
           surface_splats.upload(surfaceSplats(snap.surface, style.front));
         }
         particle_cloud = particleSplats(snap.positions, opt.particle_radius_m, {0.35f, 0.55f, 0.85f});
@@ -231,15 +284,30 @@ int runViewer(const ViewerOptions& opt) {
       // --- input: camera and shortcuts (unless ImGui has the mouse/keyboard) ---
       double mx, my;
       glfwGetCursorPos(win, &mx, &my);
-      const bool scripted_cursor = opt.cursor_x >= 0.0 && opt.cursor_y >= 0.0;
+      bool scripted_cursor = opt.cursor_x >= 0.0 && opt.cursor_y >= 0.0;
       if (scripted_cursor) {
         mx = opt.cursor_x * win_w;
         my = opt.cursor_y * win_h;
       }
+      bool scripted_down = false;
+      if (opt.scripted_mouse) {
+        double sx = -1, sy = -1;
+        scripted_down = opt.scripted_mouse(frame_index, sx, sy);
+        if (sx >= 0.0 && sy >= 0.0) {
+          scripted_cursor = true;
+          mx = sx * win_w;
+          my = sy * win_h;
+        }
+      }
       if (!io.WantCaptureMouse) {
         const double dx = mx - last_x, dy = my - last_y;
         const bool shift = glfwGetKey(win, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS;
-        if (glfwGetMouseButton(win, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS && !shift) orbit.orbit(dx, dy);
+        const bool alt = glfwGetKey(win, GLFW_KEY_LEFT_ALT) == GLFW_PRESS;
+        // In grasp / cut mode the left button belongs to the tool; alt + left or the middle button orbit.
+        const bool left_orbits = tool_mode == ToolMode::Camera || alt;
+        if ((glfwGetMouseButton(win, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS && !shift && left_orbits && !tool_active) ||
+            glfwGetMouseButton(win, GLFW_MOUSE_BUTTON_MIDDLE) == GLFW_PRESS)
+          orbit.orbit(dx, dy);
         if (glfwGetMouseButton(win, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS ||
             (glfwGetMouseButton(win, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS && shift))
           orbit.pan(dx * px_scale, dy * px_scale, f.fb_h);
@@ -266,6 +334,8 @@ int runViewer(const ViewerOptions& opt) {
         if (ImGui::IsKeyPressed(GLFW_KEY_3)) layers.particles = !layers.particles;
         if (ImGui::IsKeyPressed(GLFW_KEY_4)) layers.wireframe = !layers.wireframe;
         if (ImGui::IsKeyPressed(GLFW_KEY_T)) layers.tool = !layers.tool;
+        if (ImGui::IsKeyPressed(GLFW_KEY_G)) tool_mode = tool_mode == ToolMode::Grasp ? ToolMode::Camera : ToolMode::Grasp;
+        if (ImGui::IsKeyPressed(GLFW_KEY_C)) tool_mode = tool_mode == ToolMode::Cut ? ToolMode::Camera : ToolMode::Cut;
         if (ImGui::IsKeyPressed(GLFW_KEY_MINUS)) runner.setTimeScale(runner.timeScale() * 0.5);
         if (ImGui::IsKeyPressed(GLFW_KEY_EQUAL)) runner.setTimeScale(runner.timeScale() * 2.0);
         if (ImGui::IsKeyPressed(GLFW_KEY_ESCAPE)) glfwSetWindowShouldClose(win, GLFW_TRUE);
@@ -310,13 +380,76 @@ int runViewer(const ViewerOptions& opt) {
           }
         }
       }
+      // --- grasp / cut: press, drag and release become tool events for the simulation thread ---
+      {
+        const bool supported = tool_mode == ToolMode::Grasp ? snap.tool_support.grasp
+                               : tool_mode == ToolMode::Cut ? snap.tool_support.cut
+                                                            : false;
+        const bool alt = glfwGetKey(win, GLFW_KEY_LEFT_ALT) == GLFW_PRESS;
+        const bool down = opt.scripted_mouse ? scripted_down
+                                             : glfwGetMouseButton(win, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS && !alt;
+        // Off the organ a stroke (or a grasp) starts in the view plane through the orbit target, so a cut can
+        // begin outside the tissue like a real scalpel's.
+        if (supported && !tool_active && !tool_valid && cx >= 0 && cy >= 0 && cx < f.fb_w && cy < f.fb_h) {
+          Vec3d o, dir;
+          f.cam.pixelRay(cx, cy, o, dir);
+          const double along = dot(dir, f.cam.forward);
+          if (along > 1e-9) {
+            tool_tip = o + dir * ((f.cam.viewDepth(orbit.target) - dot(o - f.cam.eye, f.cam.forward)) / along);
+            tool_valid = true;
+          }
+        }
+        ToolEvent ev;
+        ev.kind = tool_active ? active_kind : tool_mode == ToolMode::Cut ? ToolKind::Cut : ToolKind::Grasp;
+        ev.axis = f.cam.forward;
+        ev.radius_m = grasp_radius_m;
+        ev.blade_length_m = blade_length_m;
+        if (tool_active && cx >= 0 && cy >= 0) {
+          // The dragged tip stays in the view plane of the press (under the cursor, at the pressed depth).
+          Vec3d o, dir;
+          f.cam.pixelRay(cx, cy, o, dir);
+          const double along = dot(dir, f.cam.forward);
+          if (along > 1e-9) {
+            tool_tip = o + dir * ((tool_view_depth - dot(o - f.cam.eye, f.cam.forward)) / along);
+            tool_valid = true;
+          }
+        }
+        if (supported && down && !tool_active && tool_valid && (scripted_cursor || !io.WantCaptureMouse)) {
+          tool_active = true;
+          active_kind = ev.kind;
+          tool_view_depth = f.cam.viewDepth(tool_tip);
+          ev.phase = ToolPhase::Press;
+          ev.tip = tool_sent = tool_tip;
+          runner.queueTool(ev);
+        } else if (tool_active && (down && supported)) {
+          if (norm(tool_tip - tool_sent) > 1e-3 * scene_radius) {
+            ev.phase = ToolPhase::Drag;
+            ev.tip = tool_sent = tool_tip;
+            runner.queueTool(ev);
+          }
+        } else if (tool_active) {
+          ev.phase = ToolPhase::Release;
+          ev.tip = tool_sent = tool_tip;
+          runner.queueTool(ev);
+          tool_active = false;
+        }
+      }
       if (tool_valid) {
         const double r = 0.03 * scene_radius;
-        tool_style.front = contact.inside ? std::array<float, 3>{0.3f, 0.85f, 0.4f} : std::array<float, 3>{0.75f, 0.78f, 0.82f};
+        tool_style.front = tool_active ? std::array<float, 3>{0.95f, 0.8f, 0.2f}
+                           : contact.inside ? std::array<float, 3>{0.3f, 0.85f, 0.4f}
+                                            : std::array<float, 3>{0.75f, 0.78f, 0.82f};
         tool_style.back = tool_style.front;
         tool_style.on_top = true;  // the tip stays visible when pressed into the tissue
         const Mat4f model = frameMatrix({r, 0, 0}, {0, r, 0}, {0, 0, r}, tool_tip);
         tool.draw(f.cam, tool_style, model);
+        if (tool_mode == ToolMode::Grasp && snap.tool_support.grasp) {  // the grasp's reach, as a wire ball
+          const double g = grasp_radius_m;
+          SurfaceStyle reach = tool_style;
+          reach.wireframe = true;
+          reach.on_top = false;
+          tool.draw(f.cam, reach, frameMatrix({g, 0, 0}, {0, g, 0}, {0, 0, g}, tool_tip));
+        }
       }
 
       // --- panels ---
@@ -344,24 +477,16 @@ int runViewer(const ViewerOptions& opt) {
           float safety = float(runner.stepSafety());
           if (ImGui::SliderFloat("step safety x", &safety, 0.05f, 2.0f, "%.2f", ImGuiSliderFlags_Logarithmic))
             runner.setStepSafety(safety);
-          const std::vector<ViewerKnob> knobs = runner.knobs();
-          for (std::size_t i = 0; i < knobs.size(); ++i) {
-            double v = knobs[i].value;
-            ImGuiSliderFlags fl = knobs[i].logarithmic ? ImGuiSliderFlags_Logarithmic : 0;
-            bool changed;
-            if (knobs[i].integer) {
-              int iv = int(v);
-              changed = ImGui::SliderInt(knobs[i].label.c_str(), &iv, int(knobs[i].min_value), int(knobs[i].max_value),
-                                         "%d", fl);
-              v = iv;
-            } else {
-              changed = ImGui::SliderScalar(knobs[i].label.c_str(), ImGuiDataType_Double, &v, &knobs[i].min_value,
-                                            &knobs[i].max_value, "%.4g", fl);
-            }
-            if (changed) runner.setKnob(i, v);
-          }
+          drawKnobs(runner, "", knob_editing);
           ImGui::Text("substeps %d   dt %.3g s", snap.report.substeps, snap.report.dt);
         }
+        // The scene's material and solver settings (built from the loaded scene by the scene wiring).
+        for (const char* group : {"Material", "Solver"}) {
+          const std::vector<ViewerKnob> all = runner.knobs();
+          if (std::none_of(all.begin(), all.end(), [&](const ViewerKnob& k) { return k.group == group; })) continue;
+          if (ImGui::CollapsingHeader(group, ImGuiTreeNodeFlags_DefaultOpen)) drawKnobs(runner, group, knob_editing);
+        }
+        if (!snap.message.empty()) ImGui::TextColored(ImVec4(1, 0.6f, 0.3f, 1), "%s", snap.message.c_str());
         if (ImGui::CollapsingHeader("Timing", ImGuiTreeNodeFlags_DefaultOpen)) {
           fps_hist.plot("fps", "Hz");
           advance_hist.plot("step", "ms");
@@ -387,6 +512,30 @@ int runViewer(const ViewerOptions& opt) {
         }
         if (ImGui::CollapsingHeader("Tool", ImGuiTreeNodeFlags_DefaultOpen)) {
           ImGui::Checkbox("tool (T)", &layers.tool);
+          int tm = int(tool_mode);
+          ImGui::RadioButton("camera", &tm, 0);
+          ImGui::SameLine();
+          ImGui::BeginDisabled(!snap.tool_support.grasp);
+          ImGui::RadioButton("grasp (G)", &tm, 1);
+          ImGui::EndDisabled();
+          ImGui::SameLine();
+          ImGui::BeginDisabled(!snap.tool_support.cut);
+          ImGui::RadioButton("cut (C)", &tm, 2);
+          ImGui::EndDisabled();
+          tool_mode = ToolMode(tm);
+          if (tool_mode == ToolMode::Grasp && !snap.tool_support.grasp)
+            ImGui::TextDisabled("%s cannot be grasped", snap.name.c_str());
+          if (tool_mode == ToolMode::Cut && !snap.tool_support.cut)
+            ImGui::TextDisabled("%s cannot be cut", snap.name.c_str());
+          float grasp_mm = float(grasp_radius_m * 1e3), blade_mm = float(blade_length_m * 1e3);
+          if (ImGui::SliderFloat("grasp radius [mm]", &grasp_mm, 0.5f, float(500.0 * scene_radius), "%.1f",
+                                 ImGuiSliderFlags_Logarithmic))
+            grasp_radius_m = grasp_mm * 1e-3;
+          if (ImGui::SliderFloat("blade length [mm]", &blade_mm, 1.0f, float(4000.0 * scene_radius), "%.1f",
+                                 ImGuiSliderFlags_Logarithmic))
+            blade_length_m = blade_mm * 1e-3;
+          if (snap.tool_support.grasp || snap.tool_support.cut)
+            ImGui::Text("held: %d%s", snap.last_tool.grasped, snap.last_tool.cut_applied ? "   last stroke cut" : "");
           int mode = collision == ToolCollision::DepthBuffer ? 0 : 1;
           ImGui::RadioButton("depth under cursor", &mode, 0);
           ImGui::SameLine();
@@ -425,6 +574,8 @@ int runViewer(const ViewerOptions& opt) {
               "- / =         slower / faster (time scale)\n"
               "1 2 3 4       surface / splats / particles / wireframe\n"
               "T             tool on / off\n"
+              "G / C         grasp / cut mode (left drag uses the tool;\n"
+              "              alt + left or middle drag orbits)\n"
               "F             frame the model\n"
               "P             screenshot   V  record frames\n"
               "H, F1         this help    Esc  quit");

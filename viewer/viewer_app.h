@@ -20,6 +20,13 @@ struct ViewLayers {
   bool tool = true;       // the tool tip under the mouse
 };
 
+// What the left mouse button does over the model.
+enum class ToolMode {
+  Camera,  // orbit (the default)
+  Grasp,   // press grabs what is under the tip, drag moves it, release lets go (SimulationModel::applyTool)
+  Cut,     // press starts a scalpel stroke, drag draws it, release cuts
+};
+
 enum class ToolCollision {
   DepthBuffer,  // the tip sits on the drawn surface under the cursor (z-buffer read-back)
   SplatZBuffer, // the paper's z-buffer collision against the particle splats along the eye ray
@@ -55,9 +62,16 @@ struct ViewerOptions {
   double particle_radius_m = 0.0;  // 0: from the particles' mean spacing
   ViewLayers layers;
   ToolCollision collision = ToolCollision::DepthBuffer;
+  ToolMode tool_mode = ToolMode::Camera;
+  double grasp_radius_m = 0.0;     // 0: 8 % of the scene's radius
+  double blade_length_m = 0.0;     // 0: the scene's diameter (the blade, centred on the tip, cuts through)
   // Scripted cursor in window fractions (0, 0 top-left .. 1, 1 bottom-right); negative: the real mouse.
   double cursor_x = -1.0, cursor_y = -1.0;
   double press_depth_m = 0.0;      // m, the tool tip below the surface under the cursor (negative: above)
+  // Scripted mouse for tests and captures: called every frame with the frame index; returns whether the left
+  // button is down and may set the cursor (window fractions; negative: unchanged). Overrides the real button
+  // for the grasp / cut tool.
+  std::function<bool(int frame, double& cursor_x, double& cursor_y)> scripted_mouse;
   std::function<void(const ViewerFrameInfo&)> on_frame;  // called after each frame is drawn
   bool verbose = false;            // print the GL version and progress to stdout
 };

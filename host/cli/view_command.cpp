@@ -5,6 +5,7 @@
 
 #include "host/input_error.h"
 #if INCISION_HAVE_VIEWER
+#include "viewer/scene_knobs.h"
 #include "viewer/viewer_app.h"
 #endif
 
@@ -12,19 +13,15 @@ namespace inc::cli {
 
 int runViewCommand(const Scene& scene_in, const ViewCommandOptions& options) {
 #if INCISION_HAVE_VIEWER
-  Scene scene = scene_in;
-  if (options.backend) scene.solver.backend = *options.backend;
-  const BackendChoice choice = resolveBackend(scene.solver.backend);
-  if (!choice.note.empty()) std::fprintf(stderr, "%s\n", choice.note.c_str());
-  // The factory also serves the viewer's reset button: a fresh model from the same scene.
-  auto build = [scene, kind = choice.kind]() -> std::unique_ptr<SimulationModel> {
-    auto models = createSceneModels(scene, kind);
-    if (models.empty()) throw InputError(scene.file, "models", "the scene switches on no model to show");
-    return std::move(models.front());
-  };
+  // The Material / Solver panels edit a copy of the scene; the factory rebuilds the model from it (also
+  // on reset), so the knobs' changes reach the simulation (viewer/scene_knobs.h).
+  viewer::SceneViewerSetup setup = viewer::makeSceneViewerSetup(scene_in, options.backend);
+  if (!setup.backend_note.empty()) std::fprintf(stderr, "%s\n", setup.backend_note.c_str());
+  const Scene& scene = *setup.scene;
   viewer::ViewerOptions vo;
-  vo.model = build();
-  vo.factory = build;
+  vo.model = setup.factory();
+  vo.factory = setup.factory;
+  vo.knobs = setup.knobs;
   vo.title = "Incision: " + scene.name;
   vo.frame_dt_s = scene.solver.frame_dt;
   vo.frames = options.frames;

@@ -1,0 +1,90 @@
+// Material / Solver knobs over a shared, edited copy of the scene, and the model factory reading it.
+#include "viewer/scene_knobs.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "host/backend.h"
+#include "host/input_error.h"
+#include "host/runner.h"
+
+namespace inc::viewer {
+
+SceneViewerSetup makeSceneViewerSetup(const Scene& scene_in, std::optional<BackendKind> backend) {
+  SceneViewerSetup out;
+  out.scene = std::make_shared<Scene>(scene_in);
+  if (backend) out.scene->solver.backend = *backend;
+  const BackendChoice first = resolveBackend(out.scene->solver.backend);
+  out.backend_note = first.note;
+  out.scene->solver.backend = first.kind;
+  std::shared_ptr<Scene> sc = out.scene;
+  out.factory = [sc]() -> std::unique_ptr<SimulationModel> {
+    const BackendKind kind = resolveBackend(sc->solver.backend).kind;
+    if (kind != sc->solver.backend) throw InputError(sc->file, "solver.backend", "the requested backend is not available here");
+    auto models = createSceneModels(*sc, kind);
+    if (models.empty()) throw InputError(sc->file, "models", "the scene switches on no model to show");
+    return std::move(models.front());
+  };
+
+  auto knob = [&](const char* group, const char* label, double lo, double hi, double value, bool log, bool integer,
+                  std::function<void(double)> edit) {
+    ViewerKnob k;
+    k.group = group;
+    k.label = label;
+    k.min_value = lo;
+    k.max_value = hi;
+    k.value = std::clamp(value, lo, hi);
+    k.logarithmic = log;
+    k.integer = integer;
+    k.edit = std::move(edit);
+    out.knobs.push_back(std::move(k));
+  };
+  const Scene& s = *sc;
+  const double e = s.material.youngs_modulus > 0 ? s.material.youngs_modulus : 1.0e4;
+  knob("Material", "Young's modulus [Pa]", e / 100.0, e * 100.0, e, true, false,
+       [sc](double v) { sc->material.youngs_modulus = v; });
+  if (s.models.mls)
+    knob("Material", "Poisson ratio", 0.0, 0.49, s.material.poisson_ratio, false, false,
+         [sc](double v) { sc->material.poisson_ratio = v; });
+  if (s.models.pbd_metaballs || s.models.cutting)
+    knob("Solver", "PBD iterations", 1, 100, s.pbd.iterations, true, true,
+         [sc](double v) { sc->pbd.iterations = int(std::lround(v)); });
+  knob("Solver", "substeps (0 = auto)", 0, 64, s.solver.substeps, false, true,
+       [sc](double v) { sc->solver.substeps = int(std::lround(v)); });
+  {
+    ViewerKnob k;
+    k.group = "Solver";
+    k.label = "time step [s]";
+    k.min_value = 1.0e-4;
+    k.max_value = 0.05;
+    k.value = std::clamp(s.solver.frame_dt, k.min_value, k.max_value);
+    k.logarithmic = true;
+    k.frame_dt = true;
+    k.edit = [sc](double v) { sc->solver.frame_dt = v; };
+    out.knobs.push_back(std::move(k));
+  }
+  {
+    ViewerKnob k;
+    k.group = "Solver";
+    k.label = "precision";
+    k.choices = {"float32", "float64"};
+    k.value = s.solver.precision == Precision::Float64 ? 1 : 0;
+    k.edit = [sc](double v) { sc->solver.precision = v > 0.5 ? Precision::Float64 : Precision::Float32; };
+    out.knobs.push_back(std::move(k));
+  }
+  {
+    ViewerKnob k;
+    k.group = "Solver";
+    k.label = "backend";
+    k.choices = {"cpu"};
+#if INCISION_HAVE_CUDA
+    k.choices.push_back("cuda");
+#endif
+    k.value = s.solver.backend == BackendKind::Cuda && k.choices.size() > 1 ? 1 : 0;
+    k.edit = [sc](double v) { sc->solver.backend = v > 0.5 ? BackendKind::Cuda : BackendKind::Cpu; };
+    out.knobs.push_back(std::move(k));
+  }
+  return out;
+}
+
+}  // namespace inc::viewer
