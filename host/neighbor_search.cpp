@@ -1,6 +1,7 @@
 // Dispatches findNeighbors to the CPU grid search or (when compiled and a device is usable) the CUDA one.
 #include "host/neighbor_search.h"
 
+#include <algorithm>
 #include <string>
 
 #include "cpu_fallback/neighbor_search_cpu.h"
@@ -13,9 +14,12 @@
 namespace inc {
 namespace {
 
-// The cell size: the option when given, else the largest radius (one cell ring then covers the ball).
+// The cell size: the option when given; else half the largest radius when that grid stays dense (at most
+// one cell per bucket, so no hashing), else the largest radius. Half-radius cells with per-row trimming
+// (neighborRowXRange) visit about (2.5 r)^3 of candidates instead of (3 r)^3; docs/neighbor-search.md has
+// the measurements behind the choice. The bounding box is computed here for the decision only.
 template <typename T>
-T chooseCellSize(const std::vector<T>& radii, const NeighborSearchOptions& options) {
+T chooseCellSize(const std::vector<Vec3<T>>& points, const std::vector<T>& radii, const NeighborSearchOptions& options) {
   for (std::size_t i = 0; i < radii.size(); ++i)
     if (!neighborRadiusValid(radii[i]))
       throw InputError("", radii.size() == 1 ? std::string("radius") : "radii[" + std::to_string(i) + "]",
@@ -23,15 +27,29 @@ T chooseCellSize(const std::vector<T>& radii, const NeighborSearchOptions& optio
   if (options.cell_size > 0.0) return T(options.cell_size);
   T largest = T(0);
   for (T r : radii) largest = r > largest ? r : largest;
-  return largest > T(0) ? largest : T(1);
+  if (!(largest > T(0))) return T(1);
+  Vec3<T> lo, hi;
+  bool any = false;
+  for (const Vec3<T>& x : points) {
+    if (!neighborPointFinite(x)) continue;  // the search itself reports it
+    if (!any) lo = hi = x;
+    any = true;
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], x[a]);
+      hi[a] = std::max(hi[a], x[a]);
+    }
+  }
+  if (!any || points.size() > (std::size_t(1) << 30)) return largest;
+  const T half = largest / T(2);
+  const NeighborGridParams<T> p = makeNeighborGridParams(lo, hi, half, neighborBucketCount(points.size()), 0, true);
+  return p.dense ? half : largest;
 }
-
 }  // namespace
 
 template <typename T>
 NeighborLists findNeighbors(BackendKind backend, const std::vector<Vec3<T>>& points, T radius,
                             const NeighborSearchOptions& options) {
-  const T cell = chooseCellSize(std::vector<T>{radius}, options);
+  const T cell = chooseCellSize(points, std::vector<T>{radius}, options);
   const BackendChoice choice = resolveBackend(backend);
   (void)choice;  // only read when the CUDA backend is compiled in
 #if INCISION_HAVE_CUDA
@@ -51,7 +69,7 @@ NeighborLists findNeighbors(BackendKind backend, const std::vector<Vec3<T>>& que
   if (radii.size() != 1 && radii.size() != queries.size())
     throw InputError("", "radii", "expected 1 radius or one per query (" + std::to_string(queries.size()) +
                                       "), got " + std::to_string(radii.size()));
-  const T cell = chooseCellSize(radii, options);
+  const T cell = chooseCellSize(points, radii, options);
   const BackendChoice choice = resolveBackend(backend);
   (void)choice;  // only read when the CUDA backend is compiled in
 #if INCISION_HAVE_CUDA
