@@ -107,6 +107,7 @@ class TearingDriver {
   bool deviceResident() const { return resident_; }
   BackendKind kind() const { return tear_backend_->kind(); }
   MemoryReport memory() const { return pbd_->memory(); }
+  PbdBackend<T>& pbdBackend() { return *pbd_; }  // the PBD backend (tests read its device model)
 
  private:
   mutable TearSheet<T> sheet_;  // mutable: sheet() downloads a stale device-resident sheet

@@ -621,7 +621,15 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
         std::copy(ptrs, ptrs + 11, key.ptrs);
         key.n = n_;
         key.topo = topo_version_;
-        if (!graph_exec_ || !sameKey(key, graph_key_)) {
+        const bool stale = !graph_exec_ || !sameKey(key, graph_key_);
+        // Right after a topology change (a tearing frame patches the model every frame) the frame is launched
+        // directly: capturing and updating a graph costs more host time than it saves for one launch. The graph
+        // is captured once the topology has stayed the same for a frame.
+        const bool direct = stale && key.topo != last_direct_topo_;
+        if (direct) last_direct_topo_ = key.topo;
+        if (direct) {
+          recordFrame(p);
+        } else if (stale) {
           INC_CUDA(cudaStreamBeginCapture(stream_, cudaStreamCaptureModeThreadLocal));
           cudaGraph_t graph = nullptr;
           try {
@@ -647,7 +655,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
           INC_CUDA(inst);
           graph_key_ = key;
         }
-        INC_CUDA(cudaGraphLaunch(graph_exec_, stream_));
+        if (!direct) INC_CUDA(cudaGraphLaunch(graph_exec_, stream_));
       } else {
         recordFrame(p);
       }
@@ -1186,6 +1194,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
   cudaGraphExec_t graph_exec_ = nullptr;
   GraphKey<T> graph_key_;
   std::uint64_t topo_version_ = 0;  // bumped by every patch: the captured graph holds counts and pointers
+  std::uint64_t last_direct_topo_ = ~std::uint64_t(0);
   bool patched_ = false;            // a block was rebuilt on the device: no colouring (Jacobi only)
   int summary_every_ = 1;
   std::uint64_t frame_count_ = 0;
