@@ -807,6 +807,9 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     }
     d.order.resize(0);
     d.color_offsets.assign(1, 0);
+    // The summary's reduction partials: room for every block (a block that was empty at setModel may not be).
+    const std::size_t need = std::size_t(2 * blocks_.size() + 3) * kReduceBlocks;
+    if (partials_.size() < need) partials_.resize(need);
     patched_ = true;
     ++topo_version_;
   }
