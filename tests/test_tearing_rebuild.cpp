@@ -1,9 +1,13 @@
 // Sort-based rebuild (the device algorithm, CPU reference) equals the host adjacency + PBD model rebuild after many tearing steps.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
+#include <string>
 
 #include "cpu_fallback/tearing_cpu.h"
+#include "host/input_error.h"
+#include "host/tearing_driver.h"
 #include "host/tearing_rebuild.h"
 #include "host/tearing_sheet.h"
 #include "physics/tearing_rebuild.h"
@@ -96,4 +100,40 @@ TEST(TearingRebuild, TornSheetsEqualHostRebuild) {
   const TearSheet<float> tube = tornSheet<float>(true, 8, 9);
   EXPECT_GT(tube.size(), 480u + 300u);
   expectSortedEqualsHost(tube);
+}
+
+// The driver's host path reports its stages (the breakdown bench_tearing prints) and stays on the host on the CPU.
+TEST(TearingRebuild, HostPathStagesAndCpuNeverResident) {
+  TearSheet<double> s = makeTearGrid<double>(16, 8, 0.01, 2.2, Vec3d(0, 0, 0), 1.0e4, 150.0);
+  fixTearParticles(s, Vec3d(-1, -1, -1), Vec3d(1e-3, 1, 1));
+  PbdStepParams<double> sp;
+  sp.gravity = Vec3d(0, 0, 0);
+  sp.volume_preservation = false;
+  TearModelOptions mo;
+  mo.stretch_compliance = 2e-4;
+  mo.bending_compliance = 10;
+  TearingDriver<double> d(s, TearParams<double>(), mo, sp, BackendKind::Cpu);
+  EXPECT_FALSE(d.deviceResident());
+  EXPECT_THROW(d.setSummaryEvery(0), InputError);
+  std::vector<std::int32_t> grasp;
+  for (std::size_t i = 0; i < d.sheet().size(); ++i)
+    if (d.sheet().rest[i].x > 0.149) grasp.push_back(std::int32_t(i));
+  bool saw_rebuild = false;
+  for (int f = 0; f < 12 && !saw_rebuild; ++f) {
+    std::vector<Vec3d> to;
+    for (std::int32_t id : grasp) to.push_back(d.sheet().rest[id] + Vec3d(0.01 * (f + 1), 0, 0));
+    const TearFrameStats st = d.advance(grasp, to);
+    EXPECT_FALSE(st.device_resident);
+    std::vector<std::string> names;
+    for (const StageTime& t : st.stages) {
+      names.push_back(t.stage);
+      EXPECT_GE(t.ms, 0.0) << t.stage;
+    }
+    auto has = [&](const char* n) { return std::find(names.begin(), names.end(), n) != names.end(); };
+    EXPECT_TRUE(has("solve") && has("download_state") && has("tear_step"));
+    EXPECT_EQ(has("host_model"), st.splits > 0) << "the model is rebuilt exactly on frames with splits";
+    saw_rebuild = st.splits > 0;
+    EXPECT_EQ(d.particleCount(), d.sheet().size());
+  }
+  EXPECT_TRUE(saw_rebuild) << "the pull must tear within 12 frames";
 }
