@@ -163,7 +163,8 @@ TEST(PbdPatchGpu, GrowsBeyondCapacityAndRefusesBadInput) {
   EXPECT_GE(patch->deviceParticles().capacity, 4 * cap0);
   EXPECT_EQ(patch->downloadInverseMasses(), ma.inv_mass);
   EXPECT_EQ(patch->downloadBlock(0).ids, ma.blocks[0].ids);
-  EXPECT_THROW(patch->appendParticles(int(8 * cap0) + 8, nullptr), InputError);  // beyond capacity
+  const int beyond = int(patch->deviceParticles().capacity) + 1;
+  EXPECT_THROW(patch->appendParticles(beyond, nullptr), InputError);  // beyond capacity: refused before any launch
   EXPECT_THROW(patch->setBlockFromHost(0, {0, 1, 2}, {0.01f}, {0.0f}), InputError);  // wrong arity
   EXPECT_THROW(patch->setBlockFromHost(0, {0, 100000}, {0.01f}, {0.0f}), InputError);  // index out of range
   EXPECT_THROW(patch->commitBlock(0, 1 << 30), InputError);  // beyond the reserved constraints
