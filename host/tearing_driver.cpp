@@ -76,7 +76,7 @@ void TearingDriver<T>::resetModel() {
   // model on the device; Gauss-Seidel keeps the host rebuild (its colouring is a host algorithm).
   resident_ = allow_device_resident && step_.solver == PbdSolverKind::Jacobi &&
               tear_backend_->attach(*pbd_, sheet_, model_opt_, int(model.blocks.size()));
-  host_stale_ = false;
+  host_stale_ = topo_stale_ = false;
   setSummaryEvery(summary_every_);
 }
 
@@ -92,9 +92,9 @@ void TearingDriver<T>::setSummaryEvery(int k) {
 template <typename T>
 void TearingDriver<T>::syncHost() const {
   if (!resident_ || !host_stale_) return;
-  tear_backend_->download(sheet_);
-  sheet_.rebuildTopology();
-  host_stale_ = false;
+  tear_backend_->download(sheet_, topo_stale_);
+  if (topo_stale_) sheet_.rebuildTopology();  // the device has its own adjacency; the host's only on demand
+  host_stale_ = topo_stale_ = false;
 }
 
 template <typename T>
@@ -121,7 +121,7 @@ TearFrameStats TearingDriver<T>::advanceResident(const std::vector<std::int32_t>
   st.stages.push_back({"solve", st.solve_ms});
   if (tearing_enabled && st.pbd.finite) {
     t0 = Clock::now();
-    tear_backend_->stepResident(tear_, sheet_.step, st, profile);
+    if (tear_backend_->stepResident(tear_, sheet_.step, st, profile) > 0) topo_stale_ = true;
     ++sheet_.step;
     st.tear_ms = msSince(t0) - st.rebuild_ms;  // stepResident fills rebuild_ms and its stages
   }

@@ -57,9 +57,10 @@ class TearStepBackend {
     (void)ids;
     out.clear();
   }
-  // Particles (rest, x, v, mass, fixed, k, tau_f) and triangles of the device sheet into s (the caller
-  // rebuilds the adjacency; ref_normal and step are the caller's).
-  virtual void download(TearSheet<T>& s) { (void)s; }
+  // The device sheet into s. full: particles (rest, x, v, mass, fixed, k, tau_f) and triangles (the caller
+  // rebuilds the adjacency; ref_normal and step are the caller's); else positions and velocities only (the
+  // topology has not changed since the last full download).
+  virtual void download(TearSheet<T>& s, bool full) { (void)s, (void)full; }
 };
 
 template <typename T>
@@ -118,7 +119,8 @@ class TearingDriver {
   std::unique_ptr<TearStepBackend<T>> tear_backend_;
   PbdState<T> state_;
   bool resident_ = false;
-  mutable bool host_stale_ = false;
+  mutable bool host_stale_ = false;   // positions/velocities on the host are older than the device's
+  mutable bool topo_stale_ = false;   // and the topology too (a resident step made splits)
   int summary_every_ = 1;
   void syncHost() const;
   TearFrameStats advanceResident(const std::vector<std::int32_t>& grasp_ids, const std::vector<Vec3<T>>& grasp_to);

@@ -427,10 +427,17 @@ class TearResident {
     gather_out_.download(out.data(), ids.size());
   }
 
-  void download(TearSheet<T>& s) {
+  void download(TearSheet<T>& s, bool full) {
     INC_CUDA(cudaDeviceSynchronize());
     const PbdDeviceParticles<T> d = patch_->deviceParticles();
     const std::size_t m = std::size_t(n_);
+    if (!full && s.size() == m) {
+      if (m) {
+        INC_CUDA(cudaMemcpy(s.x.data(), d.x, m * sizeof(Vec3<T>), cudaMemcpyDeviceToHost));
+        INC_CUDA(cudaMemcpy(s.v.data(), d.v, m * sizeof(Vec3<T>), cudaMemcpyDeviceToHost));
+      }
+      return;
+    }
     s.resizeParticles(m);
     if (m) {
       INC_CUDA(cudaMemcpy(s.rest.data(), d.rest, m * sizeof(Vec3<T>), cudaMemcpyDeviceToHost));
@@ -597,8 +604,8 @@ class TearStepCuda final : public TearStepBackend<T> {
   void gatherPositions(const std::vector<std::int32_t>& ids, std::vector<Vec3<T>>& out) override {
     res_.gather(ids, out);
   }
-  void download(TearSheet<T>& s) override {
-    if (resident_ok_) res_.download(s);
+  void download(TearSheet<T>& s, bool full) override {
+    if (resident_ok_) res_.download(s, full);
   }
 
  private:
