@@ -188,6 +188,7 @@ TearingDriver<T> pulledDriver(bool resident, TearCriterion crit) {
   mo.bending_compliance = 10;
   TearParams<T> tp;
   tp.criterion = crit;
+  tp.break_strain = T(0.15);  // traditional: breaks within the pull as Tresca does
   tp.seed = 5;
   TearingDriver<T> d(s, tp, mo, sp, BackendKind::Cuda);
   if (!resident) {
@@ -226,7 +227,7 @@ TEST(TearingPatchGpu, ResidentModelEqualsHostRebuildAfterTearing) {
     TearingDriver<float> d = pulledDriver<float>(true, crit);
     ASSERT_TRUE(d.deviceResident());
     const int splits = pull(d, 16);
-    EXPECT_GT(splits, 20) << tearCriterionName(crit);
+    EXPECT_GT(splits, 10) << tearCriterionName(crit) << ": the pull must tear";
     const TearSheet<float>& s = d.sheet();  // downloaded, adjacency rebuilt on the host
     EXPECT_EQ(s.size(), d.particleCount());
     EXPECT_TRUE(checkTearMesh(s).valid()) << tearCriterionName(crit);
