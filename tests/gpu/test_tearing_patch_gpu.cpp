@@ -11,6 +11,7 @@
 #include "cpu_fallback/tearing_cpu.h"
 #include "host/tearing_driver.h"
 #include "host/tearing_sheet.h"
+#include "host/tearing_simulation.h"
 #include "kernels/device_info.h"
 #include "kernels/pbd_device_cuda.h"
 #include "kernels/pbd_solver_cuda.h"
@@ -283,6 +284,60 @@ TEST(TearingPatchGpu, GaussSeidelKeepsTheHostPath) {
   const TearFrameStats st = d.advance({}, {});
   EXPECT_FALSE(st.device_resident);
   EXPECT_TRUE(st.pbd.finite);
+}
+
+// The runner's model on CUDA (device-resident path, Jacobi): counters, surface and checkpoints stay right
+// although the sheet lives on the device between frames.
+TEST(TearingPatchGpu, SimulationModelOnCudaTearsAndRestoresCheckpoints) {
+  if (!haveDevice()) GTEST_SKIP() << "no CUDA device";
+  Scene s;
+  s.file = "test-scene";
+  s.models.tearing = true;
+  s.geometry.kind = GeometrySpec::Kind::Box;
+  s.geometry.center = Vec3d(0.1, 0.05, 0);
+  s.geometry.size = Vec3d(0.2, 0.1, 0.002);
+  s.geometry.spacing = 0.01;
+  s.material.youngs_modulus = 1.5e3;
+  s.material.density = 1100;
+  s.material.damping = 4;
+  s.pbd.iterations = 8;
+  s.pbd.stretch_compliance = 2e-4;
+  s.pbd.solver = "jacobi";
+  s.solver.gravity = Vec3d(0, 0, 0);
+  s.fixed.push_back(FixedRegion{Vec3d(-1, -1, -1), Vec3d(0.001, 1, 1)});
+  ToolSpec g;
+  g.name = "grasper";
+  g.kind = "grasper";
+  g.radius = 0.004;
+  g.length = 0.1;
+  g.path = {ToolKeyframe{0.0, Vec3d(0.2, 0.0, 0), Vec3d(0, 1, 0)}, ToolKeyframe{0.25, Vec3d(0.28, 0.0, 0), Vec3d(0, 1, 0)}};
+  s.tools.push_back(g);
+  auto m = makeTearingSimulation(s, BackendKind::Cuda, Precision::Float32);
+  EXPECT_EQ(m->backend(), BackendKind::Cuda);
+  const std::size_t n0 = m->particleCount();
+  double splits = 0;
+  for (int f = 0; f < 15; ++f) {
+    const FrameReport r = m->advance(1.0 / 60.0);
+    ASSERT_TRUE(r.finite);
+    splits += r.counters.at("splits");
+    EXPECT_EQ(r.counters.at("particles"), double(m->particleCount()));
+  }
+  EXPECT_GT(splits, 0);
+  EXPECT_EQ(m->particleCount(), n0 + std::size_t(splits));
+  TriangleMesh surf;
+  ASSERT_TRUE(m->currentSurface(surf));
+  EXPECT_EQ(surf.vertices.size(), m->particleCount());
+  m->saveCheckpoint();
+  const std::size_t n1 = m->particleCount();
+  std::vector<Vec3d> x1, x2;
+  m->currentPositions(x1);
+  m->advance(1.0 / 60.0);
+  m->restoreCheckpoint();
+  EXPECT_EQ(m->particleCount(), n1);
+  m->currentPositions(x2);
+  ASSERT_EQ(x1.size(), x2.size());
+  for (std::size_t i = 0; i < x1.size(); ++i) ASSERT_EQ(norm(x1[i] - x2[i]), 0.0) << "restored positions, particle " << i;
+  EXPECT_TRUE(m->advance(1.0 / 60.0).finite);
 }
 
 #endif  // INCISION_HAVE_CUDA
