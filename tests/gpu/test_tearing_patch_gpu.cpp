@@ -15,6 +15,7 @@
 #include "kernels/device_info.h"
 #include "kernels/pbd_device_cuda.h"
 #include "kernels/pbd_solver_cuda.h"
+#include "kernels/tearing_cuda.h"
 
 using namespace inc;
 
@@ -284,6 +285,61 @@ TEST(TearingPatchGpu, GaussSeidelKeepsTheHostPath) {
   const TearFrameStats st = d.advance({}, {});
   EXPECT_FALSE(st.device_resident);
   EXPECT_TRUE(st.pbd.finite);
+}
+
+// CPU tearing step vs the device-resident step fed the same jiggled positions for 10 steps (> 1000 splits):
+// the same topology for the same seed, and the patched device model equal to a host rebuild of it.
+TEST(TearingPatchGpu, ResidentStepsMatchCpuStepsForTheSameSeed) {
+  if (!haveDevice()) GTEST_SKIP() << "no CUDA device";
+  TearSheet<double> a = makeTearGrid<double>(50, 50, 0.01, 2.2, Vec3d(0, 0, 0), 1.0e4, 120.0);
+  fixTearParticles(a, Vec3d(-1, -1, -1), Vec3d(1, 0.005, 1));
+  const TearModelOptions mo = jacobiOptions();
+  auto pbd = cuda::makePbdCudaBackend<double>();
+  pbd->setModel(buildTearPbdModel(a, mo));
+  auto tb = cuda::makeTearStepCuda<double>();
+  ASSERT_TRUE(tb->attach(*pbd, a, mo, 2));
+  TearParams<double> p;
+  p.seed = 21;
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<double> u(-1, 1);
+  int total = 0;
+  for (int step = 0; step < 10; ++step) {
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      a.x[i] = a.rest[i] + Vec3d(u(rng), u(rng), u(rng)) * 0.0012;
+      a.v[i] = Vec3d(u(rng), u(rng), u(rng)) * 0.01;
+    }
+    PbdState<double> st;
+    st.positions = a.x;
+    st.velocities = a.v;
+    st.radii.assign(a.size(), 0.0);
+    st.rotations.assign(a.size(), pbd::Quat<double>{});
+    pbd->setState(st);  // the device sheet's positions are the PBD backend's
+    const std::uint32_t counter = a.step;
+    const cpu::TearStepStats sc = cpu::tearStepCpu(a, p);
+    TearFrameStats sg;
+    const int made = tb->stepResident(p, counter, sg, step % 2 == 1);
+    ASSERT_EQ(made, sc.splits) << "step " << step;
+    EXPECT_EQ(sg.yielding, sc.yielding) << "step " << step;
+    ASSERT_EQ(tb->residentSize(), a.size());
+    total += made;
+  }
+  EXPECT_GT(total, 1000);
+  TearSheet<double> b = a;
+  tb->download(b, true);
+  b.rebuildTopology();
+  EXPECT_EQ(b.tris, a.tris) << "same seed, same topology";
+  double err = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    err = std::max(err, norm(a.x[i] - b.x[i]) + norm(a.rest[i] - b.rest[i]) + std::abs(a.mass[i] - b.mass[i]));
+    ASSERT_EQ(a.fixed[i], b.fixed[i]);
+  }
+  EXPECT_LT(err, 1e-12);
+  EXPECT_TRUE(checkTearMesh(b).valid());
+  const PbdModel<double> host = buildTearPbdModel(a, mo);
+  cuda::PbdDevicePatch<double>* patch = cuda::pbdDevicePatch<double>(*pbd);
+  ASSERT_NE(patch, nullptr);
+  expectBlockEqual(patch->downloadBlock(0), host.blocks[0], 1e-15, "distance");
+  expectBlockEqual(patch->downloadBlock(1), host.blocks[1], 1e-12, "bending");
 }
 
 // The runner's model on CUDA (device-resident path, Jacobi): counters, surface and checkpoints stay right
