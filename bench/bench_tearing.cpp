@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -28,7 +29,40 @@ struct Row {
   double ms_before = 0, ms_during = 0, ms_after = 0, ms_during_max = 0;
   double ms_tear_during = 0, ms_rebuild_during = 0;  // medians of the tearing step and the model rebuild
   double drop = 0;                                   // 1 - fps_during / fps_before
+  std::string path;                                  // "device" (resident sheet, patched model) or "host"
+  // --profile: mean ms per frame of each stage in the before / during / after phases (first-seen order).
+  std::vector<std::string> stage_order;
+  std::map<std::string, double> stage_sum[3];
+  int phase_frames[3] = {0, 0, 0};
 };
+
+struct Options {
+  bool profile = false, host_path = false;
+  int summary_every = 1;
+};
+
+void addStages(Row& row, int phase, const TearFrameStats& st) {
+  ++row.phase_frames[phase];
+  for (const StageTime& s : st.stages) {
+    if (!row.stage_sum[0].count(s.stage) && !row.stage_sum[1].count(s.stage) && !row.stage_sum[2].count(s.stage))
+      row.stage_order.push_back(s.stage);
+    row.stage_sum[phase][s.stage] += s.ms;
+  }
+}
+
+void printStages(const Row& row) {
+  std::printf("  stages (%s %s %lld, %s path; mean ms per frame, synchronised per stage):\n", row.backend.c_str(),
+              row.method.c_str(), (long long)row.target, row.path.c_str());
+  std::printf("  %-28s %10s %10s %10s\n", "stage", "before", "during", "after");
+  for (const std::string& name : row.stage_order) {
+    double v[3];
+    for (int k = 0; k < 3; ++k) {
+      const auto it = row.stage_sum[k].find(name);
+      v[k] = (it == row.stage_sum[k].end() || row.phase_frames[k] == 0) ? 0.0 : it->second / row.phase_frames[k];
+    }
+    std::printf("  %-28s %10.4f %10.4f %10.4f\n", name.c_str(), v[0], v[1], v[2]);
+  }
+}
 
 double median(std::vector<double> v) {
   if (v.empty()) return 0;
@@ -51,7 +85,7 @@ TearSheet<float> legSkin(std::int64_t particles, double& h) {
 }
 
 Row runCase(BackendKind backend, TearCriterion crit, std::int64_t particles, std::int64_t target, int f_before,
-            int f_during, int f_after) {
+            int f_during, int f_after, const Options& opt) {
   double h = 0;
   TearSheet<float> s = legSkin(particles, h);
   // A square patch on the front of the thigh holding about `target` particles.
@@ -71,7 +105,14 @@ Row runCase(BackendKind backend, TearCriterion crit, std::int64_t particles, std
   sp.damping = 2.0f;
   sp.volume_preservation = false;
   TearingDriver<float> d(s, tp, mo, sp, backend);
+  if (opt.host_path) {
+    d.allow_device_resident = false;
+    d.resetModel();
+  }
+  d.setSummaryEvery(opt.summary_every);
+  d.profile = opt.profile;
   Row row;
+  row.path = d.deviceResident() ? "device" : "host";
   row.backend = backendName(d.kind());
   row.method = tearCriterionName(crit);
   row.particles = std::int64_t(d.sheet().size());
@@ -92,29 +133,36 @@ Row runCase(BackendKind backend, TearCriterion crit, std::int64_t particles, std
   };
   std::vector<double> before, during, after, tear_ms, rebuild_ms;
   frame({}, {}, nullptr);  // warm-up
-  for (int f = 0; f < f_before; ++f) before.push_back(frame({}, {}, nullptr));
+  TearFrameStats st;
+  for (int f = 0; f < f_before; ++f) {
+    before.push_back(frame({}, {}, &st));
+    addStages(row, 0, st);
+  }
   // During: the patch is gripped and pulled 3 cm outwards (+x) over the frames while the criterion tears the
   // tissue around it; at the last frame it is removed.
   std::vector<Vec3f> to(ids.size());
   for (int f = 0; f < f_during; ++f) {
     const float a = float(f + 1) / float(f_during);
     for (std::size_t k = 0; k < ids.size(); ++k) to[k] = base[k] + Vec3f(0.03f * a, 0, 0);
-    TearFrameStats st;
     double ms = frame(ids, to, &st);
+    addStages(row, 1, st);
     row.splits += st.splits;
     tear_ms.push_back(st.tear_ms);
     rebuild_ms.push_back(st.rebuild_ms);
     if (f + 1 == f_during) {
       const auto t0 = Clock::now();
-      std::vector<std::uint8_t> grip(d.sheet().size(), 0);
+      std::vector<std::uint8_t> grip(d.particleCount(), 0);
       for (std::int32_t id : ids) grip[id] = 1;
       d.removeParticles(grip);
       ms += std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     }
     during.push_back(ms);
   }
-  for (int f = 0; f < f_after; ++f) after.push_back(frame({}, {}, nullptr));
-  row.particles_after = std::int64_t(d.sheet().size());
+  for (int f = 0; f < f_after; ++f) {
+    after.push_back(frame({}, {}, &st));
+    addStages(row, 2, st);
+  }
+  row.particles_after = std::int64_t(d.particleCount());
   row.ms_before = median(before);
   row.ms_during = median(during);
   row.ms_during_max = during.empty() ? 0 : *std::max_element(during.begin(), during.end());
@@ -151,6 +199,7 @@ int main(int argc, char** argv) {
   std::int64_t particles = 150000, cpu_max = 1000000;
   int f_before = 30, f_during = 60, f_after = 30;
   bool quick = false;
+  Options opt;
   app.add_option("--backend", backend_text, "cpu | cuda | both (cuda rows only with a device)");
   app.add_option("--particles", particles, "skin particles (the paper: ~150000)");
   app.add_option("--tears", tears_text, "particles gripped and torn out, comma separated (the paper: 200,4000)");
@@ -160,6 +209,10 @@ int main(int argc, char** argv) {
   app.add_option("--frames-after", f_after, "frames timed after the tear");
   app.add_option("--csv", csv, "write the rows as CSV here");
   app.add_flag("--quick", quick, "a short run: 20000 particles, tears 200,1000, 5/10/5 frames");
+  app.add_flag("--profile", opt.profile,
+               "per-stage breakdown (device work synchronised around each stage, PBD stages by CUDA events; slower)");
+  app.add_flag("--host-path", opt.host_path, "CUDA: host sheet + host model rebuild every tearing frame (the old path)");
+  app.add_option("--summary-every", opt.summary_every, "CUDA: PBD residual/finiteness summary every N frames");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -175,6 +228,7 @@ int main(int argc, char** argv) {
     }
     if (particles < 100) throw InputError("command line", "--particles", "must be >= 100");
     if (f_before < 1 || f_during < 1 || f_after < 1) throw InputError("command line", "--frames-*", "must be >= 1");
+    if (opt.summary_every < 1) throw InputError("command line", "--summary-every", "must be >= 1");
     const std::vector<std::int64_t> tears = parseList(tears_text);
     std::vector<BackendKind> backends;
     bool have_cuda = false;
@@ -187,18 +241,20 @@ int main(int argc, char** argv) {
     if (backend_text != "cpu" && backend_text != "cuda" && backend_text != "both")
       throw InputError("command line", "--backend", "expected cpu, cuda or both");
     std::vector<Row> rows;
-    std::printf("%-5s %-12s %9s %6s %7s %7s %9s %9s %9s %9s %8s %8s %7s\n", "tear", "method", "particles", "target",
-                "gripped", "splits", "ms_before", "ms_during", "ms_max", "ms_after", "tear_ms", "rebld_ms", "drop");
+    std::printf("%-5s %-12s %9s %6s %7s %7s %9s %9s %9s %9s %8s %8s %7s %6s\n", "tear", "method", "particles",
+                "target", "gripped", "splits", "ms_before", "ms_during", "ms_max", "ms_after", "tear_ms", "rebld_ms",
+                "drop", "path");
     for (BackendKind b : backends) {
       if (b == BackendKind::Cpu && particles > cpu_max) continue;
       for (std::int64_t t : tears)
         for (TearCriterion c : {TearCriterion::Threshold, TearCriterion::TrescaBonds, TearCriterion::TrescaPrincipal}) {
-          const Row r = runCase(b, c, particles, t, f_before, f_during, f_after);
+          const Row r = runCase(b, c, particles, t, f_before, f_during, f_after, opt);
           rows.push_back(r);
-          std::printf("%-5s %-12s %9lld %6lld %7lld %7lld %9.3f %9.3f %9.3f %9.3f %8.3f %8.3f %6.1f%%\n",
+          std::printf("%-5s %-12s %9lld %6lld %7lld %7lld %9.3f %9.3f %9.3f %9.3f %8.3f %8.3f %6.1f%% %6s\n",
                       r.backend.c_str(), r.method.c_str(), (long long)r.particles, (long long)r.target,
                       (long long)r.gripped, (long long)r.splits, r.ms_before, r.ms_during, r.ms_during_max, r.ms_after,
-                      r.ms_tear_during, r.ms_rebuild_during, 100.0 * r.drop);
+                      r.ms_tear_during, r.ms_rebuild_during, 100.0 * r.drop, r.path.c_str());
+          if (opt.profile) printStages(r);
           std::fflush(stdout);
         }
     }
@@ -206,12 +262,12 @@ int main(int argc, char** argv) {
       std::ofstream f(csv);
       if (!f) throw InputError(csv, "--csv", "cannot write the file");
       f << "backend,method,particles,target,gripped,splits,particles_after,ms_before,ms_during,ms_during_max,ms_after,"
-           "ms_tear_during,ms_rebuild_during,drop\n";
+           "ms_tear_during,ms_rebuild_during,drop,path\n";
       for (const Row& r : rows)
         f << r.backend << ',' << r.method << ',' << r.particles << ',' << r.target << ',' << r.gripped << ','
           << r.splits << ',' << r.particles_after << ',' << r.ms_before << ',' << r.ms_during << ','
           << r.ms_during_max << ',' << r.ms_after << ',' << r.ms_tear_during << ',' << r.ms_rebuild_during << ','
-          << r.drop << '\n';
+          << r.drop << ',' << r.path << '\n';
     }
     // Summary: the worst Tresca drop and its frame time during the largest tear, per backend.
     std::ostringstream sum;

@@ -6,6 +6,7 @@
 #include "cpu_fallback/tearing_cpu.h"
 #include "host/input_error.h"
 #if INCISION_HAVE_CUDA
+#include "kernels/pbd_device_cuda.h"
 #include "kernels/tearing_cuda.h"
 #endif
 
@@ -61,20 +62,78 @@ TearingDriver<T>::TearingDriver(TearSheet<T> sheet, const TearParams<T>& tear, c
 
 template <typename T>
 void TearingDriver<T>::resetModel() {
+  syncHost();
   sheet_.rebuildTopology();
-  pbd_->setModel(buildTearPbdModel(sheet_, model_opt_));
+  const PbdModel<T> model = buildTearPbdModel(sheet_, model_opt_);
+  pbd_->setModel(model);
   const std::size_t n = sheet_.size();
   state_.positions = sheet_.x;
   state_.velocities = sheet_.v;
   state_.radii.assign(n, T(0));
   state_.rotations.assign(n, pbd::Quat<T>{});
   pbd_->setState(state_);
+  // Device-resident (docs/tearing.md): the Jacobi solver needs no colouring, so a tearing frame can patch the
+  // model on the device; Gauss-Seidel keeps the host rebuild (its colouring is a host algorithm).
+  resident_ = allow_device_resident && step_.solver == PbdSolverKind::Jacobi &&
+              tear_backend_->attach(*pbd_, sheet_, model_opt_, int(model.blocks.size()));
+  host_stale_ = topo_stale_ = false;
+  setSummaryEvery(summary_every_);
+}
+
+template <typename T>
+void TearingDriver<T>::setSummaryEvery(int k) {
+  if (k < 1) throw InputError("tearing", "summary_every", "must be >= 1");
+  summary_every_ = k;
+#if INCISION_HAVE_CUDA
+  if (cuda::PbdDevicePatch<T>* patch = cuda::pbdDevicePatch<T>(*pbd_)) patch->setSummaryEvery(resident_ ? k : 1);
+#endif
+}
+
+template <typename T>
+void TearingDriver<T>::syncHost() const {
+  if (!resident_ || !host_stale_) return;
+  tear_backend_->download(sheet_, topo_stale_);
+  if (topo_stale_) sheet_.rebuildTopology();  // the device has its own adjacency; the host's only on demand
+  host_stale_ = topo_stale_ = false;
+}
+
+template <typename T>
+TearFrameStats TearingDriver<T>::advanceResident(const std::vector<std::int32_t>& grasp_ids,
+                                                 const std::vector<Vec3<T>>& grasp_to) {
+  TearFrameStats st;
+  st.device_resident = true;
+  const std::size_t n = tear_backend_->residentSize();
+  for (std::int32_t id : grasp_ids)
+    if (id < 0 || std::size_t(id) >= n) throw InputError("tearing", "grasp", "particle out of range");
+  PbdFrameInput<T> in;
+  in.kinematic_ids = grasp_ids;
+  in.kinematic_to = grasp_to;
+  auto t0 = Clock::now();
+  tear_backend_->gatherPositions(grasp_ids, in.kinematic_from);  // a gather of the grasped particles only
+  const double gather_ms = msSince(t0);
+  PbdStepParams<T> sp = step_;
+  sp.profile_stages = sp.profile_stages || profile;
+  t0 = Clock::now();
+  st.pbd = pbd_->advanceFrame(sp, in);
+  st.solve_ms = msSince(t0);
+  host_stale_ = true;
+  st.stages.push_back({"grasp_gather", gather_ms});
+  st.stages.push_back({"solve", st.solve_ms});
+  if (tearing_enabled && st.pbd.finite) {
+    t0 = Clock::now();
+    if (tear_backend_->stepResident(tear_, sheet_.step, st, profile) > 0) topo_stale_ = true;
+    ++sheet_.step;
+    st.tear_ms = msSince(t0) - st.rebuild_ms;  // stepResident fills rebuild_ms and its stages
+  }
+  for (const StageTime& s : st.pbd.stages) st.stages.push_back({"pbd:" + s.stage, s.ms});
+  return st;
 }
 
 template <typename T>
 TearFrameStats TearingDriver<T>::advance(const std::vector<std::int32_t>& grasp_ids, const std::vector<Vec3<T>>& grasp_to) {
-  TearFrameStats st;
   if (grasp_ids.size() != grasp_to.size()) throw InputError("tearing", "grasp", "ids and targets must have equal sizes");
+  if (resident_) return advanceResident(grasp_ids, grasp_to);
+  TearFrameStats st;
   PbdFrameInput<T> in;
   in.kinematic_ids = grasp_ids;
   for (std::int32_t id : grasp_ids) {
@@ -82,28 +141,55 @@ TearFrameStats TearingDriver<T>::advance(const std::vector<std::int32_t>& grasp_
     in.kinematic_from.push_back(sheet_.x[id]);
   }
   in.kinematic_to = grasp_to;
+  PbdStepParams<T> sp = step_;
+  sp.profile_stages = sp.profile_stages || profile;
   auto t0 = Clock::now();
-  st.pbd = pbd_->advanceFrame(step_, in);
+  st.pbd = pbd_->advanceFrame(sp, in);
+  const double frame_ms = msSince(t0);
+  t0 = Clock::now();
   pbd_->getState(state_);
   sheet_.x = state_.positions;
   sheet_.v = state_.velocities;
-  st.solve_ms = msSince(t0);
+  const double download_ms = msSince(t0);
+  st.solve_ms = frame_ms + download_ms;
+  st.stages.push_back({"solve", frame_ms});
+  st.stages.push_back({"download_state", download_ms});
   if (tearing_enabled && st.pbd.finite) {
     t0 = Clock::now();
     const int created = tear_backend_->step(sheet_, tear_, st);
     st.tear_ms = msSince(t0);
+    st.stages.push_back({"tear_step", st.tear_ms});
     if (created > 0) {
+      // The host rebuild: adjacency, PBD model, upload (timed apart for the breakdown).
       t0 = Clock::now();
-      resetModel();
-      st.rebuild_ms = msSince(t0);
+      sheet_.rebuildTopology();
+      const double topo_ms = msSince(t0);
+      t0 = Clock::now();
+      const PbdModel<T> model = buildTearPbdModel(sheet_, model_opt_);
+      const double model_ms = msSince(t0);
+      t0 = Clock::now();
+      pbd_->setModel(model);
+      const std::size_t n = sheet_.size();
+      state_.positions = sheet_.x;
+      state_.velocities = sheet_.v;
+      state_.radii.assign(n, T(0));
+      state_.rotations.assign(n, pbd::Quat<T>{});
+      pbd_->setState(state_);
+      const double upload_ms = msSince(t0);
+      st.rebuild_ms = topo_ms + model_ms + upload_ms;
+      st.stages.push_back({"host_topology", topo_ms});
+      st.stages.push_back({"host_model", model_ms});
+      st.stages.push_back({"upload_model", upload_ms});
     }
   }
+  for (const StageTime& s : st.pbd.stages) st.stages.push_back({"pbd:" + s.stage, s.ms});
   return st;
 }
 
 template <typename T>
 int TearingDriver<T>::removeParticles(const std::vector<std::uint8_t>& mark, bool debris_fringe,
                                       std::vector<std::int32_t>* remap) {
+  syncHost();
   const int removed = removeTearParticles(sheet_, mark, debris_fringe, tear_, remap);
   resetModel();
   return removed;
@@ -111,14 +197,15 @@ int TearingDriver<T>::removeParticles(const std::vector<std::uint8_t>& mark, boo
 
 template <typename T>
 int TearingDriver<T>::tearOut(const std::vector<std::uint8_t>& mark, const Vec3<T>& lift, int frames, int* removed) {
-  if (mark.size() != sheet_.size()) throw InputError("tearing", "mark", "one flag per particle");
+  if (mark.size() != particleCount()) throw InputError("tearing", "mark", "one flag per particle");
   if (frames < 1) throw InputError("tearing", "frames", "must be >= 1");
   std::vector<std::int32_t> ids;
   std::vector<Vec3<T>> base;
+  const TearSheet<T>& s = sheet();
   for (std::size_t i = 0; i < mark.size(); ++i)
     if (mark[i]) {
       ids.push_back(std::int32_t(i));
-      base.push_back(sheet_.x[i]);
+      base.push_back(s.x[i]);
     }
   int splits = 0;
   std::vector<Vec3<T>> to(ids.size());
@@ -127,7 +214,7 @@ int TearingDriver<T>::tearOut(const std::vector<std::uint8_t>& mark, const Vec3<
     for (std::size_t k = 0; k < ids.size(); ++k) to[k] = base[k] + lift * s;
     splits += advance(ids, to).splits;  // splits append particles: the gripped ids stay valid
   }
-  std::vector<std::uint8_t> grip(sheet_.size(), 0);
+  std::vector<std::uint8_t> grip(particleCount(), 0);
   for (std::int32_t id : ids) grip[id] = 1;
   const int r = removeParticles(grip, false);
   if (removed) *removed = r;

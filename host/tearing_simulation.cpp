@@ -129,7 +129,7 @@ class TearingSimulation final : public SimulationModel {
 
   std::string name() const override { return "tearing_sheet"; }
   BackendKind backend() const override { return driver_.kind(); }
-  std::size_t particleCount() const override { return driver_.sheet().size(); }
+  std::size_t particleCount() const override { return driver_.particleCount(); }
 
   FrameReport advance(double frame_dt) override {
     FrameReport r;

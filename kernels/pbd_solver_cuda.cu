@@ -1,5 +1,7 @@
-// CUDA PBD/XPBD backend: device-resident state, one launch per block (Jacobi: project + gather) or per colour (Gauss-Seidel), frame captured in a CUDA graph.
+// CUDA PBD/XPBD backend: device-resident state, one launch per block (Jacobi: project + gather) or per colour (Gauss-Seidel), frame captured in a CUDA graph, in-place device patching.
 #include "kernels/pbd_solver_cuda.h"
+
+#include <cub/cub.cuh>
 
 #include <algorithm>
 #include <cmath>
@@ -9,9 +11,12 @@
 
 #include "kernels/cuda_check.h"
 #include "kernels/device_buffer.h"
+#include "kernels/device_grow.h"
+#include "kernels/pbd_device_cuda.h"
 #include "kernels/pbd_group_projection.cuh"
 #include "physics/pbd_block.h"
 #include "physics/pbd_volume.h"
+#include "physics/tearing_rebuild.h"
 
 namespace inc::cuda {
 
@@ -222,6 +227,69 @@ __global__ void summaryKernel(int n, const Vec3<T>* x, const Vec3<T>* v, const T
   }
 }
 
+// ----------------------------------------------------------------------------------------------
+// Patch kernels (PbdDevicePatch): frame inverse masses, appended particles, block incidence.
+
+template <typename T>
+__global__ void zeroKinematicKernel(int k, T* w, const std::int32_t* ids) {
+  const int q = blockIdx.x * blockDim.x + threadIdx.x;
+  if (q >= k) return;
+  w[ids[q]] = T(0);
+}
+
+template <typename T>
+__global__ void invMassKernel(int n, const T* mass, const std::uint8_t* fixed, T* inv_mass) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= n) return;
+  inv_mass[i] = fixed[i] ? T(0) : T(1) / mass[i];
+}
+
+template <typename T>
+__global__ void initAppendedKernel(int n0, int n1, T* rest_r, T* r, T* r_next, pbd::Quat<T>* rot, std::uint8_t* active) {
+  const int i = n0 + blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= n1) return;
+  rest_r[i] = T(0);
+  r[i] = T(0);
+  r_next[i] = T(0);
+  rot[i] = pbd::Quat<T>{};
+  active[i] = 0;
+}
+
+__global__ void blockOffsetsKernel(int count, int arity, std::int32_t* offsets) {
+  const int c = blockIdx.x * blockDim.x + threadIdx.x;
+  if (c > count) return;
+  offsets[c] = arity * c;
+}
+
+__global__ void slotIotaKernel(int slots, const std::int32_t* ids, std::uint32_t* keys, std::int32_t* vals) {
+  const int q = blockIdx.x * blockDim.x + threadIdx.x;
+  if (q >= slots) return;
+  keys[q] = std::uint32_t(ids[q]);
+  vals[q] = q;
+}
+
+// particle_offsets[p] = first sorted slot of particle p (p = 0 .. n): a binary search per particle.
+__global__ void csrOffsetsKernel(int n, const std::uint32_t* sorted, int slots, std::int32_t* offsets) {
+  const int p = blockIdx.x * blockDim.x + threadIdx.x;
+  if (p > n) return;
+  offsets[p] = std::int32_t(tear::lowerBound<std::uint32_t>(sorted, slots, std::uint32_t(p)));
+}
+
+template <typename T>
+__global__ void jacobiScaleKernel(int count, int arity, const std::int32_t* ids, const std::int32_t* particle_offsets,
+                                  const T* inv_mass, T* scale) {
+  const int c = blockIdx.x * blockDim.x + threadIdx.x;
+  if (c >= count) return;
+  const T sc = tear::jacobiScaleOf(ids, arity, c, particle_offsets, inv_mass);
+  for (int k = 0; k < arity; ++k) scale[arity * c + k] = sc;
+}
+
+inline int blockArity(PbdConstraintKind k) {
+  if (k == PbdConstraintKind::Distance) return 2;
+  if (k == PbdConstraintKind::Bending || k == PbdConstraintKind::TetVolume) return 4;
+  return 0;
+}
+
 // Small models (the haptic case): the whole constraint loop of a frame in one thread block. Each phase is a
 // block-strided loop over the same physics calls as the per-phase kernels above, separated by
 // __syncthreads() (which orders this block's global-memory writes), so the result equals the multi-launch
@@ -390,6 +458,8 @@ struct GraphKey {
   std::size_t kinematic = 0, tools = 0;
   std::size_t attached = 0;
   const void* ptrs[11] = {};  // frame-input buffers
+  int n = 0;
+  std::uint64_t topo = 0;     // PbdCudaBackend::topo_version_
 };
 
 template <typename T>
@@ -402,11 +472,12 @@ bool sameKey(const GraphKey<T>& a, const GraphKey<T>& b) {
          x.volume_influence == y.volume_influence && x.max_radius_growth == y.max_radius_growth &&
          x.volume_passes == y.volume_passes && x.bisection_steps == y.bisection_steps &&
          x.fused_max_particles == y.fused_max_particles && a.kinematic == b.kinematic &&
-         a.tools == b.tools && a.attached == b.attached && std::equal(a.ptrs, a.ptrs + 11, b.ptrs);
+         a.tools == b.tools && a.attached == b.attached && std::equal(a.ptrs, a.ptrs + 11, b.ptrs) &&
+         a.n == b.n && a.topo == b.topo;
 }
 
 template <typename T>
-class PbdCudaBackend final : public PbdBackend<T> {
+class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
  public:
   // A blocking stream: it orders itself after the synchronous cudaMemcpy uploads of DeviceBuffer (legacy
   // default stream), so a frame never reads an input whose DMA is still in flight.
@@ -423,9 +494,11 @@ class PbdCudaBackend final : public PbdBackend<T> {
 
   void setModel(const PbdModel<T>& m) override {
     destroyGraph();
+    ++topo_version_;
+    patched_ = false;
+    frame_count_ = 0;
     n_ = int(m.size());
     host_rest_radii_ = m.rest_radii;
-    inv_mass_h_ = m.inv_mass;
     rotation_block_ = m.rotation_block;
     rest_positions_.upload(m.rest_positions);
     x_.upload(m.rest_positions);
@@ -453,16 +526,7 @@ class PbdCudaBackend final : public PbdBackend<T> {
     samples_.upload(m.ball_samples);
     have_volume_data_ = m.rest_cell_volume.size() == m.size() && !m.ball_samples.empty() &&
                         m.overlap_offsets.size() == m.size() + 1;
-    // Shared-memory staging of the fused kernel: used when the model fits this device's per-block opt-in limit
-    // (float: up to ~6,000 particles on an H100); the attribute is set here, outside any graph capture.
-    int dev = 0, optin = 0;
-    INC_CUDA(cudaGetDevice(&dev));
-    INC_CUDA(cudaDeviceGetAttribute(&optin, cudaDevAttrMaxSharedMemoryPerBlockOptin, dev));
-    stage_bytes_ = fusedStageBytes<T>(n_);
-    staged_ = n_ > 0 && stage_bytes_ <= std::size_t(optin);
-    // The attribute belongs to the kernel, not to this backend: set it to the device limit so that a second
-    // live backend with a smaller model cannot lower it below what this one launches with.
-    if (staged_) INC_CUDA(cudaFuncSetAttribute(fusedFrameKernel<T>, cudaFuncAttributeMaxDynamicSharedMemorySize, optin));
+    updateStaging();
     blocks_.clear();
     blocks_.resize(m.blocks.size());
     for (std::size_t bi = 0; bi < m.blocks.size(); ++bi) {
@@ -528,7 +592,7 @@ class PbdCudaBackend final : public PbdBackend<T> {
            d.compliance.capacityBytes() + d.jacobi_scale.capacityBytes() + d.rest_vec.capacityBytes() +
            d.lambda.capacityBytes() + d.slot_corr.capacityBytes();
     r.device_bytes = b;
-    r.host_bytes = host_rest_radii_.size() * sizeof(T) + inv_mass_h_.size() * sizeof(T);
+    r.host_bytes = host_rest_radii_.size() * sizeof(T);
     return r;
   }
 
@@ -540,6 +604,8 @@ class PbdCudaBackend final : public PbdBackend<T> {
     uploadFrameInput(in);
 
     const bool jacobi = p.solver == PbdSolverKind::Jacobi;
+    if (!jacobi && patched_)
+      throw InputError("pbd frame", "solver", "the model was patched on the device (no colouring): use the Jacobi solver");
     if (!jacobi)
       for (const DeviceBlock<T>& d : blocks_)
         if (d.solve) st.colors += int(d.color_offsets.size()) - 1;
@@ -579,8 +645,17 @@ class PbdCudaBackend final : public PbdBackend<T> {
                                 tools_to_.data(),   w_.data(),         att_ids_.data(),     att_from_.data(),
                                 att_to_.data(),     att_comp_.data(),  att_lambda_.data()};
         std::copy(ptrs, ptrs + 11, key.ptrs);
-        if (!graph_exec_ || !sameKey(key, graph_key_)) {
-          destroyGraph();
+        key.n = n_;
+        key.topo = topo_version_;
+        const bool stale = !graph_exec_ || !sameKey(key, graph_key_);
+        // Right after a topology change (a tearing frame patches the model every frame) the frame is launched
+        // directly: capturing and updating a graph costs more host time than it saves for one launch. The graph
+        // is captured once the topology has stayed the same for a frame.
+        const bool direct = stale && key.topo != last_direct_topo_;
+        if (direct) last_direct_topo_ = key.topo;
+        if (direct) {
+          recordFrame(p);
+        } else if (stale) {
           INC_CUDA(cudaStreamBeginCapture(stream_, cudaStreamCaptureModeThreadLocal));
           cudaGraph_t graph = nullptr;
           try {
@@ -591,23 +666,245 @@ class PbdCudaBackend final : public PbdBackend<T> {
             throw;
           }
           INC_CUDA(cudaStreamEndCapture(stream_, &graph));
-          const cudaError_t inst = cudaGraphInstantiate(&graph_exec_, graph, 0);
+          // After a patch the frame usually differs only in counts and pointers: update the executable graph
+          // in place (cheaper than a new instantiation); a structural change falls back to instantiating.
+          if (graph_exec_) {
+            cudaGraphExecUpdateResultInfo info;
+            if (cudaGraphExecUpdate(graph_exec_, graph, &info) != cudaSuccess) {
+              (void)cudaGetLastError();  // not sticky: clear it and instantiate instead
+              destroyGraph();
+            }
+          }
+          cudaError_t inst = cudaSuccess;
+          if (!graph_exec_) inst = cudaGraphInstantiate(&graph_exec_, graph, 0);
           cudaGraphDestroy(graph);
           INC_CUDA(inst);
           graph_key_ = key;
         }
-        INC_CUDA(cudaGraphLaunch(graph_exec_, stream_));
+        if (!direct) INC_CUDA(cudaGraphLaunch(graph_exec_, stream_));
       } else {
         recordFrame(p);
       }
       INC_CUDA(cudaEventRecord(events_[1], stream_));
-      INC_CUDA(cudaEventSynchronize(events_[1]));
-      float e = 0.f;
-      INC_CUDA(cudaEventElapsedTime(&e, events_[0], events_[1]));
-      st.stages.push_back({"frame", double(e)});
+      if (summaryDue()) {
+        INC_CUDA(cudaEventSynchronize(events_[1]));
+        float e = 0.f;
+        INC_CUDA(cudaEventElapsedTime(&e, events_[0], events_[1]));
+        st.stages.push_back({"frame", double(e)});
+      }
     }
-    summarize(p, st);
+    if (summaryDue() || p.profile_stages) summarize(p, st);
+    ++frame_count_;
     return st;
+  }
+
+  // ---------------------------------------------------------------------------------------------
+  // PbdDevicePatch
+
+  PbdDeviceParticles<T> deviceParticles() override {
+    PbdDeviceParticles<T> d;
+    d.n = n_;
+    d.capacity = std::min({capacityOf(rest_positions_), capacityOf(x_), capacityOf(v_), capacityOf(masses_),
+                           capacityOf(inv_mass_), capacityOf(w_), capacityOf(x_prev_), capacityOf(rest_radii_),
+                           capacityOf(radii_), capacityOf(radii_next_), capacityOf(rotations_), capacityOf(active_)});
+    d.rest = rest_positions_.data();
+    d.x = x_.data();
+    d.v = v_.data();
+    d.mass = masses_.data();
+    d.inv_mass = inv_mass_.data();
+    return d;
+  }
+
+  void reserveParticles(std::size_t particles) override {
+    const std::size_t keep = std::size_t(n_);
+    bool grew = false;
+    grew |= growKeep(rest_positions_, particles, keep);
+    grew |= growKeep(x_, particles, keep);
+    grew |= growKeep(v_, particles, keep);
+    grew |= growKeep(x_prev_, particles, keep);
+    grew |= growKeep(masses_, particles, keep);
+    grew |= growKeep(inv_mass_, particles, keep);
+    grew |= growKeep(w_, particles, keep);
+    grew |= growKeep(rest_radii_, particles, keep);
+    grew |= growKeep(radii_, particles, keep);
+    grew |= growKeep(radii_next_, particles, keep);
+    grew |= growKeep(rotations_, particles, keep);
+    grew |= growKeep(active_, particles, keep);
+    if (grew) ++topo_version_;
+  }
+
+  void appendParticles(int n_new, const std::uint8_t* fixed_dev) override {
+    if (n_new < n_) throw InputError("pbd patch", "particles", "appendParticles cannot remove particles");
+    if (std::size_t(n_new) > deviceParticles().capacity)
+      throw InputError("pbd patch", "particles", "call reserveParticles first (" + std::to_string(n_new) + " particles)");
+    if (have_volume_data_ && n_new > n_)
+      throw InputError("pbd patch", "volume", "models with volume-preservation data cannot grow on the device");
+    const std::size_t m = std::size_t(n_new);
+    for (auto* b : {&rest_positions_, &x_, &v_, &x_prev_}) b->resize(m);
+    for (auto* b : {&masses_, &inv_mass_, &w_, &rest_radii_, &radii_, &radii_next_}) b->resize(m);
+    rotations_.resize(m);
+    active_.resize(m);
+    if (n_new > n_) {
+      initAppendedKernel<T><<<blocksFor(n_new - n_), kThreads, 0, stream_>>>(n_, n_new, rest_radii_.data(), radii_.data(),
+                                                                             radii_next_.data(), rotations_.data(),
+                                                                             active_.data());
+      INC_CUDA_LAUNCH("pbd patch new particles");
+    }
+    if (n_new > 0) {
+      invMassKernel<T><<<blocksFor(n_new), kThreads, 0, stream_>>>(n_new, masses_.data(), fixed_dev, inv_mass_.data());
+      INC_CUDA_LAUNCH("pbd patch inverse masses");
+    }
+    host_rest_radii_.resize(m, T(0));
+    n_ = n_new;
+    updateStaging();
+    ++topo_version_;
+  }
+
+  PbdDeviceBlock<T> reserveBlock(int block, std::size_t constraints) override {
+    DeviceBlock<T>& d = patchBlock(block);
+    const int a = blockArity(d.kind);
+    const std::size_t c = std::size_t(d.count);
+    bool grew = false;
+    grew |= growKeep(d.ids, std::size_t(a) * constraints, std::size_t(a) * c);
+    grew |= growKeep(d.rest, constraints, c);
+    grew |= growKeep(d.compliance, constraints, c);
+    if (grew) ++topo_version_;
+    PbdDeviceBlock<T> r;
+    r.arity = a;
+    r.capacity = std::min({capacityOf(d.ids) / std::size_t(a), capacityOf(d.rest), capacityOf(d.compliance)});
+    r.ids = d.ids.data();
+    r.rest = d.rest.data();
+    r.compliance = d.compliance.data();
+    return r;
+  }
+
+  void commitBlock(int block, int count) override {
+    DeviceBlock<T>& d = patchBlock(block);
+    const int a = blockArity(d.kind);
+    if (count < 0 || std::size_t(count) > std::min(capacityOf(d.ids) / std::size_t(a), capacityOf(d.rest)) ||
+        std::size_t(count) > capacityOf(d.compliance))
+      throw InputError("pbd patch", "count", "call reserveBlock first (" + std::to_string(count) + " constraints)");
+    const std::size_t cnt = std::size_t(count), slots = std::size_t(a) * cnt;
+    d.ids.resize(slots);
+    d.rest.resize(cnt);
+    d.compliance.resize(cnt);
+    // Derived arrays: no content to keep, so growing them needs no copy (and no synchronisation beyond the
+    // one inside the allocation of a larger buffer, which happens only when the block outgrows its capacity).
+    if (growKeep(d.offsets, cnt + 1, 0) | growKeep(d.jacobi_scale, slots, 0) | growKeep(d.particle_slots, slots, 0) |
+        growKeep(d.lambda, cnt, 0) | growKeep(d.slot_corr, slots, 0) |
+        growKeep(d.particle_offsets, std::size_t(n_) + 1, 0))
+      ++topo_version_;
+    d.offsets.resize(cnt + 1);
+    d.jacobi_scale.resize(slots);
+    d.particle_slots.resize(slots);
+    d.lambda.resize(cnt);
+    d.slot_corr.resize(slots);
+    d.particle_offsets.resize(std::size_t(n_) + 1);
+    d.count = count;
+    blockOffsetsKernel<<<blocksFor(count + 1), kThreads, 0, stream_>>>(count, a, d.offsets.data());
+    INC_CUDA_LAUNCH("pbd patch offsets");
+    // particle -> slot CSR: slots sorted by particle with a stable radix sort over the index bits (slots stay
+    // ascending per particle: the order finalizePbdModel's counting sort gives), offsets by binary search.
+    sort_keys_.resize(std::max<std::size_t>(slots, 1));
+    sort_keys_out_.resize(std::max<std::size_t>(slots, 1));
+    sort_vals_.resize(std::max<std::size_t>(slots, 1));
+    if (slots > 0) {
+      slotIotaKernel<<<blocksFor(std::int64_t(slots)), kThreads, 0, stream_>>>(int(slots), d.ids.data(), sort_keys_.data(),
+                                                                               sort_vals_.data());
+      INC_CUDA_LAUNCH("pbd patch slot keys");
+      const int end_bit = tear::indexBits(n_);
+      std::size_t bytes = 0;
+      INC_CUDA(cub::DeviceRadixSort::SortPairs(nullptr, bytes, sort_keys_.data(), sort_keys_out_.data(), sort_vals_.data(),
+                                               d.particle_slots.data(), int(slots), 0, end_bit, stream_));
+      cub_temp_.resize(std::max<std::size_t>(bytes, 1));
+      INC_CUDA(cub::DeviceRadixSort::SortPairs(cub_temp_.data(), bytes, sort_keys_.data(), sort_keys_out_.data(),
+                                               sort_vals_.data(), d.particle_slots.data(), int(slots), 0, end_bit,
+                                               stream_));
+    }
+    csrOffsetsKernel<<<blocksFor(n_ + 1), kThreads, 0, stream_>>>(n_, sort_keys_out_.data(), int(slots),
+                                                                  d.particle_offsets.data());
+    INC_CUDA_LAUNCH("pbd patch particle offsets");
+    if (count > 0) {
+      jacobiScaleKernel<T><<<blocksFor(count), kThreads, 0, stream_>>>(count, a, d.ids.data(), d.particle_offsets.data(),
+                                                                       inv_mass_.data(), d.jacobi_scale.data());
+      INC_CUDA_LAUNCH("pbd patch jacobi scales");
+      INC_CUDA(cudaMemsetAsync(d.lambda.data(), 0, d.lambda.bytes(), stream_));
+      INC_CUDA(cudaMemsetAsync(d.slot_corr.data(), 0, d.slot_corr.bytes(), stream_));
+    }
+    d.order.resize(0);
+    d.color_offsets.assign(1, 0);
+    // The summary's reduction partials: room for every block (a block that was empty at setModel may not be).
+    const std::size_t need = std::size_t(2 * blocks_.size() + 3) * kReduceBlocks;
+    if (partials_.size() < need) partials_.resize(need);
+    patched_ = true;
+    ++topo_version_;
+  }
+
+  void setSummaryEvery(int k) override {
+    if (k < 1) throw InputError("pbd patch", "summary_every", "must be >= 1");
+    summary_every_ = k;
+  }
+
+  PbdConstraintBlock<T> downloadBlock(int block) const override {
+    if (block < 0 || std::size_t(block) >= blocks_.size()) throw InputError("pbd patch", "block", "out of range");
+    INC_CUDA(cudaStreamSynchronize(stream_));
+    const DeviceBlock<T>& d = blocks_[std::size_t(block)];
+    PbdConstraintBlock<T> b;
+    b.kind = d.kind;
+    b.solve = d.solve;
+    b.stiffness = d.stiffness;
+    b.offsets = d.offsets.download();
+    b.ids = d.ids.download();
+    b.rest = d.rest.download();
+    b.rest_vec = d.rest_vec.download();
+    b.compliance = d.compliance.download();
+    b.particle_offsets = d.particle_offsets.download();
+    b.particle_slots = d.particle_slots.download();
+    b.jacobi_scale = d.jacobi_scale.download();
+    return b;
+  }
+
+  std::vector<T> downloadInverseMasses() const override {
+    INC_CUDA(cudaStreamSynchronize(stream_));
+    return inv_mass_.download();
+  }
+
+  void setBlockFromHost(int block, const std::vector<std::int32_t>& ids, const std::vector<T>& rest,
+                        const std::vector<T>& compliance) override {
+    const int a = blockArity(patchBlock(block).kind);
+    if (rest.size() != compliance.size() || ids.size() != std::size_t(a) * rest.size())
+      throw InputError("pbd patch", "block", "ids, rest and compliance sizes do not match the block's arity");
+    for (std::int32_t p : ids)
+      if (p < 0 || p >= n_) throw InputError("pbd patch", "ids", "particle index out of range");
+    const PbdDeviceBlock<T> r = reserveBlock(block, rest.size());
+    INC_CUDA(cudaStreamSynchronize(stream_));
+    if (!ids.empty()) {
+      INC_CUDA(cudaMemcpy(r.ids, ids.data(), ids.size() * sizeof(std::int32_t), cudaMemcpyHostToDevice));
+      INC_CUDA(cudaMemcpy(r.rest, rest.data(), rest.size() * sizeof(T), cudaMemcpyHostToDevice));
+      INC_CUDA(cudaMemcpy(r.compliance, compliance.data(), compliance.size() * sizeof(T), cudaMemcpyHostToDevice));
+    }
+    commitBlock(block, int(rest.size()));
+  }
+
+  void appendParticlesFromHost(const std::vector<Vec3<T>>& rest, const std::vector<Vec3<T>>& x,
+                               const std::vector<Vec3<T>>& v, const std::vector<T>& mass,
+                               const std::vector<std::uint8_t>& fixed) override {
+    const std::size_t m = rest.size();
+    if (x.size() != m || v.size() != m || mass.size() != m || fixed.size() != m || m < std::size_t(n_))
+      throw InputError("pbd patch", "particles", "whole arrays of one size >= the particle count expected");
+    for (T mm : mass)
+      if (!(mm > T(0))) throw InputError("pbd patch", "mass", "must be > 0");
+    reserveParticles(m);
+    INC_CUDA(cudaStreamSynchronize(stream_));
+    if (m) {
+      INC_CUDA(cudaMemcpy(rest_positions_.data(), rest.data(), m * sizeof(Vec3<T>), cudaMemcpyHostToDevice));
+      INC_CUDA(cudaMemcpy(x_.data(), x.data(), m * sizeof(Vec3<T>), cudaMemcpyHostToDevice));
+      INC_CUDA(cudaMemcpy(v_.data(), v.data(), m * sizeof(Vec3<T>), cudaMemcpyHostToDevice));
+      INC_CUDA(cudaMemcpy(masses_.data(), mass.data(), m * sizeof(T), cudaMemcpyHostToDevice));
+    }
+    fixed_scratch_.upload(fixed);
+    appendParticles(int(m), fixed_scratch_.data());
+    INC_CUDA(cudaStreamSynchronize(stream_));  // fixed_scratch_ may be overwritten by the next call
   }
 
  private:
@@ -637,17 +934,44 @@ class PbdCudaBackend final : public PbdBackend<T> {
     prof_.push_back({stage, k, k + 1});
   }
 
+  bool summaryDue() const { return frame_count_ % std::uint64_t(summary_every_) == 0; }
+
+  DeviceBlock<T>& patchBlock(int block) {
+    if (block < 0 || std::size_t(block) >= blocks_.size()) throw InputError("pbd patch", "block", "out of range");
+    DeviceBlock<T>& d = blocks_[std::size_t(block)];
+    if (blockArity(d.kind) == 0)
+      throw InputError("pbd patch", "block", "only distance, bending and tet-volume blocks can be patched");
+    return d;
+  }
+
+  // Shared-memory staging of the fused kernel: used when the model fits this device's per-block opt-in limit
+  // (float: up to ~6,000 particles on an H100); the attribute is set here, outside any graph capture.
+  void updateStaging() {
+    int dev = 0, optin = 0;
+    INC_CUDA(cudaGetDevice(&dev));
+    INC_CUDA(cudaDeviceGetAttribute(&optin, cudaDevAttrMaxSharedMemoryPerBlockOptin, dev));
+    stage_bytes_ = fusedStageBytes<T>(n_);
+    staged_ = n_ > 0 && stage_bytes_ <= std::size_t(optin);
+    // The attribute belongs to the kernel, not to this backend: set it to the device limit so that a second
+    // live backend with a smaller model cannot lower it below what this one launches with.
+    if (staged_) INC_CUDA(cudaFuncSetAttribute(fusedFrameKernel<T>, cudaFuncAttributeMaxDynamicSharedMemorySize, optin));
+  }
+
   void destroyGraph() {
     if (graph_exec_) cudaGraphExecDestroy(graph_exec_);
     graph_exec_ = nullptr;
   }
 
   void uploadFrameInput(const PbdFrameInput<T>& in) {
-    // Inverse masses of this frame: kinematic particles get w = 0 (set on the host copy, then uploaded).
-    w_h_ = inv_mass_h_;
-    for (std::int32_t id : in.kinematic_ids) w_h_[id] = T(0);
-    w_.upload(w_h_);
+    // Inverse masses of this frame: kinematic particles get w = 0 (a device copy and a scatter of zeros on the
+    // stream, after the synchronous id upload; no per-particle host array crosses the bus).
     kin_ids_.upload(in.kinematic_ids);
+    if (n_ > 0) INC_CUDA(cudaMemcpyAsync(w_.data(), inv_mass_.data(), std::size_t(n_) * sizeof(T), cudaMemcpyDeviceToDevice, stream_));
+    if (!in.kinematic_ids.empty()) {
+      zeroKinematicKernel<T><<<blocksFor(std::int64_t(in.kinematic_ids.size())), kThreads, 0, stream_>>>(
+          int(in.kinematic_ids.size()), w_.data(), kin_ids_.data());
+      INC_CUDA_LAUNCH("pbd kinematic w");
+    }
     kin_from_.upload(in.kinematic_from);
     kin_to_.upload(in.kinematic_to);
     tools_from_.upload(in.tools_from);
@@ -904,17 +1228,25 @@ class PbdCudaBackend final : public PbdBackend<T> {
   cudaStream_t stream_ = nullptr;
   cudaGraphExec_t graph_exec_ = nullptr;
   GraphKey<T> graph_key_;
+  std::uint64_t topo_version_ = 0;  // bumped by every patch: the captured graph holds counts and pointers
+  std::uint64_t last_direct_topo_ = ~std::uint64_t(0);
+  bool patched_ = false;            // a block was rebuilt on the device: no colouring (Jacobi only)
+  int summary_every_ = 1;
+  std::uint64_t frame_count_ = 0;
+  DeviceBuffer<std::uint32_t> sort_keys_, sort_keys_out_;
+  DeviceBuffer<std::int32_t> sort_vals_;
+  DeviceBuffer<unsigned char> cub_temp_;
   std::vector<cudaEvent_t> events_;
   std::vector<ProfRecord> prof_;
   bool profile_ = false;
 
   int n_ = 0, n_planes_ = 0, n_boxes_ = 0, n_kin_ = 0, n_att_ = 0, n_tools_ = 0, rotation_block_ = -1;
   bool have_volume_data_ = false;
-  std::vector<T> host_rest_radii_, inv_mass_h_, w_h_;
+  std::vector<T> host_rest_radii_;
   DeviceBuffer<Vec3<T>> rest_positions_, x_, v_, x_prev_, kin_from_, kin_to_, samples_, att_from_, att_to_, att_lambda_;
   DeviceBuffer<T> masses_, inv_mass_, w_, rest_radii_, radii_, radii_next_, rest_cell_, att_comp_;
   DeviceBuffer<pbd::Quat<T>> rotations_;
-  DeviceBuffer<std::uint8_t> active_;
+  DeviceBuffer<std::uint8_t> active_, fixed_scratch_;
   DeviceBuffer<std::int32_t> kin_ids_, ov_off_, ov_ids_, att_ids_;
   DeviceBuffer<pbd::PlaneCollider<T>> planes_;
   DeviceBuffer<pbd::BoxCollider<T>> boxes_;
@@ -932,6 +1264,14 @@ template <typename T>
 std::unique_ptr<PbdBackend<T>> makePbdCudaBackend() {
   return std::make_unique<PbdCudaBackend<T>>();
 }
+
+template <typename T>
+PbdDevicePatch<T>* pbdDevicePatch(PbdBackend<T>& backend) {
+  return dynamic_cast<PbdDevicePatch<T>*>(&backend);
+}
+
+template PbdDevicePatch<float>* pbdDevicePatch<float>(PbdBackend<float>&);
+template PbdDevicePatch<double>* pbdDevicePatch<double>(PbdBackend<double>&);
 
 template std::unique_ptr<PbdBackend<float>> makePbdCudaBackend<float>();
 template std::unique_ptr<PbdBackend<double>> makePbdCudaBackend<double>();

@@ -1,15 +1,20 @@
-// CUDA tearing step: the physics/tearing_phases.h bodies as kernels, CUB exclusive sum and DeviceSelect for the split list.
+// CUDA tearing step: the physics/tearing_phases.h bodies as kernels, CUB exclusive sum and DeviceSelect for the split list; device-resident sheet with the adjacency and PBD model rebuilt by radix sorts.
 #include "kernels/tearing_cuda.h"
 
 #include <cub/cub.cuh>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdint>
 #include <vector>
 
 #include "kernels/cuda_check.h"
+#include "host/input_error.h"
 #include "kernels/device_buffer.h"
+#include "kernels/device_grow.h"
+#include "kernels/pbd_device_cuda.h"
 #include "physics/tearing_phases.h"
+#include "physics/tearing_rebuild.h"
 
 namespace inc::cuda {
 
@@ -66,6 +71,98 @@ __global__ void triangleKernel(tear::SheetView<T> s, int nt, const std::uint8_t*
   const int t = blockIdx.x * blockDim.x + threadIdx.x;
   if (t >= nt) return;
   tear::rebuildTriangle(s, t, accept, dir, rank, n);
+}
+
+// ----------------------------------------------------------------------------------------------
+// Device-resident rebuild (host/tearing_rebuild.h runs the same steps on the CPU as the reference).
+
+template <typename T>
+__global__ void detectResidentKernel(tear::SheetView<T> s, int n, int criterion, T break_strain, std::uint8_t* yield,
+                                     std::int32_t* yield_i32, std::int32_t* partner, Vec3<T>* dir, T* t_pred) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= n) return;
+  const tear::Detection<T> d = tear::detectYield(s, i, criterion, break_strain);
+  yield[i] = d.yield;
+  yield_i32[i] = d.yield;
+  partner[i] = d.partner;
+  dir[i] = d.dir;
+  t_pred[i] = d.t_pred;
+}
+
+// Corner h of the triangle list: key its particle, value its triangle (sorted: particle -> triangles).
+__global__ void cornerKernel(const std::int32_t* tris, int nh, std::uint32_t* key, std::int32_t* tri) {
+  const int h = blockIdx.x * blockDim.x + threadIdx.x;
+  if (h >= nh) return;
+  key[h] = std::uint32_t(tris[h]);
+  tri[h] = h / 3;
+}
+
+__global__ void csrFromSorted32Kernel(int n, const std::uint32_t* sorted, int count, std::int32_t* offsets) {
+  const int p = blockIdx.x * blockDim.x + threadIdx.x;
+  if (p > n) return;
+  offsets[p] = std::int32_t(tear::lowerBound<std::uint32_t>(sorted, count, std::uint32_t(p)));
+}
+
+__global__ void halfEdgeKernel(const std::int32_t* tris, int nh, int bits, std::uint64_t* key, std::int32_t* opp) {
+  const int h = blockIdx.x * blockDim.x + threadIdx.x;
+  if (h >= nh) return;
+  tear::halfEdge(tris, h, bits, key[h], opp[h]);
+}
+
+__global__ void runFlagsKernel(const std::uint64_t* key, int nh, std::int32_t* head, std::int32_t* bend) {
+  const int h = blockIdx.x * blockDim.x + threadIdx.x;
+  if (h >= nh) return;
+  const bool hd = tear::runHead(key, h);
+  head[h] = hd ? 1 : 0;
+  bend[h] = hd && tear::runLength(key, h, nh) == 2 ? 1 : 0;
+}
+
+template <typename T>
+__global__ void writeConstraintsKernel(const std::uint64_t* key, const std::int32_t* opp, const std::int32_t* head,
+                                       const std::int32_t* e_idx, const std::int32_t* b_idx, int nh, int bits,
+                                       const Vec3<T>* rest, T stretch_c, T bend_c, std::int32_t* edge_a,
+                                       std::int32_t* edge_b, std::int32_t* d_ids, T* d_rest, T* d_comp,
+                                       std::int32_t* b_ids, T* b_rest, T* b_comp) {
+  const int h = blockIdx.x * blockDim.x + threadIdx.x;
+  if (h >= nh || !head[h]) return;
+  tear::writeEdgeConstraints<T>(key, opp, h, tear::runLength(key, h, nh), bits, e_idx[h], b_idx[h], rest, stretch_c,
+                                bend_c, edge_a, edge_b, d_ids, d_rest, d_comp, b_ids, b_rest, b_comp);
+}
+
+// counts[0] = unique edges, counts[1] = bending constraints (inclusive ends of the exclusive scans).
+__global__ void runCountsKernel(const std::int32_t* head, const std::int32_t* bend, const std::int32_t* e_idx,
+                                const std::int32_t* b_idx, int nh, int* counts) {
+  if (blockIdx.x != 0 || threadIdx.x != 0) return;
+  counts[0] = nh > 0 ? e_idx[nh - 1] + head[nh - 1] : 0;
+  counts[1] = nh > 0 ? b_idx[nh - 1] + bend[nh - 1] : 0;
+}
+
+// Both directions of edge e as (owner << bits | partner): sorted, the particle -> partners CSR.
+__global__ void partnerKeysKernel(const std::int32_t* edge_a, const std::int32_t* edge_b, int ne, int bits,
+                                  std::uint64_t* key) {
+  const int e = blockIdx.x * blockDim.x + threadIdx.x;
+  if (e >= ne) return;
+  key[2 * e] = (std::uint64_t(edge_a[e]) << bits) | std::uint64_t(edge_b[e]);
+  key[2 * e + 1] = (std::uint64_t(edge_b[e]) << bits) | std::uint64_t(edge_a[e]);
+}
+
+__global__ void partnerListKernel(const std::uint64_t* sorted, int count, int bits, std::int32_t* partner) {
+  const int q = blockIdx.x * blockDim.x + threadIdx.x;
+  if (q >= count) return;
+  partner[q] = tear::edgeLow(sorted[q], bits);
+}
+
+__global__ void csrFromSorted64Kernel(int n, const std::uint64_t* sorted, int count, int bits, std::int32_t* offsets) {
+  const int p = blockIdx.x * blockDim.x + threadIdx.x;
+  if (p > n) return;
+  offsets[p] = std::int32_t(tear::lowerBound<std::uint64_t>(sorted, count, std::uint64_t(p) << bits));
+}
+
+template <typename T>
+__global__ void gatherPositionsKernel(const Vec3<T>* x, const std::int32_t* ids, int k, Vec3<T>* out) {
+  const int q = blockIdx.x * blockDim.x + threadIdx.x;
+  if (q >= k) return;
+  out[q] = x[ids[q]];
 }
 
 template <typename T>
@@ -196,20 +293,325 @@ class TearCudaWorkspace {
   DeviceBuffer<unsigned char> temp_;
 };
 
+// The sheet kept on the device between frames (docs/tearing.md, "GPU pipeline"): positions, velocities,
+// rest positions and masses are the PBD backend's arrays; this owns the rest (fixed, k, tau_f, triangles,
+// adjacency) and, after a step with splits, appends the new particles to the PBD model and rewrites its
+// distance and bending blocks on the device. All kernels run on the legacy default stream, which orders
+// itself with the PBD backend's (blocking) stream. Host synchronisations per tearing step: the split and
+// yield counts (sizes the split launch and the particle append), the constraint counts after the rebuild
+// (size the PBD blocks' launches), and a reallocation when the particle capacity is exceeded.
+template <typename T>
+class TearResident {
+ public:
+  bool attach(PbdBackend<T>& pbd, const TearSheet<T>& s, const TearModelOptions& opt, int model_blocks) {
+    patch_ = pbdDevicePatch<T>(pbd);
+    if (!patch_ || model_blocks < 1 || model_blocks > 2) return false;
+    opt_ = opt;
+    bending_ = model_blocks == 2;
+    n_ = int(s.size());
+    nt_ = int(s.tris.size());
+    // Room for growth: a quarter more particles before the first reallocation.
+    const std::size_t cap = std::size_t(n_) + std::max<std::size_t>(1024, std::size_t(n_) / 4);
+    patch_->reserveParticles(cap);
+    fixed_.resize(cap);
+    k_.resize(cap);
+    tau_.resize(cap);
+    fixed_.upload(s.fixed);  // within capacity: no reallocation
+    k_.upload(s.k);
+    tau_.upload(s.tau_f);
+    tris_.upload(s.tris.empty() ? nullptr : s.tris.front().data(), 3 * std::size_t(nt_));
+    pe_off_.upload(s.pe_offsets);
+    pe_partner_.upload(s.pe_partner);
+    pt_off_.upload(s.pt_offsets);
+    pt_tris_.upload(s.pt_tris);
+    // The triangle count never changes in a tearing step: unique edges <= 3 nt, interior edges <= 3 nt / 2.
+    const std::size_t nh = 3 * std::size_t(nt_);
+    patch_->reserveBlock(0, std::max<std::size_t>(nh, 1));
+    if (bending_) patch_->reserveBlock(1, std::max<std::size_t>(nh / 2, 1));
+    counts_.resize(2);
+    INC_CUDA(cudaDeviceSynchronize());
+    return true;
+  }
+
+  std::size_t size() const { return std::size_t(n_); }
+
+  int step(const TearParams<T>& p, std::uint32_t step, TearFrameStats& st, bool profile) {
+    using Clock = std::chrono::steady_clock;
+    auto t0 = Clock::now();
+    auto stage = [&](const char* name) {
+      if (profile) INC_CUDA(cudaDeviceSynchronize());
+      const auto t1 = Clock::now();
+      const double ms = std::chrono::duration<double, std::milli>(t1 - t0).count();
+      st.stages.push_back({name, ms});
+      t0 = t1;
+      return ms;
+    };
+    const int n = n_;
+    if (n == 0) return 0;
+    const std::size_t nz = std::size_t(n);
+    yield_.resize(nz);
+    yield_i32_.resize(nz);
+    accept_.resize(nz);
+    accept_i32_.resize(nz);
+    rank_.resize(nz + 1);
+    partner_.resize(nz);
+    dir_.resize(nz);
+    t_pred_.resize(nz);
+    ids_.resize(nz);
+    list_.resize(nz);
+    tear::SheetView<T> view = sheetView();
+    detectResidentKernel<T><<<gridFor(nz), kBlock>>>(view, n, int(p.criterion), p.break_strain, yield_.data(),
+                                                     yield_i32_.data(), partner_.data(), dir_.data(), t_pred_.data());
+    INC_CUDA_LAUNCH("tear detect");
+    acceptKernel<T><<<gridFor(nz), kBlock>>>(view, n, yield_.data(), p.seed, step, accept_.data(), accept_i32_.data());
+    INC_CUDA_LAUNCH("tear accept");
+    iotaKernel<<<gridFor(nz), kBlock>>>(ids_.data(), n);
+    INC_CUDA_LAUNCH("tear iota");
+    std::size_t b1 = 0, b2 = 0, b3 = 0;
+    INC_CUDA(cub::DeviceScan::ExclusiveSum(nullptr, b1, accept_i32_.data(), rank_.data(), n));
+    INC_CUDA(cub::DeviceSelect::Flagged(nullptr, b2, ids_.data(), accept_.data(), list_.data(), counts_.data(), n));
+    INC_CUDA(cub::DeviceReduce::Sum(nullptr, b3, yield_i32_.data(), counts_.data() + 1, n));
+    temp_.resize(std::max({b1, b2, b3, std::size_t(1)}));
+    INC_CUDA(cub::DeviceScan::ExclusiveSum(temp_.data(), b1, accept_i32_.data(), rank_.data(), n));
+    INC_CUDA(cub::DeviceSelect::Flagged(temp_.data(), b2, ids_.data(), accept_.data(), list_.data(), counts_.data(), n));
+    INC_CUDA(cub::DeviceReduce::Sum(temp_.data(), b3, yield_i32_.data(), counts_.data() + 1, n));
+    // Synchronisation 1: the split count sizes the split launch and the particle append.
+    int cnt[2] = {0, 0};
+    INC_CUDA(cudaMemcpy(cnt, counts_.data(), sizeof(cnt), cudaMemcpyDeviceToHost));
+    const int splits = cnt[0];
+    st.splits += splits;
+    st.yielding += cnt[1];
+    st.deferred += cnt[1] - splits;
+    stage("tear_detect");
+    if (splits == 0) return 0;
+
+    const int m = n + splits;
+    patch_->reserveParticles(std::size_t(m));  // reallocates (and synchronises) only beyond the capacity
+    growKeep(fixed_, std::size_t(m), nz);
+    growKeep(k_, std::size_t(m), nz);
+    growKeep(tau_, std::size_t(m), nz);
+    fixed_.resize(std::size_t(m));
+    k_.resize(std::size_t(m));
+    tau_.resize(std::size_t(m));
+    view = sheetView();  // pointers may have moved
+    moved_.resize(std::size_t(splits));
+    backed_.resize(std::size_t(splits));
+    const bool debris = p.criterion != TearCriterion::Threshold;
+    splitKernel<T><<<gridFor(std::size_t(splits)), kBlock>>>(view, list_.data(), splits, rank_.data(), n,
+                                                              partner_.data(), dir_.data(), t_pred_.data(), debris,
+                                                              p.random_range, p.t_lo, p.t_hi, p.min_area_ratio, p.seed,
+                                                              step, moved_.data(), backed_.data());
+    INC_CUDA_LAUNCH("tear split");
+    if (nt_ > 0) {
+      triangleKernel<T><<<gridFor(std::size_t(nt_)), kBlock>>>(view, nt_, accept_.data(), dir_.data(), rank_.data(), n);
+      INC_CUDA_LAUNCH("tear triangles");
+    }
+    stage("tear_split");
+    const auto r0 = Clock::now();
+    patch_->appendParticles(m, fixed_.data());  // new particles, inverse masses of the split ones
+    n_ = m;
+    stage("append_particles");
+    rebuild(stage);
+    st.rebuild_ms += std::chrono::duration<double, std::milli>(Clock::now() - r0).count();
+    return splits;
+  }
+
+  void gather(const std::vector<std::int32_t>& ids, std::vector<Vec3<T>>& out) {
+    out.resize(ids.size());
+    if (ids.empty()) return;
+    gather_ids_.upload(ids);
+    gather_out_.resize(ids.size());
+    gatherPositionsKernel<T><<<gridFor(ids.size()), kBlock>>>(patch_->deviceParticles().x, gather_ids_.data(),
+                                                              int(ids.size()), gather_out_.data());
+    INC_CUDA_LAUNCH("tear gather positions");
+    gather_out_.download(out.data(), ids.size());
+  }
+
+  void download(TearSheet<T>& s, bool full) {
+    INC_CUDA(cudaDeviceSynchronize());
+    const PbdDeviceParticles<T> d = patch_->deviceParticles();
+    const std::size_t m = std::size_t(n_);
+    if (!full && s.size() == m) {
+      if (m) {
+        INC_CUDA(cudaMemcpy(s.x.data(), d.x, m * sizeof(Vec3<T>), cudaMemcpyDeviceToHost));
+        INC_CUDA(cudaMemcpy(s.v.data(), d.v, m * sizeof(Vec3<T>), cudaMemcpyDeviceToHost));
+      }
+      return;
+    }
+    s.resizeParticles(m);
+    if (m) {
+      INC_CUDA(cudaMemcpy(s.rest.data(), d.rest, m * sizeof(Vec3<T>), cudaMemcpyDeviceToHost));
+      INC_CUDA(cudaMemcpy(s.x.data(), d.x, m * sizeof(Vec3<T>), cudaMemcpyDeviceToHost));
+      INC_CUDA(cudaMemcpy(s.v.data(), d.v, m * sizeof(Vec3<T>), cudaMemcpyDeviceToHost));
+      INC_CUDA(cudaMemcpy(s.mass.data(), d.mass, m * sizeof(T), cudaMemcpyDeviceToHost));
+      fixed_.download(s.fixed.data(), m);
+      k_.download(s.k.data(), m);
+      tau_.download(s.tau_f.data(), m);
+    }
+    s.tris.resize(std::size_t(nt_));
+    if (nt_ > 0) tris_.download(s.tris.front().data(), 3 * std::size_t(nt_));
+  }
+
+ private:
+  tear::SheetView<T> sheetView() {
+    const PbdDeviceParticles<T> d = patch_->deviceParticles();
+    tear::SheetView<T> v;
+    v.rest = d.rest;
+    v.x = d.x;
+    v.v = d.v;
+    v.mass = d.mass;
+    v.fixed = fixed_.data();
+    v.k = k_.data();
+    v.tau_f = tau_.data();
+    v.tris = tris_.data();
+    v.pe_offsets = pe_off_.data();
+    v.pe_partner = pe_partner_.data();
+    v.pt_offsets = pt_off_.data();
+    v.pt_tris = pt_tris_.data();
+    return v;
+  }
+
+  // The adjacency and the PBD blocks from the device triangles (host/tearing_rebuild.h, steps 1-4).
+  template <typename Stage>
+  void rebuild(Stage& stage) {
+    const int n = n_, nh = 3 * nt_;
+    const int bits = tear::indexBits(n);
+    const std::size_t nhz = std::size_t(std::max(nh, 1));
+    // 1: particle -> triangles (stable radix sort of the corners by particle).
+    c_key_.resize(nhz);
+    c_key_out_.resize(nhz);
+    c_tri_.resize(nhz);
+    pt_tris_.resize(std::size_t(nh));
+    pt_off_.resize(std::size_t(n) + 1);
+    if (nh > 0) {
+      cornerKernel<<<gridFor(nhz), kBlock>>>(tris_.data(), nh, c_key_.data(), c_tri_.data());
+      INC_CUDA_LAUNCH("tear corners");
+      std::size_t bytes = 0;
+      INC_CUDA(cub::DeviceRadixSort::SortPairs(nullptr, bytes, c_key_.data(), c_key_out_.data(), c_tri_.data(),
+                                               pt_tris_.data(), nh, 0, bits));
+      temp_.resize(std::max<std::size_t>(bytes, 1));
+      INC_CUDA(cub::DeviceRadixSort::SortPairs(temp_.data(), bytes, c_key_.data(), c_key_out_.data(), c_tri_.data(),
+                                               pt_tris_.data(), nh, 0, bits));
+    }
+    csrFromSorted32Kernel<<<gridFor(std::size_t(n) + 1), kBlock>>>(n, c_key_out_.data(), nh, pt_off_.data());
+    INC_CUDA_LAUNCH("tear particle triangles");
+    // 2: half-edges sorted by (min, max) -> unique edges, bending on runs of two, numbered by prefix sums.
+    h_key_.resize(nhz);
+    h_key_out_.resize(nhz);
+    h_opp_.resize(nhz);
+    h_opp_out_.resize(nhz);
+    head_.resize(nhz);
+    bend_.resize(nhz);
+    e_idx_.resize(nhz);
+    b_idx_.resize(nhz);
+    edge_a_.resize(nhz);
+    edge_b_.resize(nhz);
+    const PbdDeviceBlock<T> dist = patch_->reserveBlock(0, nhz);
+    PbdDeviceBlock<T> bend;
+    if (bending_) bend = patch_->reserveBlock(1, std::max<std::size_t>(nhz / 2, 1));
+    if (nh > 0) {
+      halfEdgeKernel<<<gridFor(nhz), kBlock>>>(tris_.data(), nh, bits, h_key_.data(), h_opp_.data());
+      INC_CUDA_LAUNCH("tear half-edges");
+      std::size_t bytes = 0, bs1 = 0, bs2 = 0;
+      INC_CUDA(cub::DeviceRadixSort::SortPairs(nullptr, bytes, h_key_.data(), h_key_out_.data(), h_opp_.data(),
+                                               h_opp_out_.data(), nh, 0, 2 * bits));
+      INC_CUDA(cub::DeviceScan::ExclusiveSum(nullptr, bs1, head_.data(), e_idx_.data(), nh));
+      INC_CUDA(cub::DeviceScan::ExclusiveSum(nullptr, bs2, bend_.data(), b_idx_.data(), nh));
+      temp_.resize(std::max({bytes, bs1, bs2, std::size_t(1)}));
+      INC_CUDA(cub::DeviceRadixSort::SortPairs(temp_.data(), bytes, h_key_.data(), h_key_out_.data(), h_opp_.data(),
+                                               h_opp_out_.data(), nh, 0, 2 * bits));
+      runFlagsKernel<<<gridFor(nhz), kBlock>>>(h_key_out_.data(), nh, head_.data(), bend_.data());
+      INC_CUDA_LAUNCH("tear edge runs");
+      INC_CUDA(cub::DeviceScan::ExclusiveSum(temp_.data(), bs1, head_.data(), e_idx_.data(), nh));
+      INC_CUDA(cub::DeviceScan::ExclusiveSum(temp_.data(), bs2, bend_.data(), b_idx_.data(), nh));
+      const PbdDeviceParticles<T> d = patch_->deviceParticles();
+      writeConstraintsKernel<T><<<gridFor(nhz), kBlock>>>(
+          h_key_out_.data(), h_opp_out_.data(), head_.data(), e_idx_.data(), b_idx_.data(), nh, bits, d.rest,
+          T(opt_.stretch_compliance), T(opt_.bending_compliance), edge_a_.data(), edge_b_.data(), dist.ids, dist.rest,
+          dist.compliance, bending_ ? bend.ids : nullptr, bend.rest, bend.compliance);
+      INC_CUDA_LAUNCH("tear write constraints");
+      runCountsKernel<<<1, 1>>>(head_.data(), bend_.data(), e_idx_.data(), b_idx_.data(), nh, counts_.data());
+      INC_CUDA_LAUNCH("tear constraint counts");
+    } else {
+      INC_CUDA(cudaMemset(counts_.data(), 0, 2 * sizeof(int)));
+    }
+    // Synchronisation 2: the constraint counts size the PBD blocks' launches.
+    int cnt[2] = {0, 0};
+    INC_CUDA(cudaMemcpy(cnt, counts_.data(), sizeof(cnt), cudaMemcpyDeviceToHost));
+    const int ne = cnt[0], nb = cnt[1];
+    stage("rebuild_edges");
+    // 3: particle -> partners (both directions of each edge sorted by (owner, partner)).
+    const std::size_t np = std::size_t(2 * ne);
+    p_key_.resize(std::max<std::size_t>(np, 1));
+    p_key_out_.resize(std::max<std::size_t>(np, 1));
+    pe_partner_.resize(np);
+    pe_off_.resize(std::size_t(n) + 1);
+    if (ne > 0) {
+      partnerKeysKernel<<<gridFor(std::size_t(ne)), kBlock>>>(edge_a_.data(), edge_b_.data(), ne, bits, p_key_.data());
+      INC_CUDA_LAUNCH("tear partner keys");
+      std::size_t bytes = 0;
+      INC_CUDA(cub::DeviceRadixSort::SortKeys(nullptr, bytes, p_key_.data(), p_key_out_.data(), int(np), 0, 2 * bits));
+      temp_.resize(std::max<std::size_t>(bytes, 1));
+      INC_CUDA(cub::DeviceRadixSort::SortKeys(temp_.data(), bytes, p_key_.data(), p_key_out_.data(), int(np), 0, 2 * bits));
+      partnerListKernel<<<gridFor(np), kBlock>>>(p_key_out_.data(), int(np), bits, pe_partner_.data());
+      INC_CUDA_LAUNCH("tear partners");
+    }
+    csrFromSorted64Kernel<<<gridFor(std::size_t(n) + 1), kBlock>>>(n, p_key_out_.data(), int(np), bits, pe_off_.data());
+    INC_CUDA_LAUNCH("tear partner offsets");
+    stage("rebuild_adjacency");
+    // 4: the PBD blocks' incidence and Jacobi scales (radix sort inside the backend).
+    patch_->commitBlock(0, ne);
+    if (bending_) patch_->commitBlock(1, nb);
+    stage("rebuild_constraints");
+  }
+
+  PbdDevicePatch<T>* patch_ = nullptr;
+  TearModelOptions opt_;
+  bool bending_ = false;
+  int n_ = 0, nt_ = 0;
+  DeviceBuffer<std::uint8_t> fixed_, yield_, accept_;
+  DeviceBuffer<T> k_, tau_, t_pred_;
+  DeviceBuffer<Vec3<T>> dir_, gather_out_;
+  DeviceBuffer<std::int32_t> tris_, pe_off_, pe_partner_, pt_off_, pt_tris_, yield_i32_, accept_i32_, rank_, partner_,
+      ids_, list_, c_tri_, h_opp_, h_opp_out_, head_, bend_, e_idx_, b_idx_, edge_a_, edge_b_, gather_ids_;
+  DeviceBuffer<std::uint32_t> c_key_, c_key_out_;
+  DeviceBuffer<std::uint64_t> h_key_, h_key_out_, p_key_, p_key_out_;
+  DeviceBuffer<int> counts_, moved_, backed_;
+  DeviceBuffer<unsigned char> temp_;
+};
+
 template <typename T>
 class TearStepCuda final : public TearStepBackend<T> {
  public:
   BackendKind kind() const override { return BackendKind::Cuda; }
   int step(TearSheet<T>& s, const TearParams<T>& p, TearFrameStats& st) override {
+    resident_ok_ = false;  // the host path owns the sheet now
     const cpu::TearStepStats r = ws_.step(s, p, nullptr);
     st.splits += r.splits;
     st.yielding += r.yielding;
     st.deferred += r.deferred;
     return r.splits;
   }
+  bool attach(PbdBackend<T>& pbd, const TearSheet<T>& s, const TearModelOptions& opt, int model_blocks) override {
+    resident_ok_ = res_.attach(pbd, s, opt, model_blocks);
+    return resident_ok_;
+  }
+  int stepResident(const TearParams<T>& p, std::uint32_t step, TearFrameStats& st, bool profile) override {
+    if (!resident_ok_) throw InputError("tearing", "device", "stepResident without a successful attach");
+    return res_.step(p, step, st, profile);
+  }
+  std::size_t residentSize() const override { return resident_ok_ ? res_.size() : 0; }
+  void gatherPositions(const std::vector<std::int32_t>& ids, std::vector<Vec3<T>>& out) override {
+    res_.gather(ids, out);
+  }
+  void download(TearSheet<T>& s, bool full) override {
+    if (resident_ok_) res_.download(s, full);
+  }
 
  private:
   TearCudaWorkspace<T> ws_;
+  TearResident<T> res_;
+  bool resident_ok_ = false;
 };
 
 }  // namespace

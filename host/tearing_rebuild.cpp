@@ -1,0 +1,124 @@
+// Sort-based rebuild of a torn sheet's adjacency and PBD constraints on the CPU: the reference of the device rebuild.
+#include "host/tearing_rebuild.h"
+
+#include <algorithm>
+#include <numeric>
+
+#include "physics/tearing_rebuild.h"
+
+namespace inc {
+
+namespace {
+
+// offsets[p] = first position of owner p in the ascending owners (p = 0 .. n).
+template <typename K>
+std::vector<std::int32_t> offsetsFromSorted(const std::vector<K>& owners, std::size_t n, int shift) {
+  std::vector<std::int32_t> off(n + 1);
+  for (std::size_t p = 0; p <= n; ++p)
+    off[p] = std::int32_t(tear::lowerBound<K>(owners.data(), std::int64_t(owners.size()), K(K(p) << shift)));
+  return off;
+}
+
+// Phase 4 for a fixed-arity block whose ids are written: particle -> slot CSR and Jacobi scales.
+template <typename T>
+void finishBlock(PbdConstraintBlock<T>& b, int arity, std::size_t n, const std::vector<T>& inv_mass) {
+  const std::size_t slots = b.ids.size();
+  b.offsets.resize(b.rest.size() + 1);
+  for (std::size_t c = 0; c < b.offsets.size(); ++c) b.offsets[c] = std::int32_t(arity * c);
+  std::vector<std::int32_t> order(slots);
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](std::int32_t u, std::int32_t v) { return b.ids[u] < b.ids[v]; });
+  std::vector<std::uint32_t> owner(slots);
+  for (std::size_t q = 0; q < slots; ++q) owner[q] = std::uint32_t(b.ids[order[q]]);
+  b.particle_slots = order;
+  b.particle_offsets = offsetsFromSorted(owner, n, 0);
+  b.jacobi_scale.resize(slots);
+  for (std::size_t c = 0; c < b.rest.size(); ++c) {
+    const T sc = tear::jacobiScaleOf(b.ids.data(), arity, std::int64_t(c), b.particle_offsets.data(), inv_mass.data());
+    for (int k = 0; k < arity; ++k) b.jacobi_scale[arity * c + k] = sc;
+  }
+  b.coloring = ConstraintColoring{};
+}
+
+}  // namespace
+
+template <typename T>
+TearSortedRebuild<T> rebuildTearSorted(const TearSheet<T>& s, const TearModelOptions& opt) {
+  TearSortedRebuild<T> r;
+  const std::size_t n = s.size(), nt = s.tris.size(), nh = 3 * nt;
+  const int bits = tear::indexBits(std::int64_t(n));
+  const std::int32_t* tris = nt ? s.tris.front().data() : nullptr;
+  // 1: particle -> triangles.
+  std::vector<std::int32_t> corner(nh);
+  std::iota(corner.begin(), corner.end(), 0);
+  std::stable_sort(corner.begin(), corner.end(), [&](std::int32_t u, std::int32_t v) { return tris[u] < tris[v]; });
+  std::vector<std::uint32_t> owner(nh);
+  r.pt_tris.resize(nh);
+  for (std::size_t q = 0; q < nh; ++q) {
+    owner[q] = std::uint32_t(tris[corner[q]]);
+    r.pt_tris[q] = corner[q] / 3;
+  }
+  r.pt_offsets = offsetsFromSorted(owner, n, 0);
+  // 2: half-edges by key; heads are unique edges, runs of two get a bending constraint.
+  std::vector<std::uint64_t> key(nh);
+  std::vector<std::int32_t> opp(nh);
+  for (std::size_t h = 0; h < nh; ++h) tear::halfEdge(tris, std::int64_t(h), bits, key[h], opp[h]);
+  std::vector<std::int32_t> perm(nh);
+  std::iota(perm.begin(), perm.end(), 0);
+  std::stable_sort(perm.begin(), perm.end(), [&](std::int32_t u, std::int32_t v) { return key[u] < key[v]; });
+  std::vector<std::uint64_t> skey(nh);
+  std::vector<std::int32_t> sopp(nh);
+  for (std::size_t q = 0; q < nh; ++q) {
+    skey[q] = key[perm[q]];
+    sopp[q] = opp[perm[q]];
+  }
+  std::vector<std::int32_t> head(nh), bend(nh), e_idx(nh + 1, 0), b_idx(nh + 1, 0);
+  for (std::size_t h = 0; h < nh; ++h) {
+    head[h] = tear::runHead(skey.data(), std::int64_t(h)) ? 1 : 0;
+    bend[h] = head[h] && tear::runLength(skey.data(), std::int64_t(h), std::int64_t(nh)) == 2 ? 1 : 0;
+    e_idx[h + 1] = e_idx[h] + head[h];
+    b_idx[h + 1] = b_idx[h] + bend[h];
+  }
+  const std::size_t ne = std::size_t(e_idx[nh]), nb = std::size_t(b_idx[nh]);
+  r.edge_a.resize(ne);
+  r.edge_b.resize(ne);
+  PbdConstraintBlock<T>& d = r.distance;
+  PbdConstraintBlock<T>& b = r.bending;
+  d.kind = PbdConstraintKind::Distance;
+  b.kind = PbdConstraintKind::Bending;
+  d.stiffness = b.stiffness = T(opt.pbd_stiffness);
+  d.ids.resize(2 * ne);
+  d.rest.resize(ne);
+  d.compliance.resize(ne);
+  b.ids.resize(4 * nb);
+  b.rest.resize(nb);
+  b.compliance.resize(nb);
+  for (std::size_t h = 0; h < nh; ++h)
+    if (head[h])
+      tear::writeEdgeConstraints<T>(skey.data(), sopp.data(), std::int64_t(h),
+                                    tear::runLength(skey.data(), std::int64_t(h), std::int64_t(nh)), bits, e_idx[h],
+                                    b_idx[h], s.rest.data(), T(opt.stretch_compliance), T(opt.bending_compliance),
+                                    r.edge_a.data(), r.edge_b.data(), d.ids.data(), d.rest.data(),
+                                    d.compliance.data(), b.ids.data(), b.rest.data(), b.compliance.data());
+  // 3: particle -> partners, ascending (owner, partner) keys.
+  std::vector<std::uint64_t> pk(2 * ne);
+  for (std::size_t e = 0; e < ne; ++e) {
+    pk[2 * e] = (std::uint64_t(r.edge_a[e]) << bits) | std::uint64_t(r.edge_b[e]);
+    pk[2 * e + 1] = (std::uint64_t(r.edge_b[e]) << bits) | std::uint64_t(r.edge_a[e]);
+  }
+  std::sort(pk.begin(), pk.end());
+  r.pe_partner.resize(2 * ne);
+  for (std::size_t q = 0; q < 2 * ne; ++q) r.pe_partner[q] = tear::edgeLow(pk[q], bits);
+  r.pe_offsets = offsetsFromSorted(pk, n, bits);
+  // 4: incidence and Jacobi scales.
+  std::vector<T> inv_mass(n);
+  for (std::size_t i = 0; i < n; ++i) inv_mass[i] = s.fixed[i] ? T(0) : T(1) / s.mass[i];
+  finishBlock(d, 2, n, inv_mass);
+  finishBlock(b, 4, n, inv_mass);
+  return r;
+}
+
+template TearSortedRebuild<float> rebuildTearSorted<float>(const TearSheet<float>&, const TearModelOptions&);
+template TearSortedRebuild<double> rebuildTearSorted<double>(const TearSheet<double>&, const TearModelOptions&);
+
+}  // namespace inc

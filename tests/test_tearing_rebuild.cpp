@@ -1,0 +1,139 @@
+// Sort-based rebuild (the device algorithm, CPU reference) equals the host adjacency + PBD model rebuild after many tearing steps.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+#include <string>
+
+#include "cpu_fallback/tearing_cpu.h"
+#include "host/input_error.h"
+#include "host/tearing_driver.h"
+#include "host/tearing_rebuild.h"
+#include "host/tearing_sheet.h"
+#include "physics/tearing_rebuild.h"
+
+using namespace inc;
+
+namespace {
+
+// Torn sheet: jiggled steps of the CPU tearing step (thousands of splits), so edges of every kind (boundary,
+// interior, doubled by a split) and split particles with moved rest positions are present.
+template <typename T>
+TearSheet<T> tornSheet(bool tube, int steps, std::uint32_t seed) {
+  TearSheet<T> s = tube ? makeTearTube<T>(24, 20, 0.04, 0.2, 2.2, 1.0e4, 120.0)
+                        : makeTearGrid<T>(30, 24, 0.01, 2.2, Vec3d(0, 0, 0), 1.0e4, 120.0);
+  fixTearParticles(s, Vec3d(-1, -1, -1), Vec3d(1, 0.005, 0.005));
+  TearParams<T> p;
+  p.seed = seed;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int k = 0; k < steps; ++k) {
+    for (std::size_t i = 0; i < s.size(); ++i) s.x[i] = s.rest[i] + Vec3<T>(Vec3d(u(rng), u(rng), u(rng)) * 0.0012);
+    cpu::tearStepCpu(s, p);
+  }
+  return s;
+}
+
+template <typename T>
+void expectSameBlock(const PbdConstraintBlock<T>& a, const PbdConstraintBlock<T>& b, const char* what) {
+  EXPECT_EQ(a.ids, b.ids) << what;
+  EXPECT_EQ(a.offsets, b.offsets) << what;
+  EXPECT_EQ(a.rest, b.rest) << what;  // the same expression on the same inputs: bit for bit
+  EXPECT_EQ(a.compliance, b.compliance) << what;
+  EXPECT_EQ(a.particle_offsets, b.particle_offsets) << what;
+  EXPECT_EQ(a.particle_slots, b.particle_slots) << what;
+  EXPECT_EQ(a.jacobi_scale, b.jacobi_scale) << what;
+  EXPECT_EQ(a.stiffness, b.stiffness) << what;
+}
+
+template <typename T>
+void expectSortedEqualsHost(const TearSheet<T>& torn) {
+  TearSheet<T> s = torn;
+  s.rebuildTopology();
+  TearModelOptions opt;
+  opt.stretch_compliance = 2e-4;
+  opt.bending_compliance = 7.0;
+  opt.pbd_stiffness = 0.9;
+  opt.coloring = false;
+  const PbdModel<T> m = buildTearPbdModel(s, opt);
+  const TearSortedRebuild<T> r = rebuildTearSorted(torn, opt);
+  EXPECT_EQ(r.pt_offsets, s.pt_offsets);
+  EXPECT_EQ(r.pt_tris, s.pt_tris);
+  EXPECT_EQ(r.edge_a, s.edge_a);
+  EXPECT_EQ(r.edge_b, s.edge_b);
+  EXPECT_EQ(r.pe_offsets, s.pe_offsets);
+  EXPECT_EQ(r.pe_partner, s.pe_partner);
+  ASSERT_EQ(m.blocks.size(), 2u);
+  expectSameBlock(r.distance, m.blocks[0], "distance");
+  expectSameBlock(r.bending, m.blocks[1], "bending");
+}
+
+}  // namespace
+
+TEST(TearingRebuild, IndexBitsAndKeys) {
+  EXPECT_EQ(tear::indexBits(0), 1);
+  EXPECT_EQ(tear::indexBits(1), 1);
+  EXPECT_EQ(tear::indexBits(2), 2);
+  EXPECT_EQ(tear::indexBits(150000), 18);  // 2^17 = 131072 <= 150000 < 2^18
+  EXPECT_EQ(tear::indexBits(262143), 18);
+  EXPECT_EQ(tear::indexBits(262144), 19);
+  const int bits = tear::indexBits(300000);
+  const std::uint64_t k = tear::packEdge(299999, 17, bits);
+  EXPECT_EQ(tear::edgeHigh(k, bits), 17);
+  EXPECT_EQ(tear::edgeLow(k, bits), 299999);
+  EXPECT_LT(tear::packEdge(3, 9, bits), tear::packEdge(4, 5, bits));  // (a, b) lexicographic
+  const std::uint32_t keys[] = {0, 0, 2, 2, 2, 5};
+  EXPECT_EQ(tear::lowerBound<std::uint32_t>(keys, 6, 1u), 2);
+  EXPECT_EQ(tear::lowerBound<std::uint32_t>(keys, 6, 2u), 2);
+  EXPECT_EQ(tear::lowerBound<std::uint32_t>(keys, 6, 6u), 6);
+}
+
+TEST(TearingRebuild, UntornGridAndTubeEqualHostRebuild) {
+  expectSortedEqualsHost(tornSheet<double>(false, 0, 1));
+  expectSortedEqualsHost(tornSheet<float>(true, 0, 1));
+}
+
+TEST(TearingRebuild, TornSheetsEqualHostRebuild) {
+  const TearSheet<double> grid = tornSheet<double>(false, 8, 5);
+  EXPECT_GT(grid.size(), 720u + 500u) << "the sheet must be well torn";
+  expectSortedEqualsHost(grid);
+  const TearSheet<float> tube = tornSheet<float>(true, 8, 9);
+  EXPECT_GT(tube.size(), 480u + 300u);
+  expectSortedEqualsHost(tube);
+}
+
+// The driver's host path reports its stages (the breakdown bench_tearing prints) and stays on the host on the CPU.
+TEST(TearingRebuild, HostPathStagesAndCpuNeverResident) {
+  TearSheet<double> s = makeTearGrid<double>(16, 8, 0.01, 2.2, Vec3d(0, 0, 0), 1.0e4, 150.0);
+  fixTearParticles(s, Vec3d(-1, -1, -1), Vec3d(1e-3, 1, 1));
+  PbdStepParams<double> sp;
+  sp.gravity = Vec3d(0, 0, 0);
+  sp.volume_preservation = false;
+  TearModelOptions mo;
+  mo.stretch_compliance = 2e-4;
+  mo.bending_compliance = 10;
+  TearingDriver<double> d(s, TearParams<double>(), mo, sp, BackendKind::Cpu);
+  EXPECT_FALSE(d.deviceResident());
+  EXPECT_THROW(d.setSummaryEvery(0), InputError);
+  std::vector<std::int32_t> grasp;
+  for (std::size_t i = 0; i < d.sheet().size(); ++i)
+    if (d.sheet().rest[i].x > 0.149) grasp.push_back(std::int32_t(i));
+  bool saw_rebuild = false;
+  for (int f = 0; f < 12 && !saw_rebuild; ++f) {
+    std::vector<Vec3d> to;
+    for (std::int32_t id : grasp) to.push_back(d.sheet().rest[id] + Vec3d(0.01 * (f + 1), 0, 0));
+    const TearFrameStats st = d.advance(grasp, to);
+    EXPECT_FALSE(st.device_resident);
+    std::vector<std::string> names;
+    for (const StageTime& t : st.stages) {
+      names.push_back(t.stage);
+      EXPECT_GE(t.ms, 0.0) << t.stage;
+    }
+    auto has = [&](const char* n) { return std::find(names.begin(), names.end(), n) != names.end(); };
+    EXPECT_TRUE(has("solve") && has("download_state") && has("tear_step"));
+    EXPECT_EQ(has("host_model"), st.splits > 0) << "the model is rebuilt exactly on frames with splits";
+    saw_rebuild = st.splits > 0;
+    EXPECT_EQ(d.particleCount(), d.sheet().size());
+  }
+  EXPECT_TRUE(saw_rebuild) << "the pull must tear within 12 frames";
+}
