@@ -7,13 +7,16 @@
 #include <sstream>
 #include <string>
 
+#include <unistd.h>
+
 namespace fs = std::filesystem;
 
 TEST(BenchSuite, QuickCpuRunProducesMergedCsvTableAndPlots) {
   const std::string bin = INCISION_BINARY_DIR, src = INCISION_SOURCE_DIR;
   for (const char* b : {"bench_neighbors", "bench_mls", "bench_pbd", "bench_scaling"})
     if (!fs::exists(fs::path(bin) / b)) GTEST_SKIP() << b << " not built (cmake --build build builds it)";
-  const fs::path out = fs::temp_directory_path() / "incision_bench_suite_quick";
+  // One folder per process: two checkouts running their suites at once must not share it.
+  const fs::path out = fs::temp_directory_path() / ("incision_bench_suite_quick_" + std::to_string(::getpid()));
   fs::remove_all(out);
   const std::string cmd = "OMP_NUM_THREADS=2 bash '" + src + "/tools/bench-suite' --quick --cpu-only --build '" + bin +
                           "' --out '" + out.string() + "' > '" + out.string() + ".log' 2>&1";
