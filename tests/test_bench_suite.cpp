@@ -8,6 +8,7 @@
 #include <string>
 
 #include <unistd.h>
+#include "test_paths.h"
 
 namespace fs = std::filesystem;
 

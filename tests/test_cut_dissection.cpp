@@ -8,6 +8,7 @@
 #include "host/dissection_simulation.h"
 #include "host/input_error.h"
 #include "host/scene_loader.h"
+#include "test_paths.h"
 
 namespace inc {
 namespace {

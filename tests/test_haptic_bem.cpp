@@ -5,6 +5,7 @@
 
 #include "host/haptics/bem_global.h"
 #include "host/input_error.h"
+#include "test_paths.h"
 
 namespace inc {
 namespace {

@@ -7,6 +7,7 @@
 #include "host/haptics/haptic_loop.h"
 #include "host/input_error.h"
 #include "physics/haptic_safety.h"
+#include "test_paths.h"
 
 namespace inc {
 namespace {

@@ -13,6 +13,7 @@
 
 #include "host/input_error.h"
 #include "host/mesh.h"
+#include "test_paths.h"
 
 using namespace inc;
 namespace fs = std::filesystem;

@@ -7,6 +7,7 @@
 #include "host/input_error.h"
 #include "host/metaball_simulation.h"
 #include "host/scene_loader.h"
+#include "test_paths.h"
 
 using namespace inc;
 

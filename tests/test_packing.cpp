@@ -15,6 +15,7 @@
 #include "host/metaball_pack_bvh.h"
 #include "host/metaball_packing.h"
 #include "host/organ_shapes.h"
+#include "test_paths.h"
 
 namespace inc {
 namespace {

@@ -12,6 +12,7 @@
 #include "host/input_error.h"
 #include "host/scene_json.h"
 #include "host/scene_loader.h"
+#include "test_paths.h"
 
 using namespace inc;
 namespace fs = std::filesystem;

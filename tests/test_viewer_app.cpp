@@ -15,6 +15,7 @@
 #include "tests/viewer_test_model.h"
 #include "viewer/gl_window.h"
 #include "viewer/viewer_app.h"
+#include "test_paths.h"
 
 namespace inc::viewer {
 namespace {

@@ -183,6 +183,7 @@ TEST(PbdGpu, SkippedWithoutCuda) { GTEST_SKIP() << "built without CUDA"; }
 #if INCISION_HAVE_CUDA
 #include "host/metaball_simulation.h"
 #include "host/scene_loader.h"
+#include "test_paths.h"
 
 // The shipped grasp scene on the CUDA backend: 100 frames, finite, grasped, and within 1 mm of the CPU run
 // (float32; the tool path and grasp selection are identical host code).
