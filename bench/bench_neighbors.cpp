@@ -36,6 +36,8 @@ constexpr double kRadius = 1.95;
 // n particles on a unit lattice (x fastest), each moved by up to +-0.25 per axis: density 1, no voids.
 // shuffle: list them in random order (the storage order then differs from the input order everywhere).
 bool g_shuffle = false;
+// storage: lists in storage order (querySelfStorage: rows and entries are storage slots, no permutation).
+bool g_storage = false;
 template <typename T>
 std::vector<Vec3<T>> jitteredLattice(std::size_t n, unsigned seed) {
   const std::size_t m = std::size_t(std::ceil(std::cbrt(double(n)) - 1e-9));
@@ -67,7 +69,7 @@ struct TrafficModel {
 // gpu: the CUDA pipeline (float points also get a 16-byte packed copy for the queries, and the query is one
 // traversal that stages sorted rows, then a copy); otherwise the CPU's (one traversal straight into lists).
 TrafficModel trafficModel(std::size_t point_bytes, double neighbours, double buckets_per_point, int bucket_bits,
-                          int morton_bits, bool morton, bool gpu) {
+                          int morton_bits, bool morton, bool gpu, bool storage) {
   const double P = double(point_bytes);
   const double Q = gpu && point_bytes == 12 ? 16.0 : P;  // the point record the query reads
   auto sortPairs = [](int bits) {  // CUB onesweep: a key histogram pass, then 8-bit digit passes over key+value
@@ -82,9 +84,12 @@ TrafficModel trafficModel(std::size_t point_bytes, double neighbours, double buc
   build += 8.0 * buckets_per_point;      // exclusive scan of the histogram: read + write
   if (morton) build += (P + 8.0) + sortPairs(morton_bits);  // Morton keys + their sort before the rest
   if (!gpu) {
-    // traversal: read own point and perm, append the list to a block buffer; then copy it into place
-    return {build, P + 4.0 + 4.0 * neighbours + 8.0 + 8.0 * neighbours};
+    // traversal: read own point (and perm for original-order lists), append the list to a block buffer; then
+    // copy it into place
+    return {build, P + (storage ? 0.0 : 4.0) + 4.0 * neighbours + 8.0 + 8.0 * neighbours};
   }
+  // storage order: one traversal reads its own point and writes its offset and its row in place
+  if (storage) return {build, Q + 8.0 + 4.0 * neighbours};
   double query = Q + 4.0 + 4.0 + 4.0 * neighbours;  // count+stage: own point, perm; write count, staged row
   query += 4.0 + 8.0;                    // scan: read count, write int64 offset
   query += 4.0 + 8.0 + 8.0 * neighbours;  // copy: perm, offset; read the staged row, write the indices
@@ -123,7 +128,7 @@ Row runCpu(std::size_t n, int repeats, bool morton, double cell_factor) {
     const auto t0 = std::chrono::steady_clock::now();
     s.build(pts, T(kRadius * cell_factor), morton);
     const auto t1 = std::chrono::steady_clock::now();
-    l = s.querySelf(r);
+    l = g_storage ? s.querySelfStorage(r) : s.querySelf(r);
     const auto t2 = std::chrono::steady_clock::now();
     if (rep < 0) continue;
     tb.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
@@ -141,7 +146,7 @@ Row runCpu(std::size_t n, int repeats, bool morton, double cell_factor) {
   const auto& p = s.params();
   const double used = p.dense ? double(p.dims[0]) * p.dims[1] * p.dims[2] : double(p.bucket_mask) + 1.0;
   const TrafficModel m = trafficModel(sizeof(Vec3<T>), row.neighbours, used / double(n), keyBits(std::uint64_t(used)),
-                                      30, morton, false);
+                                      30, morton, false, g_storage);
   row.bytes = m.build + m.query;
   row.gbs = row.bytes * double(n) / (row.total_ms * 1e-3) / 1e9;
   row.target_ms = targetMs(false, n);
@@ -166,7 +171,10 @@ Row runCuda(std::size_t n, int repeats, bool morton, double cell_factor, double 
     INC_CUDA(cudaEventRecord(e0));
     s.build(d_pts.data(), n, T(kRadius * cell_factor), morton);
     INC_CUDA(cudaEventRecord(e1));
-    s.querySelf(r, out);
+    if (g_storage)
+      s.querySelfStorage(r, out);
+    else
+      s.querySelf(r, out);
     INC_CUDA(cudaEventRecord(e2));
     INC_CUDA(cudaEventSynchronize(e2));
     if (rep < 0) continue;
@@ -188,7 +196,10 @@ Row runCuda(std::size_t n, int repeats, bool morton, double cell_factor, double 
     std::vector<std::vector<double>> ms;
     for (int rep = 0; rep < std::max(repeats, 3); ++rep) {
       s.build(d_pts.data(), n, T(kRadius * cell_factor), morton);
-      s.querySelf(r, out);
+      if (g_storage)
+        s.querySelfStorage(r, out);
+      else
+        s.querySelf(r, out);
       const auto stages = s.takeProfile();
       if (names.empty())
         for (const auto& st : stages) names.push_back(st.first);
@@ -213,7 +224,7 @@ Row runCuda(std::size_t n, int repeats, bool morton, double cell_factor, double 
   const int max_dim = std::max(p.dims[0], std::max(p.dims[1], p.dims[2]));
   const int morton_bits = std::max(1, std::min(30, 3 * (keyBits(std::uint64_t(max_dim)) - p.morton_shift)));
   const TrafficModel m = trafficModel(sizeof(Vec3<T>), row.neighbours, used / double(n), keyBits(std::uint64_t(used)),
-                                      morton_bits, morton, true);
+                                      morton_bits, morton, true, g_storage);
   row.bytes = m.build + m.query;
   row.gbs = row.bytes * double(n) / (row.total_ms * 1e-3) / 1e9;
   row.peak_fraction = peak_gbs > 0 ? row.gbs / peak_gbs : 0.0;
@@ -266,6 +277,8 @@ int main(int argc, char** argv) {
   app.add_option("--cell-factor", cell_factor, "grid cell edge / radius")->check(CLI::Range(0.05, 10.0));
   app.add_flag("--morton", morton, "store the grid in Z order");
   app.add_flag("--shuffle", g_shuffle, "list the particles in random order instead of lattice order");
+  app.add_flag("--storage-order", g_storage,
+               "lists in storage order (querySelfStorage: no permutation; one GPU traversal writes rows in place)");
   app.add_option("--csv", csv, "write the rows as CSV here");
   app.add_flag("--profile", profile, "GPU: also print the median time of every build / query stage (CUDA events)");
   app.add_flag("--quick", quick, "a short run: at most three sizes, three repeats");
@@ -284,9 +297,11 @@ int main(int argc, char** argv) {
       peak = dev.peak_bandwidth_gbs > 0 ? dev.peak_bandwidth_gbs : kH100PeakGbs;
       peak_note = dev.peak_bandwidth_gbs > 0 ? "memory clock x bus width" : "H100 SXM5 datasheet (attribute unavailable)";
     }
-    std::printf("# %s; device: %s; peak %.0f GB/s (%s); cpu threads %d; radius %.2f at unit density; %s order; %s input\n",
+    std::printf("# %s; device: %s; peak %.0f GB/s (%s); cpu threads %d; radius %.2f at unit density; %s order; %s input;"
+                " %s lists\n",
                 choice.note.c_str(), dev.device_count ? dev.name.c_str() : "none", peak, peak_note.c_str(),
-                cpu::threadCount(), kRadius, morton ? "Morton" : "bucket", g_shuffle ? "shuffled" : "lattice-order");
+                cpu::threadCount(), kRadius, morton ? "Morton" : "bucket", g_shuffle ? "shuffled" : "lattice-order",
+                g_storage ? "storage-order" : "original-order");
     std::printf("%-5s %-6s %10s %7s %11s %11s %11s %9s %8s %8s %8s %10s\n", "back", "prec", "n", "nbr/p", "build_ms",
                 "query_ms", "total_ms", "ns/p", "B/p", "GB/s", "peak", "target_ms");
     std::vector<Row> rows;
@@ -312,17 +327,17 @@ int main(int argc, char** argv) {
     if (!csv.empty()) {
       std::ofstream f(csv);
       if (!f) throw InputError(csv, "--csv", "cannot write the file");
-      f << "backend,precision,order,input,cell_factor,n,neighbors_per_particle,build_ms,query_ms,total_ms,ns_per_particle,"
+      f << "backend,precision,order,input,lists,cell_factor,n,neighbors_per_particle,build_ms,query_ms,total_ms,ns_per_particle,"
            "bytes_per_particle,achieved_gbs,peak_gbs,peak_fraction,target_ms\n";
       for (const Row& r : rows)
         f << r.backend << ',' << r.precision << ',' << (morton ? "morton" : "bucket") << ','
-          << (g_shuffle ? "shuffled" : "lattice") << ',' << cell_factor << ',' << r.n << ','
+          << (g_shuffle ? "shuffled" : "lattice") << ',' << (g_storage ? "storage" : "original") << ',' << cell_factor << ',' << r.n << ','
           << r.neighbours << ',' << r.build_ms << ',' << r.query_ms << ',' << r.total_ms << ','
           << r.total_ms * 1e6 / double(r.n) << ',' << r.bytes << ',' << r.gbs << ',' << (r.backend == "cuda" ? peak : 0.0)
           << ',' << r.peak_fraction << ',' << r.target_ms << '\n';
     }
     // one-line summary (last line): the largest run of each backend and the 1e6 row when present
-    std::string summary = "bench_neighbors " + precision + ":";
+    std::string summary = "bench_neighbors " + precision + (g_storage ? " storage-order" : "") + ":";
     for (const std::string b : {"cuda", "cpu"}) {
       const Row* big = nullptr;
       const Row* mega = nullptr;

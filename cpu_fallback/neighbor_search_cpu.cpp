@@ -154,10 +154,11 @@ DenseRowsResult denseRows(const NeighborGridParams<T>& p, const std::int32_t* st
 }
 INC_NO_CONTRACT_END
 
-struct AppendOriginal {
+// Appends perm[j] (original index), or j itself when perm is null (storage-order lists).
+struct AppendIndex {
   std::vector<std::int32_t>* out;
   const std::int32_t* perm;
-  void operator()(std::int32_t j) { out->push_back(perm[j]); }
+  void operator()(std::int32_t j) { out->push_back(perm ? perm[j] : j); }
 };
 
 }  // namespace
@@ -219,12 +220,14 @@ void GridNeighborSearch<T>::build(const std::vector<Vec3<T>>& points, T cell_siz
   slot_y_.resize(n);
   slot_z_.resize(n);
   slot_orig_.resize(n);
+  slot_store_.resize(n);
   parallelFor(std::int64_t(n), [&](std::int64_t e) {
     const std::size_t s = entries_.empty() ? std::size_t(e) : std::size_t(entries_[std::size_t(e)]);
     slot_x_[std::size_t(e)] = sorted_[s].x;
     slot_y_[std::size_t(e)] = sorted_[s].y;
     slot_z_[std::size_t(e)] = sorted_[s].z;
     slot_orig_[std::size_t(e)] = perm_[s];
+    slot_store_[std::size_t(e)] = std::int32_t(s);
   });
 }
 
@@ -250,6 +253,11 @@ NeighborLists GridNeighborSearch<T>::querySelf(const std::vector<T>& radii) cons
 }
 
 template <typename T>
+NeighborLists GridNeighborSearch<T>::querySelfStorage(T radius) const {
+  return run(nullptr, size(), std::vector<T>{radius}, true, true);
+}
+
+template <typename T>
 NeighborLists GridNeighborSearch<T>::query(const std::vector<Vec3<T>>& queries, const std::vector<T>& radii) const {
   return run(queries.data(), queries.size(), radii, false);
 }
@@ -261,7 +269,7 @@ NeighborLists GridNeighborSearch<T>::query(const std::vector<Vec3<T>>& queries, 
 
 template <typename T>
 NeighborLists GridNeighborSearch<T>::run(const Vec3<T>* queries, std::size_t nq, const std::vector<T>& radii,
-                                         bool self) const {
+                                         bool self, bool storage) const {
   if (radii.size() != 1 && radii.size() != nq)
     throw InputError("", "radii", "expected 1 radius or one per query (" + std::to_string(nq) + "), got " +
                                       std::to_string(radii.size()));
@@ -290,16 +298,18 @@ NeighborLists GridNeighborSearch<T>::run(const Vec3<T>* queries, std::size_t nq,
   parallelFor(blocks, [&](std::int64_t b) {
     std::vector<std::int32_t>& buf = buffers[std::size_t(b)];
     std::vector<std::int32_t> row;  // the dense fast path's candidates / hits of one query
-    AppendOriginal visit{&buf, perm_.data()};
+    AppendIndex visit{&buf, storage ? nullptr : perm_.data()};
+    // Storage-order lists name slots, original-order lists original indices (the fast path's id array).
+    const std::int32_t* slot_ids = storage ? slot_store_.data() : slot_orig_.data();
     try {
       buf.reserve(std::size_t(blockBegin(b + 1) - blockBegin(b)) * 32);
       for (std::size_t i = blockBegin(b); i < blockBegin(b + 1); ++i) {
-        const std::size_t q = self ? std::size_t(perm_[i]) : i;
+        const std::size_t q = self && !storage ? std::size_t(perm_[i]) : i;
         const Vec3<T>& x = self ? sorted_[i] : queries[i];
         const T r = per_query ? radii[q] : radii[0];
         const std::size_t first = buf.size();
         const DenseRowsResult fast =
-            denseRows(g.p, g.bucket_start, slot_x_.data(), slot_y_.data(), slot_z_.data(), slot_orig_.data(), g.n,
+            denseRows(g.p, g.bucket_start, slot_x_.data(), slot_y_.data(), slot_z_.data(), slot_ids, g.n,
                       x, r, self ? std::int32_t(q) : -1, row);
         if (fast.handled) {
           sortList(row.data(), fast.count);
@@ -330,7 +340,7 @@ NeighborLists GridNeighborSearch<T>::run(const Vec3<T>* queries, std::size_t nq,
   parallelFor(blocks, [&](std::int64_t b) {
     const std::int32_t* src = buffers[std::size_t(b)].data();
     for (std::size_t i = blockBegin(b); i < blockBegin(b + 1); ++i) {
-      const std::size_t q = self ? std::size_t(perm_[i]) : i;
+      const std::size_t q = self && !storage ? std::size_t(perm_[i]) : i;
       const std::size_t k = std::size_t(out.offsets[q + 1] - out.offsets[q]);
       std::copy(src, src + k, out.indices.begin() + out.offsets[q]);
       src += k;

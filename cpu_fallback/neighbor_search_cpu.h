@@ -28,6 +28,10 @@ class GridNeighborSearch {
   // Every point against every other point, one radius for all, or radii[i] for point i (size 1 or n).
   NeighborLists querySelf(T radius) const;
   NeighborLists querySelf(const std::vector<T>& radii) const;
+  // Every point against every other point in storage order (the space of sortedPoints()): row s lists the
+  // storage slots of slot s's neighbours, ascending. The same pairs as querySelf, with no permutation applied;
+  // callers that keep their particle arrays in storage order use it directly (map back with sortedToOriginal()).
+  NeighborLists querySelfStorage(T radius) const;
   // Another point set (e.g. tool samples) against the built points; radii of size 1 or queries.size().
   NeighborLists query(const std::vector<Vec3<T>>& queries, const std::vector<T>& radii) const;
   NeighborLists query(const std::vector<Vec3<T>>& queries, T radius) const;
@@ -44,7 +48,9 @@ class GridNeighborSearch {
   const std::vector<Vec3<T>>& sortedPoints() const { return sorted_; }
 
  private:
-  NeighborLists run(const Vec3<T>* queries, std::size_t nq, const std::vector<T>& radii, bool self) const;
+  // self: queries are the built points; storage: rows and indices in storage order (self only).
+  NeighborLists run(const Vec3<T>* queries, std::size_t nq, const std::vector<T>& radii, bool self,
+                    bool storage = false) const;
   NeighborGridView<T> view() const;
 
   T cell_size_ = T(0);
@@ -59,6 +65,7 @@ class GridNeighborSearch {
   // fast path of the query streams these (one contiguous run of slots per (y, z) row of cells).
   std::vector<T> slot_x_, slot_y_, slot_z_;
   std::vector<std::int32_t> slot_orig_;
+  std::vector<std::int32_t> slot_store_;    // storage slot of each bucket slot (identity unless Morton)
 };
 
 }  // namespace inc::cpu

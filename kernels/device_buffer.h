@@ -60,6 +60,7 @@ class DeviceBuffer {
   const T* data() const { return ptr_; }
   std::size_t size() const { return size_; }
   std::size_t bytes() const { return size_ * sizeof(T); }
+  std::size_t capacity() const { return capacity_; }
   std::size_t capacityBytes() const { return capacity_ * sizeof(T); }
 
  private:

@@ -1,8 +1,10 @@
 // CUDA grid neighbour search: device bounding box, radix sort by cell, cell table, count / scan / fill of CSR lists.
 #include "kernels/neighbor_search_cuda.h"
 
+#include <cub/block/block_scan.cuh>
 #include <cub/device/device_radix_sort.cuh>
 #include <cub/device/device_scan.cuh>
+#include <cuda/atomic>
 #include <cuda/std/functional>
 
 #include <algorithm>
@@ -340,9 +342,9 @@ struct SharedAppendVisit {
   }
 };
 
-// Maps a column of k <= kRowCap storage indices to original indices and insertion-sorts it in shared memory.
-__device__ void finishColumn(std::int32_t* col, std::int32_t k, const std::int32_t* perm) {
-  for (std::int32_t i = 0; i < k; ++i) col[i * kRowStride] = perm[col[i * kRowStride]];
+// Insertion sort of a column of k <= kRowCap entries in shared memory (linear when it is already sorted, as
+// storage-order rows of a dense grid in bucket order are).
+__device__ void sortColumn(std::int32_t* col, std::int32_t k) {
   for (std::int32_t i = 1; i < k; ++i) {
     const std::int32_t v = col[i * kRowStride];
     std::int32_t j = i;
@@ -353,6 +355,12 @@ __device__ void finishColumn(std::int32_t* col, std::int32_t k, const std::int32
     }
     col[j * kRowStride] = v;
   }
+}
+
+// Maps a column of k <= kRowCap storage indices to original indices and sorts it.
+__device__ void finishColumn(std::int32_t* col, std::int32_t k, const std::int32_t* perm) {
+  for (std::int32_t i = 0; i < k; ++i) col[i * kRowStride] = perm[col[i * kRowStride]];
+  sortColumn(col, k);
 }
 
 // Fused first pass: one traversal per query counts its neighbours (counts[q]) and, for rows of at most
@@ -436,6 +444,131 @@ __global__ void __launch_bounds__(kFillThreads) fillKernel(QuerySpec<T> s, const
       for (std::int32_t i = lane; i < kk; i += 32) indices[b + i] = col[i * kRowStride];
     }
   }
+}
+
+// ---- storage-order self-query: one traversal, rows written in place (decoupled look-back) ----
+
+// Tile status words of the look-back scan (Merrill & Garland 2016): a 2-bit flag over a 62-bit count.
+constexpr std::uint64_t kTileAggregate = std::uint64_t(1) << 62;  // the tile's own total is published
+constexpr std::uint64_t kTileInclusive = std::uint64_t(2) << 62;  // the total of tiles 0..this is published
+constexpr std::uint64_t kTileValue = (std::uint64_t(1) << 62) - 1;
+
+__device__ inline std::uint64_t tileLoad(std::uint64_t* w) {
+  return ::cuda::atomic_ref<std::uint64_t, ::cuda::thread_scope_device>(*w).load(::cuda::memory_order_acquire);
+}
+__device__ inline void tileStore(std::uint64_t* w, std::uint64_t v) {
+  ::cuda::atomic_ref<std::uint64_t, ::cuda::thread_scope_device>(*w).store(v, ::cuda::memory_order_release);
+}
+
+// Called by the 32 lanes of a tile's first warp: publishes the tile's aggregate, sums the predecessors'
+// published values 32 at a time back to the nearest inclusive prefix, publishes this tile's inclusive prefix
+// and returns the exclusive one. Tiles take their index from an atomic counter in launch order, so every
+// predecessor is already running: the wait always ends.
+__device__ std::uint64_t tileExclusivePrefix(std::uint64_t* status, int tile, std::uint64_t aggregate) {
+  const int lane = threadIdx.x & 31;
+  if (tile == 0) {
+    if (lane == 0) tileStore(status, kTileInclusive | aggregate);
+    return 0;
+  }
+  if (lane == 0) tileStore(status + tile, kTileAggregate | aggregate);
+  std::uint64_t exclusive = 0;
+  for (int end = tile - 1;; end -= 32) {
+    const int p = end - lane;  // lane 0 looks at the nearest predecessor
+    std::uint64_t w = p >= 0 ? tileLoad(status + p) : kTileInclusive;
+    while (__any_sync(0xffffffffu, (w >> 62) == 0))
+      if ((w >> 62) == 0) w = tileLoad(status + p);
+    const unsigned inclusive = __ballot_sync(0xffffffffu, (w >> 62) == 2);
+    const int stop = inclusive ? __ffs(int(inclusive)) - 1 : 31;  // nearest inclusive prefix, else the window
+    std::uint64_t v = lane <= stop ? (w & kTileValue) : 0;
+    for (int o = 16; o > 0; o >>= 1) v += __shfl_down_sync(0xffffffffu, v, o);
+    exclusive += __shfl_sync(0xffffffffu, v, 0);
+    if (inclusive) break;
+  }
+  if (lane == 0) tileStore(status + tile, kTileInclusive | (exclusive + aggregate));
+  return exclusive;
+}
+
+struct SlotWriteVisit {
+  std::int32_t* row;
+  std::int32_t k;
+  __device__ void operator()(std::int32_t j) { row[k++] = j; }
+};
+
+// Storage-order self-query in one pass. Tile = kFillThreads consecutive storage slots. Each thread traverses
+// its slot's neighbourhood into a shared-memory column (rows of at most kRowCap; longer ones are counted),
+// the tile scans its counts, the look-back gives the tile's offset, and the rows are written straight to
+// their CSR place by the whole warp (consecutive rows are contiguous: coalesced). Rows are only written when
+// the whole list fits `capacity` (the host checks offsets[nq] and runs again with an exact buffer if not);
+// the offsets are always complete. tile_status has gridDim.x zeroed words plus the tile counter.
+template <typename T>
+__global__ void __launch_bounds__(kFillThreads) storageSelfKernel(QuerySpec<T> s, std::int64_t* offsets,
+                                                                  std::int32_t* indices, std::uint64_t capacity,
+                                                                  std::uint64_t* tile_status) {
+  using Scan = cub::BlockScan<std::uint64_t, kFillThreads>;
+  __shared__ std::int32_t buf[kRowCap * kRowStride];
+  __shared__ typename Scan::TempStorage scan_tmp;
+  __shared__ int s_tile;
+  __shared__ std::uint64_t s_prefix;
+  if (threadIdx.x == 0) s_tile = int(atomicAdd(reinterpret_cast<unsigned long long*>(tile_status + gridDim.x), 1ull));
+  __syncthreads();
+  const int tile = s_tile;
+  const int t = tile * kFillThreads + int(threadIdx.x);
+  const bool active = t < s.nq;
+  std::int32_t k = 0;
+  Vec3<T> x;
+  if (active) {
+    x = s.g.point(t);
+    SharedAppendVisit v{buf + threadIdx.x, 0};
+    forEachGridNeighbor(s.g, x, s.radius, t, v);
+    k = v.k;
+    if (k <= kRowCap) sortColumn(buf + threadIdx.x, k);
+  }
+  std::uint64_t local = 0, tile_total = 0;
+  Scan(scan_tmp).ExclusiveSum(std::uint64_t(k), local, tile_total);
+  if (threadIdx.x < 32) {
+    const std::uint64_t prefix = tileExclusivePrefix(tile_status, tile, tile_total);
+    if (threadIdx.x == 0) s_prefix = prefix;
+  }
+  __syncthreads();
+  const std::uint64_t begin = s_prefix + local;
+  const bool fits = begin + std::uint64_t(k) <= capacity;
+  if (active) {
+    offsets[t] = std::int64_t(begin);
+    if (t == s.nq - 1) offsets[s.nq] = std::int64_t(begin + std::uint64_t(k));
+    if (k > kRowCap && fits) {  // a long row: traverse again straight into its place, then sort it there
+      SlotWriteVisit v{indices + begin, 0};
+      forEachGridNeighbor(s.g, x, s.radius, t, v);
+      sortRow(v.row, v.k);
+    }
+  }
+  const std::int32_t small_k = active && fits && k <= kRowCap ? k : 0;
+  __syncwarp();
+  const int lane = threadIdx.x & 31;
+  const int warp_base = threadIdx.x & ~31;
+  for (int l = 0; l < 32; ++l) {
+    const std::uint64_t b = __shfl_sync(0xffffffffu, begin, l);
+    const std::int32_t kk = __shfl_sync(0xffffffffu, small_k, l);
+    const std::int32_t* col = buf + warp_base + l;
+    for (std::int32_t i = lane; i < kk; i += 32) indices[b + std::uint64_t(i)] = col[i * kRowStride];
+  }
+}
+
+// The grid part of a query's parameters (queries, radii and count are the caller's).
+template <typename T>
+QuerySpec<T> querySpec(const NeighborGridParams<T>& params, const Packed4<T>* packed, const Vec3<T>* sorted,
+                       const std::int32_t* bucket_start, const std::int32_t* entries, const std::int32_t* perm,
+                       std::size_t n) {
+  QuerySpec<T> s{};
+  s.g.p = params;
+  if constexpr (std::is_same_v<T, float>)
+    s.g.points = reinterpret_cast<const float4*>(packed);
+  else
+    s.g.points = sorted;
+  s.g.bucket_start = bucket_start;
+  s.g.entries = entries;
+  s.g.n = std::int32_t(n);
+  s.perm = perm;
+  return s;
 }
 
 template <typename T>
@@ -638,6 +771,59 @@ void GridNeighborSearch<T>::query(const Vec3<T>* d_queries, std::size_t nq, cons
 }
 
 template <typename T>
+void GridNeighborSearch<T>::querySelfStorage(T radius, DeviceNeighborLists& out) const {
+  if (!neighborRadiusValid(radius))
+    throw InputError("", "radius", "must be finite and >= 0, got " + std::to_string(double(radius)));
+  const std::size_t nq = n_;
+  out.offsets.resize(nq + 1);
+  if (nq == 0) {
+    out.offsets.fillZero();
+    out.indices.resize(0);
+    return;
+  }
+  mark("query:start");
+  QuerySpec<T> s = querySpec(params_, packed_.data(), sorted_.data(), bucket_start_.data(),
+                              morton_ ? entries_.data() : nullptr, perm_.data(), n_);
+  s.radius = radius;
+  s.nq = int(nq);
+  const unsigned tiles = unsigned((nq + kFillThreads - 1) / kFillThreads);
+  tile_status_.resize(std::size_t(tiles) + 1);  // + the tile counter
+  // Optimistic size: the buffer's capacity (a previous call's lists), at least 32 entries per query. When the
+  // lists turn out longer, the offsets are still complete: grow to the exact total and run once more.
+  std::size_t cap = std::max(out.indices.capacity(), nq * 32);
+  auto grow = [&](std::size_t total) {
+    try {
+      out.indices.resize(total);
+    } catch (const std::runtime_error&) {  // cudaMalloc failed: never hand out truncated lists
+      cudaGetLastError();
+      throw InputError("", "radius", "the neighbour lists (" + std::to_string(total) +
+                                         " entries) do not fit in device memory; use a smaller radius");
+    }
+  };
+  grow(cap);
+  cap = out.indices.capacity();
+  for (int attempt = 0;; ++attempt) {
+    INC_CUDA(cudaMemsetAsync(tile_status_.data(), 0, tile_status_.bytes()));
+    storageSelfKernel<T><<<tiles, kFillThreads>>>(s, out.offsets.data(), out.indices.data(), cap,
+                                                  tile_status_.data());
+    INC_CUDA_LAUNCH("storageSelfKernel");
+    // Host sync 1 of 1 (2 when the lists outgrow the buffer): the total, to size the list exactly and to know
+    // whether every row was written.
+    std::int64_t total = 0;
+    INC_CUDA(cudaMemcpy(&total, out.offsets.data() + nq, sizeof(total), cudaMemcpyDeviceToHost));
+    mark(attempt == 0 ? "query:storage traverse+write+sync" : "query:storage rerun");
+    if (std::uint64_t(total) > std::uint64_t(std::numeric_limits<std::int64_t>::max() / 4))
+      throw InputError("", "radius", "the neighbour lists hold " + std::to_string(total) + " entries; use a smaller radius");
+    if (std::size_t(total) <= cap) {
+      out.indices.resize(std::size_t(total));
+      return;
+    }
+    grow(std::size_t(total));
+    cap = out.indices.capacity();
+  }
+}
+
+template <typename T>
 void GridNeighborSearch<T>::run(const Vec3<T>* d_queries, std::size_t nq, T radius, const T* d_radii,
                                 std::size_t radii_count, bool self, DeviceNeighborLists& out) const {
   if (radii_count != 1 && radii_count != nq)
@@ -665,17 +851,9 @@ void GridNeighborSearch<T>::run(const Vec3<T>* d_queries, std::size_t nq, T radi
     INC_CUDA_LAUNCH("validateKernel");
   }
 
-  QuerySpec<T> s;
-  s.g.p = params_;
-  if constexpr (std::is_same_v<T, float>)
-    s.g.points = reinterpret_cast<const float4*>(packed_.data());
-  else
-    s.g.points = sorted_.data();
-  s.g.bucket_start = bucket_start_.data();
-  s.g.entries = morton_ ? entries_.data() : nullptr;
-  s.g.n = std::int32_t(n_);
+  QuerySpec<T> s = querySpec(params_, packed_.data(), sorted_.data(), bucket_start_.data(),
+                              morton_ ? entries_.data() : nullptr, perm_.data(), n_);
   s.queries = self ? nullptr : d_queries;
-  s.perm = perm_.data();
   s.radii = d_radii;
   s.radii_stride = radii_count == nq ? 1 : 0;  // one device radius for all: every query reads radii[0]
   s.radius = radius;

@@ -55,6 +55,13 @@ class GridNeighborSearch {
   DeviceNeighborLists querySelf(T radius) const;
   void querySelf(T radius, DeviceNeighborLists& out) const;  // reuses out's buffers (they never shrink)
   void querySelf(const T* d_radii, std::size_t radii_count, DeviceNeighborLists& out) const;
+  // Storage-order self-query (the space of sortedPoints()): row s lists the storage slots of slot s's
+  // neighbours, ascending; the same pairs as querySelf, with no permutation applied (map back with
+  // sortedToOriginal()). The cheapest form: one traversal writes every row straight to its place (tile offsets
+  // from a decoupled look-back scan inside the kernel); out.indices is sized optimistically from its capacity
+  // (at least 32 per query) and, if the lists are longer, grown to the exact total and filled by a second run.
+  // One host read of the total per call (two after a growth). Same lists as cpu::querySelfStorage.
+  void querySelfStorage(T radius, DeviceNeighborLists& out) const;
   // nq device query points (e.g. tool samples) against the built points.
   DeviceNeighborLists query(const Vec3<T>* d_queries, std::size_t nq, T radius) const;
   void query(const Vec3<T>* d_queries, std::size_t nq, T radius, DeviceNeighborLists& out) const;
@@ -109,6 +116,7 @@ class GridNeighborSearch {
   mutable DeviceBuffer<std::int32_t> staged_;       // fused query: sorted short rows, kRowCap per storage slot
   std::size_t staged_limit_bytes_ = std::size_t(4) << 30;
   mutable DeviceBuffer<std::uint64_t> status_;      // {first bad query, first bad radius, total}
+  mutable DeviceBuffer<std::uint64_t> tile_status_;  // storage query: look-back words per tile + tile counter
   mutable DeviceBuffer<unsigned char> temp_;        // CUB temporary storage
   DeviceBuffer<Vec3<T>> partial_lo_, partial_hi_;   // bounding-box partials per block
   DeviceBuffer<std::int64_t> partial_bad_;

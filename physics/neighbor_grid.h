@@ -197,6 +197,29 @@ template <typename T, typename View, typename Visit>
 INC_HD void neighborTest(const View& g, const Vec3<T>& x, T r2, std::int32_t j, std::int32_t skip, Visit& visit) {
   if (j != skip && distance2Exact(x, g.point(j)) <= r2) visit(j);
 }
+
+template <typename T, typename Visit>
+INC_HD void neighborTestPoint(const Vec3<T>& x, const Vec3<T>& y, T r2, std::int32_t j, std::int32_t skip,
+                              Visit& visit) {
+  if (j != skip && distance2Exact(x, y) <= r2) visit(j);
+}
+
+// One contiguous run of slots [e, e1) of a dense grid, in slot order. Four candidates are loaded before the
+// first of them is tested: the loop is bound by the latency of those loads, and independent loads overlap.
+template <typename T, typename View, typename Visit>
+INC_HD void neighborScanRun(const View& g, const Vec3<T>& x, T r2, std::int32_t e, std::int32_t e1,
+                            std::int32_t skip, Visit& visit) {
+  for (; e + 4 <= e1; e += 4) {
+    const std::int32_t j0 = g.entries ? g.entries[e] : e, j1 = g.entries ? g.entries[e + 1] : e + 1,
+                       j2 = g.entries ? g.entries[e + 2] : e + 2, j3 = g.entries ? g.entries[e + 3] : e + 3;
+    const Vec3<T> y0 = g.point(j0), y1 = g.point(j1), y2 = g.point(j2), y3 = g.point(j3);
+    neighborTestPoint(x, y0, r2, j0, skip, visit);
+    neighborTestPoint(x, y1, r2, j1, skip, visit);
+    neighborTestPoint(x, y2, r2, j2, skip, visit);
+    neighborTestPoint(x, y3, r2, j3, skip, visit);
+  }
+  for (; e < e1; ++e) neighborTest(g, x, r2, g.entries ? g.entries[e] : e, skip, visit);
+}
 }  // namespace detail
 
 // Calls visit(j) for every storage index j != skip with distance2Exact(x, points[j]) <= r * r, each exactly
@@ -243,9 +266,7 @@ INC_HD void forEachGridNeighbor(const View& view, const Vec3<T>& query, T r, std
         if (!neighborRowXRange(p, x, reach, qc, cy, cz, xl, xh)) continue;
         const std::uint32_t b0 = neighborBucket(p, xl, cy, cz);
         const std::uint32_t b1 = b0 + std::uint32_t(xh - xl) + 1u;
-        const std::int32_t e1 = g.bucket_start[b1];
-        for (std::int32_t e = g.bucket_start[b0]; e < e1; ++e)
-          detail::neighborTest(g, x, r2, g.entries ? g.entries[e] : e, skip, visit);
+        detail::neighborScanRun(g, x, r2, g.bucket_start[b0], g.bucket_start[b1], skip, visit);
       }
     return;
   }

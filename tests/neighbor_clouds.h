@@ -135,4 +135,22 @@ inline void expectCanonical(const NeighborLists& l, bool self, const std::string
     }
 }
 
+// Storage-order lists (row s = storage slot s, entries = storage slots) mapped back through the permutation
+// slot -> original index: row perm[s] holds perm[j] for j in row s, sorted. Equal to the original-order lists
+// when both name the same pairs.
+inline NeighborLists storageListsToOriginal(const NeighborLists& storage, const std::vector<std::int32_t>& perm) {
+  const std::size_t n = storage.queryCount();
+  NeighborLists out;
+  out.offsets.assign(n + 1, 0);
+  for (std::size_t s = 0; s < n; ++s) out.offsets[std::size_t(perm[s]) + 1] = std::int64_t(storage.count(s));
+  for (std::size_t q = 0; q < n; ++q) out.offsets[q + 1] += out.offsets[q];
+  out.indices.resize(storage.indices.size());
+  for (std::size_t s = 0; s < n; ++s) {
+    std::int32_t* dst = out.indices.data() + out.offsets[std::size_t(perm[s])];
+    for (std::int64_t e = storage.offsets[s]; e < storage.offsets[s + 1]; ++e) *dst++ = perm[std::size_t(storage.indices[std::size_t(e)])];
+    std::sort(out.indices.data() + out.offsets[std::size_t(perm[s])], dst);
+  }
+  return out;
+}
+
 }  // namespace inc::testing_neighbors

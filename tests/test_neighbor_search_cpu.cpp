@@ -316,6 +316,37 @@ TYPED_TEST(NeighborSearchCpu, MortonOrderAndPermutations) {
   for (int c : seen) ASSERT_EQ(c, 1);
 }
 
+// Storage-order lists name the same pairs as the original-order ones (mapped back through the permutation:
+// exact equality with brute force), each row ascending in storage slots and without the query itself, for
+// bucket and Morton order, dense and hashed grids, short and long rows.
+TYPED_TEST(NeighborSearchCpu, StorageOrderListsAreThePermutedLists) {
+  using T = TypeParam;
+  struct Case {
+    std::vector<Vec3<T>> pts;
+    T r, cell;
+    const char* what;
+  };
+  auto big = randomCloud<T>(600, 9);
+  for (auto& x : big) x = x * T(1e-3);  // every point in one cell: rows of 599
+  const std::vector<Case> cases = {{randomCloud<T>(3000, 21), T(0.06), T(0.03), "random"},
+                                   {clusteredCloud<T>(3000, 22), T(0.04), T(0.04), "clustered"},
+                                   {latticeCloud<T>(12, 10, 8, T(0.125), 23), T(0.125), T(0.125), "lattice ties"},
+                                   {sparseCloud<T>(700, 24), T(1), T(1), "sparse hashed"},
+                                   {big, T(1), T(1), "one cell"}};
+  for (const Case& c : cases)
+    for (bool morton : {false, true}) {
+      const std::string tag = std::string(c.what) + (morton ? " morton" : " bucket-order");
+      cpu::GridNeighborSearch<T> s(c.pts, c.cell, morton);
+      const NeighborLists storage = s.querySelfStorage(c.r);
+      expectCanonical(storage, true, tag + " storage");
+      expectSameLists(storageListsToOriginal(storage, s.sortedToOriginal()),
+                      cpu::bruteForceNeighbors(c.pts, c.pts, std::vector<T>{c.r}, true), tag + " vs brute force");
+    }
+  EXPECT_THROW(cpu::GridNeighborSearch<T>(cases[0].pts, T(0.1)).querySelfStorage(std::numeric_limits<T>::quiet_NaN()),
+               InputError);
+  EXPECT_TRUE(cpu::GridNeighborSearch<T>(std::vector<Vec3<T>>{}, T(1)).querySelfStorage(T(1)).indices.empty());
+}
+
 TYPED_TEST(NeighborSearchCpu, ResultDoesNotDependOnThreadCount) {
   using T = TypeParam;
   const auto pts = clusteredCloud<T>(3000, 14);

@@ -233,6 +233,40 @@ TYPED_TEST(NeighborSearchGpu, AllPointsInOneCellListEveryOtherPoint) {
   }
 }
 
+// Storage-order lists: GPU == CPU exactly (offsets and entries), for bucket and Morton order, dense and hashed
+// grids, rows longer than the shared-memory column and than the optimistic 32 per query (the second run after
+// the index array grows), and a reused output whose capacity already fits.
+TYPED_TEST(NeighborSearchGpu, StorageOrderListsEqualTheCpu) {
+  SKIP_WITHOUT_GPU();
+  using T = TypeParam;
+  struct Case {
+    std::vector<Vec3<T>> pts;
+    T r, cell;
+    const char* what;
+  };
+  auto big = randomCloud<T>(600, 9);
+  for (auto& x : big) x = x * T(1e-3);
+  const std::vector<Case> cases = {{randomCloud<T>(20000, 31), T(0.03), T(0.015), "random"},
+                                   {clusteredCloud<T>(20000, 32), T(0.03), T(0.03), "clustered"},
+                                   {latticeCloud<T>(20, 16, 12, T(0.125), 33), T(0.125), T(0.125), "lattice ties"},
+                                   {sparseCloud<T>(3000, 34), T(1), T(1), "sparse hashed"},
+                                   {big, T(1), T(1), "one cell"}};
+  for (const Case& c : cases)
+    for (bool morton : {false, true}) {
+      const std::string tag = std::string(c.what) + (morton ? " morton" : " bucket-order");
+      cpu::GridNeighborSearch<T> cs(c.pts, c.cell, morton);
+      const NeighborLists want = cs.querySelfStorage(c.r);
+      cuda::GridNeighborSearch<T> gs;
+      gs.build(c.pts, c.cell, morton);
+      cuda::DeviceNeighborLists out;
+      gs.querySelfStorage(c.r, out);
+      expectSameLists(out.download(), want, tag + " gpu vs cpu");
+      gs.querySelfStorage(c.r, out);  // reused buffers: one run, same lists
+      expectSameLists(out.download(), want, tag + " gpu reused vs cpu");
+      EXPECT_EQ(downloadArray(gs.sortedToOriginal(), c.pts.size()), cs.sortedToOriginal()) << tag;
+    }
+}
+
 TYPED_TEST(NeighborSearchGpu, DuplicatePositionsAndZeroRadius) {
   SKIP_WITHOUT_GPU();
   using T = TypeParam;
