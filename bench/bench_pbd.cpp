@@ -88,30 +88,18 @@ std::chrono::steady_clock::time_point g_deadline = std::chrono::steady_clock::ti
 int g_skipped = 0;
 bool pastDeadline() { return std::chrono::steady_clock::now() > g_deadline; }
 
-// A solver as the tables name it: Jacobi with blocks one after another, Jacobi with all blocks at once
-// (PbdStepParams::jacobi_simultaneous), or Gauss-Seidel.
-struct SolverMode {
-  PbdSolverKind kind;
-  bool simultaneous;
-  const char* name;
-};
-const SolverMode kJacobi{PbdSolverKind::Jacobi, false, "jacobi"};
-const SolverMode kJacobiSim{PbdSolverKind::Jacobi, true, "jacobi_sim"};
-const SolverMode kGaussSeidel{PbdSolverKind::GaussSeidel, false, "gauss_seidel"};
-
 // Frame time: CUDA events (the backend's "frame" stage) on the GPU, wall clock on the CPU; median of up to
 // `repeats` frames (fewer when a point's time budget runs out) after up to 3 warm-up frames (graph capture,
 // first touch). --profile: one more frame with per-stage CUDA events (no graph, no fusion) gives the stage split.
 template <typename T>
-Row timeFrames(BackendKind kind, SolverMode solver, std::int64_t n, int iterations, int substeps, int repeats,
+Row timeFrames(BackendKind kind, PbdSolverKind solver, std::int64_t n, int iterations, int substeps, int repeats,
                int fused_max = 4096) {
   Vec3d size;
   const PbdModel<T> m = blockModel<T>(n, size);
   auto be = makePbdBackend<T>(kind);
   be->setModel(m);
   PbdStepParams<T> p;
-  p.solver = solver.kind;
-  p.jacobi_simultaneous = solver.simultaneous;
+  p.solver = solver;
   p.iterations = iterations;
   p.substeps = substeps;
   p.volume_influence = T(2 * kSpacing);
@@ -137,10 +125,8 @@ Row timeFrames(BackendKind kind, SolverMode solver, std::int64_t n, int iteratio
   r.table = "scaling";
   r.backend = backendName(be->kind());
   r.precision = sizeof(T) == 4 ? "float32" : "float64";
-  r.solver = solver.name;
-  // (simultaneous Jacobi always runs on per-phase launches)
-  if (be->kind() == BackendKind::Cuda)
-    r.path = std::int64_t(m.size()) <= fused_max && !solver.simultaneous ? "fused" : "launches";
+  r.solver = solver == PbdSolverKind::Jacobi ? "jacobi" : "gauss_seidel";
+  if (be->kind() == BackendKind::Cuda) r.path = std::int64_t(m.size()) <= fused_max ? "fused" : "launches";
   r.spheres = std::int64_t(m.size());
   r.constraints = solvedConstraints(m);
   r.iterations = iterations;
@@ -165,15 +151,14 @@ Row timeFrames(BackendKind kind, SolverMode solver, std::int64_t n, int iteratio
 // Speed/accuracy: mean tip deflection after `frames` frames of sagging, against a 200-iteration
 // Gauss-Seidel reference run.
 template <typename T>
-double tipDeflection(BackendKind kind, SolverMode solver, std::int64_t n, int iterations, int substeps, int frames,
+double tipDeflection(BackendKind kind, PbdSolverKind solver, std::int64_t n, int iterations, int substeps, int frames,
                      PbdFrameStats& st) {
   Vec3d size;
   const PbdModel<T> m = blockModel<T>(n, size);
   auto be = makePbdBackend<T>(kind);
   be->setModel(m);
   PbdStepParams<T> p;
-  p.solver = solver.kind;
-  p.jacobi_simultaneous = solver.simultaneous;
+  p.solver = solver;
   p.iterations = iterations;
   p.substeps = substeps;
   p.damping = T(5);
@@ -270,7 +255,7 @@ int main(int argc, char** argv) {
     for (BackendKind k : kinds)
       for (std::int64_t n : sizes) {
         if (k == BackendKind::Cpu && n > cpu_max) continue;
-        for (const SolverMode& s : {kJacobi, kJacobiSim, kGaussSeidel}) {
+        for (PbdSolverKind s : {PbdSolverKind::Jacobi, PbdSolverKind::GaussSeidel}) {
           if (pastDeadline()) {
             ++g_skipped;
             continue;
@@ -300,9 +285,9 @@ int main(int argc, char** argv) {
         continue;
       }
       PbdFrameStats st;
-      const double ref = f64 ? tipDeflection<double>(k, kGaussSeidel, accuracy_n, 200, substeps, frames, st)
-                             : tipDeflection<float>(k, kGaussSeidel, accuracy_n, 200, substeps, frames, st);
-      for (const SolverMode& s : {kJacobi, kJacobiSim, kGaussSeidel})
+      const double ref = f64 ? tipDeflection<double>(k, PbdSolverKind::GaussSeidel, accuracy_n, 200, substeps, frames, st)
+                             : tipDeflection<float>(k, PbdSolverKind::GaussSeidel, accuracy_n, 200, substeps, frames, st);
+      for (PbdSolverKind s : {PbdSolverKind::Jacobi, PbdSolverKind::GaussSeidel})
         for (int it : {1, 2, 5, 10, 20, 50}) {
           if (pastDeadline()) {
             ++g_skipped;

@@ -111,16 +111,6 @@ class PbdCpuBackend final : public PbdBackend<T> {
     ctx.jacobi = p.solver == PbdSolverKind::Jacobi;
     ctx.omega = p.jacobi_omega;
     ctx.rotation_iterations = p.rotation_iterations;
-    // Simultaneous Jacobi: every block projects from the same positions; clusters write new rotations to a
-    // copy that the gather takes back, so that no block reads what another writes in the same pass.
-    const bool together = ctx.jacobi && p.jacobi_simultaneous;
-    if (together) {
-      rotation_out_ = state_.rotations;
-      ctx.rotation_out = rotation_out_.data();
-    }
-    std::vector<pbd::BlockView<T>> solved;
-    for (std::size_t bi = 0; bi < model_.blocks.size(); ++bi)
-      if (model_.blocks[bi].solve) solved.push_back(blockView(bi, together));
     if (!ctx.jacobi)
       for (const auto& b : model_.blocks)
         if (b.solve) st.colors += b.coloring.colorCount();
@@ -139,21 +129,7 @@ class PbdCpuBackend final : public PbdBackend<T> {
 
       for (int it = 0; it < p.iterations; ++it) {
         t0 = Clock::now();
-        if (together) {
-          for (const pbd::BlockView<T>& view : solved) {
-            const std::int64_t spc = view.count ? std::int64_t(view.offsets[view.count] / view.count) : 1;
-            constraintLoop(std::int64_t(view.count), spc, [&](std::int64_t c) { pbd::projectConstraint(view, int(c), ctx); });
-          }
-          pbd::Quat<T>* rot = state_.rotations.data();
-          const pbd::Quat<T>* rot_out = rotation_out_.data();
-          loop(ni, [&](std::int64_t i) {
-            Vec3<T> d;
-            for (const pbd::BlockView<T>& view : solved) d += pbd::gatherCorrection(view, std::int32_t(i));
-            x[i] += d;
-            rot[i] = rot_out[i];
-          });
-        }
-        for (std::size_t bi = 0; bi < (together ? 0 : model_.blocks.size()); ++bi) {
+        for (std::size_t bi = 0; bi < model_.blocks.size(); ++bi) {
           const auto& b = model_.blocks[bi];
           if (!b.solve) continue;
           const pbd::BlockView<T> view = blockView(bi);
@@ -234,8 +210,7 @@ class PbdCpuBackend final : public PbdBackend<T> {
   }
 
  private:
-  // simultaneous: the Jacobi scales that count every solved block's constraints.
-  pbd::BlockView<T> blockView(std::size_t bi, bool simultaneous = false) {
+  pbd::BlockView<T> blockView(std::size_t bi) {
     const PbdConstraintBlock<T>& b = model_.blocks[bi];
     pbd::BlockView<T> v;
     v.kind = int(b.kind);
@@ -246,7 +221,7 @@ class PbdCpuBackend final : public PbdBackend<T> {
     v.rest = b.rest.data();
     v.rest_vec = b.rest_vec.data();
     v.compliance = b.compliance.data();
-    v.jacobi_scale = simultaneous ? b.jacobi_scale_all.data() : b.jacobi_scale.data();
+    v.jacobi_scale = b.jacobi_scale.data();
     v.particle_offsets = b.particle_offsets.data();
     v.particle_slots = b.particle_slots.data();
     v.lambda = lambda_[bi].data();
@@ -308,7 +283,6 @@ class PbdCpuBackend final : public PbdBackend<T> {
   std::vector<std::vector<Vec3<T>>> lambda_;
   std::vector<std::vector<Vec3<T>>> slot_corr_;
   std::vector<Vec3<T>> attach_lambda_;
-  std::vector<pbd::Quat<T>> rotation_out_;  // simultaneous Jacobi: the clusters' new rotations of an iteration
 };
 
 }  // namespace

@@ -85,7 +85,6 @@ class MetaballSimulation final : public SimulationModel {
     if (!(scene.material.damping >= 0)) throw InputError(f, "material.damping_per_s", "must be >= 0");
     params_.solver = parsePbdSolver(scene.pbd.solver, f, "pbd.solver");
     params_.iterations = scene.pbd.iterations;
-    params_.jacobi_simultaneous = scene.pbd.jacobi_blocks == "simultaneous";
     // CUDA single-block fused frame: measured on an H100 (docs/BENCHMARKS.md) it beats per-phase launches for
     // Gauss-Seidel up to thousands of spheres, but for Jacobi only below ~300 spheres.
     params_.fused_max_particles = params_.solver == PbdSolverKind::Jacobi ? 256 : 4096;

@@ -60,26 +60,6 @@ void validateBlock(const PbdConstraintBlock<T>& b, std::size_t n, const std::str
 }
 }  // namespace
 
-namespace {
-// Per-slot Jacobi scales of block b from constraint counts per particle (`count`): 1 / count of the busiest
-// movable participant of each constraint (shape matching: of the member itself, per slot).
-template <typename T>
-void computeJacobiScales(const PbdConstraintBlock<T>& b, const std::vector<std::int32_t>& count,
-                         const std::vector<std::uint8_t>& fixed, std::vector<T>& scale) {
-  scale.assign(b.ids.size(), T(1));
-  for (std::size_t c = 0; c < b.count(); ++c) {
-    if (b.kind == PbdConstraintKind::ShapeMatching) {
-      for (std::int32_t s = b.offsets[c]; s < b.offsets[c + 1]; ++s) scale[s] = T(1) / T(std::max(1, count[b.ids[s]]));
-    } else {
-      int busiest = 1;
-      for (std::int32_t s = b.offsets[c]; s < b.offsets[c + 1]; ++s)
-        if (!fixed[b.ids[s]]) busiest = std::max(busiest, count[b.ids[s]]);
-      for (std::int32_t s = b.offsets[c]; s < b.offsets[c + 1]; ++s) scale[s] = T(1) / T(busiest);
-    }
-  }
-}
-}  // namespace
-
 template <typename T>
 void finalizePbdModel(PbdModel<T>& model) {
   const std::size_t n = model.size();
@@ -109,17 +89,25 @@ void finalizePbdModel(PbdModel<T>& model) {
     for (std::size_t s = 0; s < b.ids.size(); ++s) b.particle_slots[fill[b.ids[s]]++] = std::int32_t(s);
     // Jacobi scale: a constraint's step is divided by the number of this block's constraints acting on its
     // busiest movable participant, so that each particle's summed correction is at most an average.
-    std::vector<std::int32_t> own(n);
-    for (std::size_t p = 0; p < n; ++p) own[p] = b.particle_offsets[p + 1] - b.particle_offsets[p];
-    computeJacobiScales(b, own, fixed, b.jacobi_scale);
+    b.jacobi_scale.assign(b.ids.size(), T(1));
+    for (std::size_t c = 0; c < b.count(); ++c) {
+      if (b.kind == PbdConstraintKind::ShapeMatching) {
+        for (std::int32_t s = b.offsets[c]; s < b.offsets[c + 1]; ++s) {
+          const std::int32_t p = b.ids[s];
+          b.jacobi_scale[s] = T(1) / T(std::max(1, b.particle_offsets[p + 1] - b.particle_offsets[p]));
+        }
+      } else {
+        int busiest = 1;
+        for (std::int32_t s = b.offsets[c]; s < b.offsets[c + 1]; ++s) {
+          const std::int32_t p = b.ids[s];
+          if (fixed[p]) continue;
+          busiest = std::max(busiest, b.particle_offsets[p + 1] - b.particle_offsets[p]);
+        }
+        for (std::int32_t s = b.offsets[c]; s < b.offsets[c + 1]; ++s) b.jacobi_scale[s] = T(1) / T(busiest);
+      }
+    }
     b.coloring = colorConstraints(b.offsets, b.ids, n, fixed);
   }
-  // Simultaneous Jacobi: the same rule with every solved block's constraints on a particle counted.
-  std::vector<std::int32_t> total(n, 0);
-  for (const PbdConstraintBlock<T>& b : model.blocks)
-    if (b.solve)
-      for (std::size_t p = 0; p < n; ++p) total[p] += b.particle_offsets[p + 1] - b.particle_offsets[p];
-  for (PbdConstraintBlock<T>& b : model.blocks) computeJacobiScales(b, total, fixed, b.jacobi_scale_all);
 }
 
 template <typename T>

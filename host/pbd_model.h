@@ -43,8 +43,6 @@ struct PbdConstraintBlock {
   std::vector<std::int32_t> particle_slots;
   std::vector<T> jacobi_scale;                 // per slot: 1 / (constraints of this block on the busiest movable
                                                // participant); uniform within a constraint except ShapeMatching
-  std::vector<T> jacobi_scale_all;             // the same with the constraints of every solved block counted
-                                               // (simultaneous Jacobi: all blocks project from one state)
   ConstraintColoring coloring;
 
   std::size_t count() const { return offsets.empty() ? 0 : offsets.size() - 1; }
@@ -86,12 +84,6 @@ struct PbdStepParams {
   bool xpbd = true;             // false: plain PBD, block stiffness k per projection, no multipliers
   PbdSolverKind solver = PbdSolverKind::Jacobi;
   T jacobi_omega = T(1.5);      // over-relaxation of the averaged Jacobi step, (0, 2)
-  // Jacobi only. false: blocks one after another (each block projects, then its corrections are gathered
-  // before the next block reads the positions). true: every block projects from the same positions and one
-  // gather per particle sums all of them (steps averaged over every constraint on the particle: scales
-  // jacobi_scale_all); shape matching's new rotations take effect after the iteration. Two dependent passes
-  // per iteration instead of two per block: the GPU frame is latency bound on those passes.
-  bool jacobi_simultaneous = false;
   Vec3<T> gravity{T(0), T(0), T(-9.81)};  // m/s^2
   T damping = T(1);             // 1/s, velocities scaled by exp(-damping dt) each substep
   int rotation_iterations = 4;  // polar-decomposition steps per cluster per projection (warm-started)

@@ -50,7 +50,6 @@ struct PbdSpec {
   int iterations = 10;              // >= 1
   bool xpbd = true;                 // false: plain PBD (stiffness depends on iterations/dt)
   std::string solver = "jacobi";    // "jacobi" | "gauss_seidel"
-  std::string jacobi_blocks = "sequential";  // Jacobi: "sequential" | "simultaneous" (PbdStepParams::jacobi_simultaneous)
   double stretch_compliance = 0.0;  // m/N (XPBD alpha), >= 0
   double laplacian_compliance = 0.0;
   bool volume_preservation = true;

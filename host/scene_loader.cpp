@@ -228,12 +228,11 @@ PbdSpec readPbd(const ObjectReader& top) {
   PbdSpec p;
   if (!top.has("pbd")) return p;
   const ObjectReader r = top.object("pbd");
-  r.allowOnly({"iterations", "xpbd", "solver", "jacobi_blocks", "stretch_compliance", "laplacian_compliance",
-               "volume_preservation", "target_spheres"});
+  r.allowOnly({"iterations", "xpbd", "solver", "stretch_compliance", "laplacian_compliance", "volume_preservation",
+               "target_spheres"});
   p.iterations = intAtLeast(r, "iterations", p.iterations, 1);
   p.xpbd = r.boolean("xpbd", p.xpbd);
   p.solver = r.choice("solver", p.solver, {"jacobi", "gauss_seidel"});
-  p.jacobi_blocks = r.choice("jacobi_blocks", p.jacobi_blocks, {"sequential", "simultaneous"});
   p.stretch_compliance = nonNegative(r, "stretch_compliance", p.stretch_compliance);
   p.laplacian_compliance = nonNegative(r, "laplacian_compliance", p.laplacian_compliance);
   p.volume_preservation = r.boolean("volume_preservation", p.volume_preservation);
@@ -519,7 +518,6 @@ std::string sceneToJson(const Scene& s) {
   j["pbd"] = J{{"iterations", s.pbd.iterations},
                {"xpbd", s.pbd.xpbd},
                {"solver", s.pbd.solver},
-               {"jacobi_blocks", s.pbd.jacobi_blocks},
                {"stretch_compliance", s.pbd.stretch_compliance},
                {"laplacian_compliance", s.pbd.laplacian_compliance},
                {"volume_preservation", s.pbd.volume_preservation},

@@ -249,9 +249,6 @@ class TearingSimulation final : public SimulationModel {
     p.iterations = s.iterations;
     p.xpbd = s.xpbd;
     p.solver = parsePbdSolver(s.solver, scene.file, "pbd.solver");
-    // The device-resident tearing path patches each block's Jacobi scales on its own (no cross-block counts).
-    if (scene.pbd.jacobi_blocks != "sequential")
-      throw InputError(scene.file, "pbd.jacobi_blocks", "tearing solves its blocks one after another: use \"sequential\"");
     p.gravity = Vec3<T>(scene.solver.gravity);
     p.damping = T(s.damping);
     p.volume_preservation = false;

@@ -63,7 +63,7 @@ __device__ void shapeMatchingGroup(const pbd::BlockView<T>& b, int c, bool valid
   __syncwarp();
   if (valid) {
     q = pbd::extractRotation(a, q, ctx.rotation_iterations);
-    if (lane == 0) pbd::rotationTarget(ctx)[centre] = q;
+    if (lane == 0) ctx.rotation[centre] = q;
   }
   const Mat3<T> rot = pbd::quatToMatrix(q);
   Vec3<T> dmom;

@@ -102,54 +102,6 @@ __global__ void gatherKernel(int n, pbd::BlockView<T> b, Vec3<T>* x) {
   x[i] += pbd::gatherCorrection(b, std::int32_t(i));
 }
 
-// Simultaneous Jacobi: every solved block of the model in one launch. CUDA blocks [grid_begin[k],
-// grid_begin[k + 1]) project constraint block k (cluster kinds kGroup lanes per constraint). The views are
-// picked with constant indices (an unrolled loop), so the kernel reads them from parameter space.
-constexpr int kMaxSetBlocks = 4;
-template <typename T>
-struct BlockSet {
-  int nblocks = 0;
-  pbd::BlockView<T> views[kMaxSetBlocks];
-  unsigned grid_begin[kMaxSetBlocks + 1] = {};
-};
-
-template <typename T>
-__global__ void projectSetKernel(BlockSet<T> set, pbd::SolveContext<T> ctx) {
-#pragma unroll
-  for (int k = 0; k < kMaxSetBlocks; ++k) {
-    if (k >= set.nblocks || blockIdx.x < set.grid_begin[k] || blockIdx.x >= set.grid_begin[k + 1]) continue;
-    const pbd::BlockView<T>& b = set.views[k];
-    const long long t = (long long)(blockIdx.x - set.grid_begin[k]) * blockDim.x + threadIdx.x;
-    if (pbdgroup::usesGroup(b.kind)) {
-      const int q = int(t / pbdgroup::kGroup);
-      const bool valid = q < b.count;  // no early return: the whole warp takes part in the shuffles
-      pbdgroup::projectGroup(b, valid ? q : 0, valid, ctx, int(threadIdx.x) % pbdgroup::kGroup);
-    } else if (t < b.count) {
-      pbd::projectConstraint(b, int(t), ctx);
-    }
-  }
-}
-
-// Simultaneous Jacobi gather: each particle sums every block's slots (block order, then slot order), takes
-// back its cluster's new rotation and, when no attachment comes between, resolves its contacts in the same pass.
-template <typename T>
-__global__ void gatherSetKernel(int n, BlockSet<T> set, Vec3<T>* x, pbd::Quat<T>* rotation,
-                                const pbd::Quat<T>* rotation_out, bool contacts, const T* r, const T* w,
-                                const pbd::PlaneCollider<T>* planes, int np, const pbd::BoxCollider<T>* boxes, int nb,
-                                const pbd::CapsuleCollider<T>* tools_from, const pbd::CapsuleCollider<T>* tools_to,
-                                int nt, T t) {
-  const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i >= n) return;
-  Vec3<T> d;
-#pragma unroll
-  for (int k = 0; k < kMaxSetBlocks; ++k)
-    if (k < set.nblocks) d += pbd::gatherCorrection(set.views[k], std::int32_t(i));
-  Vec3<T> xi = x[i] + d;
-  if (rotation_out) rotation[i] = rotation_out[i];
-  if (contacts && w[i] > T(0)) xi = pbd::resolveContacts(xi, r[i], planes, np, boxes, nb, tools_from, tools_to, nt, t);
-  x[i] = xi;
-}
-
 template <typename T>
 __global__ void rotationKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx) {
   const int c = blockIdx.x * blockDim.x + threadIdx.x;
@@ -494,7 +446,6 @@ struct DeviceBlock {
   int count = 0;
   DeviceBuffer<std::int32_t> offsets, ids, particle_offsets, particle_slots, order;
   DeviceBuffer<T> rest, compliance, jacobi_scale;
-  DeviceBuffer<T> jacobi_scale_all;  // simultaneous Jacobi scales (host-built models only)
   DeviceBuffer<Vec3<T>> rest_vec, lambda, slot_corr;
   std::vector<std::int32_t> color_offsets;  // host: launch ranges
   DeviceBuffer<std::int32_t> color_offsets_dev;  // the same, for the fused small-model kernel
@@ -515,7 +466,7 @@ template <typename T>
 bool sameKey(const GraphKey<T>& a, const GraphKey<T>& b) {
   const PbdStepParams<T>&x = a.p, &y = b.p;
   return x.frame_dt == y.frame_dt && x.substeps == y.substeps && x.iterations == y.iterations && x.xpbd == y.xpbd &&
-         x.solver == y.solver && x.jacobi_omega == y.jacobi_omega && x.jacobi_simultaneous == y.jacobi_simultaneous && x.gravity.x == y.gravity.x &&
+         x.solver == y.solver && x.jacobi_omega == y.jacobi_omega && x.gravity.x == y.gravity.x &&
          x.gravity.y == y.gravity.y && x.gravity.z == y.gravity.z && x.damping == y.damping &&
          x.rotation_iterations == y.rotation_iterations && x.volume_preservation == y.volume_preservation &&
          x.volume_influence == y.volume_influence && x.max_radius_growth == y.max_radius_growth &&
@@ -563,7 +514,6 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     radii_next_.upload(m.rest_radii);
     std::vector<pbd::Quat<T>> ident(m.size());
     rotations_.upload(ident);
-    rotations_out_.upload(ident);
     active_.resize(m.size());
     active_.fillZero();
     planes_.upload(m.planes);
@@ -596,7 +546,6 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
       d.rest.upload(s.rest);
       d.compliance.upload(s.compliance);
       d.jacobi_scale.upload(s.jacobi_scale);
-      d.jacobi_scale_all.upload(s.jacobi_scale_all);
       d.rest_vec.upload(s.rest_vec);
       d.lambda.resize(s.multiplierCount());
       d.lambda.fillZero();
@@ -635,14 +584,12 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     std::size_t b = x_.capacityBytes() + v_.capacityBytes() + x_prev_.capacityBytes() + rest_positions_.capacityBytes() +
                     masses_.capacityBytes() + inv_mass_.capacityBytes() + w_.capacityBytes() +
                     rest_radii_.capacityBytes() + radii_.capacityBytes() + radii_next_.capacityBytes() +
-                    rotations_.capacityBytes() + rotations_out_.capacityBytes() + active_.capacityBytes() +
-                    ov_off_.capacityBytes() +
+                    rotations_.capacityBytes() + active_.capacityBytes() + ov_off_.capacityBytes() +
                     ov_ids_.capacityBytes() + rest_cell_.capacityBytes() + samples_.capacityBytes();
     for (const DeviceBlock<T>& d : blocks_)
       b += d.offsets.capacityBytes() + d.ids.capacityBytes() + d.particle_offsets.capacityBytes() +
            d.particle_slots.capacityBytes() + d.order.capacityBytes() + d.rest.capacityBytes() +
-           d.compliance.capacityBytes() + d.jacobi_scale.capacityBytes() + d.jacobi_scale_all.capacityBytes() +
-           d.rest_vec.capacityBytes() +
+           d.compliance.capacityBytes() + d.jacobi_scale.capacityBytes() + d.rest_vec.capacityBytes() +
            d.lambda.capacityBytes() + d.slot_corr.capacityBytes();
     r.device_bytes = b;
     r.host_bytes = host_rest_radii_.size() * sizeof(T);
@@ -659,12 +606,6 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     const bool jacobi = p.solver == PbdSolverKind::Jacobi;
     if (!jacobi && patched_)
       throw InputError("pbd frame", "solver", "the model was patched on the device (no colouring): use the Jacobi solver");
-    if (jacobi && p.jacobi_simultaneous && patched_)
-      throw InputError("pbd frame", "jacobi_blocks",
-                       "the model was patched on the device (no cross-block Jacobi scales): use sequential blocks");
-    if (jacobi && p.jacobi_simultaneous && solvedBlockCount() > kMaxSetBlocks)
-      throw InputError("pbd frame", "jacobi_blocks",
-                       "simultaneous Jacobi takes at most " + std::to_string(kMaxSetBlocks) + " solved blocks");
     if (!jacobi)
       for (const DeviceBlock<T>& d : blocks_)
         if (d.solve) st.colors += int(d.color_offsets.size()) - 1;
@@ -1045,15 +986,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     n_tools_ = int(in.tools_from.size());
   }
 
-  int solvedBlockCount() const {
-    int k = 0;
-    for (const DeviceBlock<T>& d : blocks_)
-      if (d.solve && d.count > 0) ++k;
-    return k;
-  }
-
-  // simultaneous: the Jacobi scales that count every solved block's constraints.
-  pbd::BlockView<T> view(DeviceBlock<T>& d, bool simultaneous = false) {
+  pbd::BlockView<T> view(DeviceBlock<T>& d) {
     pbd::BlockView<T> b;
     b.kind = int(d.kind);
     b.count = d.count;
@@ -1063,7 +996,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     b.rest = d.rest.data();
     b.rest_vec = d.rest_vec.data();
     b.compliance = d.compliance.data();
-    b.jacobi_scale = simultaneous ? d.jacobi_scale_all.data() : d.jacobi_scale.data();
+    b.jacobi_scale = d.jacobi_scale.data();
     b.particle_offsets = d.particle_offsets.data();
     b.particle_slots = d.particle_slots.data();
     b.lambda = d.lambda.data();
@@ -1087,28 +1020,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     ctx.omega = p.jacobi_omega;
     ctx.rotation_iterations = p.rotation_iterations;
 
-    // Simultaneous Jacobi: all blocks in one projection launch and one gather (see BlockSet); the fused
-    // single-block kernel runs the block-sequential form only.
-    const bool together = ctx.jacobi && p.jacobi_simultaneous;
-    BlockSet<T> set;
-    unsigned set_grid = 0;
-    if (together) {
-      for (DeviceBlock<T>& d : blocks_) {
-        if (!d.solve || d.count == 0) continue;
-        set.views[set.nblocks] = view(d, true);
-        set.grid_begin[set.nblocks] = set_grid;
-        set_grid += pbdgroup::usesGroup(int(d.kind)) ? groupBlocksFor(d.count) : blocksFor(d.count);
-        ++set.nblocks;
-      }
-      set.grid_begin[set.nblocks] = set_grid;
-      if (n_ > 0) {
-        INC_CUDA(cudaMemcpyAsync(rotations_out_.data(), rotations_.data(), std::size_t(n_) * sizeof(pbd::Quat<T>),
-                                 cudaMemcpyDeviceToDevice, stream_));
-        ctx.rotation_out = rotations_out_.data();
-      }
-    }
-    const bool fused = !together && !profile_ && n_ > 0 && n_ <= p.fused_max_particles &&
-                       int(blocks_.size()) <= kMaxFusedBlocks;
+    const bool fused = !profile_ && n_ > 0 && n_ <= p.fused_max_particles && int(blocks_.size()) <= kMaxFusedBlocks;
     if (fused) {
       FusedFrame<T> f;
       f.n = n_;
@@ -1173,22 +1085,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
       stageEnd(0, ev);
 
       for (int it = 0; it < p.iterations; ++it) {
-        if (together) {
-          ev = stageBegin();
-          if (set_grid > 0) {
-            projectSetKernel<T><<<set_grid, kThreads, 0, stream_>>>(set, ctx);
-            INC_CUDA_LAUNCH("pbd project (simultaneous jacobi)");
-          }
-          if (n_ > 0) {
-            gatherSetKernel<T><<<gn, kThreads, 0, stream_>>>(
-                n_, set, x_.data(), rotations_.data(), ctx.rotation_out, n_att_ == 0, radii_.data(), w_.data(),
-                planes_.data(), n_planes_, boxes_.data(), n_boxes_, tools_from_.data(), tools_to_.data(), n_tools_,
-                t_end);
-            INC_CUDA_LAUNCH("pbd gather (simultaneous jacobi)");
-          }
-          stageEnd(1, ev);
-        }
-        for (std::size_t bi = 0; bi < (together ? 0 : blocks_.size()); ++bi) {
+        for (std::size_t bi = 0; bi < blocks_.size(); ++bi) {
           DeviceBlock<T>& d = blocks_[bi];
           if (!d.solve || d.count == 0) continue;
           ev = stageBegin();  // profiling: each block is its own record (stage 5 + block index)
@@ -1224,7 +1121,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
         }
         stageEnd(1, ev);
         ev = stageBegin();
-        if (n_ > 0 && !(together && n_att_ == 0)) {  // simultaneous Jacobi without attachments: in the gather
+        if (n_ > 0) {
           contactKernel<T><<<gn, kThreads, 0, stream_>>>(n_, x_.data(), radii_.data(), w_.data(), planes_.data(),
                                                          n_planes_, boxes_.data(), n_boxes_, tools_from_.data(),
                                                          tools_to_.data(), n_tools_, t_end);
@@ -1349,7 +1246,6 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
   DeviceBuffer<Vec3<T>> rest_positions_, x_, v_, x_prev_, kin_from_, kin_to_, samples_, att_from_, att_to_, att_lambda_;
   DeviceBuffer<T> masses_, inv_mass_, w_, rest_radii_, radii_, radii_next_, rest_cell_, att_comp_;
   DeviceBuffer<pbd::Quat<T>> rotations_;
-  DeviceBuffer<pbd::Quat<T>> rotations_out_;  // simultaneous Jacobi: the clusters' new rotations of an iteration
   DeviceBuffer<std::uint8_t> active_, fixed_scratch_;
   DeviceBuffer<std::int32_t> kin_ids_, ov_off_, ov_ids_, att_ids_;
   DeviceBuffer<pbd::PlaneCollider<T>> planes_;

@@ -39,8 +39,6 @@ struct SolveContext {
   const T* w = nullptr;          // inverse masses of this frame (kinematic particles 0)
   const T* mass = nullptr;       // masses (shape-matching centre of mass)
   Quat<T>* rotation = nullptr;   // per-particle rotation, updated by the particle's own cluster
-  Quat<T>* rotation_out = nullptr;  // simultaneous Jacobi: clusters write their new rotation here (the
-                                    // Laplacian reads `rotation` concurrently); copied back by the gather
   bool xpbd = true;
   T dt = T(0);
   bool jacobi = true;
@@ -61,17 +59,11 @@ INC_HD void emitCorrection(const BlockView<T>& b, const SolveContext<T>& ctx, st
 // the CUDA group projection (kernels/pbd_group_projection.cuh) gives each member a lane and sums the same
 // terms with a fixed-order tree reduction. Same formulas, different loop.
 
-// Where a cluster stores its new rotation: in place, or (simultaneous Jacobi) in rotation_out.
-template <typename T>
-INC_HD Quat<T>* rotationTarget(const SolveContext<T>& ctx) {
-  return ctx.rotation_out ? ctx.rotation_out : ctx.rotation;
-}
-
 // The cluster's rotation from its moment matrix, warm-started from (and stored as) the centre's rotation.
 template <typename T>
 INC_HD Mat3<T> shapeMatchRotation(const SolveContext<T>& ctx, std::int32_t centre, const Mat3<T>& a_pq) {
   const Quat<T> q = extractRotation(a_pq, ctx.rotation[centre], ctx.rotation_iterations);
-  rotationTarget(ctx)[centre] = q;
+  ctx.rotation[centre] = q;
   return quatToMatrix(q);
 }
 

@@ -28,7 +28,7 @@ PbdModel<T> parityModel() {
 }
 
 template <typename T>
-PbdFrameInput<T> parityInput(const PbdModel<T>& m, int frame, bool attach = true) {
+PbdFrameInput<T> parityInput(const PbdModel<T>& m, int frame) {
   PbdFrameInput<T> in;
   const T t0 = T(frame) / T(100), t1 = T(frame + 1) / T(100);
   pbd::CapsuleCollider<T> a, b;
@@ -39,7 +39,7 @@ PbdFrameInput<T> parityInput(const PbdModel<T>& m, int frame, bool attach = true
   b.b = Vec3<T>(T(0.03), T(0.03), T(0.035) - T(0.01) * t1);
   in.tools_from.push_back(a);
   in.tools_to.push_back(b);
-  for (std::size_t i = 0; attach && i < m.size(); ++i)
+  for (std::size_t i = 0; i < m.size(); ++i)
     if (m.rest_positions[i].x > T(0.055)) {
       in.attach_ids.push_back(std::int32_t(i));
       in.attach_from.push_back(m.rest_positions[i] + Vec3<T>(T(0), T(0), T(0.01) * t0));
@@ -50,8 +50,7 @@ PbdFrameInput<T> parityInput(const PbdModel<T>& m, int frame, bool attach = true
 }
 
 template <typename T>
-void runParity(PbdSolverKind solver, double pos_tol_m, double radius_tol_m, int fused_max = 4096,
-               bool simultaneous = false, bool attach = true) {
+void runParity(PbdSolverKind solver, double pos_tol_m, double radius_tol_m, int fused_max = 4096) {
   const PbdModel<T> m = parityModel<T>();
   auto cpu = cpu::makePbdCpuBackend<T>();
   auto gpu = cuda::makePbdCudaBackend<T>();
@@ -59,14 +58,13 @@ void runParity(PbdSolverKind solver, double pos_tol_m, double radius_tol_m, int 
   gpu->setModel(m);
   PbdStepParams<T> p;
   p.solver = solver;
-  p.jacobi_simultaneous = simultaneous;
   p.iterations = 8;
   p.substeps = 4;
   p.volume_influence = T(0.004);
   p.fused_max_particles = fused_max;
   PbdFrameStats sc, sg;
   for (int f = 0; f < 100; ++f) {
-    const PbdFrameInput<T> in = parityInput(m, f, attach);
+    const PbdFrameInput<T> in = parityInput(m, f);
     sc = cpu->advanceFrame(p, in);
     sg = gpu->advanceFrame(p, in);
   }
@@ -120,18 +118,6 @@ TEST(PbdGpu, GaussSeidelMatchesCpuAfter100FramesFloat) {
   }
   runParity<float>(PbdSolverKind::GaussSeidel, 2e-5, 2e-5);
 }
-// Simultaneous Jacobi (one projection launch for all blocks, one gather that also takes back the rotations and,
-// without attachments, resolves the contacts): the same tolerances, with and without the grasp attachments.
-TEST(PbdGpu, SimultaneousJacobiMatchesCpuAfter100Frames) {
-  if (!haveDevice()) {
-    GTEST_SKIP() << "no CUDA device";
-  }
-  for (bool attach : {true, false}) {
-    runParity<double>(PbdSolverKind::Jacobi, 1e-9, 1e-9, 4096, true, attach);
-    runParity<float>(PbdSolverKind::Jacobi, 2e-5, 2e-5, 4096, true, attach);
-  }
-}
-
 // The same with the per-block/per-colour launches instead of the fused single-block frame kernel.
 TEST(PbdGpu, UnfusedLaunchesMatchCpuAfter100Frames) {
   if (!haveDevice()) {
