@@ -9,6 +9,7 @@
 #include "host/cut_mesh.h"
 #include "host/cut_nodal_points.h"
 #include "host/cut_swept_surface.h"
+#include "host/dissection_render_layers.h"
 #include "host/grasper.h"
 #include "host/input_error.h"
 #include "host/interactive_tool.h"
@@ -16,6 +17,7 @@
 #include "host/organ_shapes.h"
 #include "host/pbd_builders.h"
 #include "host/pbd_model.h"
+#include "host/pbd_render_layers.h"
 #include "host/skin_binding.h"
 
 namespace inc {
@@ -177,6 +179,22 @@ class DissectionSimulation final : public SimulationModel {
     return m;
   }
   void cutWallTriangles(std::vector<std::uint8_t>& out) const override { out = wall_flags_; }
+  // The viewer's layers: spheres, fixed spheres, the mouse grasp (host/pbd_render_layers.h), the swept
+  // surfaces (applied cuts, the running stroke) and the last cut's nodal points (host/dissection_render_layers.h).
+  void renderLayers(RenderLayers& out) const override {
+    out = RenderLayers{};
+    appendPbdSpheres(state_, out);
+    appendPbdFixed(model_, state_, out);
+    PbdFrameInput<T> in;
+    appendMouseAttachments(mouse_, in);
+    appendAttachmentLayers(in, state_, params_.xpbd, mouse_.tip(), out);
+    std::vector<const SweptSurface*> swept;
+    for (const SweptSurface& c : earlier_cuts_) swept.push_back(&c);
+    if (!cut_applied_) swept.push_back(&swept_);
+    swept.push_back(&stroke_);
+    cut_layers_.update(swept, last_nodal_, earlier_cuts_.empty() ? nullptr : &earlier_cuts_.back(), spheres_);
+    cut_layers_.apply(out.sphere_centres, out);
+  }
 
   ToolSupport toolSupport() const override { return {true, true}; }
   // Grasp & drag (host/interactive_tool.h) and the mouse scalpel: each blade pose is taken back to the rest
@@ -317,6 +335,7 @@ class DissectionSimulation final : public SimulationModel {
     double rmax = 0.0;
     for (auto i : r.cut) rmax = std::max(rmax, spheres_.rest_radii[i]);
     last_points_ = r.points.size();
+    last_nodal_ = r.points;
     // Earlier cuts: the new spheres are grouped and linked only on their own side of each (successive cuts).
     last_added_ = repackSpheres(r.spheres, r.points, cut, rmax, RepackOptions{}, earlier_cuts_);
     earlier_cuts_.push_back(cut);
@@ -392,6 +411,8 @@ class DissectionSimulation final : public SimulationModel {
   SweptSurface stroke_;                   // the mouse scalpel's stroke so far (rest configuration)
   std::vector<SweptSurface> earlier_cuts_;  // every cut applied so far (rest configuration)
   double mouse_cut_ms_ = 0.0;
+  NodalPoints last_nodal_;                // the last cut's nodal points (rest configuration), for the viewer
+  mutable CutLayerBinding cut_layers_;    // renderLayers' bindings (rebuilt when the cut geometry changes)
   int base_substeps_ = 4;
   double substep_scale_ = 1.0;
   double time_ = 0, saved_time_ = 0;

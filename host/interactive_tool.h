@@ -35,6 +35,7 @@ class PbdMouseGrasp {
     if (holding()) grasper_->appendAttachments(from_, to_, in);
   }
   void frameDone() { from_ = to_; }
+  const Vec3d& tip() const { return to_; }  // where the held spheres' targets are anchored now (m)
 
  private:
   std::optional<Grasper> grasper_;

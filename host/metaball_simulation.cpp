@@ -16,6 +16,7 @@
 #include "host/particle_sampling.h"
 #include "host/pbd_builders.h"
 #include "host/pbd_model.h"
+#include "host/pbd_render_layers.h"
 #include "physics/pbd_rotation.h"
 
 namespace inc {
@@ -239,6 +240,30 @@ class MetaballSimulation final : public SimulationModel {
     for (std::size_t v = 0; v < skinned_.size(); ++v) out.vertices[v] = Vec3d(skinned_[v]);
     out.triangles = rest_surface_.triangles;
     return true;
+  }
+  // The viewer's layers: every sphere, the fixed ones, and per grasp (scripted graspers, the mouse) the held
+  // spheres, the attachment forces on them and the reaction on the tool (host/pbd_render_layers.h).
+  void renderLayers(RenderLayers& out) const override {
+    out = RenderLayers{};
+    appendPbdSpheres(state_, out);
+    appendPbdFixed(model_, state_, out);
+    PbdFrameInput<T> all;
+    for (const Grasper& g : graspers_) {
+      if (!g.holding()) continue;
+      const Vec3d tip = toolPoseAt(g.tool(), time_).position;
+      PbdFrameInput<T> one;
+      g.appendAttachments(tip, tip, one);
+      appendAttachmentLayers(one, state_, params_.xpbd, tip, out);
+      g.appendAttachments(tip, tip, all);
+    }
+    // The mouse's spheres, less those a scripted grasper holds (as the frame's input was assembled).
+    const std::size_t scripted = all.attach_ids.size();
+    appendMouseAttachments(mouse_, all);
+    PbdFrameInput<T> mouse;
+    mouse.attach_ids.assign(all.attach_ids.begin() + std::ptrdiff_t(scripted), all.attach_ids.end());
+    mouse.attach_to.assign(all.attach_to.begin() + std::ptrdiff_t(scripted), all.attach_to.end());
+    mouse.attach_compliance.assign(all.attach_compliance.begin() + std::ptrdiff_t(scripted), all.attach_compliance.end());
+    appendAttachmentLayers(mouse, state_, params_.xpbd, mouse_.tip(), out);
   }
   MemoryReport memory() const override {
     MemoryReport m = backend_->memory();

@@ -39,8 +39,16 @@ bool insideBox(const Vec3d& p, const FixedRegion& r) {
 
 class MlsSimulation final : public SimulationModel {
  public:
-  MlsSimulation(std::unique_ptr<MlsSolver> solver, const Scene& scene)
+  MlsSimulation(std::unique_ptr<MlsSolver> solver, const Scene& scene, const MlsBuildInput& in)
       : solver_(std::move(solver)), fixed_substeps_(scene.solver.substeps), tools_(scene.tools) {
+    // For the viewer's layers: which particles are fixed, the masses (as makeMlsModel sets them) and gravity.
+    gravity_ = in.gravity;
+    fixed_.assign(in.rest_positions.size(), 0);
+    masses_.resize(in.rest_positions.size());
+    for (std::size_t i = 0; i < masses_.size(); ++i) {
+      masses_[i] = in.masses.empty() ? in.material.density * in.spacing * in.spacing * in.spacing : in.masses[i];
+      fixed_[i] = !in.kinds.empty() && in.kinds[i] == kMlsFixed ? 1 : 0;
+    }
     // Refuse an unstable fixed substep count now (bad input), not in the middle of a run.
     planMlsSubsteps(scene.solver.frame_dt, solver_->stableTimeStep(), solver_->safety(), fixed_substeps_, scene.file,
                     "solver.substeps");
@@ -167,7 +175,49 @@ class MlsSimulation final : public SimulationModel {
     return r;
   }
 
+  // The viewer's layers. Every particle is an MLS nodal point. Fixed particles, and the particles a tool holds
+  // (scripted graspers, the mouse), are pinned: what pins particle i applies F_i = m_i a_i - f_i - m_i g,
+  // with f_i the body's elastic force on it (MlsSolver::forces at the current displacement), taken
+  // quasi-statically (a_i = 0): F_i = -(f_i + m_i g). The elastic forces sum to zero, so at rest the F_i of
+  // all supports and tools carry the body's weight. A tool's arrow at its tip is the tissue's reaction,
+  // -sum F_i over its particles.
+  void renderLayers(RenderLayers& out) const override {
+    out = RenderLayers{};
+    std::vector<Vec3d> x, f;
+    solver_->positions(x);
+    solver_->forces(f);
+    if (f.size() != x.size() || masses_.size() != x.size()) return;
+    out.nodal_points = x;
+    const auto pinned = [&](std::size_t i) { return (f[i] + gravity_ * masses_[i]) * -1.0; };
+    for (std::size_t i = 0; i < x.size(); ++i)
+      if (fixed_[i]) {
+        out.fixed_ids.push_back(std::int32_t(i));
+        out.fixed_points.push_back(x[i]);
+        out.forces.push_back({x[i], pinned(i), ForceArrowKind::Particle});
+      }
+    const auto held = [&](const std::vector<std::int32_t>& ids, const Vec3d& tip) {
+      Vec3d total;
+      bool any = false;
+      for (std::int32_t id : ids) {
+        const std::size_t i = std::size_t(id);
+        if (fixed_[i]) continue;  // a fixed particle stays fixed under a tool
+        const Vec3d F = pinned(i);
+        out.held_ids.push_back(id);
+        out.held_points.push_back(x[i]);
+        out.forces.push_back({x[i], F, ForceArrowKind::Particle});
+        total += F;
+        any = true;
+      }
+      if (any) out.forces.push_back({tip, total * -1.0, ForceArrowKind::Tool});
+    };
+    for (const Grasp& g : grasps_) held(g.particles, toolPosition(tools_[g.tool], time_));
+    held(mouse_ids_, mouse_tip_);
+  }
+
  private:
+  Vec3d gravity_;                        // m/s^2
+  std::vector<double> masses_;           // kg
+  std::vector<std::uint8_t> fixed_;      // 1: in a fixed region
   std::vector<std::int32_t> mouse_ids_;  // the viewer's grasp: held particles
   std::vector<Vec3d> mouse_u0_;          // their displacements at the grasp (m)
   Vec3d mouse_tip0_, mouse_tip_;         // tip at the grasp and now (m)
@@ -225,7 +275,7 @@ std::unique_ptr<SimulationModel> makeMlsSimulation(const Scene& scene, BackendKi
   if (scene.solver.substeps < 0) throw InputError(scene.file, "solver.substeps", "must be >= 0");
   const MlsBuildInput in = mlsBuildInputFromScene(scene);
   std::unique_ptr<MlsSolver> solver = makeMlsSolver(in, resolved, precision);
-  return std::make_unique<MlsSimulation>(std::move(solver), scene);
+  return std::make_unique<MlsSimulation>(std::move(solver), scene, in);
 }
 
 }  // namespace inc

@@ -31,6 +31,8 @@ struct FrameReport {
   std::string failure_stage;
   std::int64_t failure_particle = -1;
   std::map<std::string, double> counters;  // model-specific ("degenerate_neighbourhoods", "broken_bonds", ...)
+  // A model that runs a haptic loop reports its rate and period p99 as counters "haptic_hz" and
+  // "haptic_p99_ms" (the viewer's Haptics plots).
 };
 
 // The interactive tool (the viewer's mouse): what a model can do with it.
@@ -62,6 +64,30 @@ struct ToolResult {
   int grasped = 0;         // particles / spheres held after the event
   bool cut_applied = false;
   std::string message;
+};
+
+// What a model can show besides its surface and particles (the viewer's layers). World metres, current
+// configuration. Every part is optional: an empty vector means the model has no such data. Ids index the
+// particles of currentPositions(); a model that reports spheres has sphere i = particle i.
+enum class ForceArrowKind : std::uint8_t {
+  Tool,      // the tissue's reaction on a tool (grasp), drawn at the tool tip: what a hand on it would feel
+  Particle,  // an external force a tool or a support applies to one particle
+};
+struct ForceArrow {
+  Vec3d origin;   // m
+  Vec3d force_n;  // N
+  ForceArrowKind kind = ForceArrowKind::Particle;
+};
+struct RenderLayers {
+  std::vector<Vec3d> sphere_centres;     // metaball spheres (m) ...
+  std::vector<double> sphere_radii;      // ... and their radii (m), one per centre
+  std::vector<Vec3d> nodal_points;       // MLS nodal points (m)
+  std::vector<std::int32_t> fixed_ids;   // particles a fixed region holds (Dirichlet) ...
+  std::vector<Vec3d> fixed_points;       // ... and where they are (m)
+  std::vector<std::int32_t> held_ids;    // particles a tool holds now (grasped, prescribed) ...
+  std::vector<Vec3d> held_points;        // ... and where they are (m)
+  TriangleMesh swept_surface;            // the scalpel's swept cut surface(s) (m)
+  std::vector<ForceArrow> forces;
 };
 
 struct MemoryReport {
@@ -101,6 +127,9 @@ class SimulationModel {
   // One flag per triangle of currentSurface(): 1 for a cut wall (drawn in the cut-wall colour). Empty
   // (the default): no triangle is a cut wall.
   virtual void cutWallTriangles(std::vector<std::uint8_t>& out) const { out.clear(); }
+  // The geometry of the viewer's extra layers (spheres, nodal points, fixed and held particles, swept
+  // surface, force arrows) at the current state. Default: none.
+  virtual void renderLayers(RenderLayers& out) const { out = RenderLayers{}; }
 };
 
 }  // namespace inc

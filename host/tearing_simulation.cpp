@@ -208,6 +208,23 @@ class TearingSimulation final : public SimulationModel {
     return m;
   }
 
+  // The viewer's layers: the fixed particles and those the graspers hold. No forces: the graspers move their
+  // particles kinematically (TearingDriver::advance), so no constraint force is defined for them.
+  void renderLayers(RenderLayers& out) const override {
+    out = RenderLayers{};
+    const TearSheet<T>& s = driver_.sheet();
+    for (std::size_t i = 0; i < s.size(); ++i)
+      if (s.fixed[i]) {
+        out.fixed_ids.push_back(std::int32_t(i));
+        out.fixed_points.push_back(Vec3d(s.x[i]));
+      }
+    for (const Grab& g : grabs_)
+      for (std::int32_t id : g.ids) {
+        out.held_ids.push_back(id);
+        out.held_points.push_back(Vec3d(s.x[std::size_t(id)]));
+      }
+  }
+
   double setupCompliance_ = 0.0;
 
  private:

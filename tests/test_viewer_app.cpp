@@ -10,6 +10,7 @@
 #include <stb_image.h>
 
 #include "host/dissection_simulation.h"
+#include "host/metaball_simulation.h"
 #include "host/input_error.h"
 #include "host/mesh.h"
 #include "tests/viewer_test_model.h"
@@ -212,6 +213,213 @@ TEST_F(ViewerApp, MouseGraspInGraspModeDragsTheModel) {
   const FrameReport rep = o.model->advance(1.0 / 60.0);
   EXPECT_GT(rep.counters.at("grasped"), 0.0);
   EXPECT_GT(rep.max_displacement, 3e-3);  // 0 without the grasp: no gravity, nothing else moves it
+}
+
+// The swept surface of a scalpel stroke still in progress (pressed and dragged across the block through the tool
+// API, not released, so nothing is cut yet) shows as translucent cyan where it leaves the block; with the layer
+// off there is none. Swept pixels: blue clearly above red (the tissue's red is 2.4x its blue, the background's
+// blue exceeds its red by 8 levels).
+TEST_F(ViewerApp, StrokeInProgressShowsTheSweptSurface) {
+  auto sweptFraction = [](const Png& p) {
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < p.rgb.size(); i += 3) n += (p.rgb[i + 2] > p.rgb[i] + 25 && p.rgb[i + 2] > 80) ? 1 : 0;
+    return double(n) / (double(p.w) * p.h);
+  };
+  for (bool shown : {true, false}) {
+    std::unique_ptr<SimulationModel> m = dissectionBlock();
+    ToolEvent e;
+    e.kind = ToolKind::Cut;
+    e.axis = Vec3d(0, 0, -1);
+    e.blade_length_m = 0.08;
+    for (int k = 0; k <= 3; ++k) {  // across the block on the plane y = 2 mm, from x = -5 cm to +2.5 cm
+      e.phase = k == 0 ? ToolPhase::Press : ToolPhase::Drag;
+      e.tip = Vec3d(-0.05 + 0.025 * k, 0.002, 0.0);
+      ASSERT_TRUE(m->applyTool(e).supported);
+    }
+    ViewerOptions o;
+    o.model = std::move(m);
+    o.width = 480;
+    o.height = 300;
+    o.frames = 3;
+    o.show_ui = false;
+    o.layers.tool = false;
+    o.layers.swept_surface = shown;
+    o.screenshot_path = outPath(shown ? "viewer_test_swept.png" : "viewer_test_swept_off.png");
+    ASSERT_EQ(runViewer(o), 0);
+    const Png p = loadPng(o.screenshot_path);
+    ASSERT_EQ(p.w, 480);
+    if (shown)
+      EXPECT_GT(sweptFraction(p), 0.02);
+    else
+      EXPECT_LT(sweptFraction(p), 1e-3);
+    EXPECT_GT(tissueFraction(p), 0.03);
+  }
+}
+
+// The metaball organ's spheres layer with the constrained layer on: the spheres are drawn (sphere colour) and
+// the fixed ones (the x < -1 cm slab) in the fixed colour, on the left of the picture.
+TEST_F(ViewerApp, MetaballSpheresWithFixedOnesMarked) {
+  Scene s;
+  s.file = "<test:viewer_spheres>";
+  s.geometry.kind = GeometrySpec::Kind::Box;
+  s.geometry.size = Vec3d(0.06, 0.04, 0.03);
+  s.geometry.spacing = 0.01;
+  s.models.pbd_metaballs = true;
+  s.solver.gravity = Vec3d(0, 0, 0);
+  s.fixed = {{Vec3d(-1, -1, -1), Vec3d(-0.01, 1, 1)}};
+  ViewerOptions o;
+  o.model = makeMetaballSimulation(s, BackendKind::Cpu, Precision::Float32);
+  o.width = 480;
+  o.height = 300;
+  o.frames = 2;
+  o.show_ui = false;
+  o.layers.tool = false;
+  o.layers.surface = false;
+  o.layers.spheres = true;
+  o.layers.constrained = true;
+  o.screenshot_path = outPath("viewer_test_spheres.png");
+  ASSERT_EQ(runViewer(o), 0);
+  const Png p = loadPng(o.screenshot_path);
+  ASSERT_EQ(p.w, 480);
+  std::size_t sphere = 0, fixed = 0;
+  double fixed_x = 0, sphere_x = 0;
+  for (int y = 0; y < p.h; ++y)
+    for (int x = 0; x < p.w; ++x) {
+      const unsigned char* c = &p.rgb[3 * (std::size_t(y) * p.w + x)];
+      if (c[0] > 120 && c[1] > 100 && c[2] < 0.45 * c[1] && c[1] > 0.7 * c[0]) {  // fixed: yellow (0.85 G/R, blue ~0.1)
+        ++fixed;
+        fixed_x += x;
+      } else if (c[0] > 100 && c[2] > 0.45 * c[1] && c[2] < 0.8 * c[0] && c[0] > c[1]) {  // tan (0.85, 0.72, 0.50)
+        ++sphere;
+        sphere_x += x;
+      }
+    }
+  EXPECT_GT(double(sphere) / (480.0 * 300.0), 0.03);
+  EXPECT_GT(double(fixed) / (480.0 * 300.0), 0.005);
+  ASSERT_GT(fixed, 0u);
+  ASSERT_GT(sphere, 0u);
+  EXPECT_LT(fixed_x / double(fixed), sphere_x / double(sphere));  // the fixed slab is at the left (-x)
+}
+
+// Grasp mode on a block whose bottom row is fixed: dragging the top up stretches it, and the tissue's pull on the
+// tool is drawn as the orange arrow from the tip, pointing back down the screen (against the drag).
+TEST_F(ViewerApp, GraspDragShowsTheToolForceArrow) {
+  Scene s;
+  s.file = "<test:viewer_force_block>";
+  s.geometry.kind = GeometrySpec::Kind::Box;
+  s.geometry.size = Vec3d(0.06, 0.04, 0.03);
+  s.geometry.spacing = 0.01;
+  s.models.pbd_metaballs = true;
+  s.solver.gravity = Vec3d(0, 0, 0);
+  s.solver.substeps = 2;
+  s.pbd.iterations = 5;
+  s.fixed = {{Vec3d(-1, -1, -1), Vec3d(1, -0.01, 1)}};
+  ViewerOptions o;
+  o.model = makeMetaballSimulation(s, BackendKind::Cpu, Precision::Float32);
+  o.width = 480;
+  o.height = 300;
+  o.frames = 14;
+  o.show_ui = false;
+  o.tool_mode = ToolMode::Grasp;
+  o.grasp_radius_m = 0.01;
+  o.scripted_mouse = [](int frame, double& x, double& y) {
+    x = 0.5;
+    y = 0.5 - 0.1 * std::clamp((frame - 3) / 6.0, 0.0, 1.0);
+    return frame >= 2;
+  };
+  o.screenshot_path = outPath("viewer_test_force.png");
+  ViewerFrameInfo last;
+  o.on_frame = [&last](const ViewerFrameInfo& f) { last = f; };
+  ASSERT_EQ(runViewer(o), 0);
+  EXPECT_GT(last.force_scale_m_per_n, 0.0);
+  const Png p = loadPng(o.screenshot_path);
+  ASSERT_EQ(p.w, 480);
+  double px, py, d;
+  ASSERT_TRUE(last.camera.project(last.tool_tip, px, py, d));
+  const double tip_row = p.h - py;  // PNG rows run from the top
+  std::size_t n = 0;
+  double rows = 0;
+  for (int y = 0; y < p.h; ++y)
+    for (int x = 0; x < p.w; ++x) {
+      const unsigned char* c = &p.rgb[3 * (std::size_t(y) * p.w + x)];
+      if (c[0] > 200 && c[1] > 80 && c[1] < 180 && c[2] < 60) {
+        ++n;
+        rows += y;
+      }
+    }
+  ASSERT_GT(n, 30u);
+  EXPECT_GT(rows / double(n), tip_row + 5.0);  // below the tip on the screen
+}
+
+// The layers together on a dissection block (8 x 5 x 4 cm, 1 cm metaballs, no gravity, the top row fixed) with a
+// cut through its left half (a stroke on y = 5 mm from x = -6 cm to 0): the grasp pulls the lower-left part down,
+// opening the cut. Wireframe surface, the fixed spheres' markers (yellow), the cut's nodal points (green), the
+// applied cut's swept surface (cyan) and the grasp's force arrows all show at once. INCISION_DOC_LAYERS=PATH also
+// writes the picture there, at 960 x 600 (docs/images/viewer_layers.png).
+TEST_F(ViewerApp, CutBlockShowsAllLayersTogether) {
+  Scene s;
+  s.file = "<test:viewer_layers_block>";
+  s.geometry.kind = GeometrySpec::Kind::Box;
+  s.geometry.size = Vec3d(0.08, 0.05, 0.04);
+  s.geometry.spacing = 0.01;
+  s.models.pbd_metaballs = true;
+  s.models.cutting = true;
+  s.solver.gravity = Vec3d(0, 0, 0);
+  s.solver.substeps = 2;
+  s.pbd.iterations = 5;
+  s.material.damping = 6;
+  s.fixed = {{Vec3d(-1, 0.015, -1), Vec3d(1, 1, 1)}};
+  ToolSpec t;  // the scene's scripted scalpel never runs here (its path starts at t = 100 s)
+  t.name = "scalpel";
+  t.kind = "scalpel";
+  t.length = 0.1;
+  t.path = {{100.0, Vec3d(-0.06, 0.005, 0), Vec3d(0, 0, 1)}, {101.0, Vec3d(0.0, 0.005, 0), Vec3d(0, 0, 1)}};
+  s.tools = {t};
+  std::unique_ptr<SimulationModel> m = makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float32);
+  ToolEvent e;
+  e.kind = ToolKind::Cut;
+  e.axis = Vec3d(0, 0, -1);
+  e.blade_length_m = 0.1;
+  for (int k = 0; k <= 3; ++k) {
+    e.phase = k == 0 ? ToolPhase::Press : k == 3 ? ToolPhase::Release : ToolPhase::Drag;
+    e.tip = Vec3d(-0.06 + 0.02 * k, 0.005, 0.0);
+    ASSERT_TRUE(m->applyTool(e).cut_applied || k < 3);
+  }
+  const char* doc = std::getenv("INCISION_DOC_LAYERS");
+  ViewerOptions o;
+  o.model = std::move(m);
+  o.width = doc ? 960 : 480;
+  o.height = doc ? 600 : 300;
+  o.frames = 8;
+  o.show_ui = false;
+  o.layers.wireframe = true;
+  o.layers.nodal_points = true;
+  o.layers.constrained = true;
+  o.tool_mode = ToolMode::Grasp;
+  o.grasp_radius_m = 0.01;
+  o.scripted_mouse = [](int frame, double& x, double& y) {
+    x = 0.4;
+    y = 0.6 + 0.08 * std::clamp((frame - 2) / 4.0, 0.0, 1.0);
+    return frame >= 1;
+  };
+  o.screenshot_path = outPath("viewer_test_layers.png");
+  ASSERT_EQ(runViewer(o), 0);
+  const Png p = loadPng(o.screenshot_path);
+  ASSERT_EQ(p.w, o.width);
+  std::size_t green = 0, yellow = 0, cyan = 0, orange = 0;
+  for (std::size_t i = 0; i < p.rgb.size(); i += 3) {
+    const int r = p.rgb[i], g = p.rgb[i + 1], b = p.rgb[i + 2];
+    green += (g > 150 && g > r + 50 && g > b + 40) ? 1 : 0;
+    yellow += (r > 200 && g > 180 && b < 100) ? 1 : 0;
+    cyan += (b > r + 25 && b > 80 && g > r) ? 1 : 0;
+    orange += (r > 200 && g > 80 && g < 180 && b < 60) ? 1 : 0;
+  }
+  const double n = double(p.w) * p.h;
+  EXPECT_GT(green / n, 1e-3);
+  EXPECT_GT(yellow / n, 1e-3);
+  EXPECT_GT(cyan / n, 1e-2);
+  EXPECT_GT(orange / n, 1e-4);
+  if (doc) std::filesystem::copy_file(o.screenshot_path, doc, std::filesystem::copy_options::overwrite_existing);
 }
 
 // The organ (a ball of radius R framed by its bounding box) covers its analytic share of the picture.

@@ -44,6 +44,46 @@ TEST(ViewerRunner, YoungsModulusKnobChangesDeflection) {
   EXPECT_DOUBLE_EQ(run.knobs()[0].value, 1e6);
 }
 
+// Snapshots carry the model's RenderLayers only while the viewer wants them; asking while paused republishes
+// the current state with them at once (no frame advanced).
+TEST(ViewerRunner, RenderLayersOnlyWhenWantedAndRepublishedWhilePaused) {
+  class WithLayers : public SaggingBall {
+   public:
+    void renderLayers(RenderLayers& out) const override {
+      ++calls;
+      out = RenderLayers{};
+      out.sphere_centres = {{0, 0, 0}, {0.1, 0, 0}};
+      out.sphere_radii = {0.05, 0.02};
+    }
+    mutable int calls = 0;
+  };
+  auto model = std::make_unique<WithLayers>();
+  WithLayers* raw = model.get();
+  SimRunner run(std::move(model), nullptr, {}, 1.0 / 60, false);
+  SimSnapshot s;
+  std::uint64_t ver = 0;
+  run.pump();
+  ASSERT_TRUE(run.latest(s, ver));
+  EXPECT_TRUE(s.layers.sphere_centres.empty());
+  EXPECT_EQ(raw->calls, 0);
+  run.setPaused(true);
+  run.setLayersWanted(true);
+  run.pump();  // paused: no frame, but the state is published again with its layers
+  ASSERT_TRUE(run.latest(s, ver));
+  EXPECT_EQ(s.frame, 1u);
+  ASSERT_EQ(s.layers.sphere_radii.size(), 2u);
+  EXPECT_DOUBLE_EQ(s.layers.sphere_radii[1], 0.02);
+  EXPECT_EQ(raw->calls, 1);
+  run.pump();
+  EXPECT_FALSE(run.latest(s, ver));  // nothing new while paused
+  run.setLayersWanted(false);
+  run.setPaused(false);
+  run.pump();
+  ASSERT_TRUE(run.latest(s, ver));
+  EXPECT_TRUE(s.layers.sphere_centres.empty());
+  EXPECT_EQ(raw->calls, 1);
+}
+
 TEST(ViewerRunner, PauseStepResetAndStepSafety) {
   int built = 0;
   auto factory = [&built] {

@@ -128,8 +128,17 @@ void SimRunner::queueTool(const ToolEvent& event) {
   cv_.notify_all();
 }
 
+void SimRunner::setLayersWanted(bool wanted) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (wanted && !layers_wanted_) republish_ = true;
+    layers_wanted_ = wanted;
+  }
+  cv_.notify_all();
+}
+
 void SimRunner::applyPending() {
-  bool do_reset, rebuild = false;
+  bool do_reset, rebuild = false, republish;
   std::vector<std::size_t> changed;
   std::vector<double> values;
   std::vector<ToolEvent> tools;
@@ -138,6 +147,8 @@ void SimRunner::applyPending() {
     std::lock_guard<std::mutex> lock(mutex_);
     do_reset = reset_requested_ && bool(factory_);
     reset_requested_ = false;
+    republish = republish_;
+    republish_ = false;
     for (std::size_t i = 0; i < knobs_.size(); ++i) {
       values.push_back(knobs_[i].value);
       if (!knob_dirty_[i]) continue;
@@ -217,7 +228,7 @@ void SimRunner::applyPending() {
       snapshot_.message = std::string("tool: ") + ex.what();
     }
   }
-  bool show_now = fresh;
+  bool show_now = fresh || republish;
   if (!tools.empty()) {
     std::lock_guard<std::mutex> lock(mutex_);
     show_now = show_now || (paused_ && steps_requested_ == 0);  // a cut while paused shows at once
@@ -273,7 +284,15 @@ void SimRunner::publish(const FrameReport* report, double advance_ms) {
   model_->currentPositions(positions);
   TriangleMesh surface;
   const bool has_surface = model_->currentSurface(surface);
+  bool wanted;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    wanted = layers_wanted_;
+  }
+  RenderLayers layers;
+  if (wanted) model_->renderLayers(layers);
   std::lock_guard<std::mutex> lock(mutex_);
+  snapshot_.layers = std::move(layers);
   snapshot_.positions.swap(positions);
   snapshot_.surface = std::move(surface);
   snapshot_.has_surface = has_surface;
@@ -306,7 +325,7 @@ void SimRunner::loop() {
     {
       std::unique_lock<std::mutex> lock(mutex_);
       cv_.wait(lock, [&] {
-        return stop_ || !paused_ || steps_requested_ > 0 || reset_requested_ || !tool_queue_.empty() ||
+        return stop_ || !paused_ || steps_requested_ > 0 || reset_requested_ || republish_ || !tool_queue_.empty() ||
                std::find(knob_dirty_.begin(), knob_dirty_.end(), 1) != knob_dirty_.end();
       });
       if (stop_) return;

@@ -57,6 +57,7 @@ struct SimSnapshot {
   ToolSupport tool_support;         // what the model's interactive tool can do
   ToolResult last_tool;             // result of the last tool event applied
   std::vector<std::uint8_t> cut_walls;  // per surface triangle: 1 = cut wall (SimulationModel::cutWallTriangles)
+  RenderLayers layers;              // SimulationModel::renderLayers, while the viewer wants them (else empty)
   std::string message;              // the last knob rebuild or tool error, empty when none
   std::uint64_t rebuilds = 0;       // models built by resets and scene edits
 };
@@ -88,6 +89,9 @@ class SimRunner {
   // on the simulation thread (SimulationModel::applyTool). An event the model rejects (InputError) is
   // dropped and reported in the snapshot's `message`.
   void queueTool(const ToolEvent& event);
+  // Whether snapshots carry the model's RenderLayers (spheres, forces, ...; collected only when shown).
+  // Turning them on while paused republishes the current state at once.
+  void setLayersWanted(bool wanted);
 
   void pump();  // synchronous mode: one frame unless paused (applies pending commands first)
   // Copies the newest snapshot when its version differs from `version` (and updates it); false otherwise.
@@ -115,6 +119,7 @@ class SimRunner {
   bool paused_ = false;
   int steps_requested_ = 0;
   bool reset_requested_ = false;
+  bool layers_wanted_ = false, republish_ = false;
   double time_scale_ = 1.0;
   double step_safety_ = 1.0, applied_step_safety_ = 1.0;
   bool stop_ = false;

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "viewer/surface_renderer.h"
 
@@ -37,6 +38,24 @@ bool pointBounds(const std::vector<Vec3d>& points, Vec3d& lo, Vec3d& hi) {
     }
   }
   return any;
+}
+
+double medianNearestSpacing(const std::vector<Vec3d>& points, std::size_t samples) {
+  const std::size_t n = points.size();
+  if (n < 2 || samples == 0) return 0.0;
+  const std::size_t m = std::min(samples, n);
+  std::vector<double> d;
+  d.reserve(m);
+  for (std::size_t k = 0; k < m; ++k) {
+    const std::size_t i = k * n / m;
+    double best = std::numeric_limits<double>::infinity();
+    for (std::size_t j = 0; j < n; ++j)
+      if (j != i) best = std::min(best, norm2(points[j] - points[i]));
+    if (std::isfinite(best)) d.push_back(std::sqrt(best));
+  }
+  if (d.empty()) return 0.0;
+  std::nth_element(d.begin(), d.begin() + std::ptrdiff_t(d.size() / 2), d.end());
+  return d[d.size() / 2];
 }
 
 SplatCloud particleSplats(const std::vector<Vec3d>& points, double radius_m, const std::array<float, 3>& colour) {

@@ -17,6 +17,10 @@ SplatCloud surfaceSplats(const TriangleMesh& mesh, const std::array<float, 3>& c
 // 0.6 x (bounding-box volume / n)^(1/3), the mean spacing of points filling the box.
 SplatCloud particleSplats(const std::vector<Vec3d>& points, double radius_m, const std::array<float, 3>& colour);
 
+// The median, over up to `samples` points spread through the list, of the distance to their nearest other point
+// (m): the spacing of a point set even when it is split into distant groups. 0 for fewer than two points.
+double medianNearestSpacing(const std::vector<Vec3d>& points, std::size_t samples = 64);
+
 // Axis-aligned bounds of points; false when empty or non-finite.
 bool pointBounds(const std::vector<Vec3d>& points, Vec3d& lo, Vec3d& hi);
 

@@ -16,6 +16,8 @@
 #include <backends/imgui_impl_glfw.h>
 #include <backends/imgui_impl_opengl3.h>
 
+#include "viewer/live_plots.h"
+#include "viewer/model_layers.h"
 #include "viewer/orbit_camera.h"
 #include "viewer/screenshot.h"
 #include "viewer/splat_renderer.h"
@@ -45,27 +47,25 @@ class BorrowedModel : public SimulationModel {
   ToolSupport toolSupport() const override { return m_.toolSupport(); }
   ToolResult applyTool(const ToolEvent& e) override { return m_.applyTool(e); }
   void cutWallTriangles(std::vector<std::uint8_t>& out) const override { m_.cutWallTriangles(out); }
+  void renderLayers(RenderLayers& out) const override { m_.renderLayers(out); }
 
  private:
   SimulationModel& m_;
 };
 
-// A fixed-length history for ImGui's PlotLines.
-struct History {
-  std::vector<float> values = std::vector<float>(240, 0.0f);
-  int offset = 0;
-  float last = 0.0f;
-  void push(double v) {
-    last = float(v);
-    values[std::size_t(offset)] = last;
-    offset = (offset + 1) % int(values.size());
-  }
-  void plot(const char* label, const char* unit) const {
-    char overlay[64];
-    std::snprintf(overlay, sizeof overlay, "%.4g %s", double(last), unit);
-    ImGui::PlotLines(label, values.data(), int(values.size()), offset, overlay, FLT_MAX, FLT_MAX, ImVec2(0, 40));
-  }
-};
+ModelLayerToggles modelToggles(const ViewLayers& l) {
+  ModelLayerToggles t;
+  t.spheres = l.spheres;
+  t.nodal_points = l.nodal_points;
+  t.constrained = l.constrained;
+  t.swept_surface = l.swept_surface;
+  t.forces = l.forces;
+  return t;
+}
+
+bool anyModelLayer(const ViewLayers& l) {
+  return l.spheres || l.nodal_points || l.constrained || l.swept_surface || l.forces;
+}
 
 const char* viewerBackendName(BackendKind k) {
   switch (k) {
@@ -170,6 +170,7 @@ int runViewer(const ViewerOptions& opt) {
   try {
     SurfaceRenderer surface, tool;
     SplatRenderer surface_splats, particle_splats;
+    ModelLayerRenderer model_layers;
     ZBufferCollider collider;
     ViewLayers layers = opt.layers;
     ToolCollision collision = opt.collision;
@@ -222,8 +223,11 @@ int runViewer(const ViewerOptions& opt) {
 
     SplatCloud particle_cloud;
     bool need_upload = true;
-    std::map<std::string, History> stage_hist, counter_hist;
-    History fps_hist, advance_hist, ke_hist, ee_hist, pe_hist, disp_hist;
+    LivePlots plots;
+    double force_scale_m_per_n = opt.force_scale_m_per_n;  // fixed scale; 0: automatic
+    double force_scale_used = 0.0;
+    bool layers_wanted = anyModelLayer(layers);
+    runner.setLayersWanted(layers_wanted);
     double press_depth_m = opt.press_depth_m;
     ToolMode tool_mode = opt.tool_mode;
     double grasp_radius_m = opt.grasp_radius_m > 0 ? opt.grasp_radius_m : 0.08 * scene_radius;
@@ -245,15 +249,10 @@ int runViewer(const ViewerOptions& opt) {
     while (!glfwWindowShouldClose(win) && (!scripted || frame_index < opt.frames)) {
       glfwPollEvents();
       runner.pump();
+      if (anyModelLayer(layers) != layers_wanted) runner.setLayersWanted(layers_wanted = anyModelLayer(layers));
       if (runner.latest(snap, version)) {
         need_upload = true;
-        for (const auto& st : snap.report.stages) stage_hist[st.stage].push(st.ms);
-        advance_hist.push(snap.advance_ms);
-        ke_hist.push(snap.report.kinetic_energy);
-        ee_hist.push(snap.report.elastic_energy);
-        pe_hist.push(snap.report.potential_energy);
-        disp_hist.push(snap.report.max_displacement);
-        for (const auto& [k, v] : snap.report.counters) counter_hist[k].push(v);
+        plots.push(snap);
       }
       if (need_upload) {
         if (snap.has_surface) {
@@ -262,12 +261,13 @@ int runViewer(const ViewerOptions& opt) {
         }
         particle_cloud = particleSplats(snap.positions, opt.particle_radius_m, {0.35f, 0.55f, 0.85f});
         particle_splats.upload(particle_cloud);
+        model_layers.upload(snap.layers, particle_cloud.radii.empty() ? 0.0 : 1.15 * particle_cloud.radii.front());
         need_upload = false;
       }
       const auto t_now = std::chrono::steady_clock::now();
       const double frame_s = std::chrono::duration<double>(t_now - t_prev).count();
       t_prev = t_now;
-      if (frame_s > 0) fps_hist.push(1.0 / frame_s);
+      if (frame_s > 0) plots.pushFrameRate(1.0 / frame_s);
 
       Frame f;
       glfwGetFramebufferSize(win, &f.fb_w, &f.fb_h);
@@ -333,6 +333,11 @@ int runViewer(const ViewerOptions& opt) {
         if (ImGui::IsKeyPressed(GLFW_KEY_2)) layers.splats = !layers.splats;
         if (ImGui::IsKeyPressed(GLFW_KEY_3)) layers.particles = !layers.particles;
         if (ImGui::IsKeyPressed(GLFW_KEY_4)) layers.wireframe = !layers.wireframe;
+        if (ImGui::IsKeyPressed(GLFW_KEY_5)) layers.spheres = !layers.spheres;
+        if (ImGui::IsKeyPressed(GLFW_KEY_6)) layers.nodal_points = !layers.nodal_points;
+        if (ImGui::IsKeyPressed(GLFW_KEY_7)) layers.constrained = !layers.constrained;
+        if (ImGui::IsKeyPressed(GLFW_KEY_8)) layers.swept_surface = !layers.swept_surface;
+        if (ImGui::IsKeyPressed(GLFW_KEY_9)) layers.forces = !layers.forces;
         if (ImGui::IsKeyPressed(GLFW_KEY_T)) layers.tool = !layers.tool;
         if (ImGui::IsKeyPressed(GLFW_KEY_G)) tool_mode = tool_mode == ToolMode::Grasp ? ToolMode::Camera : ToolMode::Grasp;
         if (ImGui::IsKeyPressed(GLFW_KEY_C)) tool_mode = tool_mode == ToolMode::Cut ? ToolMode::Camera : ToolMode::Cut;
@@ -352,7 +357,11 @@ int runViewer(const ViewerOptions& opt) {
       style.wireframe = layers.wireframe;
       if (snap.has_surface && layers.surface && !layers.splats) surface.draw(f.cam, style);
       if (snap.has_surface && layers.splats) surface_splats.draw(f.cam, splat_params);
+      const ModelLayerToggles toggles = modelToggles(layers);
+      // Marked particles (fixed, held, nodal) before the plain particle splats, so that they show over them.
+      model_layers.drawOpaque(f.cam, toggles, splat_params);
       if (layers.particles || !snap.has_surface) particle_splats.draw(f.cam, splat_params);
+      model_layers.drawTranslucent(f.cam, toggles);
 
       // --- the tool under the mouse: z-buffer depth under the cursor places it on the drawn surface ---
       tool_valid = false;
@@ -434,6 +443,8 @@ int runViewer(const ViewerOptions& opt) {
           tool_active = false;
         }
       }
+      force_scale_used = forceArrowScale(model_layers.layers().forces, force_scale_m_per_n, scene_radius);
+      model_layers.drawForces(f.cam, toggles, force_scale_used);
       if (tool_valid) {
         const double r = 0.03 * scene_radius;
         tool_style.front = tool_active ? std::array<float, 3>{0.95f, 0.8f, 0.2f}
@@ -487,26 +498,48 @@ int runViewer(const ViewerOptions& opt) {
           if (ImGui::CollapsingHeader(group, ImGuiTreeNodeFlags_DefaultOpen)) drawKnobs(runner, group, knob_editing);
         }
         if (!snap.message.empty()) ImGui::TextColored(ImVec4(1, 0.6f, 0.3f, 1), "%s", snap.message.c_str());
-        if (ImGui::CollapsingHeader("Timing", ImGuiTreeNodeFlags_DefaultOpen)) {
-          fps_hist.plot("fps", "Hz");
-          advance_hist.plot("step", "ms");
-          for (const auto& [name, h] : stage_hist) h.plot(name.c_str(), "ms");
-        }
-        if (ImGui::CollapsingHeader("Energy and counters")) {
-          ke_hist.plot("kinetic", "J");
-          ee_hist.plot("elastic", "J");
-          pe_hist.plot("potential", "J");
-          disp_hist.plot("max |u|", "m");
-          // Model counters (e.g. haptic_hz, haptic_p99_ms, broken_bonds) plotted over the last frames.
-          for (const auto& [k, h] : counter_hist) h.plot(k.c_str(), "");
-        }
+        if (ImGui::CollapsingHeader("Timing", ImGuiTreeNodeFlags_DefaultOpen)) plots.drawTiming();
+        if (ImGui::CollapsingHeader("Haptics")) plots.drawHaptics();
+        // Energies, particle count and the model's counters (e.g. broken_bonds) over the last frames.
+        if (ImGui::CollapsingHeader("Energy and counters")) plots.drawEnergy();
         if (ImGui::CollapsingHeader("Layers")) {
+          const RenderLayers& rl = model_layers.layers();
           ImGui::Checkbox("surface (1)", &layers.surface);
           ImGui::SameLine();
           ImGui::Checkbox("splats (2)", &layers.splats);
           ImGui::Checkbox("particles (3)", &layers.particles);
           ImGui::SameLine();
           ImGui::Checkbox("wireframe (4)", &layers.wireframe);
+          ImGui::Checkbox("spheres (5)", &layers.spheres);
+          ImGui::SameLine();
+          ImGui::TextDisabled("%zu", rl.sphere_centres.size());
+          ImGui::SameLine();
+          ImGui::Checkbox("nodal points (6)", &layers.nodal_points);
+          ImGui::SameLine();
+          ImGui::TextDisabled("%zu", rl.nodal_points.size());
+          ImGui::Checkbox("fixed / held (7)", &layers.constrained);
+          ImGui::SameLine();
+          ImGui::TextDisabled("%zu / %zu", rl.fixed_points.size(), rl.held_points.size());
+          ImGui::SameLine();
+          ImGui::Checkbox("swept surface (8)", &layers.swept_surface);
+          ImGui::Checkbox("forces (9)", &layers.forces);
+          ImGui::SameLine();
+          double fmax = 0;
+          for (const ForceArrow& a : rl.forces)
+            if (a.kind == ForceArrowKind::Tool) fmax = std::max(fmax, norm(a.force_n));
+          if (fmax > 0) ImGui::TextDisabled("tool %.3g N", fmax);
+          else ImGui::TextDisabled("%zu arrows", rl.forces.size());
+          bool auto_scale = force_scale_m_per_n <= 0;
+          if (ImGui::Checkbox("auto force scale", &auto_scale))
+            force_scale_m_per_n = auto_scale ? 0.0 : std::max(force_scale_used, 1e-6);
+          if (!auto_scale) {
+            float mm_per_n = float(force_scale_m_per_n * 1e3);
+            if (ImGui::SliderFloat("force scale [mm/N]", &mm_per_n, 1e-3f, 1e4f, "%.3g", ImGuiSliderFlags_Logarithmic))
+              force_scale_m_per_n = mm_per_n * 1e-3;
+          } else {
+            ImGui::SameLine();
+            ImGui::TextDisabled("%.3g mm/N", force_scale_used * 1e3);
+          }
           float sf = float(splat_params.sigma_fraction);
           if (ImGui::SliderFloat("splat sigma / r", &sf, 0.2f, 1.0f)) splat_params.sigma_fraction = sf;
         }
@@ -573,6 +606,8 @@ int runViewer(const ViewerOptions& opt) {
               "R             reset\n"
               "- / =         slower / faster (time scale)\n"
               "1 2 3 4       surface / splats / particles / wireframe\n"
+              "5 6 7 8 9     spheres / nodal points / fixed+held /\n"
+              "              swept surface / forces\n"
               "T             tool on / off\n"
               "G / C         grasp / cut mode (left drag uses the tool;\n"
               "              alt + left or middle drag orbits)\n"
@@ -588,7 +623,7 @@ int runViewer(const ViewerOptions& opt) {
                      ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoInputs | ImGuiWindowFlags_NoSavedSettings);
         ImGui::Text("%s | %s | %.0f fps | step %.2f ms%s", viewerBackendName(snap.backend),
                     snap.backend == BackendKind::Cpu ? "no GPU model: running on the CPU" : "GPU",
-                    double(fps_hist.last), snap.advance_ms, runner.paused() ? " | PAUSED" : "");
+                    double(plots.fps().last()), snap.advance_ms, runner.paused() ? " | PAUSED" : "");
         ImGui::End();
       }
       ImGui::Render();
@@ -602,6 +637,7 @@ int runViewer(const ViewerOptions& opt) {
         info.tool_tip = tool_tip;
         info.contact = contact;
         info.camera = f.cam;
+        info.force_scale_m_per_n = layers.forces ? force_scale_used : 0.0;
         opt.on_frame(info);
       }
       // --- captures read the back buffer before the swap ---

@@ -18,6 +18,12 @@ struct ViewLayers {
   bool particles = false; // every particle (nodal points, metaball centres) as view-facing splats
   bool wireframe = false;
   bool tool = true;       // the tool tip under the mouse
+  // The model's own layers (SimulationModel::renderLayers; viewer/model_layers.h):
+  bool spheres = false;        // metaball spheres at their radius (ray-cast impostors)
+  bool nodal_points = false;   // MLS nodal points (green splats)
+  bool constrained = false;    // fixed particles (yellow) and particles a tool holds (magenta)
+  bool swept_surface = true;   // the scalpel's swept cut surface (translucent cyan)
+  bool forces = true;          // tool reaction (orange) and per-particle external forces (white), on top
 };
 
 // What the left mouse button does over the model.
@@ -40,6 +46,7 @@ struct ViewerFrameInfo {
   Vec3d tool_tip;                // m, world
   ZContact contact;              // of the active collision mode
   ViewCamera camera;
+  double force_scale_m_per_n = 0.0;  // of the force arrows drawn (0: none)
 };
 
 struct ViewerOptions {
@@ -61,6 +68,7 @@ struct ViewerOptions {
   bool start_paused = false;
   double particle_radius_m = 0.0;  // 0: from the particles' mean spacing
   ViewLayers layers;
+  double force_scale_m_per_n = 0.0;  // force arrows, metres per newton; 0: the longest is a quarter of the scene radius
   ToolCollision collision = ToolCollision::DepthBuffer;
   ToolMode tool_mode = ToolMode::Camera;
   double grasp_radius_m = 0.0;     // 0: 8 % of the scene's radius
