@@ -128,6 +128,8 @@ void checkInputMesh(const TriangleMesh& mesh) {
     throw InputError("cut", "surface mesh", "inconsistently oriented: " + std::to_string(r.inconsistent_edges) + " edges");
   if (r.degenerate_triangles > 0)
     throw InputError("cut", "surface mesh", std::to_string(r.degenerate_triangles) + " degenerate triangles");
+  const int pinched = nonManifoldVertexCount(mesh);
+  if (pinched > 0) throw InputError("cut", "surface mesh", "not manifold at " + std::to_string(pinched) + " vertices");
 }
 
 class Splitter {
@@ -735,10 +737,11 @@ class Splitter {
         n.v_minus = addVertex(n.x, -1, p.closest - p.normal * probe_eps_);
         ++out.crossings;
       } else {
-        // Just ahead of the front in the strip's tangent plane: sees the material on both sides of the slit tip.
+        // Just ahead of the strip's outline (the front point may lie up to snap_fraction of an edge inside it),
+        // in the strip's tangent plane: sees the material on both sides of the slit tip.
         Vec2d outward;
-        outlinePoint(dom_, n.s, &outward);
-        const Vec3d probe = liftFromDomain(s_, dom_, {n.uv[0] + 10.0 * probe_eps_ * outward[0], n.uv[1] + 10.0 * probe_eps_ * outward[1]});
+        const Vec2d q = outlinePoint(dom_, n.s, &outward);
+        const Vec3d probe = liftFromDomain(s_, dom_, {q[0] + 10.0 * probe_eps_ * outward[0], q[1] + 10.0 * probe_eps_ * outward[1]});
         n.v_plus = n.v_minus = addVertex(n.x, 0, probe);
         ++(n.kind == NodeKind::Pierce ? out.pierce_points : out.front_points);
       }
