@@ -154,7 +154,8 @@ class Splitter {
     if (real == 0) {  // the blade crosses no mesh edge and meets no vertex: nothing of the surface is cut
       out.mesh = m_;
       out.vertex_side.resize(m_.vertices.size());
-      for (std::size_t v = 0; v < m_.vertices.size(); ++v) out.vertex_side[v] = side_[v];
+      for (std::size_t v = 0; v < m_.vertices.size(); ++v)
+        out.vertex_side[v] = std::int8_t(!far_[v] ? side_[v] : (projectOntoSweep(s_, dom_, m_.vertices[v]).offset >= 0.0 ? 1 : -1));
       out.binding_probe = m_.vertices;
       out.source_triangle.resize(m_.triangles.size());
       std::iota(out.source_triangle.begin(), out.source_triangle.end(), 0);
@@ -220,19 +221,38 @@ class Splitter {
       const double facing = dot(vertex_normal[std::size_t(v)], proj_[std::size_t(v)].normal);
       return facing > 0.0 ? -1 : (facing < 0.0 ? 1 : (fallback >= 0.0 ? 1 : -1));
     };
-    for (std::size_t v = 0; v < nv; ++v) {
-      proj_[v] = projectOntoSweep(s_, dom_, m_.vertices[v]);
-      side_[v] = std::fabs(proj_[v].offset) <= 1e-12 * size_ ? materialSide(int(v), proj_[v].offset)
-                                                               : (proj_[v].offset >= 0.0 ? 1 : -1);
-    }
     std::vector<double> shortest(nv, std::numeric_limits<double>::infinity());
     adj_.assign(nv, {});
+    double longest = 0.0;
     for (const auto& e : edges_) {
       const double l = norm(m_.vertices[std::size_t(e[0])] - m_.vertices[std::size_t(e[1])]);
+      longest = std::max(longest, l);
       for (int k = 0; k < 2; ++k) {
         shortest[std::size_t(e[k])] = std::min(shortest[std::size_t(e[k])], l);
         adj_[std::size_t(e[k])].push_back(e[1 - k]);
       }
+    }
+    // Vertices farther than two edges from the strip's box take no part in any crossing or snap (an edge that
+    // meets the strip has both ends within one edge of it): they are labelled later, only if needed.
+    far_.assign(nv, 0);
+    int hint = -1;
+    for (std::size_t v = 0; v < nv; ++v) {
+      const Vec3d& x = m_.vertices[v];
+      double out2 = 0.0;
+      for (int a = 0; a < 3; ++a) {
+        const double o = std::max({dom_.box_lo[a] - x[a], x[a] - dom_.box_hi[a], 0.0});
+        out2 += o * o;
+      }
+      if (out2 > 4.0 * longest * longest) {
+        far_[v] = 1;
+        side_[v] = 1;
+        proj_[v].offset = std::numeric_limits<double>::max();
+        continue;
+      }
+      proj_[v] = projectOntoSweep(s_, dom_, x, hint);
+      hint = proj_[v].triangle;
+      side_[v] = std::fabs(proj_[v].offset) <= 1e-12 * size_ ? materialSide(int(v), proj_[v].offset)
+                                                               : (proj_[v].offset >= 0.0 ? 1 : -1);
     }
     // Groups of coincident vertices.
     std::vector<int> order(nv);
@@ -257,7 +277,7 @@ class Splitter {
     for (std::size_t g = 0; g < groups.size(); ++g)
       for (int v : groups[g])
         for (int w : adj_[std::size_t(v)]) {
-          if (side_[std::size_t(v)] == side_[std::size_t(w)]) continue;
+          if (side_[std::size_t(v)] == side_[std::size_t(w)] || far_[std::size_t(v)] || far_[std::size_t(w)]) continue;
           const double a = std::fabs(offset(v)), b = std::fabs(offset(w));
           if (a < tau * (a + b)) cand[g] = 1;
         }
@@ -340,6 +360,10 @@ class Splitter {
     for (std::size_t e = 0; e < edges_.size(); ++e) {
       int a = edges_[e][0], b = edges_[e][1];
       if (side_[std::size_t(a)] * side_[std::size_t(b)] != -1) continue;
+      if (far_[std::size_t(a)] || far_[std::size_t(b)]) {  // cannot meet the strip, and no cut triangle uses it
+        edge_x_[e].cross = true;
+        continue;
+      }
       if (lexLess(m_.vertices[std::size_t(b)], m_.vertices[std::size_t(a)])) std::swap(a, b);
       const Vec3d &p = m_.vertices[std::size_t(a)], &q = m_.vertices[std::size_t(b)];
       const double oa = proj_[std::size_t(a)].offset, ob = proj_[std::size_t(b)].offset;
@@ -841,7 +865,8 @@ class Splitter {
         }
     }
     for (std::size_t v = 0; v < n_in; ++v)
-      if (!seen[v]) out.vertex_side[v] = std::int8_t(side_[v]);
+      if (!seen[v])
+        out.vertex_side[v] = std::int8_t(!far_[v] ? side_[v] : (projectOntoSweep(s_, dom_, m_.vertices[v]).offset >= 0.0 ? 1 : -1));
   }
 
   struct Piece {
@@ -858,7 +883,8 @@ class Splitter {
   std::vector<int> tri_edge_;
   std::vector<std::array<int, 2>> edge_tris_;
   std::vector<int> side_;                // +1 / -1, 0 = snapped onto the cut
-  std::vector<SweepProjection> proj_;    // per input vertex
+  std::vector<SweepProjection> proj_;    // per input vertex (not for far ones)
+  std::vector<char> far_;                // farther than two edges from the strip's bounding box
   std::vector<std::vector<int>> adj_;
   std::vector<int> vertex_node_;         // node of a snapped vertex, -1
   std::vector<EdgeCrossing> edge_x_;

@@ -100,6 +100,15 @@ SweepDomain unfoldSweptSurface(const SweptSurface& s) {
   }
   const int nb = int(d.boundary.size());
   if (nb < 3) bad("the strip has no area");
+  d.box_lo = d.box_hi = s.vertices.front();
+  for (const auto& v : s.vertices)
+    for (int a = 0; a < 3; ++a) d.box_lo[a] = std::min(d.box_lo[a], v[a]), d.box_hi[a] = std::max(d.box_hi[a], v[a]);
+  for (const auto& t : s.triangles) {
+    const Vec3d &a = s.vertices[t[0]], &b = s.vertices[t[1]], &c = s.vertices[t[2]];
+    const Vec3d g = (a + b + c) * (1.0 / 3.0);
+    d.tri_centre.push_back(g);
+    d.tri_radius.push_back(std::sqrt(std::max({norm2(a - g), norm2(b - g), norm2(c - g)})));
+  }
   double area2 = 0.0;
   d.boundary_s.assign(std::size_t(nb) + 1, 0.0);
   for (int i = 0; i < nb; ++i) {
@@ -119,25 +128,26 @@ SweepDomain unfoldSweptSurface(const SweptSurface& s) {
   return d;
 }
 
-SweepProjection projectOntoSweep(const SweptSurface& s, const SweepDomain& d, const Vec3d& p) {
+SweepProjection projectOntoSweep(const SweptSurface& s, const SweepDomain& d, const Vec3d& p, int hint) {
   SweepProjection r;
-  double best = std::numeric_limits<double>::infinity();
-  for (std::size_t i = 0; i < s.triangles.size(); ++i) {
+  double best = std::numeric_limits<double>::infinity(), reach = best;  // best squared distance, and its root
+  const auto visit = [&](std::size_t i) {
+    // Early out: a triangle whose bounding sphere lies farther than the best distance so far cannot be closer.
+    const double lim = d.tri_radius[i] + reach;
+    if (norm2(p - d.tri_centre[i]) > lim * lim) return;
     const auto& t = s.triangles[i];
-    const Vec3d &a = s.vertices[t[0]], &b = s.vertices[t[1]], &c = s.vertices[t[2]];
-    // Bounding-sphere early out (the centroid and the farthest corner from it).
-    const Vec3d g = (a + b + c) * (1.0 / 3.0);
-    const double rad = std::sqrt(std::max({norm2(a - g), norm2(b - g), norm2(c - g)}));
-    const double dg = norm(p - g) - rad;
-    if (dg > 0.0 && dg * dg >= best) continue;
-    const Vec3d k = cut::closestPointOnTriangle(p, a, b, c);
+    const Vec3d k = cut::closestPointOnTriangle(p, s.vertices[t[0]], s.vertices[t[1]], s.vertices[t[2]]);
     const double d2 = norm2(k - p);
-    if (d2 < best) {
+    // Ties go to the lower index, whatever the visiting order.
+    if (d2 < best || (d2 == best && int(i) < r.triangle)) {
       best = d2;
+      reach = std::sqrt(d2);
       r.triangle = int(i);
       r.closest = k;
     }
-  }
+  };
+  if (hint >= 0 && std::size_t(hint) < s.triangles.size()) visit(std::size_t(hint));
+  for (std::size_t i = 0; i < s.triangles.size(); ++i) visit(i);
   const auto& t = s.triangles[std::size_t(r.triangle)];
   const Vec3d& a = s.vertices[t[0]];
   const Vec3d e1 = s.vertices[t[1]] - a, e2 = s.vertices[t[2]] - a, w = p - a;

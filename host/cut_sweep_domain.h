@@ -20,6 +20,9 @@ struct SweepDomain {
   std::vector<int> boundary;             // swept vertex ids of the strip's outline, counter-clockwise
   std::vector<double> boundary_s;        // arc length at each boundary vertex (size boundary.size() + 1)
   double diameter = 0.0;                 // of the domain's bounding box (m)
+  std::vector<Vec3d> tri_centre;         // per swept triangle: centroid and the radius of the sphere about it
+  std::vector<double> tri_radius;        // holding the triangle (for the closest-triangle search)
+  Vec3d box_lo, box_hi;                  // bounding box of the swept surface (m)
   double perimeter() const { return boundary_s.back(); }
 };
 
@@ -38,7 +41,8 @@ struct SweepProjection {
   double distance = 0.0, offset = 0.0;
   Vec2d uv{0.0, 0.0};
 };
-SweepProjection projectOntoSweep(const SweptSurface& surface, const SweepDomain& domain, const Vec3d& p);
+// `hint`: a triangle to try first (e.g. the previous query's, for nearby points); the result does not depend on it.
+SweepProjection projectOntoSweep(const SweptSurface& surface, const SweepDomain& domain, const Vec3d& p, int hint = -1);
 
 // The 3D point of domain position uv: the unfolded triangle containing it (or, outside the strip, the nearest
 // one with extended barycentric coordinates) mapped back affinely.
