@@ -909,12 +909,15 @@ SurfaceSplit splitSurfaceBySweep(const TriangleMesh& mesh, const SweptSurface& s
   for (const auto& v : mesh.vertices)
     for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], v[a]), hi[a] = std::max(hi[a], v[a]);
   const double size = norm(hi - lo);
-  // Perturbations for the retries: fixed directions (deterministic), a few 1e-6 of the mesh size.
+  // Perturbations for the retries: fixed unit directions (deterministic) and growing sizes relative to the mesh:
+  // rounding-level first, then up to 1e-3 of the organ (a crossing curve that grazes the cut front, e.g. along a
+  // wall of an earlier cut nearly parallel to the blade, needs the front moved by more than rounding).
   const Vec3d dirs[4] = {Vec3d(0, 0, 0), Vec3d(0.48, 0.36, 0.8), Vec3d(-0.6, 0.64, 0.48), Vec3d(0.36, -0.48, 0.8)};
+  const double sizes[4] = {0.0, 2e-6, 1e-4, 1e-3};
   std::string reason;
   for (int attempt = 0; attempt < std::max(1, opt.max_attempts); ++attempt) {
     SweptSurface s = sweep;
-    const Vec3d shift = dirs[attempt % 4] * (2e-6 * size * double((attempt + 3) / 4));
+    const Vec3d shift = dirs[attempt % 4] * (sizes[attempt % 4] * size * double(1 + attempt / 4));
     for (auto& v : s.vertices) v += shift;
     try {
       SurfaceSplit r = Splitter(mesh, s, opt).run();
@@ -924,8 +927,7 @@ SurfaceSplit splitSurfaceBySweep(const TriangleMesh& mesh, const SweptSurface& s
       reason = e.what();
     }
   }
-  throw InputError("cut", "swept surface", "the split stayed inconsistent after " + std::to_string(opt.max_attempts) +
-                                               " perturbed attempts: " + reason);
+  throw CutSplitFailed("the split stayed inconsistent after " + std::to_string(opt.max_attempts) + " perturbed attempts: " + reason);
 }
 
 }  // namespace inc

@@ -4,10 +4,21 @@
 #include <cstdint>
 #include <vector>
 
+#include <string>
+
 #include "host/cut_swept_surface.h"
+#include "host/input_error.h"
 #include "host/mesh.h"
 
 namespace inc {
+
+// The split stayed inconsistent after every perturbed attempt (a degenerate configuration such as a blade that
+// stops exactly on a wall of an earlier cut): InputError("cut", "swept surface", reason) of its own type, so that a
+// running simulation can keep the surface unsplit for that cut instead of stopping.
+class CutSplitFailed : public InputError {
+ public:
+  explicit CutSplitFailed(const std::string& reason) : InputError("cut", "swept surface", reason) {}
+};
 
 struct SurfaceSplitOptions {
   // A crossing is kept at least this fraction of its edge away from either end vertex (and a cut-front point
@@ -18,8 +29,8 @@ struct SurfaceSplitOptions {
   // the crossed mesh edges (the wall gets the resolution of the surface around it).
   double wall_spacing_factor = 1.0;
   int smoothing_iterations = 4;
-  // Attempts with the swept surface shifted by a few 1e-6 of the mesh size when the crossing curve comes out
-  // inconsistent (a blade exactly through a vertex of the strip's outline and the like).
+  // Attempts with the swept surface shifted by 2e-6, 1e-4 then 1e-3 of the mesh size when the crossing curve comes
+  // out inconsistent (a blade exactly through a vertex of the strip's outline, a crossing curve grazing the front).
   int max_attempts = 4;
 };
 
@@ -36,6 +47,7 @@ struct SurfaceSplit {
   std::vector<std::int32_t> source_triangle;   // per triangle: the input triangle it is part of, -1 for a wall
   std::vector<std::uint8_t> wall;              // per triangle: 1 = cut wall (both sides)
   bool split = false;  // false: the blade crosses no triangle (the mesh is returned unchanged)
+  std::string failure;  // applySurfaceCut only: why the surface was left unsplit (CutSplitFailed), else empty
   int crossings = 0, front_points = 0, pierce_points = 0, contour_loops = 0, wall_triangles = 0, components = 0;
   int attempts = 0, chord_splits = 0;
   double wall_spacing_m = 0.0;
@@ -50,7 +62,8 @@ struct SurfaceSplit {
 // opposite orientations. Every output is closed, manifold (edges and vertices), consistently oriented and free
 // of degenerate triangles, or the call throws. Throws InputError("cut", "surface mesh", reason) for an open,
 // non-manifold or inconsistently oriented mesh and InputError("cut", "swept surface", reason) for a degenerate
-// swept surface (see unfoldSweptSurface) or a split that stays inconsistent after every attempt.
+// swept surface (see unfoldSweptSurface), and CutSplitFailed for a split that stays inconsistent after every
+// attempt.
 SurfaceSplit splitSurfaceBySweep(const TriangleMesh& mesh, const SweptSurface& sweep,
                                  const SurfaceSplitOptions& options = {});
 

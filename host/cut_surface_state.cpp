@@ -15,7 +15,13 @@ CutSurfaceState cutSurfaceState(const TriangleMesh& rest) {
 }
 
 SurfaceSplit applySurfaceCut(CutSurfaceState& state, const SweptSurface& sweep, const SurfaceSplitOptions& options) {
-  SurfaceSplit r = splitSurfaceBySweep(state.mesh, sweep, options);
+  SurfaceSplit r;
+  try {
+    r = splitSurfaceBySweep(state.mesh, sweep, options);
+  } catch (const CutSplitFailed& e) {
+    r.failure = e.reason();  // the surface stays as it is for this cut; spheres and links are still cut
+    return r;
+  }
   if (!r.split) return r;
   std::vector<std::uint8_t> wall(r.mesh.triangles.size(), 1);
   for (std::size_t t = 0; t < wall.size(); ++t)

@@ -23,7 +23,8 @@ CutSurfaceState cutSurfaceState(const TriangleMesh& rest);
 
 // Splits the current surface along `sweep` (rest configuration; any shape, a partial cut leaves a slit). The
 // state changes only when the blade crossed the surface (split == true). Wall flags and probes of the triangles
-// and vertices that existed before carry over (a wall crossed by a later cut stays a wall).
+// and vertices that existed before carry over (a wall crossed by a later cut stays a wall). A split that stays
+// inconsistent (CutSplitFailed) leaves the state unchanged and says why in `failure`; bad input still throws.
 SurfaceSplit applySurfaceCut(CutSurfaceState& state, const SweptSurface& sweep, const SurfaceSplitOptions& options = {});
 
 // Skin binding (bindSkin, k nearest by signed sphere distance) restricted, per vertex, to the spheres whose
