@@ -272,11 +272,11 @@ class DissectionSimulation final : public SimulationModel {
     bindSurface();
   }
 
-  // Binds the surface to the spheres. After a surface split each vertex binds only to spheres it sees without
-  // crossing any cut (no skin weight across a swept surface; host/cut_surface_state.h).
+  // Binds the surface to the spheres. After a cut each vertex binds only to spheres it sees without crossing
+  // any cut (no skin weight across a swept surface; host/cut_surface_state.h).
   void bindSurface() {
-    const SkinBinding b = surface_split_ ? bindSkinAcrossCuts(surface_, spheres_, earlier_cuts_, 4, scene_.file)
-                                         : bindSkin(rest_surface_, spheres_, 4, scene_.file);
+    const SkinBinding b = earlier_cuts_.empty() ? bindSkin(rest_surface_, spheres_, 4, scene_.file)
+                                                : bindSkinAcrossCuts(surface_, spheres_, earlier_cuts_, 4, scene_.file);
     skin_ = Skin{b.k, b.rest_vertices, b.sphere, b.weight};
   }
 
