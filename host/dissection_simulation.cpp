@@ -6,7 +6,7 @@
 #include <cmath>
 #include <limits>
 
-#include "host/cut_mesh.h"
+#include "host/cut_surface_state.h"
 #include "host/cut_nodal_points.h"
 #include "host/cut_swept_surface.h"
 #include "host/dissection_render_layers.h"
@@ -290,40 +290,12 @@ class DissectionSimulation final : public SimulationModel {
     bindSurface();
   }
 
-  // Binds the surface to the spheres. After a surface split each piece binds only to the spheres on its own
-  // side of the cut (no skin weight across the swept surface): piece + to spheres with side +1, piece - to -1.
+  // Binds the surface to the spheres. After a cut each vertex binds only to spheres it sees without crossing
+  // any cut (no skin weight across a swept surface; host/cut_surface_state.h).
   void bindSurface() {
-    skin_ = Skin{};
-    if (pieces_.empty()) {
-      const SkinBinding b = bindSkin(rest_surface_, spheres_, 4, scene_.file);
-      skin_.k = b.k;
-      skin_.rest_vertices = b.rest_vertices;
-      skin_.sphere = b.sphere;
-      skin_.weight = b.weight;
-      return;
-    }
-    skin_.k = 4;
-    for (const auto& piece : pieces_) {
-      MetaballModel sub;
-      std::vector<std::int32_t> global;
-      for (std::size_t i = 0; i < spheres_.size(); ++i)
-        if (sideOfSweptSurface(cut_surface_, spheres_.rest_centers[i]) == piece.side) {
-          global.push_back(std::int32_t(i));
-          sub.rest_centers.push_back(spheres_.rest_centers[i]);
-          sub.rest_radii.push_back(spheres_.rest_radii[i]);
-          sub.masses.push_back(spheres_.masses[i]);
-        }
-      if (global.empty()) throw InputError(scene_.file, "cutting", "a cut piece has no spheres to bind its surface to");
-      const int k = std::min<int>(4, int(global.size()));
-      const SkinBinding b = bindSkin(piece.mesh, sub, k, scene_.file);
-      for (std::size_t v = 0; v < b.rest_vertices.size(); ++v) {
-        skin_.rest_vertices.push_back(b.rest_vertices[v]);
-        for (int j = 0; j < 4; ++j) {
-          skin_.sphere.push_back(j < k ? global[b.sphere[v * k + j]] : global[b.sphere[v * k]]);
-          skin_.weight.push_back(j < k ? b.weight[v * k + j] : 0.0);
-        }
-      }
-    }
+    const SkinBinding b = earlier_cuts_.empty() ? bindSkin(rest_surface_, spheres_, 4, scene_.file)
+                                                : bindSkinAcrossCuts(surface_, spheres_, earlier_cuts_, 4, scene_.file);
+    skin_ = Skin{b.k, b.rest_vertices, b.sphere, b.weight};
   }
 
   // The cut pipeline of section 5 for one finished swept surface (scripted or drawn with the mouse).
@@ -341,42 +313,18 @@ class DissectionSimulation final : public SimulationModel {
     earlier_cuts_.push_back(cut);
     std::vector<std::int32_t> carry(r.kept.begin(), r.kept.end());
     carry.resize(r.spheres.size(), -1);
-    // The surface: split along the swept plane when the sweep is planar and spans the whole section. Only
-    // the first such cut splits it (the pieces' skin binding knows one cut surface); later cuts separate
-    // the spheres and their links, and the surface follows its bound spheres.
-    Vec3d p, n;
-    const double tol = 0.25 * scene_.geometry.spacing;
-    if (!surface_split_ && planeOfSweptSurface(cut, p, n, tol) &&
-        sweptSurfaceSpansSection(rest_surface_, cut, p, n, tol)) {
-      const CutMeshResult m = splitMeshByPlane(rest_surface_, p, n);
-      rest_surface_ = mergeMeshes(m.positive, m.negative);  // same vertex order as the pieces below
-      pieces_ = {{m.positive, +1}, {m.negative, -1}};
-      cut_surface_ = cut;
+    // The surface: split along the swept surface whatever its shape (a partial cut leaves one closed mesh with
+    // a slit), at every cut; CGAL walls (host/cut_surface_split.h).
+    if (!surface_split_) surface_ = cutSurfaceState(rest_surface_);
+    if (applySurfaceCut(surface_, cut).split) {
+      rest_surface_ = surface_.mesh;
+      wall_flags_ = surface_.wall;
       surface_split_ = true;
-      wall_flags_ = wallTriangles(rest_surface_, p, n);
     }
     surface_components_ = analyzeMesh(rest_surface_).components;
     spheres_ = std::move(r.spheres);
     sphere_components_ = sphereGraphComponents(spheres_);
     rebuild(&carry, &cut);
-  }
-
-  // The cap triangles splitMeshByPlane added: all three vertices on one plane parallel to the cut plane (the
-  // split plane may be shifted by a few 1e-7 of the mesh size to clear vertices; every original vertex then
-  // lies at least that far from it, while the contour vertices agree to rounding).
-  static std::vector<std::uint8_t> wallTriangles(const TriangleMesh& m, const Vec3d& p, const Vec3d& n) {
-    Vec3d lo = m.vertices.front(), hi = lo;
-    for (const auto& v : m.vertices)
-      for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], v[k]), hi[k] = std::max(hi[k], v[k]);
-    const double size = norm(hi - lo), nn = norm(n);
-    std::vector<std::uint8_t> flags(m.triangles.size(), 0);
-    for (std::size_t t = 0; t < m.triangles.size(); ++t) {
-      double d[3];
-      for (int k = 0; k < 3; ++k) d[k] = dot(m.vertices[m.triangles[t][k]] - p, n) / nn;
-      const double spread = std::max({d[0], d[1], d[2]}) - std::min({d[0], d[1], d[2]});
-      flags[t] = (spread < 1e-9 * size && std::fabs(d[0]) < 1e-4 * size) ? 1 : 0;
-    }
-    return flags;
   }
 
   Scene scene_;
@@ -385,12 +333,7 @@ class DissectionSimulation final : public SimulationModel {
   bool has_scalpel_ = false;
   MetaballModel spheres_;
   TriangleMesh rest_surface_;
-  struct Piece {
-    TriangleMesh mesh;
-    int side;
-  };
-  std::vector<Piece> pieces_;  // the surface pieces of the last split, in rest_surface_'s vertex order
-  SweptSurface cut_surface_;
+  CutSurfaceState surface_;  // the split surface with its wall flags and binding probes (after the first split)
   struct Skin {  // translation skinning slots v * k + j (sphere index into spheres_, weight)
     int k = 0;
     std::vector<Vec3d> rest_vertices;

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <numeric>
 #include <utility>
@@ -43,7 +44,9 @@ class CentreGrid {
   }
 
   // The `want` smallest (d_i, i) pairs, sorted ascending (fewer when there are fewer spheres).
-  void nearest(const Vec3d& p, int want, std::vector<std::pair<double, int>>& best) const {
+  // With `allowed`, only spheres it accepts count (it is asked only for candidates that would enter the list).
+  void nearest(const Vec3d& p, int want, std::vector<std::pair<double, int>>& best,
+               const std::function<bool(int)>* allowed = nullptr) const {
     best.clear();
     int q[3];
     for (int a = 0; a < 3; ++a) q[a] = idx(p, a);
@@ -68,6 +71,8 @@ class CentreGrid {
             for (int s = start_[cidx]; s < start_[cidx + 1]; ++s) {
               const int id = items_[std::size_t(s)];
               const std::pair<double, int> cand{norm(p - c_[std::size_t(id)]) - r_[std::size_t(id)], id};
+              if (int(best.size()) == want && !(cand < best.back())) continue;
+              if (allowed && !(*allowed)(id)) continue;
               if (int(best.size()) < want) {
                 best.insert(std::upper_bound(best.begin(), best.end(), cand), cand);
               } else if (cand < best.back()) {
@@ -99,6 +104,11 @@ class CentreGrid {
 }  // namespace
 
 SkinBinding bindSkin(const TriangleMesh& surface, const MetaballModel& mb, int k, const std::string& file) {
+  return bindSkin(surface, mb, k, file, SkinFilter());
+}
+
+SkinBinding bindSkin(const TriangleMesh& surface, const MetaballModel& mb, int k, const std::string& file,
+                     const SkinFilter& allowed) {
   if (k < 1 || k > 16) throw InputError(file, "skinning.k", "spheres per vertex must be in [1, 16], got " + std::to_string(k));
   if (mb.size() == 0) throw InputError(file, "skinning", "the metaball model has no spheres");
   if (mb.rest_radii.size() != mb.size()) throw InputError(file, "skinning", "radii and centres differ in count");
@@ -120,7 +130,12 @@ SkinBinding bindSkin(const TriangleMesh& surface, const MetaballModel& mb, int k
   const int want = std::min<int>(k + 1, int(mb.size()));
   cpu::parallelFor(nv, [&](std::int64_t v) {
     thread_local std::vector<std::pair<double, int>> best;
-    grid.nearest(surface.vertices[std::size_t(v)], want, best);
+    best.clear();
+    if (allowed) {
+      const std::function<bool(int)> sees = [&](int sphere) { return allowed(int(v), sphere); };
+      grid.nearest(surface.vertices[std::size_t(v)], want, best, &sees);
+    }
+    if (best.empty()) grid.nearest(surface.vertices[std::size_t(v)], want, best);  // unfiltered, or none allowed
     const double dmin = best.front().first;
     // rho: the first unbound sphere; with no such sphere, 1.5 x the farthest bound one (its weight stays > 0).
     double rho = int(best.size()) > k ? best[std::size_t(k)].first - dmin : 1.5 * (best.back().first - dmin);

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,11 @@ struct SkinBinding {
 // centres (exact k-nearest, not approximate). Deterministic. Throws InputError(file, "skinning", reason) for
 // k outside [1, 16], no spheres, a non-positive radius, or a triangle index out of range.
 SkinBinding bindSkin(const TriangleMesh& surface, const MetaballModel& spheres, int k = 4, const std::string& file = "");
+// The same over the spheres `allowed(vertex, sphere)` accepts (e.g. those a vertex sees without crossing a cut:
+// no skin weight across the swept surface, section 5.4); a vertex that none is allowed for binds unfiltered.
+using SkinFilter = std::function<bool(int vertex, int sphere)>;
+SkinBinding bindSkin(const TriangleMesh& surface, const MetaballModel& spheres, int k, const std::string& file,
+                     const SkinFilter& allowed);
 
 // The binding in precision T, owning its arrays; view() gives the pointers the kernels and CPU loops use.
 template <typename T>
