@@ -108,6 +108,7 @@ struct Row {
   double neighbours = 0, build_ms = 0, query_ms = 0, total_ms = 0, bytes = 0, gbs = 0, peak_fraction = 0,
          target_ms = 0;
   bool hashed = false;
+  double cell_factor = 0;
 };
 
 // Issue 3 targets: GPU 0.5 ms at 1e6 and 10 ms at 1.6e7, linear in between; CPU 300 ms at 1e6.
@@ -265,7 +266,7 @@ int main(int argc, char** argv) {
   std::size_t lo = 10000, hi = 1000000, cpu_max = 0;
   int repeats = 0, cpu_threads = 0;
   bool quick = false, morton = false, profile = false;
-  double cell_factor = 0.5;  // what findNeighbors picks by default for a dense cloud
+  double cell_factor = 0.0;  // 0: what findNeighbors picks for a dense cloud (CPU 0.5, CUDA 1.0)
   app.add_option("--backend", backend_text, "cpu | cuda | auto");
   app.add_option("--min", lo, "smallest particle count");
   app.add_option("--max", hi, "largest particle count");
@@ -274,7 +275,8 @@ int main(int argc, char** argv) {
   app.add_option("--repeats", repeats, "timed repeats per size after warm-up (default 10 GPU, 5 CPU)");
   app.add_option("--cpu-threads", cpu_threads, "OpenMP threads for the CPU runs (0: OMP_NUM_THREADS or all cores;"
                                               " 2 matches the issue's 2-core target)");
-  app.add_option("--cell-factor", cell_factor, "grid cell edge / radius")->check(CLI::Range(0.05, 10.0));
+  app.add_option("--cell-factor", cell_factor, "grid cell edge / radius (default: CPU 0.5, CUDA 1.0, as findNeighbors)")
+      ->check(CLI::Range(0.0, 10.0));
   app.add_flag("--morton", morton, "store the grid in Z order");
   app.add_flag("--shuffle", g_shuffle, "list the particles in random order instead of lattice order");
   app.add_flag("--storage-order", g_storage,
@@ -305,16 +307,18 @@ int main(int argc, char** argv) {
     std::printf("%-5s %-6s %10s %7s %11s %11s %11s %9s %8s %8s %8s %10s\n", "back", "prec", "n", "nbr/p", "build_ms",
                 "query_ms", "total_ms", "ns/p", "B/p", "GB/s", "peak", "target_ms");
     std::vector<Row> rows;
+    auto cellFactor = [&](bool on_gpu) { return cell_factor > 0 ? cell_factor : (on_gpu ? 1.0 : 0.5); };
     auto run = [&](bool on_gpu, std::size_t n) {
       const int reps = repeats > 0 ? repeats : (quick ? 3 : (on_gpu ? 10 : 5));
       Row r;
 #if INCISION_HAVE_CUDA
       if (on_gpu)
-        r = precision == "double" ? runCuda<double>(n, reps, morton, cell_factor, peak, profile)
-                                    : runCuda<float>(n, reps, morton, cell_factor, peak, profile);
+        r = precision == "double" ? runCuda<double>(n, reps, morton, cellFactor(true), peak, profile)
+                                    : runCuda<float>(n, reps, morton, cellFactor(true), peak, profile);
 #endif
-      if (!on_gpu) r = precision == "double" ? runCpu<double>(n, reps, morton, cell_factor)
-                                        : runCpu<float>(n, reps, morton, cell_factor);
+      if (!on_gpu) r = precision == "double" ? runCpu<double>(n, reps, morton, cellFactor(false))
+                                        : runCpu<float>(n, reps, morton, cellFactor(false));
+      r.cell_factor = cellFactor(on_gpu);
       r.precision = precision;
       printRow(r);
       std::fflush(stdout);
@@ -331,7 +335,7 @@ int main(int argc, char** argv) {
            "bytes_per_particle,achieved_gbs,peak_gbs,peak_fraction,target_ms\n";
       for (const Row& r : rows)
         f << r.backend << ',' << r.precision << ',' << (morton ? "morton" : "bucket") << ','
-          << (g_shuffle ? "shuffled" : "lattice") << ',' << (g_storage ? "storage" : "original") << ',' << cell_factor << ',' << r.n << ','
+          << (g_shuffle ? "shuffled" : "lattice") << ',' << (g_storage ? "storage" : "original") << ',' << r.cell_factor << ',' << r.n << ','
           << r.neighbours << ',' << r.build_ms << ',' << r.query_ms << ',' << r.total_ms << ','
           << r.total_ms * 1e6 / double(r.n) << ',' << r.bytes << ',' << r.gbs << ',' << (r.backend == "cuda" ? peak : 0.0)
           << ',' << r.peak_fraction << ',' << r.target_ms << '\n';

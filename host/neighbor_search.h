@@ -10,8 +10,8 @@
 namespace inc {
 
 struct NeighborSearchOptions {
-  double cell_size = 0.0;     // grid cell edge; <= 0: half the largest radius if that grid is dense, else the
-                              // largest radius, or 1 when every radius is 0
+  double cell_size = 0.0;     // grid cell edge; <= 0: CPU: half the largest radius if that grid is dense, else
+                              // the largest radius; CUDA: the largest radius; 1 when every radius is 0
   bool morton_order = false;  // sort the grid's storage along the Z curve (same lists either way)
 };
 
