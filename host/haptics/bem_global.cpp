@@ -402,6 +402,36 @@ void BemModel::interiorRows(const Vec3d& xi, Eigen::MatrixXd& g_rows, Eigen::Mat
   }
 }
 
+namespace {
+void subdividedRule(const Vec3d& p0, const Vec3d& p1, const Vec3d& p2, int level, std::vector<Vec3d>& pts,
+                    std::vector<double>& wts) {
+  if (level > 0) {
+    const Vec3d m01 = (p0 + p1) * 0.5, m12 = (p1 + p2) * 0.5, m20 = (p2 + p0) * 0.5;
+    subdividedRule(p0, m01, m20, level - 1, pts, wts);
+    subdividedRule(m01, p1, m12, level - 1, pts, wts);
+    subdividedRule(m20, m12, p2, level - 1, pts, wts);
+    subdividedRule(m01, m12, m20, level - 1, pts, wts);
+    return;
+  }
+  const double area = 0.5 * norm(cross(p1 - p0, p2 - p0));
+  const TriRule& r = triRule();
+  for (int q = 0; q < 7; ++q) {
+    pts.push_back(p0 * r.b[q][0] + p1 * r.b[q][1] + p2 * r.b[q][2]);
+    wts.push_back(r.w[q] * area);
+  }
+}
+}  // namespace
+
+void BemModel::elementQuadrature(int j, const Vec3d& near_point, std::vector<Vec3d>& points,
+                                 std::vector<double>& weights) const {
+  if (j < 0 || j >= elementCount()) throw InputError("<bem model>", "element", "out of range");
+  points.clear();
+  weights.clear();
+  const auto& tri = mesh_.triangles[j];
+  const int level = subdivisionLevel(norm(centroids_[j] - near_point), std::sqrt(2.0 * areas_[j]));
+  subdividedRule(mesh_.vertices[tri[0]], mesh_.vertices[tri[1]], mesh_.vertices[tri[2]], level, points, weights);
+}
+
 Vec3d BemModel::interiorDisplacement(const Vec3d& xi, const Eigen::VectorXd& u, const Eigen::VectorXd& t) const {
   Vec3d out;
   for (int j = 0; j < elementCount(); ++j) {

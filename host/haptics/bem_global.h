@@ -36,6 +36,13 @@ class BemModel {
   const std::vector<Vec3d>& centroids() const { return centroids_; }
   const std::vector<Vec3d>& normals() const { return normals_; }
   const std::vector<double>& areas() const { return areas_; }
+  const TriangleMesh& mesh() const { return mesh_; }
+  double shearModulus_pa() const { return shear_pa_; }
+  double poisson() const { return nu_; }
+  // Quadrature of element j (points, weights in m^2 summing to its area): the degree-5 7-point rule on
+  // 4^L sub-triangles, L = 0..3 growing as `near_point` gets closer (the rule of the assembly), for
+  // integrands that vary like 1 / distance^n from near_point.
+  void elementQuadrature(int j, const Vec3d& near_point, std::vector<Vec3d>& points, std::vector<double>& weights) const;
   const Eigen::MatrixXd& H() const { return H_; }
   const Eigen::MatrixXd& G() const { return G_; }
   double assemblySeconds() const { return assembly_s_; }
