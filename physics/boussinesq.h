@@ -41,27 +41,38 @@ INC_HD Mat3<T> boussinesqCerrutiDisplacement(const Vec3<T>& x, T shear_pa, T nu,
   return b;
 }
 
-// Stress (Pa per newton) at x for a unit force in direction k: Hooke's law on the displacement gradient
-// taken by central differences with step h_rel * |x| (relative error ~ h_rel^2; 1e-4 gives ~1e-8).
+// Stresses (Pa per newton) at x for unit forces along x, y and z (out[k]): Hooke's law on the displacement
+// gradient taken by central differences with step h_rel * |x| (relative error ~ h_rel^2; 1e-4 gives ~1e-8).
 template <typename T>
-INC_HD Mat3<T> boussinesqCerrutiStress(const Vec3<T>& x, int k, T shear_pa, T nu, T h_rel = T(1e-4),
-                                       T guard_rel = T(0)) {
+INC_HD void boussinesqCerrutiStresses(const Vec3<T>& x, T shear_pa, T nu, Mat3<T> out[3], T h_rel = T(1e-4),
+                                      T guard_rel = T(0)) {
   const T h = h_rel * norm(x);
-  T grad[3][3];  // grad[m][l] = d u_l / d x_m
+  T grad[3][3][3];  // grad[k][m][l] = d u_l / d x_m for the force along k
   for (int m = 0; m < 3; ++m) {
     Vec3<T> xp = x, xm = x;
     xp[m] += h;
     xm[m] -= h;
     const Mat3<T> up = boussinesqCerrutiDisplacement(xp, shear_pa, nu, guard_rel);
     const Mat3<T> um = boussinesqCerrutiDisplacement(xm, shear_pa, nu, guard_rel);
-    for (int l = 0; l < 3; ++l) grad[m][l] = (up(k, l) - um(k, l)) / (T(2) * h);
+    for (int k = 0; k < 3; ++k)
+      for (int l = 0; l < 3; ++l) grad[k][m][l] = (up(k, l) - um(k, l)) / (T(2) * h);
   }
   const T lambda = T(2) * shear_pa * nu / (T(1) - T(2) * nu);
-  const T div = grad[0][0] + grad[1][1] + grad[2][2];
-  Mat3<T> s;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) s(i, j) = shear_pa * (grad[i][j] + grad[j][i]) + (i == j ? lambda * div : T(0));
-  return s;
+  for (int k = 0; k < 3; ++k) {
+    const T div = grad[k][0][0] + grad[k][1][1] + grad[k][2][2];
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        out[k](i, j) = shear_pa * (grad[k][i][j] + grad[k][j][i]) + (i == j ? lambda * div : T(0));
+  }
+}
+
+// The stress for one force direction k (see boussinesqCerrutiStresses).
+template <typename T>
+INC_HD Mat3<T> boussinesqCerrutiStress(const Vec3<T>& x, int k, T shear_pa, T nu, T h_rel = T(1e-4),
+                                       T guard_rel = T(0)) {
+  Mat3<T> s[3];
+  boussinesqCerrutiStresses(x, shear_pa, nu, s, h_rel, guard_rel);
+  return s[k];
 }
 
 }  // namespace inc

@@ -281,6 +281,30 @@ Eigen::VectorXd BemModel::rhs(const Eigen::VectorXd& known, const std::vector<Be
   return f;
 }
 
+namespace {
+// out += sign * A X for a tall X of a few columns, column by column of A: each column of A is read from memory
+// once and used for every column of X (a general matrix product would pack A first; for a few load cases the
+// product is memory bound, and packing doubled the time). Zero rows of X are skipped.
+void addSkinnyProduct(const Eigen::MatrixXd& A, const Eigen::MatrixXd& X, double sign, Eigen::MatrixXd& out) {
+  for (Eigen::Index j = 0; j < A.cols(); ++j) {
+    if (X.row(j).isZero(0.0)) continue;
+    for (Eigen::Index k = 0; k < X.cols(); ++k) out.col(k) += (sign * X(j, k)) * A.col(j);
+  }
+}
+}  // namespace
+
+Eigen::MatrixXd BemModel::rhs(const Eigen::MatrixXd& known, const std::vector<BemBc>& bc) const {
+  if (known.rows() != 3 * elementCount()) throw InputError("<bem model>", "known", "need 3 rows per element");
+  // F = G t - H u: column 3j + l of G multiplies a known traction, of H a known displacement.
+  Eigen::MatrixXd t = Eigen::MatrixXd::Zero(known.rows(), known.cols()), u = t;
+  for (int j = 0; j < elementCount(); ++j)
+    (bc[j] == BemBc::kTraction ? t : u).middleRows(3 * j, 3) = known.middleRows(3 * j, 3);
+  Eigen::MatrixXd f = Eigen::MatrixXd::Zero(known.rows(), known.cols());
+  addSkinnyProduct(G_, t, 1.0, f);
+  addSkinnyProduct(H_, u, -1.0, f);
+  return f;
+}
+
 void BemModel::factorBase(const std::vector<BemBc>& base) {
   if (int(base.size()) != elementCount()) throw InputError("<bem model>", "base", "need one condition per element");
   const auto t0 = std::chrono::steady_clock::now();
@@ -376,6 +400,15 @@ Eigen::VectorXd BemModel::solve(const Eigen::VectorXd& known) const {
   if (changed_cols_.empty()) return y0;
   Eigen::VectorXd ys(changed_cols_.size());
   for (std::size_t r = 0; r < changed_cols_.size(); ++r) ys[r] = y0[changed_cols_[r]];
+  return y0 - z_ * c_lu_.solve(ys);
+}
+
+Eigen::MatrixXd BemModel::solve(const Eigen::MatrixXd& known) const {
+  Eigen::MatrixXd y0 = Eigen::MatrixXd::Zero(known.rows(), known.cols());
+  addSkinnyProduct(a_inv_, rhs(known, currentBc()), 1.0, y0);
+  if (changed_cols_.empty()) return y0;
+  Eigen::MatrixXd ys(changed_cols_.size(), known.cols());
+  for (std::size_t r = 0; r < changed_cols_.size(); ++r) ys.row(Eigen::Index(r)) = y0.row(changed_cols_[r]);
   return y0 - z_ * c_lu_.solve(ys);
 }
 

@@ -66,6 +66,8 @@ class BemModel {
   // elements (of the current conditions: base + contact). Returns Y (u or t per element, same layout).
   // Uses A_base^-1 and the SMW correction: O(N^2 + N k).
   Eigen::VectorXd solve(const Eigen::VectorXd& known) const;
+  // The same for several load cases (one column each): the matrices are read once for all columns.
+  Eigen::MatrixXd solve(const Eigen::MatrixXd& known) const;
   // The same by a fresh dense LU of the current A (reference for tests; O(N^3)).
   Eigen::VectorXd solveFresh(const Eigen::VectorXd& known) const;
   std::vector<BemBc> currentBc() const;
@@ -77,6 +79,7 @@ class BemModel {
 
  private:
   Eigen::VectorXd rhs(const Eigen::VectorXd& known, const std::vector<BemBc>& bc) const;
+  Eigen::MatrixXd rhs(const Eigen::MatrixXd& known, const std::vector<BemBc>& bc) const;
   Eigen::MatrixXd matrixFor(const std::vector<BemBc>& bc) const;
   TriangleMesh mesh_;
   double shear_pa_, nu_;

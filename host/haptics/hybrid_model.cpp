@@ -117,8 +117,10 @@ void HybridHapticModel::touch(int element) {
       const Vec3d xl = toLocal(pts[q] - contact_point_);
       area += wts[q];
       if (bc[j] == BemBc::kTraction) {
+        Mat3d sk[3];
+        boussinesqCerrutiStresses(xl, G, nu, sk, 1e-4, kGuardRel);
         for (int k = 0; k < 3; ++k) {
-          const Mat3d s = boussinesqCerrutiStress(xl, k, G, nu, 1e-4, kGuardRel);
+          const Mat3d& s = sk[k];
           avg[k] += Vec3d{s(0, 0) * nl.x + s(0, 1) * nl.y + s(0, 2) * nl.z, s(1, 0) * nl.x + s(1, 1) * nl.y + s(1, 2) * nl.z,
                           s(2, 0) * nl.x + s(2, 1) * nl.y + s(2, 2) * nl.z} *
                     wts[q];
@@ -135,13 +137,13 @@ void HybridHapticModel::touch(int element) {
       surface_b_.block<3, 1>(3 * j, k) << ub.x, ub.y, ub.z;
     }
   }
+  const Eigen::MatrixXd y = global_.solve(known);  // the three load cases at once (one pass over the matrices)
   for (int k = 0; k < 3; ++k) {
-    const Eigen::VectorXd y = global_.solve(known.col(k));
     for (int j = 0; j < E; ++j) {
-      if (bc[j] == BemBc::kTraction) surface_r_.block<3, 1>(3 * j, k) = y.segment<3>(3 * j);
+      if (bc[j] == BemBc::kTraction) surface_r_.block<3, 1>(3 * j, k) = y.block<3, 1>(3 * j, k);
       else surface_r_.block<3, 1>(3 * j, k) = known.block<3, 1>(3 * j, k);
     }
-    const Vec3d ur = toLocal(Vec3d{y[3 * element], y[3 * element + 1], y[3 * element + 2]});
+    const Vec3d ur = toLocal(Vec3d{y(3 * element, k), y(3 * element + 1, k), y(3 * element + 2, k)});
     r_.col(k) << ur.x, ur.y, ur.z;
   }
   // Interface compliance: the half-space field at each coupled node plus the regular part, which varies on
