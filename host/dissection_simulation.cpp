@@ -42,9 +42,11 @@ class DissectionSimulation final : public SimulationModel {
         has_scalpel_ = true;
         break;
       }
-    if (!has_scalpel_) throw InputError(f, "tools", "cutting needs a tool of kind \"scalpel\"");
-    if (scalpel_.path.size() < 2) throw InputError(f, "tools." + scalpel_.name + ".path", "a scalpel needs >= 2 keyframes");
-    if (!(scalpel_.length > 0)) throw InputError(f, "tools." + scalpel_.name + ".length_m", "must be > 0");
+    // With models.haptics the blade may come only from a haptic device (applyTool), without a scripted one.
+    if (!has_scalpel_ && !scene.models.haptics) throw InputError(f, "tools", "cutting needs a tool of kind \"scalpel\"");
+    if (has_scalpel_ && scalpel_.path.size() < 2)
+      throw InputError(f, "tools." + scalpel_.name + ".path", "a scalpel needs >= 2 keyframes");
+    if (has_scalpel_ && !(scalpel_.length > 0)) throw InputError(f, "tools." + scalpel_.name + ".length_m", "must be > 0");
     params_.solver = parsePbdSolver(scene.pbd.solver, f, "pbd.solver");
     params_.iterations = scene.pbd.iterations;
     // CUDA single-block fused frame: measured on an H100 (docs/BENCHMARKS.md) it beats per-phase launches for
@@ -71,9 +73,9 @@ class DissectionSimulation final : public SimulationModel {
   FrameReport advance(double frame_dt) override {
     FrameReport rep;
     const double t0 = time_, t1 = time_ + frame_dt;
-    const double ts = scalpel_.path.front().t, te = scalpel_.path.back().t;
     double sweep_ms = 0.0, apply_ms = 0.0;
-    if (!cut_applied_ && t1 >= ts) {
+    if (has_scalpel_ && !cut_applied_ && t1 >= scalpel_.path.front().t) {
+      const double ts = scalpel_.path.front().t, te = scalpel_.path.back().t;
       const auto c0 = std::chrono::steady_clock::now();
       // One strip per frame from the blade at max(t0, ts) to the blade at min(t1, te) (eq.-free: section 5.1).
       const BladePose b1 = blade(std::min(t1, te));
@@ -124,6 +126,7 @@ class DissectionSimulation final : public SimulationModel {
     rep.potential_energy = pe;
     rep.max_displacement = disp;
     rep.counters["spheres"] = double(model_.size());
+    rep.counters["links"] = double(spheres_.links.size());
     rep.counters["cut_spheres_pending"] = double(pending_);
     rep.counters["cuts_applied"] = double(cuts_done_);
     rep.counters["sphere_components"] = double(sphere_components_);

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "host/backend.h"
+#include "physics/cutting_force.h"
 #include "physics/vec3.h"
 
 namespace inc {
@@ -28,6 +29,7 @@ struct MaterialSpec {
   double poisson_ratio = 0.45;    // (-1, 0.5)
   double density = 1060.0;        // kg/m^3, > 0
   double damping = 1.0;           // 1/s, mass-proportional damping coefficient, >= 0
+  CutThresholds<double> cutting;  // haptic cutting force model (eqs. 15-16): F_p, F_s, F_d (N), friction (N/m)
 };
 
 // Which models the scene switches on; a scene pays only for those.

@@ -12,6 +12,7 @@
 #include <sstream>
 #include <system_error>
 
+#include "host/haptics/cutting_scene.h"
 #include "host/input_error.h"
 #include "host/mesh.h"
 #include "host/scene_json.h"
@@ -176,7 +177,7 @@ MaterialSpec readMaterial(const ObjectReader& top) {
   MaterialSpec m;
   if (!top.has("material")) return m;
   const ObjectReader r = top.object("material");
-  r.allowOnly({"youngs_modulus_pa", "poisson_ratio", "density_kg_m3", "damping_per_s"});
+  r.allowOnly({"youngs_modulus_pa", "poisson_ratio", "density_kg_m3", "damping_per_s", "cutting"});
   m.youngs_modulus = positive(r, "youngs_modulus_pa", m.youngs_modulus);
   m.poisson_ratio = r.number("poisson_ratio", m.poisson_ratio);
   if (!(m.poisson_ratio > -1 && m.poisson_ratio < 0.5)) {
@@ -185,6 +186,7 @@ MaterialSpec readMaterial(const ObjectReader& top) {
   }
   m.density = positive(r, "density_kg_m3", m.density);
   m.damping = nonNegative(r, "damping_per_s", m.damping);
+  if (r.has("cutting")) m.cutting = readCutThresholds(r.object("cutting"));  // host/haptics/cutting_force_model.h
   return m;
 }
 
@@ -505,7 +507,8 @@ std::string sceneToJson(const Scene& s) {
   j["material"] = J{{"youngs_modulus_pa", s.material.youngs_modulus},
                     {"poisson_ratio", s.material.poisson_ratio},
                     {"density_kg_m3", s.material.density},
-                    {"damping_per_s", s.material.damping}};
+                    {"damping_per_s", s.material.damping},
+                    {"cutting", cutThresholdsJson(s.material.cutting)}};
   j["models"] = J{{"mls", s.models.mls},
                   {"pbd_metaballs", s.models.pbd_metaballs},
                   {"cutting", s.models.cutting},

@@ -49,6 +49,15 @@ TEST(HapticBem, SmwUpdateEqualsFreshSolve) {
     for (int j : contact) known.segment<3>(3 * j) << 1e-4, 0.0, -2e-3;  // pressed down and sideways
     const Eigen::VectorXd a = m.solve(known), b = m.solveFresh(known);
     EXPECT_LT((a - b).norm() / b.norm(), 1e-8) << "rank " << 3 * k;
+    // Several load cases at once give the columns' answers (the hybrid model's three unit loads).
+    Eigen::MatrixXd many(3 * n, 2);
+    many.col(0) = known;
+    many.col(1) = known * -0.5;
+    for (int j = 0; j < n; ++j)
+      if (base[j] == BemBc::kTraction && j % 3 == 0) many(3 * j, 1) = 10.0;  // a traction load elsewhere too
+    const Eigen::MatrixXd ys = m.solve(many);
+    EXPECT_LT((ys.col(0) - a).norm(), 1e-12 * a.norm());
+    EXPECT_LT((ys.col(1) - m.solve(Eigen::VectorXd(many.col(1)))).norm(), 1e-12 * ys.col(1).norm());
     // Pressing down: the contact tractions push down on average (the tool does positive work).
     double fz = 0.0;
     for (int j : contact) fz += a[3 * j + 2] * m.areas()[j];

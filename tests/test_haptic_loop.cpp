@@ -1,6 +1,11 @@
 // Tests of the haptic loop: fake-clock bookkeeping, safety chain, triple buffer, record -> replay.
 #include <gtest/gtest.h>
 
+#include <linux/capability.h>
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
 #include <cstdio>
 #include <thread>
 
@@ -161,6 +166,74 @@ TEST(HapticLoop, RealThreadRunsAndStops) {
   loop.stop();
   EXPECT_GT(loop.records().size(), 20u);  // ~50 ticks at 1 kHz; loose: the CI machine is shared
   EXPECT_LE(seen, loop.records().size());
+}
+
+// The thread reports how it is scheduled: SCHED_FIFO where the process may (the message says so), else the
+// normal policy with a message naming what was refused; off when not asked. Either way the loop runs.
+TEST(HapticLoop, ThreadReportsItsScheduling) {
+  ScriptedDevice dev(linePath(1.0, 10), ScriptedDevice::Mode::kByTime);
+  {
+    HapticLoop loop(dev, [](const ForceRequest&) { return ForceResult{}; });
+    loop.start();
+    const HapticScheduling s = loop.scheduling();
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    loop.stop();
+    std::printf("haptic thread: %s\n", s.message.c_str());
+    if (s.realtime) {
+      EXPECT_EQ(s.priority, HapticLoopConfig{}.realtime_priority);
+      EXPECT_EQ(s.spin_margin_s, HapticLoopConfig{}.realtime_spin_margin_s);
+      EXPECT_EQ(s.message.rfind("SCHED_FIFO priority", 0), 0u);
+    } else {
+      EXPECT_EQ(s.priority, 0);
+      EXPECT_EQ(s.spin_margin_s, HapticLoopConfig{}.spin_margin_s);
+      EXPECT_NE(s.message.find("SCHED_FIFO refused"), std::string::npos);
+    }
+    EXPECT_GT(loop.records().size(), 5u);
+  }
+  HapticLoopConfig cfg;
+  cfg.realtime = false;
+  HapticLoop loop(dev, [](const ForceRequest&) { return ForceResult{}; }, cfg);
+  loop.start();
+  const HapticScheduling s = loop.scheduling();
+  loop.stop();
+  EXPECT_FALSE(s.realtime);
+  EXPECT_EQ(s.message, "normal scheduling (realtime off)");
+  cfg.realtime = true;
+  cfg.realtime_priority = 100;
+  EXPECT_THROW(HapticLoop(dev, [](const ForceRequest&) { return ForceResult{}; }, cfg), InputError);
+}
+
+// The fallback itself: a thread without CAP_SYS_NICE (capabilities are per thread and inherited by the
+// threads it creates) and with an rtprio limit below the asked priority starts a loop that is refused
+// SCHED_FIFO, says so, and still runs.
+TEST(HapticLoop, RefusedRealtimeFallsBackWithAMessage) {
+  rlimit rl{};
+  ASSERT_EQ(getrlimit(RLIMIT_RTPRIO, &rl), 0);
+  if (rl.rlim_cur >= rlim_t(HapticLoopConfig{}.realtime_priority))
+    GTEST_SKIP() << "the rtprio limit allows SCHED_FIFO " << HapticLoopConfig{}.realtime_priority << " anyway";
+  HapticScheduling s;
+  std::size_t ticks = 0;
+  std::thread unprivileged([&] {
+    __user_cap_header_struct hdr{_LINUX_CAPABILITY_VERSION_3, 0};
+    __user_cap_data_struct data[2]{};
+    if (syscall(SYS_capget, &hdr, data) != 0) return;
+    data[CAP_SYS_NICE / 32].effective &= ~(1u << (CAP_SYS_NICE % 32));
+    if (syscall(SYS_capset, &hdr, data) != 0) return;
+    ScriptedDevice dev(linePath(1.0, 10), ScriptedDevice::Mode::kByTime);
+    HapticLoop loop(dev, [](const ForceRequest&) { return ForceResult{}; });
+    loop.start();
+    s = loop.scheduling();
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    loop.stop();
+    ticks = loop.records().size();
+  });
+  unprivileged.join();
+  std::printf("without CAP_SYS_NICE: %s\n", s.message.c_str());
+  EXPECT_FALSE(s.realtime);
+  EXPECT_NE(s.message.find("SCHED_FIFO refused"), std::string::npos);
+  EXPECT_NE(s.message.find("CAP_SYS_NICE"), std::string::npos);  // says what to grant
+  EXPECT_EQ(s.spin_margin_s, HapticLoopConfig{}.spin_margin_s);
+  EXPECT_GT(ticks, 5u);
 }
 
 }  // namespace

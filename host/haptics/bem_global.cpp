@@ -281,6 +281,30 @@ Eigen::VectorXd BemModel::rhs(const Eigen::VectorXd& known, const std::vector<Be
   return f;
 }
 
+namespace {
+// out += sign * A X for a tall X of a few columns, column by column of A: each column of A is read from memory
+// once and used for every column of X (a general matrix product would pack A first; for a few load cases the
+// product is memory bound, and packing doubled the time). Zero rows of X are skipped.
+void addSkinnyProduct(const Eigen::MatrixXd& A, const Eigen::MatrixXd& X, double sign, Eigen::MatrixXd& out) {
+  for (Eigen::Index j = 0; j < A.cols(); ++j) {
+    if (X.row(j).isZero(0.0)) continue;
+    for (Eigen::Index k = 0; k < X.cols(); ++k) out.col(k) += (sign * X(j, k)) * A.col(j);
+  }
+}
+}  // namespace
+
+Eigen::MatrixXd BemModel::rhs(const Eigen::MatrixXd& known, const std::vector<BemBc>& bc) const {
+  if (known.rows() != 3 * elementCount()) throw InputError("<bem model>", "known", "need 3 rows per element");
+  // F = G t - H u: column 3j + l of G multiplies a known traction, of H a known displacement.
+  Eigen::MatrixXd t = Eigen::MatrixXd::Zero(known.rows(), known.cols()), u = t;
+  for (int j = 0; j < elementCount(); ++j)
+    (bc[j] == BemBc::kTraction ? t : u).middleRows(3 * j, 3) = known.middleRows(3 * j, 3);
+  Eigen::MatrixXd f = Eigen::MatrixXd::Zero(known.rows(), known.cols());
+  addSkinnyProduct(G_, t, 1.0, f);
+  addSkinnyProduct(H_, u, -1.0, f);
+  return f;
+}
+
 void BemModel::factorBase(const std::vector<BemBc>& base) {
   if (int(base.size()) != elementCount()) throw InputError("<bem model>", "base", "need one condition per element");
   const auto t0 = std::chrono::steady_clock::now();
@@ -379,6 +403,15 @@ Eigen::VectorXd BemModel::solve(const Eigen::VectorXd& known) const {
   return y0 - z_ * c_lu_.solve(ys);
 }
 
+Eigen::MatrixXd BemModel::solve(const Eigen::MatrixXd& known) const {
+  Eigen::MatrixXd y0 = Eigen::MatrixXd::Zero(known.rows(), known.cols());
+  addSkinnyProduct(a_inv_, rhs(known, currentBc()), 1.0, y0);
+  if (changed_cols_.empty()) return y0;
+  Eigen::MatrixXd ys(changed_cols_.size(), known.cols());
+  for (std::size_t r = 0; r < changed_cols_.size(); ++r) ys.row(Eigen::Index(r)) = y0.row(changed_cols_[r]);
+  return y0 - z_ * c_lu_.solve(ys);
+}
+
 Eigen::VectorXd BemModel::solveFresh(const Eigen::VectorXd& known) const {
   const auto bc = currentBc();
   return matrixFor(bc).partialPivLu().solve(rhs(known, bc));
@@ -400,6 +433,36 @@ void BemModel::interiorRows(const Vec3d& xi, Eigen::MatrixXd& g_rows, Eigen::Mat
         h_rows(k, 3 * j + l) = blk.h(k, l);
       }
   }
+}
+
+namespace {
+void subdividedRule(const Vec3d& p0, const Vec3d& p1, const Vec3d& p2, int level, std::vector<Vec3d>& pts,
+                    std::vector<double>& wts) {
+  if (level > 0) {
+    const Vec3d m01 = (p0 + p1) * 0.5, m12 = (p1 + p2) * 0.5, m20 = (p2 + p0) * 0.5;
+    subdividedRule(p0, m01, m20, level - 1, pts, wts);
+    subdividedRule(m01, p1, m12, level - 1, pts, wts);
+    subdividedRule(m20, m12, p2, level - 1, pts, wts);
+    subdividedRule(m01, m12, m20, level - 1, pts, wts);
+    return;
+  }
+  const double area = 0.5 * norm(cross(p1 - p0, p2 - p0));
+  const TriRule& r = triRule();
+  for (int q = 0; q < 7; ++q) {
+    pts.push_back(p0 * r.b[q][0] + p1 * r.b[q][1] + p2 * r.b[q][2]);
+    wts.push_back(r.w[q] * area);
+  }
+}
+}  // namespace
+
+void BemModel::elementQuadrature(int j, const Vec3d& near_point, std::vector<Vec3d>& points,
+                                 std::vector<double>& weights) const {
+  if (j < 0 || j >= elementCount()) throw InputError("<bem model>", "element", "out of range");
+  points.clear();
+  weights.clear();
+  const auto& tri = mesh_.triangles[j];
+  const int level = subdivisionLevel(norm(centroids_[j] - near_point), std::sqrt(2.0 * areas_[j]));
+  subdividedRule(mesh_.vertices[tri[0]], mesh_.vertices[tri[1]], mesh_.vertices[tri[2]], level, points, weights);
 }
 
 Vec3d BemModel::interiorDisplacement(const Vec3d& xi, const Eigen::VectorXd& u, const Eigen::VectorXd& t) const {

@@ -36,6 +36,13 @@ class BemModel {
   const std::vector<Vec3d>& centroids() const { return centroids_; }
   const std::vector<Vec3d>& normals() const { return normals_; }
   const std::vector<double>& areas() const { return areas_; }
+  const TriangleMesh& mesh() const { return mesh_; }
+  double shearModulus_pa() const { return shear_pa_; }
+  double poisson() const { return nu_; }
+  // Quadrature of element j (points, weights in m^2 summing to its area): the degree-5 7-point rule on
+  // 4^L sub-triangles, L = 0..3 growing as `near_point` gets closer (the rule of the assembly), for
+  // integrands that vary like 1 / distance^n from near_point.
+  void elementQuadrature(int j, const Vec3d& near_point, std::vector<Vec3d>& points, std::vector<double>& weights) const;
   const Eigen::MatrixXd& H() const { return H_; }
   const Eigen::MatrixXd& G() const { return G_; }
   double assemblySeconds() const { return assembly_s_; }
@@ -59,6 +66,8 @@ class BemModel {
   // elements (of the current conditions: base + contact). Returns Y (u or t per element, same layout).
   // Uses A_base^-1 and the SMW correction: O(N^2 + N k).
   Eigen::VectorXd solve(const Eigen::VectorXd& known) const;
+  // The same for several load cases (one column each): the matrices are read once for all columns.
+  Eigen::MatrixXd solve(const Eigen::MatrixXd& known) const;
   // The same by a fresh dense LU of the current A (reference for tests; O(N^3)).
   Eigen::VectorXd solveFresh(const Eigen::VectorXd& known) const;
   std::vector<BemBc> currentBc() const;
@@ -70,6 +79,7 @@ class BemModel {
 
  private:
   Eigen::VectorXd rhs(const Eigen::VectorXd& known, const std::vector<BemBc>& bc) const;
+  Eigen::MatrixXd rhs(const Eigen::MatrixXd& known, const std::vector<BemBc>& bc) const;
   Eigen::MatrixXd matrixFor(const std::vector<BemBc>& bc) const;
   TriangleMesh mesh_;
   double shear_pa_, nu_;

@@ -7,7 +7,9 @@
 
 namespace inc {
 
-// Throws InputError(file, key, reason) unless all thresholds are finite and > 0 and F_d < F_s.
+// Throws InputError(file, key + ".<scene key>", reason) unless F_p >= 0, F_s > 0, F_d > 0, friction slope >= 0,
+// all finite, and F_d < F_s (scene keys: press_threshold_n, static_friction_n, dynamic_friction_n,
+// friction_n_per_m; docs/scene-format.md).
 void validateCutThresholds(const CutThresholds<double>& th, const std::string& file, const std::string& key);
 
 struct CutForceOutput {
@@ -22,7 +24,7 @@ struct CutForceOutput {
 class CuttingForceModel {
  public:
   explicit CuttingForceModel(const CutThresholds<double>& th, const std::string& file = "<material>",
-                             const std::string& key = "cutting");
+                             const std::string& key = "material.cutting");
   CutForceOutput tick(const Vec3d& applied_force_n, const Vec3d& unit_normal, const Vec3d& velocity_m_s,
                       double depth_m);
   CutState state() const { return machine_.state; }

@@ -1,9 +1,17 @@
 // Haptic loop implementation: scheduling (sleep then spin), safety chain, recording, statistics.
 #include "host/haptics/haptic_loop.h"
 
+#include <pthread.h>
+#include <sched.h>
+#include <sys/prctl.h>
+#include <time.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <cstring>
+#include <future>
 #include <memory>
 
 #include "host/input_error.h"
@@ -29,9 +37,15 @@ SteadyClock::SteadyClock(double spin_margin_s) : spin_margin_s_(spin_margin_s), 
 double SteadyClock::now_s() { return double(steadyNs() - origin_ns_) * 1e-9; }
 
 void SteadyClock::sleepUntil(double t_s) {
-  const double coarse = t_s - spin_margin_s_;
-  const double now = now_s();
-  if (coarse > now) std::this_thread::sleep_for(std::chrono::nanoseconds(std::int64_t((coarse - now) * 1e9)));
+  // steady_clock is CLOCK_MONOTONIC on Linux: sleep to an absolute time (no drift from computing a relative
+  // one), again after an early return (a signal), so the spin below lasts at most spin_margin_s.
+  const std::int64_t coarse_ns = origin_ns_ + std::int64_t((t_s - spin_margin_s_) * 1e9);
+  while (steadyNs() < coarse_ns) {
+    timespec ts;
+    ts.tv_sec = static_cast<time_t>(coarse_ns / 1000000000);
+    ts.tv_nsec = static_cast<long>(coarse_ns % 1000000000);
+    if (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) != 0 && errno != EINTR) break;
+  }
   while (now_s() < t_s) {
   }
 }
@@ -46,8 +60,15 @@ HapticLoop::HapticLoop(HapticDevice& device, ForceModel model, HapticLoopConfig 
     throw InputError(f, "stall_after_s", "stall_after_s must be > 0 and stall_fade_s >= 0");
   if (!(config_.late_tolerance >= 0.0)) throw InputError(f, "late_tolerance", "must be >= 0");
   if (!model_) throw InputError(f, "model", "no force model given");
+  if (config_.realtime && (config_.realtime_priority < 1 || config_.realtime_priority > 99))
+    throw InputError(f, "realtime_priority", "must be in [1, 99]");
+  if (!(config_.spin_margin_s >= 0.0) || !(config_.realtime_spin_margin_s >= 0.0) || config_.spin_margin_s > 0.01 ||
+      config_.realtime_spin_margin_s > 0.01)
+    throw InputError(f, "spin_margin_s", "spin margins must be in [0, 10 ms]");
   if (!clock_) {
-    owned_clock_ = std::make_unique<SteadyClock>(config_.spin_margin_s);
+    auto steady = std::make_unique<SteadyClock>(config_.spin_margin_s);
+    steady_ = steady.get();
+    owned_clock_ = std::move(steady);
     clock_ = owned_clock_.get();
   }
   period_s_ = 1.0 / config_.rate_hz;
@@ -117,12 +138,55 @@ void HapticLoop::runTicks(std::uint64_t n) {
   for (std::uint64_t i = 0; i < n; ++i) tick();
 }
 
+// Runs on the loop's own thread: real-time policy when permitted, timer slack, CPU pinning.
+HapticScheduling HapticLoop::setUpThreadScheduling() {
+  HapticScheduling out;
+  out.spin_margin_s = config_.spin_margin_s;
+  // Timer slack: the kernel may otherwise delay a normal thread's wake-up by up to 50 us to batch timers.
+  (void)prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
+  if (config_.cpu >= 0) {
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    CPU_SET(config_.cpu, &set);
+    const int e = pthread_setaffinity_np(pthread_self(), sizeof(set), &set);
+    if (e == 0) out.cpu = config_.cpu;
+    else out.message += "CPU " + std::to_string(config_.cpu) + " pinning refused (" + std::strerror(e) + "); ";
+  }
+  if (config_.realtime) {
+    sched_param p{};
+    p.sched_priority = config_.realtime_priority;
+    const int e = pthread_setschedparam(pthread_self(), SCHED_FIFO, &p);
+    if (e == 0) {
+      out.realtime = true;
+      out.priority = config_.realtime_priority;
+      out.spin_margin_s = config_.realtime_spin_margin_s;
+      out.message += "SCHED_FIFO priority " + std::to_string(out.priority);
+    } else {
+      out.message += std::string("SCHED_FIFO refused (") + std::strerror(e) +
+                     "): normal scheduling; run as root, grant CAP_SYS_NICE or raise the rtprio limit "
+                     "(ulimit -r) for a steadier period";
+    }
+  } else {
+    out.message += "normal scheduling (realtime off)";
+  }
+  if (steady_) steady_->setSpinMargin(out.spin_margin_s);
+  return out;
+}
+
 void HapticLoop::start() {
   if (running_.exchange(true)) return;
   stop_.store(false);
-  thread_ = std::thread([this] {
+  // Touch the record storage now so that the loop never takes a page fault on it.
+  const std::size_t kept = records_.size();
+  records_.resize(records_.capacity());
+  records_.resize(kept);
+  std::promise<HapticScheduling> ready;
+  std::future<HapticScheduling> result = ready.get_future();
+  thread_ = std::thread([this, ready = std::move(ready)]() mutable {
+    ready.set_value(setUpThreadScheduling());
     while (!stop_.load(std::memory_order_relaxed)) tick();
   });
+  scheduling_ = result.get();
 }
 
 void HapticLoop::stop() {

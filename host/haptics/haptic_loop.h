@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -21,13 +22,16 @@ class HapticClock {
   virtual void sleepUntil(double t_s) = 0;
 };
 
-// std::chrono::steady_clock; sleepUntil sleeps until spin_margin_s before the deadline (the OS wakes us
-// late by up to ~0.1 ms), then spins on the clock to hold the period.
+// std::chrono::steady_clock (CLOCK_MONOTONIC). sleepUntil is a hybrid wait: an absolute clock_nanosleep to
+// spin_margin_s before the deadline (the OS wakes a thread late by tens of microseconds, more under load),
+// then a spin on the clock of at most spin_margin_s (an early wake-up sleeps again rather than spinning
+// longer), so the thread gives its core back for all but the last spin_margin_s of each period.
 class SteadyClock : public HapticClock {
  public:
   explicit SteadyClock(double spin_margin_s = 2.0e-4);
   double now_s() override;
   void sleepUntil(double t_s) override;
+  void setSpinMargin(double spin_margin_s) { spin_margin_s_ = spin_margin_s; }
 
  private:
   double spin_margin_s_;
@@ -51,8 +55,26 @@ struct HapticLoopConfig {
   double stall_after_s = 1.0 / 30.0;    // simulation data older than this starts the fade
   double stall_fade_s = 0.1;            // ... reaching zero force this much later
   double late_tolerance = 0.1;          // a period > (1 + tol) * nominal counts as a missed deadline
-  std::size_t record_capacity = 600000; // ticks recorded (preallocated: no allocation in the loop)
-  double spin_margin_s = 2.0e-4;        // SteadyClock spin margin
+  std::size_t record_capacity = 600000; // ticks recorded (preallocated and pre-touched: no allocation or page
+                                        // fault in the loop)
+  double spin_margin_s = 2.0e-4;        // SteadyClock spin margin under normal (time-shared) scheduling
+  // Scheduling of the loop's own thread (start()): SCHED_FIFO at realtime_priority when the process may
+  // (root / CAP_SYS_NICE / an rtprio limit), else the default policy with a message in scheduling().
+  // Under SCHED_FIFO the thread preempts every normal thread the moment its sleep ends, so the spin margin
+  // can be short; the thread still sleeps most of each period (it never starves the others).
+  bool realtime = true;
+  int realtime_priority = 80;           // 1..99
+  double realtime_spin_margin_s = 5.0e-5;
+  int cpu = -1;                         // >= 0: pin the loop thread to this CPU
+};
+
+// How the loop's thread is scheduled (filled by start()).
+struct HapticScheduling {
+  bool realtime = false;   // SCHED_FIFO granted
+  int priority = 0;        // its priority (0 under SCHED_OTHER)
+  int cpu = -1;            // pinned CPU, -1: none
+  double spin_margin_s = 0.0;
+  std::string message;     // what was asked, what was granted and why not (e.g. "SCHED_FIFO refused: ...")
 };
 
 // What the force model is given each tick. dt_s is the nominal period (not the measured one) so that
@@ -113,9 +135,11 @@ class HapticLoop {
   // Runs n ticks on the calling thread (tests, replays).
   void runTicks(std::uint64_t n);
   // Runs on its own std::thread until stop(). Recording is read only after stop().
+  // start() returns once the thread has set up its scheduling (see scheduling()).
   void start();
   void stop();
   bool running() const { return running_.load(); }
+  const HapticScheduling& scheduling() const { return scheduling_; }
 
   const std::vector<TickRecord>& records() const { return records_; }
   PeriodStats stats() const;
@@ -126,11 +150,14 @@ class HapticLoop {
 
  private:
   void tick();
+  HapticScheduling setUpThreadScheduling();
   HapticDevice& device_;
   ForceModel model_;
   HapticLoopConfig config_;
   HapticClock* clock_;
   std::unique_ptr<HapticClock> owned_clock_;
+  SteadyClock* steady_ = nullptr;  // owned_clock_ when it is a SteadyClock (spin margin follows the scheduling)
+  HapticScheduling scheduling_;
   double period_s_;
   double t0_s_ = 0.0;
   double next_deadline_s_ = 0.0;

@@ -87,6 +87,9 @@ class MfsLocalModel {
   const std::vector<int>& prescribedDofs() const { return a_; }
   const std::vector<int>& coupledDofs() const { return c_; }
   const std::vector<int>& freeDofs() const { return b_; }
+  // The condensed operators of the current roles (eq. 6): f_a = S_aa U_a + S_ac U_c.
+  const Eigen::MatrixXd& condensedAA() const { return s_aa_; }
+  const Eigen::MatrixXd& condensedAC() const { return s_ac_; }
   double assemblySeconds() const { return assembly_s_; }
   double factorSeconds() const { return factor_s_; }
   // x K x for a displacement of all DOFs (twice the strain energy, J): for tests.
