@@ -85,7 +85,7 @@ int main(int argc, char** argv) {
   tradeoff->add_option("--budget-ms", tradeoff_budgets, "Comma list of frame budgets in ms for the Pareto tables");
   tradeoff->add_option("--out", tradeoff_out, "Output folder (tradeoff.csv, tradeoff.md, tradeoff.png)");
   tradeoff->add_option("--backend", tradeoff_backend, "auto | cuda | cpu (default cpu)");
-  tradeoff->add_option("--models", tradeoff_models, "Comma list (mls,pbd) swept instead of the scene's models");
+  tradeoff->add_option("--models", tradeoff_models, "Comma list (mls,pbd,mfs) swept instead of the scene's models");
   tradeoff->add_flag("--quick", tradeoff_quick, "Few settings, short runs (checks it runs)");
   try {
     app.parse(argc, argv);

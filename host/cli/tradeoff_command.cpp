@@ -12,7 +12,7 @@
 namespace inc::cli {
 namespace {
 
-// The plot: one marker series per (model, knob), Pareto fronts for each budget drawn as steps, budgets as lines.
+// The plot: one marker series per (model, knob), each model's Pareto front drawn as steps, budgets as lines.
 const char* kPlotScript = R"PY(
 import csv, sys
 import matplotlib
@@ -41,7 +41,7 @@ for b in budgets:
     ax.axvline(b, color="grey", linestyle="--", linewidth=0.8)
     ax.text(b, 0.98, f" {b:g} ms budget", rotation=90, fontsize=8, va="top", transform=ax.get_xaxis_transform())
 ax.set_xscale("log"); ax.set_yscale("log")
-ax.set_xlabel("ms per frame"); ax.set_ylabel("relative error vs reference")
+ax.set_xlabel("ms per frame (mfs: per haptic tick)"); ax.set_ylabel("relative error vs reference")
 ax.set_title(sys.argv[4])
 ax.grid(True, which="both", alpha=0.3)
 ax.legend(fontsize=7)
@@ -60,13 +60,14 @@ void writeFile(const std::string& path, const std::string& text) {
 int runTradeoffCommand(const Scene& scene_in, const TradeoffCommandOptions& o) {
   Scene scene = scene_in;
   if (!o.models.empty()) {
-    scene.models.mls = scene.models.pbd_metaballs = false;
+    scene.models.mls = scene.models.pbd_metaballs = scene.models.haptics = false;
     std::stringstream ss(o.models);
     std::string m;
     while (std::getline(ss, m, ',')) {
       if (m == "mls") scene.models.mls = true;
       else if (m == "pbd") scene.models.pbd_metaballs = true;
-      else throw InputError("", "--models", "unknown model '" + m + "' (mls, pbd)");
+      else if (m == "mfs") scene.models.haptics = true;
+      else throw InputError("", "--models", "unknown model '" + m + "' (mls, pbd, mfs)");
     }
   }
   const TradeoffResult r = runTradeoff(scene, o.sweep);
