@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <sstream>
 
 #include "host/haptics/mfs_punch.h"
@@ -18,7 +19,7 @@ namespace {
 
 struct Measured {
   std::size_t particles = 0;
-  double ms = 0.0;
+  double wall_ms = 0.0, cpu_ms = 0.0;
   double setup_s = 0.0;
   double observable = 0.0;
   bool finite = true;
@@ -34,6 +35,12 @@ double median(std::vector<double> v) {
 
 double secondsSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+double processCpuMs() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) * 1e3 + double(ts.tv_nsec) * 1e-6;
 }
 
 // Builds the scene's (single) model through the factory, runs `frames` frames, times each advance().
@@ -54,10 +61,12 @@ Measured measure(const Scene& s, BackendKind backend, int frames, const Analytic
   m.particles = model.particleCount();
   std::vector<Vec3d> rest, now;
   model.currentPositions(rest);
-  std::vector<double> ms;
+  std::vector<double> ms, cpu;
   for (int f = 0; f < frames; ++f) {
     const auto t0 = std::chrono::steady_clock::now();
+    const double c0 = processCpuMs();
     const FrameReport rep = model.advance(s.solver.frame_dt);
+    cpu.push_back(processCpuMs() - c0);
     ms.push_back(1e3 * secondsSince(t0));
     if (!rep.finite) {
       m.finite = false;
@@ -67,8 +76,12 @@ Measured measure(const Scene& s, BackendKind backend, int frames, const Analytic
     }
   }
   // The first frame pays one-off costs (neighbour build, allocation): leave it out when there are others.
-  if (ms.size() > 1) ms.erase(ms.begin());
-  m.ms = median(ms);
+  if (ms.size() > 1) {
+    ms.erase(ms.begin());
+    cpu.erase(cpu.begin());
+  }
+  m.wall_ms = median(ms);
+  m.cpu_ms = median(cpu);
   model.currentPositions(now);
   m.observable = analyticObservable(ac, rest, now, s.geometry.spacing);
   if (!std::isfinite(m.observable)) {
@@ -168,7 +181,7 @@ Scene tradeoffReferenceScene(const Scene& base, const std::string& model, bool q
 namespace {
 
 // The node-count knob of the haptic local model on the flat punch (host/haptics/mfs_punch.h).
-void sweepMfs(const Scene& scene, bool quick, TradeoffResult& res) {
+void sweepMfs(const Scene& scene, bool quick, bool cpu_cost, TradeoffResult& res) {
   MfsPunchSpec spec;
   for (const ToolSpec& t : scene.tools)
     if ((t.kind == "probe" || t.kind == "grasper") && t.radius > 0.0) {
@@ -193,7 +206,9 @@ void sweepMfs(const Scene& scene, bool quick, TradeoffResult& res) {
       const MfsPunchResult r = mfsFlatPunch(spec, material);
       row.value = std::to_string(r.nodes);
       row.particles = std::size_t(r.nodes);
-      row.ms_per_frame = r.tick_ms;
+      row.wall_ms = r.tick_ms;
+      row.cpu_ms = r.tick_cpu_ms;
+      row.ms_per_frame = cpu_cost ? r.tick_cpu_ms : r.tick_ms;
       row.setup_s = r.setup_s;
       row.observable = r.force_n;
       row.finite = std::isfinite(r.force_n);
@@ -227,6 +242,8 @@ std::vector<double> parseBudgets(const std::string& text) {
   return out;
 }
 
+std::string tradeoffCostName(const TradeoffOptions& options) { return options.cpu_cost ? "cpu" : "wall"; }
+
 TradeoffResult runTradeoff(const Scene& scene, const TradeoffOptions& opt) {
   if (!scene.models.mls && !scene.models.pbd_metaballs && !scene.models.haptics)
     throw InputError(scene.file, "models",
@@ -237,6 +254,7 @@ TradeoffResult runTradeoff(const Scene& scene, const TradeoffOptions& opt) {
   TradeoffResult res;
   res.scene = scene.name;
   res.backend = backendName(choice.kind);
+  res.cost = tradeoffCostName(opt);
 
   Scene base = scene;
   base.tools.clear();
@@ -300,7 +318,9 @@ TradeoffResult runTradeoff(const Scene& scene, const TradeoffOptions& opt) {
       row.knob = st.knob;
       row.value = st.knob == "spheres" ? std::to_string(r.particles) : st.value;
       row.particles = r.particles;
-      row.ms_per_frame = r.ms;
+      row.wall_ms = r.wall_ms;
+      row.cpu_ms = r.cpu_ms;
+      row.ms_per_frame = opt.cpu_cost ? r.cpu_ms : r.wall_ms;
       row.setup_s = r.setup_s;
       row.observable = r.observable;
       row.finite = r.finite;
@@ -313,7 +333,7 @@ TradeoffResult runTradeoff(const Scene& scene, const TradeoffOptions& opt) {
       res.rows.push_back(row);
     }
   }
-  if (scene.models.haptics) sweepMfs(scene, opt.quick, res);
+  if (scene.models.haptics) sweepMfs(scene, opt.quick, opt.cpu_cost, res);
   return res;
 }
 
@@ -338,13 +358,13 @@ std::vector<std::size_t> paretoFront(const std::vector<TradeoffRow>& rows, doubl
 
 std::string tradeoffCsv(const TradeoffResult& r) {
   std::ostringstream o;
-  o << "model,knob,value,particles,ms_per_frame,setup_s,observable,unit,error,finite,note\n";
+  o << "model,knob,value,particles,ms_per_frame,wall_ms,cpu_ms,setup_s,observable,unit,error,finite,note\n";
   for (const TradeoffRow& x : r.rows) {
     std::string note = x.note;
     std::replace(note.begin(), note.end(), ',', ';');
     std::replace(note.begin(), note.end(), '\n', ' ');
     o << x.model << ',' << x.knob << ',' << x.value << ',' << x.particles << ',' << fmt(x.ms_per_frame) << ','
-      << fmt(x.setup_s) << ',' << fmt(x.observable) << ',' << x.unit << ',' << fmt(x.error) << ','
+      << fmt(x.wall_ms) << ',' << fmt(x.cpu_ms) << ',' << fmt(x.setup_s) << ',' << fmt(x.observable) << ',' << x.unit << ',' << fmt(x.error) << ','
       << (x.finite ? 1 : 0) << ',' << note << '\n';
   }
   return o.str();
@@ -352,7 +372,7 @@ std::string tradeoffCsv(const TradeoffResult& r) {
 
 std::string tradeoffMarkdown(const TradeoffResult& r, const std::vector<double>& budgets_ms) {
   std::ostringstream o;
-  o << "# Trade-off: " << r.scene << " (" << r.backend << ")\n\nReferences:\n";
+  o << "# Trade-off: " << r.scene << " (" << r.backend << ", cost: " << r.cost << " time)\n\nReferences:\n";
   for (const std::string& s : r.references) o << "- " << s << "\n";
   const char* header =
       "| model | knob | value | particles | ms | setup s | error |\n|---|---|---|---|---|---|---|\n";
@@ -360,8 +380,9 @@ std::string tradeoffMarkdown(const TradeoffResult& r, const std::vector<double>&
     o << "| " << x.model << " | " << x.knob << " | " << x.value << " | " << x.particles << " | " << fmt(x.ms_per_frame)
       << " | " << fmt(x.setup_s) << " | " << (x.finite ? fmt(100.0 * x.error) + " %" : "failed") << " |\n";
   };
-  o << "\nms: per frame (mls, pbd) or per haptic tick (mfs); setup: building the model once (mfs: assembly and "
-       "condensation, paid per contact configuration).\n";
+  o << "\nms: " << (r.cost == "cpu" ? "CPU time of the process" : "wall time")
+    << " per frame (mls, pbd) or per haptic tick (mfs), median; setup: building the model once (mfs: assembly "
+       "and condensation, paid per contact configuration).\n";
   for (const std::string model : {"mls", "pbd", "mfs"}) {
     std::vector<TradeoffRow> rows;
     for (const TradeoffRow& x : r.rows)

@@ -14,6 +14,9 @@ struct TradeoffOptions {
   std::vector<double> budgets_ms{1.0, 16.0};  // Pareto tables: settings whose ms per frame fit each budget
   BackendKind backend = BackendKind::Cpu;     // Auto resolves like the runner (CUDA when usable)
   bool quick = false;                         // fewer settings, shorter runs (CI: checks it runs, not accuracy)
+  // The cost the Pareto tables and the plot use: false = wall time, true = CPU time of the process (on a
+  // shared machine wall time also measures the neighbours; with OMP_NUM_THREADS=1 CPU time is one core's).
+  bool cpu_cost = false;
 };
 
 // One measured setting. `knob` is "baseline" for the scene's own settings.
@@ -24,9 +27,11 @@ struct TradeoffRow {
   std::string knob;
   std::string value;       // the knob's value as text (spheres, nodes: the count built; target_spheres: the count asked)
   std::size_t particles = 0;   // particles / spheres / MFS nodes
-  // mls, pbd: median wall time of one advance(frame_dt) (host wall; includes GPU sync), ms per frame.
-  // mfs: median wall time of one haptic tick (eq. 6 condensed force), ms per tick.
+  // The cost: wall_ms, or cpu_ms with TradeoffOptions::cpu_cost.
   double ms_per_frame = 0.0;
+  // mls, pbd: medians over the timed frames of one advance(frame_dt) (wall: host clock, includes GPU sync;
+  // cpu: CPU time of the whole process, all threads). mfs: the same for one haptic tick (eq. 6 condensed force).
+  double wall_ms = 0.0, cpu_ms = 0.0;
   double setup_s = 0.0;        // building the model (sampling or packing, neighbourhoods; mfs: assembly + condensation)
   double observable = 0.0;     // in `unit`: tip deflection / tip drop / centroid displacement (m), punch force (N)
   std::string unit = "m";
@@ -38,10 +43,14 @@ struct TradeoffRow {
 struct TradeoffResult {
   std::string scene;
   std::string backend;
+  std::string cost = "wall";  // "wall" | "cpu": what ms_per_frame holds
   // Per model: what the error is measured against ("Euler-Bernoulli cantilever tip deflection 6.5 mm", ...)
   std::vector<std::string> references;
   std::vector<TradeoffRow> rows;
 };
+
+// The cost name of the options for reports: "wall" or "cpu".
+std::string tradeoffCostName(const TradeoffOptions& options);
 
 // Sweeps one knob at a time around the scene's settings for each model the scene switches on (MLS, PBD and,
 // with models.haptics, the MFS local model; MLS and PBD: the scene is copied with only that model on and built

@@ -41,7 +41,7 @@ for b in budgets:
     ax.axvline(b, color="grey", linestyle="--", linewidth=0.8)
     ax.text(b, 0.98, f" {b:g} ms budget", rotation=90, fontsize=8, va="top", transform=ax.get_xaxis_transform())
 ax.set_xscale("log"); ax.set_yscale("log")
-ax.set_xlabel("ms per frame (mfs: per haptic tick)"); ax.set_ylabel("relative error vs reference")
+ax.set_xlabel(sys.argv[5] + " ms per frame (mfs: per haptic tick)"); ax.set_ylabel("relative error vs reference")
 ax.set_title(sys.argv[4])
 ax.grid(True, which="both", alpha=0.3)
 ax.legend(fontsize=7)
@@ -57,7 +57,10 @@ void writeFile(const std::string& path, const std::string& text) {
 
 }  // namespace
 
-int runTradeoffCommand(const Scene& scene_in, const TradeoffCommandOptions& o) {
+int runTradeoffCommand(const Scene& scene_in, const TradeoffCommandOptions& options) {
+  TradeoffCommandOptions o = options;
+  if (o.cost != "wall" && o.cost != "cpu") throw InputError("", "--cost", "'" + o.cost + "' is not wall or cpu");
+  o.sweep.cpu_cost = o.cost == "cpu";
   Scene scene = scene_in;
   if (!o.models.empty()) {
     scene.models.mls = scene.models.pbd_metaballs = scene.models.haptics = false;
@@ -86,7 +89,7 @@ int runTradeoffCommand(const Scene& scene_in, const TradeoffCommandOptions& o) {
   for (char& c : title)
     if (c == '\'' || c == '\\') c = ' ';
   const std::string cmd = "/usr/bin/python3 '" + py + "' '" + csv + "' '" + png + "' '" + budgets + "' '" +
-                          title + " (" + r.backend + "): error vs cost' 2>&1";
+                          title + " (" + r.backend + "): error vs cost' '" + r.cost + "' 2>&1";
   const int rc = std::system(cmd.c_str());
   std::fputs(report.c_str(), stdout);
   std::printf("tradeoff: %s: %zu settings, %s, %s%s\n", scene.name.c_str(), r.rows.size(), csv.c_str(), md.c_str(),

@@ -30,6 +30,7 @@ struct MfsPunchResult {
   double analytic_n = 0.0;  // flatPunchForce
   double setup_s = 0.0;     // assembly + condensation (eq. 6), paid once per contact configuration
   double tick_ms = 0.0;     // median wall time of one haptic tick (reactionForce), ms
+  double tick_cpu_ms = 0.0; // the same in CPU time of the process, ms
 };
 
 // Builds the cloud and the model, condenses, times `ticks` haptic ticks. Throws InputError for a bad spec.
