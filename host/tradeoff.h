@@ -37,7 +37,10 @@ struct TradeoffRow {
   std::string unit = "m";
   double error = 0.0;          // |observable - reference| / |reference|
   bool finite = true;
-  std::string note;            // refusal / failure text, empty when the run completed
+  // false: no particle (sphere centre) lay in the scene's fixed boxes, so the body fell: the setting changed
+  // the problem, not its accuracy. Kept in the table, never Pareto-optimal.
+  bool held = true;
+  std::string note;            // refusal / failure / not-held text, empty when the run completed normally
 };
 
 struct TradeoffResult {
@@ -78,8 +81,8 @@ std::vector<TradeoffSetting> tradeoffSettings(const Scene& base, const std::stri
 // (--quick: the scene's resolution, 10 x 4).
 Scene tradeoffReferenceScene(const Scene& base, const std::string& model, bool quick);
 
-// Indices of the rows that are Pareto-optimal (no other finite row is both faster and more accurate) among
-// those with ms_per_frame <= budget_ms, sorted by ms. Call it with the rows of one model.
+// Indices of the rows that are Pareto-optimal (no other finite, held row is both faster and more accurate)
+// among the finite, held rows with ms_per_frame <= budget_ms, sorted by ms. Call it with the rows of one model.
 std::vector<std::size_t> paretoFront(const std::vector<TradeoffRow>& rows, double budget_ms);
 
 std::string tradeoffCsv(const TradeoffResult& r);

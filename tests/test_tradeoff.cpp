@@ -53,9 +53,10 @@ TEST(Tradeoff, ParetoFrontKeepsOnlyUndominatedSettingsWithinTheBudget) {
     x.finite = finite;
     return x;
   };
-  const std::vector<TradeoffRow> rows = {r(0.5, 0.4), r(0.8, 0.5), r(0.9, 0.1), r(3.0, 0.01), r(0.2, 0.0, false),
-                                         r(12.0, 0.001), r(20.0, 0.0)};
-  EXPECT_EQ(paretoFront(rows, 1.0), (std::vector<std::size_t>{0, 2}));  // 0.8/0.5 is dominated; NaN run excluded
+  std::vector<TradeoffRow> rows = {r(0.5, 0.4), r(0.8, 0.5), r(0.9, 0.1), r(3.0, 0.01), r(0.2, 0.0, false),
+                                   r(12.0, 0.001), r(20.0, 0.0), r(0.1, 0.05)};
+  rows.back().held = false;  // a body that fell: the setting changed the problem
+  EXPECT_EQ(paretoFront(rows, 1.0), (std::vector<std::size_t>{0, 2}));  // 0.8/0.5 dominated; NaN, not-held excluded
   EXPECT_EQ(paretoFront(rows, 16.0), (std::vector<std::size_t>{0, 2, 3, 5}));
   EXPECT_TRUE(paretoFront(rows, 0.1).empty());
 }
@@ -104,6 +105,7 @@ TEST(Tradeoff, QuickSweepOfACantileverMeasuresMlsAgainstEulerBernoulliAndPbdAgai
     EXPECT_TRUE(std::isfinite(x.error));
     // The beam sags under gravity: the measured tip moves down (4 frames, not yet settled).
     EXPECT_GT(x.observable, 0.0) << x.model << " " << x.knob;
+    EXPECT_EQ(x.held, x.note.find("not held") == std::string::npos) << x.note;
   }
   EXPECT_GE(mls, 4);  // baseline, spacing, support, safety, precision
   EXPECT_GE(pbd, 5);  // baseline, iterations, substeps (1: refused), spheres, target_spheres, precision
@@ -271,4 +273,20 @@ TEST(Tradeoff, SphereCountKnobsOfLatticeAndPackedOrgans) {
   EXPECT_EQ(ref.pbd.iterations, 40);
   EXPECT_EQ(ref.solver.substeps, 16);
   EXPECT_EQ(knobs(tradeoffSettings(p, "pbd", true), "target_spheres"), (std::vector<std::string>{"200"}));
+}
+
+TEST(Tradeoff, ARowSaysWhenNoParticleIsHeldByTheFixedBoxes) {
+  // A fixed box above the body holds nothing: the bar falls, and each row says why its result is what it is.
+  Scene s = hangingBar();
+  s.geometry.spacing = 0.01;  // 2 x 2 x 8 particles: fast
+  s.fixed[0] = FixedRegion{{-0.011, -0.011, 0.05}, {0.011, 0.011, 0.06}};
+  TradeoffOptions o;
+  o.quick = true;
+  const TradeoffResult r = runTradeoff(s, o);
+  ASSERT_FALSE(r.rows.empty());
+  for (const TradeoffRow& x : r.rows) {
+    if (!x.finite) continue;
+    EXPECT_FALSE(x.held) << x.knob << " " << x.value;
+    EXPECT_NE(x.note.find("not held"), std::string::npos) << x.knob << " " << x.value << ": " << x.note;
+  }
 }
