@@ -396,8 +396,8 @@ std::string tradeoffMarkdown(const TradeoffResult& r, const std::vector<double>&
   const char* header =
       "| model | knob | value | particles | ms | setup s | error |\n|---|---|---|---|---|---|---|\n";
   auto row = [&](const TradeoffRow& x) {
-    o << "| " << x.model << " | " << x.knob << " | " << x.value << " | " << x.particles << " | " << fmt(x.ms_per_frame)
-      << " | " << fmt(x.setup_s) << " | "
+    o << "| " << x.model << " | " << x.knob << " | " << x.value << " | " << x.particles << " | "
+      << (x.finite ? fmt(x.ms_per_frame) : "-") << " | " << (x.finite ? fmt(x.setup_s) : "-") << " | "
       << (x.finite ? fmt(100.0 * x.error) + " %" + (x.held ? "" : " (not held)") : "failed") << " |\n";
   };
   o << "\nms: " << (r.cost == "cpu" ? "CPU time of the process" : "wall time")
