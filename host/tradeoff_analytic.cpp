@@ -84,12 +84,17 @@ AnalyticCase detectAnalyticCase(const Scene& s) {
   // The clamp holds the end gravity points away from: the top.
   const bool top_clamped = down < 0.0 ? clampsMaxEnd(gaxis) : clampsMinEnd(gaxis);
   if (!coversSection(gaxis) || !top_clamped) return c;
+  // A bar, not a block: with nu > 0 the clamp's lateral restraint reaches about one section width into the
+  // body, and uniaxial stress describes only a body much longer than that.
+  const double section = std::max(comp(g.size, (gaxis + 1) % 3), comp(g.size, (gaxis + 2) % 3));
+  const double free_length = down < 0.0 ? comp(f.min, gaxis) - comp(lo, gaxis) : comp(hi, gaxis) - comp(f.max, gaxis);
+  if (free_length < 2.0 * section) return c;
   c.kind = AnalyticCase::Kind::HangingBar;
   c.axis = gaxis;
   c.down = down;
   c.end_axis = gaxis;
   c.end_sign = down;
-  c.length_m = down < 0.0 ? comp(f.min, gaxis) - comp(lo, gaxis) : comp(hi, gaxis) - comp(f.max, gaxis);
+  c.length_m = free_length;
   // First axial mode of a fixed-free bar: omega_1 = (pi / 2) sqrt(E / rho) / L.
   c.omega1 = 0.5 * M_PI * std::sqrt(E / rho) / c.length_m;
   c.reference_m = hangingBarDisplacement(c.length_m, c.length_m, E, rho, gmag);

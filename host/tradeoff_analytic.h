@@ -30,7 +30,7 @@ struct AnalyticCase {
 // Cantilever: a beam or box clamped by one fixed box over its x-min end (whole section, less than half the
 // length), gravity along -z. Reference: Euler-Bernoulli tip deflection q L^4 / (8 E I).
 // Hanging bar: a beam or box, gravity along one axis only, clamped by one fixed box over the whole section at
-// the end gravity points away from (less than half the length). Reference: the tip drop of a bar in
+// the end gravity points away from (less than half the length), free length at least twice the section. Reference: the tip drop of a bar in
 // uniaxial stress under its own weight, rho g L^2 / (2 E) (hangingBarDisplacement at s = L).
 AnalyticCase detectAnalyticCase(const Scene& scene);
 

@@ -171,6 +171,10 @@ TEST(Tradeoff, DetectsTheCantileverAndTheHangingBar) {
   Scene two = bar;
   two.fixed.push_back(bar.fixed[0]);
   EXPECT_EQ(detectAnalyticCase(two).kind, AnalyticCase::Kind::None);
+  Scene block = bar;  // free length 76 mm under a 40 mm section: a block, not a bar
+  block.geometry.size = {0.04, 0.04, 0.08};
+  block.fixed[0] = FixedRegion{{-0.021, -0.021, 0.0359}, {0.021, 0.021, 0.041}};
+  EXPECT_EQ(detectAnalyticCase(block).kind, AnalyticCase::Kind::None);
 }
 
 TEST(Tradeoff, HangingBarMlsDisplacementMatchesUniaxialStress) {
