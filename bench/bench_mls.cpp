@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/mls_traffic.h"
 #include "cpu_fallback/mls_solver_cpu.h"
 #include "host/backend.h"
 #include "host/input_error.h"
@@ -56,16 +57,6 @@ MlsBuildInput cubeInput(std::int64_t n) {
   return in;
 }
 
-// Compulsory traffic of one substep (each array touched once per pass, neighbour indices once per pass):
-// a lower bound on bytes moved; with perfect caching of neighbour data the kernels reach it.
-double bytesPerStep(std::int64_t n, double nnz, std::size_t t) {
-  const double T = double(t);
-  const double drift = n * (1 + 10 * T + 6 * T);                        // kind, v, f, m, u read; v, u written
-  const double stress = n * (3 * T + 3 * T + 9 * T + T + 8 + 9 * T + T) + nnz * 4;  // X, u, A^-1, v, offsets; M, psi
-  const double force = n * (3 * T + 9 * T + 8 + 1 + T + 3 * T + 3 * T + 3 * T) + nnz * 4;  // X, M, offsets, kind, m, v, f
-  return drift + stress + force;
-}
-
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v.empty() ? 0.0 : v[v.size() / 2];
@@ -99,7 +90,7 @@ Row timeSolver(MlsSolver& solver, int substeps, int repeats) {
   r.ms_forces = median(forces);
   r.particles_per_s = double(r.particles) / (r.ms_step * 1e-3);
   const std::size_t t = solver.precision() == Precision::Float64 ? 8 : 4;
-  const double bytes = bytesPerStep(r.particles, r.mean_neighbors * double(r.particles), t);
+  const double bytes = bench::mlsStepBytes(r.particles, r.mean_neighbors * double(r.particles), t);
   r.mbytes_per_step = bytes / 1e6;
   r.gbytes_per_s = bytes / (r.ms_step * 1e-3) / 1e9;
   return r;

@@ -1,5 +1,6 @@
 // Scaling of skinning and of a whole frame of the default scene against particle count (CPU and CUDA, float32/64).
 #include <CLI/CLI.hpp>
+#include <malloc.h>
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -11,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/mls_traffic.h"
 #include "cpu_fallback/parallel.h"
 #include "host/backend.h"
 #include "host/embedded_scenes.h"
@@ -35,29 +37,75 @@ struct Row {
   std::string suite, backend, precision;
   std::int64_t n = 0;  // particles (frame) / skinned vertices (skinning)
   double ms_median = 0, ms_min = 0, ms_max = 0, items_per_s = 0, mbytes = 0, gbytes_per_s = 0;
-  double host_peak_mib = 0, device_mib = 0;
+  double host_peak_mib = 0;    // peak resident set of the process during the row (see HostPeak)
+  double device_mib = 0;       // what the row's own buffers hold on the device (model report / explicit allocations)
+  double device_peak_mib = 0;  // device memory in use above the row's start, sampled after the build and each run
+  int substeps = 0;            // frame: substeps per frame (median)
 };
 
-double peakHostMiB() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return double(u.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
+// Peak host memory per row: the kernel's high-water mark of the resident set (VmHWM) is reset before the row
+// (Linux >= 4.0: write 5 to /proc/self/clear_refs, after malloc_trim returns freed heap pages), then read after
+// it. The figure is the whole process (binary, OpenMP and CUDA runtimes included), not the model alone. Where
+// the reset is not allowed it falls back to ru_maxrss, the peak since the process started (then monotone).
+struct HostPeak {
+  bool per_row = false;
+  void reset() {
+    malloc_trim(0);
+    std::ofstream f("/proc/self/clear_refs");
+    f << "5";
+    f.flush();
+    per_row = bool(f);
+  }
+  double mib() const {
+    if (per_row) {
+      std::ifstream st("/proc/self/status");
+      std::string key;
+      while (st >> key) {
+        if (key == "VmHWM:") {
+          double kib = 0;
+          st >> kib;
+          return kib / 1024.0;
+        }
+        st.ignore(1 << 12, '\n');
+      }
+    }
+    rusage u{};
+    getrusage(RUSAGE_SELF, &u);
+    return double(u.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
+  }
+};
+
+// Device memory in use (MiB, all of the device: cudaMemGetInfo), 0 without CUDA.
+double deviceUsedMiB(BackendKind be) {
+#if INCISION_HAVE_CUDA
+  if (be == BackendKind::Cuda) {
+    size_t free_b = 0, total_b = 0;
+    INC_CUDA(cudaMemGetInfo(&free_b, &total_b));
+    return double(total_b - free_b) / 1048576.0;
+  }
+#endif
+  (void)be;
+  return 0.0;
 }
 
-void finish(Row& r, std::vector<double> ms) {
+void finish(Row& r, std::vector<double> ms, const HostPeak& host) {
   std::sort(ms.begin(), ms.end());
   r.ms_median = ms.size() % 2 ? ms[ms.size() / 2] : 0.5 * (ms[ms.size() / 2 - 1] + ms[ms.size() / 2]);
   r.ms_min = ms.front();
   r.ms_max = ms.back();
   r.items_per_s = r.ms_median > 0 ? double(r.n) / (r.ms_median * 1e-3) : 0.0;
   r.gbytes_per_s = r.ms_median > 0 ? r.mbytes * 1e6 / (r.ms_median * 1e-3) / 1e9 : 0.0;
-  r.host_peak_mib = peakHostMiB();
+  r.host_peak_mib = host.mib();
 }
 
 // Skinning: n vertices at random points in a 4:1:1 box bound (k = 4) to a lattice of about n / 8 spheres,
 // blended with per-sphere rotations (identity here; the cost is the same).
 template <typename T>
 Row skinning(std::int64_t n, BackendKind be, int repeats) {
+  HostPeak host;
+  host.reset();
+  const double dev0 = deviceUsedMiB(be);
+  (void)dev0;  // read on the CUDA path only
   Row r;
   r.suite = "skinning";
   r.backend = backendName(be);
@@ -113,23 +161,28 @@ Row skinning(std::int64_t n, BackendKind be, int repeats) {
       INC_CUDA(cudaEventElapsedTime(&t, e0, e1));
       if (it >= 0) ms.push_back(double(t));
     }
-    size_t free_b = 0, total_b = 0;
-    INC_CUDA(cudaMemGetInfo(&free_b, &total_b));
-    r.device_mib = double(total_b - free_b) / 1048576.0;
+    // Skinning has no model report: its buffers (uploaded binding, centres, rotations, output) are what the
+    // device holds above the row's start.
+    r.device_peak_mib = deviceUsedMiB(be) - dev0;
+    r.device_mib = r.device_peak_mib;
     INC_CUDA(cudaEventDestroy(e0));
     INC_CUDA(cudaEventDestroy(e1));
     INC_CUDA(cudaFree(d_c));
     INC_CUDA(cudaFree(d_r));
   }
 #endif
-  finish(r, ms);
+  finish(r, ms, host);
   return r;
 }
 
 // A whole frame (1/60 s, as many substeps as stability needs) of the default scene with its spacing scaled so
 // the body has about n particles; host wall time of advance() (it returns after the frame's report, so the
-// device is synchronised). Bytes: not estimated (a frame is many kernels; see bench_mls for per-pass figures).
+// device is synchronised). Bytes: the compulsory traffic of the frame's MLS substeps and its reduction
+// (bench/mls_traffic.h, mean neighbours from the model); 0 when the scene has other models than MLS.
 Row frame(std::int64_t n, BackendKind be, Precision p, int repeats) {
+  HostPeak host;
+  host.reset();
+  const double dev0 = deviceUsedMiB(be);
   Row r;
   r.suite = "frame";
   r.backend = backendName(be);
@@ -141,15 +194,32 @@ Row frame(std::int64_t n, BackendKind be, Precision p, int repeats) {
   s.solver.precision = p;
   auto models = createSceneModels(s, be);
   for (const auto& m : models) r.n += std::int64_t(m->particleCount());
-  std::vector<double> ms;
+  double dev_peak = deviceUsedMiB(be) - dev0;
+  const bool mls_only = models.size() == 1 && models[0]->name() == "mls";
+  std::vector<double> ms, mbytes;
+  std::vector<int> substeps;
   for (int it = -1; it < repeats; ++it) {
     const auto t0 = std::chrono::steady_clock::now();
-    for (auto& m : models) m->advance(s.solver.frame_dt);
+    std::vector<FrameReport> reps;
+    for (auto& m : models) reps.push_back(m->advance(s.solver.frame_dt));
     const auto t1 = std::chrono::steady_clock::now();
-    if (it >= 0) ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+    dev_peak = std::max(dev_peak, deviceUsedMiB(be) - dev0);
+    if (it < 0) continue;
+    ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+    substeps.push_back(reps.front().substeps);
+    if (mls_only) {
+      const auto nb = reps.front().counters.find("mean_neighbours");
+      const double nnz = (nb == reps.front().counters.end() ? 0.0 : nb->second) * double(r.n);
+      mbytes.push_back(bench::mlsFrameBytes(r.n, nnz, p == Precision::Float64 ? 8 : 4, reps.front().substeps) / 1e6);
+    }
   }
+  std::sort(substeps.begin(), substeps.end());
+  r.substeps = substeps[substeps.size() / 2];
+  std::sort(mbytes.begin(), mbytes.end());
+  r.mbytes = mbytes.empty() ? 0.0 : mbytes[mbytes.size() / 2];
   for (const auto& m : models) r.device_mib += double(m->memory().device_bytes) / 1048576.0;
-  finish(r, ms);
+  r.device_peak_mib = dev_peak;
+  finish(r, ms, host);
   return r;
 }
 
@@ -198,11 +268,12 @@ int main(int argc, char** argv) {
     std::ofstream f;
     if (!csv.empty()) {
       f.open(csv);
-      f << "suite,backend,precision,n,ms_median,ms_min,ms_max,items_per_s,mbytes,gbytes_per_s,host_peak_mib,device_mib\n";
+      f << "suite,backend,precision,n,ms_median,ms_min,ms_max,items_per_s,mbytes,gbytes_per_s,host_peak_mib,device_mib,"
+           "device_peak_mib,substeps\n";
       if (!f) throw InputError(csv, "--csv", "cannot write the file");
     }
-    std::printf("%-9s %-5s %-8s %10s %10s %10s %10s %12s %9s %10s %10s\n", "suite", "backend", "precision", "n",
-                "ms median", "min", "max", "items/s", "GB/s", "host MiB", "dev MiB");
+    std::printf("%-9s %-5s %-8s %10s %10s %10s %10s %12s %9s %9s %10s %9s %9s %6s\n", "suite", "backend", "precision", "n",
+                "ms median", "min", "max", "items/s", "MB", "GB/s", "host MiB", "dev MiB", "dev peak", "subst");
     for (const std::string suite : {"skinning", "frame"}) {
       if (suites.find(suite) == std::string::npos) continue;
       for (BackendKind be : backends)
@@ -215,15 +286,17 @@ int main(int argc, char** argv) {
             Row r = suite == "frame" ? frame(n, be, p, repeats)
                                      : (p == Precision::Float32 ? skinning<float>(n, be, repeats)
                                                                 : skinning<double>(n, be, repeats));
-            std::printf("%-9s %-5s %-8s %10lld %10.3f %10.3f %10.3f %12.3e %9.2f %10.1f %10.1f\n", r.suite.c_str(),
-                        r.backend.c_str(), r.precision.c_str(), (long long)r.n, r.ms_median, r.ms_min, r.ms_max,
-                        r.items_per_s, r.gbytes_per_s, r.host_peak_mib, r.device_mib);
+            std::printf("%-9s %-5s %-8s %10lld %10.3f %10.3f %10.3f %12.3e %9.2f %9.2f %10.1f %9.1f %9.1f %6d\n",
+                        r.suite.c_str(), r.backend.c_str(), r.precision.c_str(), (long long)r.n, r.ms_median, r.ms_min,
+                        r.ms_max, r.items_per_s, r.mbytes, r.gbytes_per_s, r.host_peak_mib, r.device_mib,
+                        r.device_peak_mib, r.substeps);
             std::fflush(stdout);
             rows.push_back(r);
             if (f.is_open()) {
               f << r.suite << ',' << r.backend << ',' << r.precision << ',' << r.n << ',' << r.ms_median << ','
                 << r.ms_min << ',' << r.ms_max << ',' << r.items_per_s << ',' << r.mbytes << ',' << r.gbytes_per_s
-                << ',' << r.host_peak_mib << ',' << r.device_mib << std::endl;
+                << ',' << r.host_peak_mib << ',' << r.device_mib << ',' << r.device_peak_mib << ',' << r.substeps
+                << std::endl;
             }
             // The next point is ~4x the work: skip it when it would not fit the budget.
             if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() * 4.0 > budget_s / 2.0) break;

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include <unistd.h>
 #include "test_paths.h"
@@ -31,8 +32,24 @@ TEST(BenchSuite, QuickCpuRunProducesMergedCsvTableAndPlots) {
   ASSERT_TRUE(csv) << ss.str();
   std::string line, all;
   std::getline(csv, line);
-  EXPECT_EQ(line, "suite,backend,precision,n,ms,items_per_s,gbytes_per_s");
-  while (std::getline(csv, line)) all += line + "\n";
+  EXPECT_EQ(line, "suite,backend,precision,n,ms,items_per_s,gbytes_per_s,host_peak_mib,device_peak_mib");
+  int frame_rows = 0;
+  while (std::getline(csv, line)) {
+    all += line + "\n";
+    // Whole-frame rows carry the compulsory-traffic bandwidth and the row's peak host memory (positive; the
+    // process alone holds more than 1 MiB), and no device memory on the CPU.
+    if (line.rfind("frame_default_scene,", 0) == 0) {
+      std::vector<std::string> f;
+      std::stringstream ls(line);
+      for (std::string c; std::getline(ls, c, ',');) f.push_back(c);
+      ASSERT_EQ(f.size(), 9u) << line;
+      EXPECT_GT(std::stod(f[6]), 0.0) << "GB/s: " << line;
+      EXPECT_GT(std::stod(f[7]), 1.0) << "host peak MiB: " << line;
+      EXPECT_EQ(std::stod(f[8]), 0.0) << "device peak MiB on the CPU: " << line;
+      ++frame_rows;
+    }
+  }
+  EXPECT_GE(frame_rows, 2);
   for (const char* s : {"neighbor_search,cpu,float32", "neighbor_search,cpu,float64", "mls_step,cpu,float32",
                         "mls_step,cpu,float64", "pbd_iteration,cpu,float32", "pbd_iteration,cpu,float64",
                         "skinning,cpu,float32", "skinning,cpu,float64", "frame_default_scene,cpu,float32",

@@ -78,15 +78,17 @@ int main(int argc, char** argv) {
   auto* scenes = app.add_subcommand("scenes", "List the embedded scenes");
   auto* devices = app.add_subcommand("devices", "Report the CUDA devices this build can use");
 
-  std::string tradeoff_arg, tradeoff_budgets = "1,16", tradeoff_out = "tradeoff", tradeoff_backend, tradeoff_models;
+  std::string tradeoff_arg, tradeoff_budgets = "1,16", tradeoff_out = "tradeoff", tradeoff_backend, tradeoff_models,
+      tradeoff_cost = "wall";
   bool tradeoff_quick = false;
   auto* tradeoff = app.add_subcommand("tradeoff", "Sweep the scene's model knobs: ms per frame vs error (CSV, table, plot)");
   tradeoff->add_option("scene", tradeoff_arg, "Scene file (JSON) or embedded scene name; default: the embedded default");
   tradeoff->add_option("--budget-ms", tradeoff_budgets, "Comma list of frame budgets in ms for the Pareto tables");
   tradeoff->add_option("--out", tradeoff_out, "Output folder (tradeoff.csv, tradeoff.md, tradeoff.png)");
   tradeoff->add_option("--backend", tradeoff_backend, "auto | cuda | cpu (default cpu)");
-  tradeoff->add_option("--models", tradeoff_models, "Comma list (mls,pbd) swept instead of the scene's models");
+  tradeoff->add_option("--models", tradeoff_models, "Comma list (mls,pbd,mfs) swept instead of the scene's models");
   tradeoff->add_flag("--quick", tradeoff_quick, "Few settings, short runs (checks it runs)");
+  tradeoff->add_option("--cost", tradeoff_cost, "wall | cpu: the time the Pareto tables use (cpu: process CPU time)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -121,6 +123,7 @@ int main(int argc, char** argv) {
       if (!tradeoff_backend.empty()) to.sweep.backend = inc::parseBackend(tradeoff_backend);
       to.out_dir = tradeoff_out;
       to.models = tradeoff_models;
+      to.cost = tradeoff_cost;
       return inc::cli::runTradeoffCommand(resolveScene(tradeoff_arg), to);
     }
     if (*run) {

@@ -11,7 +11,8 @@ namespace inc::cli {
 struct TradeoffCommandOptions {
   TradeoffOptions sweep;
   std::string out_dir = "tradeoff";
-  std::string models;  // "" = the scene's; else a comma list of "mls", "pbd" switched on instead
+  std::string models;  // "" = the scene's; else a comma list of "mls", "pbd", "mfs" (haptic local model) switched on instead
+  std::string cost = "wall";  // "wall" | "cpu" (sets sweep.cpu_cost; anything else: InputError(--cost))
 };
 
 // Writes OUT/tradeoff.csv, OUT/tradeoff.md, OUT/tradeoff.png (through /usr/bin/python3 + matplotlib; a missing

@@ -23,6 +23,8 @@ expect 2 "typo.json: solver.frame_dt: .*frame_dt_s" -- "$exe" validate "$tmp/typ
 expect 2 "mesh.json: geometry.mesh" -- "$exe" validate "$tmp/mesh.json"
 expect 2 "--backend" -- "$exe" run --backend quantum --out "$tmp/o"
 expect 2 "--precision" -- "$exe" run --precision float16 --out "$tmp/o"
+expect 2 "--cost" -- "$exe" tradeoff --cost sometimes --quick --out "$tmp/t"
+expect 2 "--models.*unknown model" -- "$exe" tradeoff --models fem --quick --out "$tmp/t"
 expect 0 "beam" -- "$exe" scenes
 expect 0 "CUDA backend compiled" -- "$exe" devices
 # The viewer on the default scene: a scripted run writes a real picture; without a display (or a build
