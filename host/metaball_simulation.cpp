@@ -113,6 +113,7 @@ class MetaballSimulation final : public SimulationModel {
     opt.stretch_compliance = scene.pbd.stretch_compliance;
     opt.laplacian_compliance = scene.pbd.laplacian_compliance;
     opt.fixed = scene.fixed;
+    opt.file = f;
     opt.volume_samples = scene.pbd.volume_preservation ? 64 : 0;
     model_ = buildMetaballPbdModel<T>(mb, opt);
     // The organ's surface rides on the spheres (linear-blend skinning, k = 4 nearest spheres).

@@ -73,6 +73,24 @@ PbdModel<T> buildMetaballPbdModel(const MetaballModel& mb, const MetaballPbdOpti
     for (const FixedRegion& r : opt.fixed) fixed = fixed || insideBox(mb.rest_centers[i], r);
     m.inv_mass[i] = fixed ? T(0) : T(1.0 / mb.masses[i]);
   }
+  // A support that holds nothing lets the organ fall: say so instead (a coarse packing can leave a thin
+  // clamp box between sphere centres).
+  for (std::size_t k = 0; k < opt.fixed.size(); ++k) {
+    double nearest = 1e300;
+    bool held = false;
+    for (std::size_t i = 0; i < n && !held; ++i) {
+      held = insideBox(mb.rest_centers[i], opt.fixed[k]);
+      const Vec3d c = mb.rest_centers[i];
+      const Vec3d q(std::clamp(c.x, opt.fixed[k].min.x, opt.fixed[k].max.x),
+                    std::clamp(c.y, opt.fixed[k].min.y, opt.fixed[k].max.y),
+                    std::clamp(c.z, opt.fixed[k].min.z, opt.fixed[k].max.z));
+      nearest = std::min(nearest, norm(c - q));
+    }
+    if (!held && n > 0)
+      throw InputError(opt.file, "fixed[" + std::to_string(k) + "]",
+                       "the box holds no sphere centre (the nearest is " + std::to_string(nearest * 1e3) +
+                           " mm outside); enlarge it or use more spheres");
+  }
   // Neighbour lists from the links (ascending).
   std::vector<std::vector<std::int32_t>> nbr(n);
   for (const auto& e : mb.links) {

@@ -3,6 +3,7 @@
 
 #include <array>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "host/metaball_model.h"
@@ -19,7 +20,9 @@ struct MetaballPbdOptions {
   double pbd_stiffness = 1.0;        // plain PBD k of every block
   bool laplacian = true;
   bool shape_matching = true;        // false: clusters kept only for the rotations skinning needs
-  std::vector<FixedRegion> fixed;    // spheres whose rest centre lies inside are fixed
+  std::vector<FixedRegion> fixed;    // spheres whose rest centre lies inside are fixed; a box that holds no
+                                     // centre is an InputError naming fixed[k] (the body would fall)
+  std::string file = "metaball options";  // named in errors (the scene file when built from a scene)
   int volume_samples = 64;           // per sphere, for the power-cell volumes (0: no volume preservation)
 };
 

@@ -6,6 +6,7 @@
 #include "host/grasper.h"
 #include "host/input_error.h"
 #include "host/metaball_simulation.h"
+#include "host/pbd_builders.h"
 #include "host/scene_loader.h"
 #include "test_paths.h"
 
@@ -158,4 +159,33 @@ TEST(MetaballSimulation, LiverGraspSceneRunsAndGrasps) {
   }
   EXPECT_GT(r.counters.at("grasped"), 0.0);
   EXPECT_LT(r.max_displacement, 0.05);
+}
+
+// A clamp box that holds no sphere centre (a thin slab between two layers of a 1 cm lattice) is refused with
+// the key and the distance to the nearest centre; one that holds a layer fixes exactly that layer.
+TEST(MetaballSimulation, FixedBoxHoldingNoSphereIsAnInputError) {
+  const MetaballModel mb = makeLatticeMetaballs(Vec3d(0, 0, 0), Vec3d(0.04, 0.02, 0.02), 0.01, 0.75, 1000.0);
+  MetaballPbdOptions opt;
+  opt.volume_samples = 0;
+  opt.file = "scene.json";
+  FixedRegion between;  // lattice centres at x = 0, 0.01, ...: nothing in [0.002, 0.008]
+  between.min = Vec3d(0.002, -1, -1);
+  between.max = Vec3d(0.008, 1, 1);
+  opt.fixed = {between};
+  try {
+    buildMetaballPbdModel<double>(mb, opt);
+    FAIL() << "expected an InputError";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("scene.json"), std::string::npos) << what;
+    EXPECT_NE(what.find("fixed[0]"), std::string::npos) << what;
+    EXPECT_NE(what.find("2.000000 mm"), std::string::npos) << what;  // the layers are 2 mm outside the slab
+  }
+  FixedRegion layer = between;
+  layer.min.x = -0.001;
+  opt.fixed = {layer};
+  const PbdModel<double> m = buildMetaballPbdModel<double>(mb, opt);
+  int fixed = 0;
+  for (std::size_t i = 0; i < m.size(); ++i) fixed += m.inv_mass[i] == 0.0 ? 1 : 0;
+  EXPECT_EQ(fixed, 9);  // the x = 0 layer: 3 x 3 spheres
 }
