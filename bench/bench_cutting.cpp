@@ -122,7 +122,7 @@ Row runCase(BackendKind backend, int target, int reps) {
     const NeighborLists nl = visibleNodalNeighbours(cr.points, 2.5 * cr.points.spacing, swept);
     vis.push_back(msSince(c0));
     c0 = Clock::now();
-    repackSpheres(cr.spheres, cr.points, swept, scene.geometry.spacing * 0.75);
+    repackSpheres(cr.spheres, cr.points, swept);
     repack.push_back(msSince(c0));
     c0 = Clock::now();
     const CutMeshResult m = splitMeshByPlane(surface, Vec3d(0, 0.004, 0), Vec3d(0, -1, 0));
