@@ -1,4 +1,5 @@
-// Cut update time vs organ size: deforming / cutting / cut-applying frames of DissectionSimulation and the cut stages.
+// Cutting cost: frame time while the MLS nodal points are coupled with the spheres, the re-packing, and how the
+// frame time grows with the cut length (the number of nodal points), per organ size and backend.
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -6,17 +7,14 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <string>
 #include <vector>
 
 #include "host/backend.h"
-#include "host/cut_mesh.h"
-#include "host/cut_nodal_points.h"
 #include "host/dissection_simulation.h"
 #include "host/input_error.h"
-#include "host/metaball_simulation.h"
 #if INCISION_HAVE_CUDA
-#include "kernels/cut_cuda.h"
 #include "kernels/device_info.h"
 #endif
 
@@ -31,18 +29,33 @@ double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v[v.size() / 2];
 }
+double stage(const FrameReport& r, const std::string& name) {
+  double ms = 0;
+  for (const auto& s : r.stages)
+    if (s.stage == name) ms += s.ms;
+  return ms;
+}
+double pbdStages(const FrameReport& r) {  // everything that is not a cut / MLS / coupling stage
+  double ms = 0;
+  for (const auto& s : r.stages)
+    if (s.stage.rfind("cut_", 0) != 0 && s.stage.rfind("mls_", 0) != 0 && s.stage != "coupling_exchange") ms += s.ms;
+  return ms;
+}
 
 struct Row {
-  std::string backend;
-  int target = 0, spheres = 0, cut_spheres = 0, nodal_points = 0, spheres_added = 0, vertices = 0;
-  double ms_deform = 0, ms_cutting = 0, ms_apply_frame = 0, ms_after = 0;
-  double ms_find_cpu = 0, ms_find_gpu = -1, ms_nodes = 0, ms_visibility = 0, ms_repack = 0, ms_split = 0;
+  std::string kind, backend;
+  int target = 0, spheres = 0, nodal_points = 0, interface = 0, spheres_after = 0, mls_substeps = 0;
+  double cut_length_m = 0;
+  double ms_deform = 0, ms_cutting = 0, ms_mls = 0, ms_exchange = 0, ms_pbd = 0, ms_convert = 0;
+  double ms_repack = 0, ms_apply_frame = 0, ms_after = 0;
 };
 
-// The liver_cut scene (ellipsoid 18 x 12 x 7 cm) at the lattice spacing that gives about `target` spheres.
-Scene liverScene(int target, double cut_length_fraction) {
+// The liver_cut organ (ellipsoid 18 x 12 x 7 cm, bed glued) at the lattice spacing that gives about `target`
+// spheres; a straight scalpel (10 cm vertical blade) along x in the plane y = 4 mm from x = -12 cm over
+// `length_m` between 0.1 s and 0.4 s, then held in the tissue until `leave_s`.
+Scene liverScene(int target, double length_m, double leave_s, int samples) {
   Scene s;
-  s.file = "<bench:liver_cut>";
+  s.file = "<bench:cutting>";
   s.geometry.kind = GeometrySpec::Kind::Ellipsoid;
   s.geometry.radii = Vec3d(0.09, 0.06, 0.035);
   const double volume = 4.0 / 3.0 * 3.141592653589793 * 0.09 * 0.06 * 0.035;
@@ -54,110 +67,97 @@ Scene liverScene(int target, double cut_length_fraction) {
   s.solver.substeps = 4;
   s.pbd.iterations = 10;
   s.pbd.solver = "gauss_seidel";
+  s.cutting.samples_per_diameter = samples;
   s.fixed = {{Vec3d(-0.1, -0.07, -0.04), Vec3d(0.1, 0.07, -0.02)}};
   ToolSpec t;
   t.name = "scalpel";
   t.kind = "scalpel";
   t.length = 0.1;
-  const double x1 = -0.12 + 0.24 * cut_length_fraction;
-  t.path = {{0.1, Vec3d(-0.12, 0.004, 0), Vec3d(0, 0, 1)}, {0.6, Vec3d(x1, 0.004, 0), Vec3d(0, 0, 1)}};
+  const double x1 = -0.12 + length_m;
+  t.path = {{0.1, Vec3d(-0.12, 0.004, 0), Vec3d(0, 0, 1)},
+            {0.4, Vec3d(x1, 0.004, 0), Vec3d(0, 0, 1)},
+            {leave_s, Vec3d(x1, 0.004, 0), Vec3d(0, 0, 1)}};
   s.tools = {t};
   return s;
 }
 
-Row runCase(BackendKind backend, int target, int reps) {
+// Frames: deforming (before the blade), cutting (the points exist), the frame that re-packs, after.
+Row runCase(const std::string& kind, BackendKind backend, int target, double length_m, int samples, int after_frames) {
   Row r;
+  r.kind = kind;
   r.backend = backendName(backend);
   r.target = target;
-  const Scene scene = liverScene(target, 1.0);
-  const double dt = 1.0 / 60.0;
-  // Frames: 0.1 s deforming, 0.5 s cutting, the apply frame, 0.2 s after.
+  r.cut_length_m = length_m;
+  const double leave = 0.5;
+  const Scene scene = liverScene(target, length_m, leave, samples);
   auto sim = makeDissectionSimulation(scene, backend, Precision::Float32);
   r.spheres = int(sim->particleCount());
-  std::vector<double> deform, cutting, after;
-  double t = 0;
+  std::vector<double> deform, cutting, mls, exchange, pbd, convert, after;
+  const double dt = 1.0 / 60.0;
   bool applied = false;
-  for (int f = 0; f < 60; ++f) {
+  for (int f = 0; f < 200; ++f) {
     const auto c0 = Clock::now();
-    FrameReport rep = sim->advance(dt);
+    const FrameReport rep = sim->advance(dt);
     const double ms = msSince(c0);
-    t += dt;
     if (!rep.finite) throw InputError("bench_cutting", "frame", "non-finite state at frame " + std::to_string(f));
-    if (rep.counters["cuts_applied"] > 0 && !applied) {
+    const double points = rep.counters.at("nodal_points");
+    if (rep.counters.at("cuts_applied") > 0 && !applied) {
       applied = true;
       r.ms_apply_frame = ms;
-      r.nodal_points = int(rep.counters["nodal_points_last_cut"]);
-      r.spheres_added = int(rep.counters["spheres_added_last_cut"]);
+      r.ms_repack = stage(rep, "cut_repack");
+      r.spheres_after = int(rep.counters.at("spheres"));
     } else if (applied) {
       after.push_back(ms);
-    } else if (t > 0.1 + dt) {
+      if (int(after.size()) >= after_frames) break;
+    } else if (points > 0) {
       cutting.push_back(ms);
+      mls.push_back(stage(rep, "mls_integrate") + stage(rep, "mls_coupling") + stage(rep, "mls_stress") + stage(rep, "mls_forces"));
+      exchange.push_back(stage(rep, "coupling_exchange"));
+      pbd.push_back(pbdStages(rep));
+      convert.push_back(stage(rep, "cut_convert"));
+      if (int(points) >= r.nodal_points) {
+        r.nodal_points = int(points);
+        r.interface = int(rep.counters.at("interface_spheres"));
+        r.mls_substeps = int(rep.counters.at("mls_substeps"));
+      }
     } else {
       deform.push_back(ms);
     }
-    if (applied && after.size() >= 12) break;
   }
   r.ms_deform = median(deform);
   r.ms_cutting = median(cutting);
+  r.ms_mls = median(mls);
+  r.ms_exchange = median(exchange);
+  r.ms_pbd = median(pbd);
+  r.ms_convert = median(convert);
   r.ms_after = median(after);
-  TriangleMesh surf;
-  sim->currentSurface(surf);
-  r.vertices = int(surf.vertices.size());
-
-  // Stage breakdown on the rest model (median of reps).
-  const MetaballModel mb = buildSceneMetaballs(scene);
-  const SweptSurface swept = sweepSurface({{Vec3d(-0.12, 0.004, -0.05), Vec3d(-0.12, 0.004, 0.05)},
-                                           {Vec3d(0.12, 0.004, -0.05), Vec3d(0.12, 0.004, 0.05)}});
-  const TriangleMesh surface = sceneSurfaceMesh(scene);
-  std::vector<double> find, nodes, vis, repack, split, find_gpu;
-  for (int k = 0; k < reps; ++k) {
-    auto c0 = Clock::now();
-    const auto ids = findCutSpheres(swept, mb.rest_centers, mb.rest_radii);
-    find.push_back(msSince(c0));
-    r.cut_spheres = int(ids.size());
-    c0 = Clock::now();
-    SphereCutResult cr = cutSpheres(mb, swept);
-    nodes.push_back(msSince(c0));
-    c0 = Clock::now();
-    const NeighborLists nl = visibleNodalNeighbours(cr.points, 2.5 * cr.points.spacing, swept);
-    vis.push_back(msSince(c0));
-    c0 = Clock::now();
-    repackSpheres(cr.spheres, cr.points, swept, scene.geometry.spacing * 0.75);
-    repack.push_back(msSince(c0));
-    c0 = Clock::now();
-    const CutMeshResult m = splitMeshByPlane(surface, Vec3d(0, 0.004, 0), Vec3d(0, -1, 0));
-    split.push_back(msSince(c0));
-#if INCISION_HAVE_CUDA
-    if (backend == BackendKind::Cuda) {
-      c0 = Clock::now();
-      const auto mask = cuda::cutSphereMaskCuda(swept.vertices, swept.triangles, mb.rest_centers, mb.rest_radii);
-      find_gpu.push_back(msSince(c0));  // includes upload and download (what a cut event costs)
-    }
-#endif
-  }
-  r.ms_find_cpu = median(find);
-  r.ms_nodes = median(nodes);
-  r.ms_visibility = median(vis);
-  r.ms_repack = median(repack);
-  r.ms_split = median(split);
-  if (!find_gpu.empty()) r.ms_find_gpu = median(find_gpu);
   return r;
+}
+
+void printRow(const Row& r) {
+  std::printf("%-6s %-5s %7d %7d %6.3f %7d %6d %5d | %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f | %8.2f %8.2f %8.2f %7d\n",
+              r.kind.c_str(), r.backend.c_str(), r.target, r.spheres, r.cut_length_m, r.nodal_points, r.interface,
+              r.mls_substeps, r.ms_deform, r.ms_cutting, r.ms_mls, r.ms_exchange, r.ms_pbd, r.ms_convert, r.ms_repack,
+              r.ms_apply_frame, r.ms_after, r.spheres_after);
+  std::fflush(stdout);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Cutting: frame time deforming / cutting / applying the cut vs organ size, and the cut stages"};
-  std::string backend_text = "auto", csv, sizes_text = "500,2000,8000,32000";
-  int max_spheres = 32000, cpu_max = 8000, reps = 5;
+  CLI::App app{"Cutting: frame time with the MLS nodal points coupled, the re-packing, frame time vs cut length"};
+  std::string backend_text = "auto", csv, sizes_text = "500,2000,8000", lengths_text = "0.06,0.12,0.18,0.24";
+  int max_spheres = 32000, cpu_max = 8000, samples = 3, long_target = 500, after_frames = 6;
   bool quick = false;
   app.add_option("--backend", backend_text, "cpu | cuda | auto | both");
-  app.add_option("--sizes", sizes_text, "target sphere counts, comma separated");
+  app.add_option("--sizes", sizes_text, "target sphere counts of the full-length cut, comma separated");
+  app.add_option("--lengths", lengths_text, "cut lengths (m) of the long-cut series, comma separated");
+  app.add_option("--long-target", long_target, "sphere count of the long-cut series");
+  app.add_option("--samples", samples, "cutting.samples_per_diameter");
   app.add_option("--max", max_spheres, "skip sizes above this many spheres");
   app.add_option("--cpu-max", cpu_max, "skip CPU rows above this many spheres");
-  app.add_option("--reps", reps, "repetitions of each stage timing (median)");
   app.add_option("--csv", csv, "write the rows as CSV here");
-  app.add_flag("--quick", quick, "a short run: sizes 500,2000, 3 reps");
+  app.add_flag("--quick", quick, "a short run: size 500, lengths 0.06,0.24");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -165,15 +165,20 @@ int main(int argc, char** argv) {
   }
   try {
     if (quick) {
-      sizes_text = "500,2000";
-      reps = 3;
+      sizes_text = "500";
+      lengths_text = "0.06,0.24";
+      after_frames = 3;
     }
-    std::vector<int> sizes;
-    for (std::size_t a = 0; a < sizes_text.size();) {
-      const std::size_t b = std::min(sizes_text.find(',', a), sizes_text.size());
-      sizes.push_back(std::stoi(sizes_text.substr(a, b - a)));
-      a = b + 1;
-    }
+    const auto parse = [](const std::string& text) {
+      std::vector<double> v;
+      for (std::size_t a = 0; a < text.size();) {
+        const std::size_t b = std::min(text.find(',', a), text.size());
+        v.push_back(std::stod(text.substr(a, b - a)));
+        a = b + 1;
+      }
+      return v;
+    };
+    const std::vector<double> sizes = parse(sizes_text), lengths = parse(lengths_text);
     std::vector<BackendKind> backends;
     if (backend_text == "both") {
       backends = {BackendKind::Cpu, BackendKind::Cuda};
@@ -185,40 +190,39 @@ int main(int argc, char** argv) {
     have_gpu = inc::cuda::queryDevices().device_count > 0;
 #endif
     std::vector<Row> rows;
-    std::printf("%-5s %7s %7s %6s %7s %6s %7s | %8s %8s %8s %8s | %8s %8s %8s %8s %8s %8s\n", "back", "target",
-                "spheres", "cut", "nodes", "added", "verts", "deform", "cutting", "apply", "after", "find", "findGPU",
-                "nodes", "visib", "repack", "split");
+    std::printf("%-6s %-5s %7s %7s %6s %7s %6s %5s | %8s %8s %8s %8s %8s %8s | %8s %8s %8s %7s\n", "case", "back",
+                "target", "spheres", "len_m", "nodes", "iface", "mlsub", "deform", "cutting", "mls", "exchng", "pbd",
+                "convert", "repack", "apply", "after", "spheres");
     for (BackendKind b : backends) {
       if (b == BackendKind::Cuda && !have_gpu) continue;
-      for (int n : sizes) {
+      for (double n : sizes) {
         if (n > max_spheres || (b == BackendKind::Cpu && n > cpu_max)) continue;
-        const Row r = runCase(b, n, std::max(1, reps));
-        rows.push_back(r);
-        std::printf("%-5s %7d %7d %6d %7d %6d %7d | %8.3f %8.3f %8.3f %8.3f | %8.3f %8.3f %8.3f %8.3f %8.3f %8.3f\n",
-                    r.backend.c_str(), r.target, r.spheres, r.cut_spheres, r.nodal_points, r.spheres_added, r.vertices,
-                    r.ms_deform, r.ms_cutting, r.ms_apply_frame, r.ms_after, r.ms_find_cpu, r.ms_find_gpu, r.ms_nodes,
-                    r.ms_visibility, r.ms_repack, r.ms_split);
-        std::fflush(stdout);
+        rows.push_back(runCase("size", b, int(n), 0.24, samples, after_frames));
+        printRow(rows.back());
+      }
+      for (double len : lengths) {
+        rows.push_back(runCase("length", b, long_target, len, samples, after_frames));
+        printRow(rows.back());
       }
     }
     if (!csv.empty()) {
       std::ofstream f(csv);
       if (!f) throw InputError(csv, "--csv", "cannot write");
-      f << "backend,target,spheres,cut_spheres,nodal_points,spheres_added,vertices,ms_deform,ms_cutting,ms_apply_frame,"
-           "ms_after,ms_find_cpu,ms_find_gpu,ms_nodes,ms_visibility,ms_repack,ms_split\n";
+      f << "case,backend,target,spheres,cut_length_m,nodal_points,interface_spheres,mls_substeps,ms_deform,ms_cutting,"
+           "ms_mls,ms_exchange,ms_pbd,ms_convert,ms_repack,ms_apply_frame,ms_after,spheres_after\n";
       for (const Row& r : rows)
-        f << r.backend << ',' << r.target << ',' << r.spheres << ',' << r.cut_spheres << ',' << r.nodal_points << ','
-          << r.spheres_added << ',' << r.vertices << ',' << r.ms_deform << ',' << r.ms_cutting << ','
-          << r.ms_apply_frame << ',' << r.ms_after << ',' << r.ms_find_cpu << ',' << r.ms_find_gpu << ','
-          << r.ms_nodes << ',' << r.ms_visibility << ',' << r.ms_repack << ',' << r.ms_split << '\n';
+        f << r.kind << ',' << r.backend << ',' << r.target << ',' << r.spheres << ',' << r.cut_length_m << ','
+          << r.nodal_points << ',' << r.interface << ',' << r.mls_substeps << ',' << r.ms_deform << ',' << r.ms_cutting
+          << ',' << r.ms_mls << ',' << r.ms_exchange << ',' << r.ms_pbd << ',' << r.ms_convert << ',' << r.ms_repack
+          << ',' << r.ms_apply_frame << ',' << r.ms_after << ',' << r.spheres_after << '\n';
     }
     if (rows.empty()) {
       std::printf("bench_cutting: no rows (sizes above the limits or no device)\n");
       return 0;
     }
-    const Row& last = rows.back();
-    std::printf("bench_cutting: %s %d spheres: deform %.3f ms, cutting %.3f ms, cut apply frame %.3f ms per frame\n",
-                last.backend.c_str(), last.spheres, last.ms_deform, last.ms_cutting, last.ms_apply_frame);
+    const Row& first = rows.front();
+    std::printf("bench_cutting: %s %d spheres: %.3f ms per frame while cutting (%d nodal points), re-packing %.3f ms\n",
+                first.backend.c_str(), first.spheres, first.ms_cutting, first.nodal_points, first.ms_repack);
   } catch (const InputError& e) {
     std::fprintf(stderr, "%s\n", e.what());
     return 2;

@@ -54,8 +54,84 @@ std::vector<Vec3d> MlsCpuSolver<T>::restPositions() const {
 }
 
 template <typename T>
+MlsView<T> MlsCpuSolver<T>::view() {
+  MlsView<T> s = makeMlsView(model_, state_);
+  if (!cg_rest_centre_.empty()) {
+    s.coupling_group = particle_group_.data();
+    s.coupling_force = cg_force_.data();
+  }
+  return s;
+}
+
+template <typename T>
+CouplingView<T> MlsCpuSolver<T>::couplingView() {
+  CouplingView<T> c;
+  c.groups = std::int32_t(cg_rest_centre_.size());
+  c.member_offsets = cg_member_offsets_.data();
+  c.members = cg_members_.data();
+  c.rest_centre = cg_rest_centre_.data();
+  c.spring_offsets = cg_spring_offsets_.data();
+  c.anchor = cg_anchor_.data();
+  c.rest_length = cg_rest_length_.data();
+  c.stiffness = cg_stiffness_.data();
+  c.group_displacement = cg_displacement_.data();
+  c.member_force = cg_force_.data();
+  return c;
+}
+
+template <typename T>
+void MlsCpuSolver<T>::couplingPass() {
+  if (cg_rest_centre_.empty()) return;
+  const CouplingView<T> c = couplingView();
+  const Vec3<T>* u = state_.displacement.data();
+  forEachParticle(c.groups, [&](std::int64_t g) { couplingGroupPass(c, u, std::int32_t(g)); });
+}
+
+template <typename T>
+void MlsCpuSolver<T>::setCouplingGroups(const MlsCouplingGroups& g) {
+  validateMlsCouplingGroups(g, size());
+  cg_member_offsets_ = g.member_offsets;
+  cg_members_ = g.members;
+  cg_spring_offsets_ = g.spring_offsets;
+  cg_rest_centre_.resize(g.size());
+  for (std::size_t k = 0; k < g.size(); ++k) cg_rest_centre_[k] = Vec3<T>(g.rest_centres[k] - model_.origin);
+  cg_rest_length_.assign(g.rest_lengths.begin(), g.rest_lengths.end());
+  cg_stiffness_.assign(g.stiffnesses.begin(), g.stiffnesses.end());
+  // Until anchors arrive every spring sits at its rest length from the group's rest centre along x (no force).
+  cg_anchor_.resize(g.springs());
+  for (std::size_t k = 0; k < g.size(); ++k)
+    for (std::int32_t s = g.spring_offsets[k]; s < g.spring_offsets[k + 1]; ++s)
+      cg_anchor_[std::size_t(s)] = cg_rest_centre_[k] + Vec3<T>(cg_rest_length_[std::size_t(s)], T(0), T(0));
+  cg_displacement_.assign(g.size(), Vec3<T>());
+  cg_force_.assign(g.size(), Vec3<T>());
+  particle_group_.assign(size(), -1);
+  for (std::size_t k = 0; k < g.size(); ++k)
+    for (std::int32_t p = g.member_offsets[k]; p < g.member_offsets[k + 1]; ++p)
+      particle_group_[std::size_t(g.members[std::size_t(p)])] = std::int32_t(k);
+  if (g.size() == 0) particle_group_.clear();
+  std::vector<double> mass(model_.mass.begin(), model_.mass.end());
+  setCouplingStableStep(mlsCouplingStableStep(g, mass));
+  forces_valid_ = false;
+}
+
+template <typename T>
+void MlsCpuSolver<T>::setCouplingAnchors(const std::vector<Vec3d>& anchors) {
+  checkSize(anchors, cg_rest_length_.size(), "coupling anchors");
+  for (std::size_t s = 0; s < anchors.size(); ++s) cg_anchor_[s] = Vec3<T>(anchors[s] - model_.origin);
+  forces_valid_ = false;
+}
+
+template <typename T>
+void MlsCpuSolver<T>::couplingDisplacements(std::vector<Vec3d>& out) {
+  couplingPass();
+  out.resize(cg_displacement_.size());
+  for (std::size_t g = 0; g < out.size(); ++g) out[g] = Vec3d(cg_displacement_[g]);
+}
+
+template <typename T>
 void MlsCpuSolver<T>::computeForces() {
-  const MlsView<T> s = makeMlsView(model_, state_);
+  couplingPass();
+  const MlsView<T> s = view();
   forEachParticle(s.n, [&](std::int64_t i) { mlsStressPass(s, i); });
   forEachParticle(s.n, [&](std::int64_t k) { mlsForcePass(s, k, T(0), false); });
   forces_valid_ = true;
@@ -64,13 +140,16 @@ void MlsCpuSolver<T>::computeForces() {
 template <typename T>
 void MlsCpuSolver<T>::substeps(T dt, int n, MlsFrameStats* stats) {
   if (!forces_valid_) computeForces();
-  const MlsView<T> s = makeMlsView(model_, state_);
+  const MlsView<T> s = view();
   const T half = T(0.5) * dt;
   for (int step = 0; step < n; ++step) {
     auto t0 = std::chrono::steady_clock::now();
     const int remaining = n - step;
     forEachParticle(s.n, [&](std::int64_t k) { mlsDriftPass(s, k, dt, remaining); });
     if (stats) stats->ms_integrate += msSince(t0);
+    t0 = std::chrono::steady_clock::now();
+    couplingPass();  // the groups' spring forces at the drifted displacement, before the force gather
+    if (stats) stats->ms_coupling += msSince(t0);
     t0 = std::chrono::steady_clock::now();
     forEachParticle(s.n, [&](std::int64_t i) { mlsStressPass(s, i); });
     if (stats) stats->ms_stress += msSince(t0);
@@ -107,7 +186,7 @@ template <typename T>
 MlsReduction MlsCpuSolver<T>::reduce() {
   if (!forces_valid_) computeForces();
   MlsState<T>& st = state_;
-  const MlsView<T> s = makeMlsView(model_, st);
+  const MlsView<T> s = view();
   MlsReduction r;
   double max_u2 = 0.0;
   // Serial, in index order, in double: deterministic and independent of the thread count.
@@ -212,7 +291,9 @@ void MlsCpuSolver<T>::restoreCheckpoint() {
 template <typename T>
 MemoryReport MlsCpuSolver<T>::memory() const {
   MemoryReport m;
-  m.host_bytes = model_.bytes() + state_.bytes() + (saved_u_.size() + saved_v_.size()) * sizeof(Vec3<T>);
+  m.host_bytes = model_.bytes() + state_.bytes() + (saved_u_.size() + saved_v_.size()) * sizeof(Vec3<T>) +
+                 (cg_members_.size() + particle_group_.size() + 2 * cg_member_offsets_.size()) * sizeof(std::int32_t) +
+                 (cg_rest_centre_.size() * 3 + cg_anchor_.size()) * sizeof(Vec3<T>) + cg_rest_length_.size() * 2 * sizeof(T);
   return m;
 }
 

@@ -5,6 +5,7 @@
 
 #include "host/mls_model.h"
 #include "host/mls_solver.h"
+#include "physics/cut_coupling.h"
 
 namespace inc::cpu {
 
@@ -33,6 +34,9 @@ class MlsCpuSolver final : public MlsSolver {
   void energies(std::vector<double>& out) const override;
   void setPrescribed(const std::vector<std::int32_t>& particles, const std::vector<Vec3d>& targets) override;
   void release(const std::vector<std::int32_t>& particles) override;
+  void setCouplingGroups(const MlsCouplingGroups& groups) override;
+  void setCouplingAnchors(const std::vector<Vec3d>& anchors) override;
+  void couplingDisplacements(std::vector<Vec3d>& out) override;
   void saveCheckpoint() override;
   void restoreCheckpoint() override;
   MemoryReport memory() const override;
@@ -43,8 +47,15 @@ class MlsCpuSolver final : public MlsSolver {
  private:
   // Runs n substeps of dt; stage times (ms) are added to `stats` when given.
   void substeps(T dt, int n, MlsFrameStats* stats);
+  MlsView<T> view();              // the passes' view, with the coupling arrays when groups are set
+  CouplingView<T> couplingView();
+  void couplingPass();            // eqs. 11-13 for every group at the current displacement
   MlsModel<T> model_;
   MlsState<T> state_;
+  // Coupling groups in precision T, positions relative to the model origin (empty: no coupling).
+  std::vector<std::int32_t> cg_member_offsets_{0}, cg_members_, cg_spring_offsets_{0}, particle_group_;
+  std::vector<Vec3<T>> cg_rest_centre_, cg_anchor_, cg_displacement_, cg_force_;
+  std::vector<T> cg_rest_length_, cg_stiffness_;
   std::vector<Vec3<T>> saved_u_, saved_v_;
   bool forces_valid_ = false;
 };

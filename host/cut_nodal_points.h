@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "host/cut_swept_surface.h"
@@ -16,12 +17,37 @@ struct NodalPoints {
   std::vector<std::int32_t> source_sphere; // index of the converted sphere in the pre-cut model
   std::vector<std::int8_t> side;           // +1 / -1 side of the swept surface
   double spacing = 0.0;                    // m, the lattice spacing used
+  double max_source_radius = 0.0;          // m, the largest converted sphere's radius
   std::size_t size() const { return positions.size(); }
 };
 
 struct CutOptions {
   int samples_per_diameter = 4;   // lattice cells across a sphere's diameter (the paper's uniform sampling)
+  // Cuts made before this one: a sphere's points are kept only where the segment from its centre crosses none
+  // of them (a sphere re-packed on one side of an earlier cut holds no material of the other side).
+  std::vector<const SweptSurface*> earlier_cuts;
+  // The tissue (e.g. inside the organ's rest surface): a sphere's points are kept only inside it, so that the
+  // part of a ball that reaches out of the organ carries no mass (empty: everywhere).
+  std::function<bool(const Vec3d&)> inside;
 };
+
+// Uniform sampling inside one sphere (section 5.1): cell centres of an n^3 lattice (cell 2 r / n) over its
+// bounding cube with |x - c| < r, visible from the centre through `cuts` (segment c-x crosses none of them) and
+// inside the tissue when `inside` is given; the centre alone when the lattice leaves nothing. Throws
+// InputError("cut", "samples_per_diameter") unless n is in [1, 64].
+std::vector<Vec3d> sampleSphere(const Vec3d& centre, double radius, int n, const std::vector<const SweptSurface*>& cuts = {},
+                                const std::function<bool(const Vec3d&)>& inside = {});
+
+// Symmetric supports of radius h (closed ball, grid search) over `positions` with the visibility criterion of
+// section 5.2 applied for every cut: a pair is dropped when its segment crosses one of `cuts` (decided once per
+// unordered pair, lower index first, so the lists stay symmetric). `removed` (when given) gets the number of
+// directed entries dropped.
+NeighborLists visibleSupports(const std::vector<Vec3d>& positions, double support_radius,
+                              const std::vector<const SweptSurface*>& cuts, std::size_t* removed = nullptr);
+// Drops from `lists` (symmetric, every pair at most `reach` long, m) the pairs crossing `cut` (the same decision
+// as visibleSupports); returns how many.
+std::size_t removeCrossingPairsSymmetric(NeighborLists& lists, const std::vector<Vec3d>& positions, const SweptSurface& cut,
+                                         double reach);
 
 // The spheres the swept surface enters are removed and replaced by nodal points on a lattice of cell size
 // 2 r / samples_per_diameter inside each sphere (cell centres with |x - c| < r; the centre alone when the lattice
@@ -43,19 +69,27 @@ NeighborLists visibleNodalNeighbours(const NodalPoints& points, double support_r
                                      std::size_t* removed = nullptr);
 
 struct RepackOptions {
-  double max_radius = 0.0;         // m; <= 0: the largest radius among the converted spheres
+  double boundary_offset = 0.3;    // (0, 1): a point whose support centroid is off by more than this * h is boundary
+  double spacing_factor = 0.5;     // eq. 14: d = spacing_factor * max distance of a group's medial points to the cut
+  double sphere_budget = 1.0;      // > 0: new spheres per reference mass, per group (merging, bounded count)
+  double reference_mass = 0.0;     // kg, > 0; 0: the mean mass of the converted spheres. Give the organ's original
+                                   // mean over successive cuts (a mean of re-packed spheres would drift)
+  double max_radius = 0.0;         // m, > 0: the cap of new radii and of eq. 14's d; 0: 1.5 x the largest converted
+                                   // radius (give 1.5 x the organ's original over successive cuts)
+  double support_factor = 2.0;     // h = support_factor * point spacing for the supports of the classification
 };
 
-// Re-packs the nodal points into spheres side by side (a documented local cover, docs/cutting.md): the points of
-// each side are grouped by the cells of a grid of size h = r_max / 0.75 (r_max: the largest converted radius
-// unless options.max_radius > 0; 0.75 h is the lattice's sphere radius), one sphere per non-empty (side, cell)
-// group: centre = the group's mass centroid, radius = max(0.5 r_max, distance to its farthest point), so every
-// nodal point lies in the sphere that took its mass (exact mass conservation, complete cover) and the re-packed
-// region keeps the original sphere density. With earlier cuts given, points are also grouped by their side of
-// each earlier cut, and links are refused across any of them (successive cuts). New spheres are appended to `spheres`; links join overlapping spheres
-// (new-new, new-old) whose centre segment does not cross the swept surface. Returns the number of spheres added.
+// Re-packs the nodal points into spheres by Algorithm 1 (host/cut_repack.h, packNodalPoints): the points are
+// grouped by the components of their visibility-filtered supports (radius support_factor * points.spacing; pairs
+// crossing `surface` or an earlier cut dropped), each group's boundary / medial / middle points classified, the
+// medial points down-sampled with the spacing of eq. 14, radius = distance to the nearest boundary point, small
+// spheres merged down to the group's budget. Every point's mass goes to the new sphere of its Voronoi cell (exact
+// mass). New spheres are appended to `spheres`; links join overlapping spheres (new-new,
+// new-old) whose centre segment crosses neither `surface` nor an earlier cut (new spheres connect only to their
+// own side). The budget's reference mass is options.reference_mass, or the mean mass of the converted spheres.
+// Returns the number of spheres added.
 std::size_t repackSpheres(MetaballModel& spheres, const NodalPoints& points, const SweptSurface& surface,
-                          double converted_max_radius, const RepackOptions& options = {},
+                          const RepackOptions& options = {},
                           const std::vector<SweptSurface>& earlier_cuts = {});
 
 double totalMass(const MetaballModel& model);

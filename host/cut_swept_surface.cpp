@@ -49,18 +49,58 @@ void extendSweptSurface(SweptSurface& s, const BladePose& next) {
   if (area2(k + 1, k + 2, k + 3) > 1e-24) s.triangles.push_back({k + 1, k + 2, k + 3});
 }
 
+namespace {
+// One swept triangle against a segment, with its box (margin far above the widened barycentric bounds) and its
+// plane normal given. Both ends clearly on one side of the plane (by more than 1e-6 of their distance to a
+// corner, far above rounding) means no crossing without the full test.
+bool crossesTriangle(const Vec3d& p, const Vec3d& q, const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& lo,
+                     const Vec3d& hi, const Vec3d& n) {
+  for (int k = 0; k < 3; ++k)
+    if (std::max(p[k], q[k]) < lo[k] || std::min(p[k], q[k]) > hi[k]) return false;
+  const double dp = dot(n, p - a), dq = dot(n, q - a);
+  if (dp * dq > 0) {
+    const double m = 1e-12 * norm2(n);
+    if (dp * dp > m * norm2(p - a) && dq * dq > m * norm2(q - a)) return false;
+  }
+  return cut::segmentCrossesTriangle(p, q, a, b, c);
+}
+void triangleBox(const Vec3d& a, const Vec3d& b, const Vec3d& c, Vec3d& lo, Vec3d& hi) {
+  for (int k = 0; k < 3; ++k) {
+    const double l = std::min({a[k], b[k], c[k]}), h = std::max({a[k], b[k], c[k]});
+    const double m = 1e-6 * (h - l) + 1e-12;
+    lo[k] = l - m;
+    hi[k] = h + m;
+  }
+}
+}  // namespace
+
 bool segmentCrossesSweptSurface(const SweptSurface& s, const Vec3d& p, const Vec3d& q) {
   for (const auto& t : s.triangles) {
     const Vec3d& a = s.vertices[t[0]];
     const Vec3d& b = s.vertices[t[1]];
     const Vec3d& c = s.vertices[t[2]];
-    bool apart = false;  // bounding boxes disjoint (with a margin far above the widened barycentric bounds)
-    for (int k = 0; k < 3 && !apart; ++k) {
-      const double lo = std::min({a[k], b[k], c[k]}), hi = std::max({a[k], b[k], c[k]});
-      const double m = 1e-6 * (hi - lo) + 1e-12;
-      apart = std::max(p[k], q[k]) < lo - m || std::min(p[k], q[k]) > hi + m;
-    }
-    if (!apart && cut::segmentCrossesTriangle(p, q, a, b, c)) return true;
+    Vec3d lo, hi;
+    triangleBox(a, b, c, lo, hi);
+    if (crossesTriangle(p, q, a, b, c, lo, hi, cross(b - a, c - a))) return true;
+  }
+  return false;
+}
+
+SweptSurfaceQuery::SweptSurfaceQuery(const SweptSurface& s) : s_(s) {
+  lo_.resize(s.triangles.size());
+  hi_.resize(s.triangles.size());
+  n_.resize(s.triangles.size());
+  for (std::size_t i = 0; i < s.triangles.size(); ++i) {
+    const auto& t = s.triangles[i];
+    triangleBox(s.vertices[t[0]], s.vertices[t[1]], s.vertices[t[2]], lo_[i], hi_[i]);
+    n_[i] = cross(s.vertices[t[1]] - s.vertices[t[0]], s.vertices[t[2]] - s.vertices[t[0]]);
+  }
+}
+
+bool SweptSurfaceQuery::segmentCrosses(const Vec3d& p, const Vec3d& q) const {
+  for (std::size_t i = 0; i < s_.triangles.size(); ++i) {
+    const auto& t = s_.triangles[i];
+    if (crossesTriangle(p, q, s_.vertices[t[0]], s_.vertices[t[1]], s_.vertices[t[2]], lo_[i], hi_[i], n_[i])) return true;
   }
   return false;
 }

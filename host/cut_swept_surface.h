@@ -32,6 +32,16 @@ void extendSweptSurface(SweptSurface& surface, const BladePose& next);
 
 // Visibility criterion: the segment p-q crosses a triangle of the swept surface.
 bool segmentCrossesSweptSurface(const SweptSurface& surface, const Vec3d& p, const Vec3d& q);
+// The same decision with the triangles' boxes and normals computed once (many segments against one surface).
+class SweptSurfaceQuery {
+ public:
+  explicit SweptSurfaceQuery(const SweptSurface& surface);  // keeps a reference: the surface must outlive it
+  bool segmentCrosses(const Vec3d& p, const Vec3d& q) const;
+
+ private:
+  const SweptSurface& s_;
+  std::vector<Vec3d> lo_, hi_, n_;
+};
 // +1 / -1: the side of p (sign of the oriented normal offset to the closest swept triangle); 0 never returned.
 int sideOfSweptSurface(const SweptSurface& surface, const Vec3d& p);
 // Unsigned distance from p to the swept surface (m).

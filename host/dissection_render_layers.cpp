@@ -1,4 +1,4 @@
-// Swept cut surfaces and nodal points carried from the rest configuration to the current one (viewer layers).
+// Swept cut surfaces carried from the rest configuration to the current one (viewer layer).
 #include "host/dissection_render_layers.h"
 
 #include <algorithm>
@@ -7,18 +7,7 @@
 
 namespace inc {
 
-void CutLayerBinding::append(Bound& into, const std::vector<Vec3d>& points, const MetaballModel& spheres,
-                             const std::vector<std::int32_t>* subset) {
-  MetaballModel sub;
-  if (subset) {
-    for (std::int32_t i : *subset) {
-      sub.rest_centers.push_back(spheres.rest_centers[std::size_t(i)]);
-      sub.rest_radii.push_back(spheres.rest_radii[std::size_t(i)]);
-    }
-  }
-  // A side with fewer than two spheres cannot weight a neighbourhood: bind to all of them instead.
-  const bool use_sub = subset && sub.size() >= 2;
-  const MetaballModel& m = use_sub ? sub : spheres;
+void CutLayerBinding::bind(Bound& into, const std::vector<Vec3d>& points, const MetaballModel& m) {
   if (points.empty() || m.size() < 2) return;
   TriangleMesh cloud;  // vertices only: bindSkin needs no triangles for the weights
   cloud.vertices = points;
@@ -29,30 +18,27 @@ void CutLayerBinding::append(Bound& into, const std::vector<Vec3d>& points, cons
     for (int j = 0; j < 4; ++j) {
       const std::size_t slot = v * std::size_t(k) + std::size_t(std::min(j, k - 1));
       const std::int32_t s = b.sphere[slot];
-      into.sphere.push_back(use_sub ? (*subset)[std::size_t(s)] : s);
+      into.sphere.push_back(s);
       into.weight.push_back(j < k ? b.weight[slot] : 0.0);
     }
   }
   into.k = 4;
 }
 
-void CutLayerBinding::update(const std::vector<const SweptSurface*>& swept, const NodalPoints& nodal,
-                             const SweptSurface* nodal_cut, const MetaballModel& spheres) {
-  // A cheap fingerprint of what the bindings depend on: sizes and coordinate sums.
-  double key[4] = {0, double(nodal.size()), double(spheres.size()), 0};
+void CutLayerBinding::update(const std::vector<const SweptSurface*>& swept, const MetaballModel& spheres) {
+  // A cheap fingerprint of what the binding depends on: sizes and coordinate sums.
+  double key[3] = {0, double(spheres.size()), 0};
   for (const SweptSurface* s : swept)
     if (s && !s->empty()) {
       key[0] += double(s->vertices.size());
-      for (const Vec3d& v : s->vertices) key[3] += v.x + 2 * v.y + 3 * v.z;
+      for (const Vec3d& v : s->vertices) key[2] += v.x + 2 * v.y + 3 * v.z;
     }
-  for (const Vec3d& p : nodal.positions) key[3] += 5 * p.x + 7 * p.y + 11 * p.z;
-  for (const Vec3d& c : spheres.rest_centers) key[3] += 13 * c.x + 17 * c.y + 19 * c.z;
-  if (std::equal(key, key + 4, key_)) return;
-  std::copy(key, key + 4, key_);
+  for (const Vec3d& c : spheres.rest_centers) key[2] += 13 * c.x + 17 * c.y + 19 * c.z;
+  if (std::equal(key, key + 3, key_)) return;
+  std::copy(key, key + 3, key_);
 
   rest_centres_ = spheres.rest_centers;
   swept_ = Bound{};
-  nodal_ = Bound{};
   swept_triangles_.clear();
   std::vector<Vec3d> verts;
   for (const SweptSurface* s : swept) {
@@ -61,20 +47,8 @@ void CutLayerBinding::update(const std::vector<const SweptSurface*>& swept, cons
     verts.insert(verts.end(), s->vertices.begin(), s->vertices.end());
     for (const auto& t : s->triangles) swept_triangles_.push_back({base + t[0], base + t[1], base + t[2]});
   }
-  append(swept_, verts, spheres, nullptr);
+  bind(swept_, verts, spheres);
   if (swept_.rest.size() != verts.size()) swept_triangles_.clear();  // nothing to bind to
-
-  for (int side : {+1, -1}) {
-    std::vector<Vec3d> pts;
-    for (std::size_t i = 0; i < nodal.size(); ++i)
-      if (!nodal_cut || nodal.side[i] == side) pts.push_back(nodal.positions[i]);
-    std::vector<std::int32_t> same;
-    if (nodal_cut && !pts.empty())
-      for (std::size_t i = 0; i < spheres.size(); ++i)
-        if (sideOfSweptSurface(*nodal_cut, spheres.rest_centers[i]) == side) same.push_back(std::int32_t(i));
-    append(nodal_, pts, spheres, nodal_cut ? &same : nullptr);
-    if (!nodal_cut) break;
-  }
 }
 
 void CutLayerBinding::move(const Bound& b, const std::vector<Vec3d>& rest_centres, const std::vector<Vec3d>& now,
@@ -95,7 +69,6 @@ void CutLayerBinding::apply(const std::vector<Vec3d>& sphere_positions, RenderLa
   if (sphere_positions.size() != rest_centres_.size()) return;  // update() not called for these spheres
   move(swept_, rest_centres_, sphere_positions, out.swept_surface.vertices);
   out.swept_surface.triangles = swept_triangles_;
-  move(nodal_, rest_centres_, sphere_positions, out.nodal_points);
 }
 
 }  // namespace inc

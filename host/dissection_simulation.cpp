@@ -1,24 +1,32 @@
-// DissectionSimulation: PBD metaballs + scripted scalpel; the cut pipeline of section 5 applied when the blade stops.
+// DissectionSimulation: PBD metaballs cut by scalpel strokes; while the blade is in the tissue the cut spheres are MLS
+// nodal points coupled both ways with the spheres (section 5.2-5.3), re-packed by Algorithm 1 when it leaves.
 #include "host/dissection_simulation.h"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <map>
 
-#include "host/cut_surface_state.h"
 #include "host/cut_nodal_points.h"
+#include "host/cut_nodal_region.h"
+#include "host/cut_repack.h"
+#include "host/cut_surface_state.h"
 #include "host/cut_swept_surface.h"
 #include "host/dissection_render_layers.h"
 #include "host/grasper.h"
 #include "host/input_error.h"
 #include "host/interactive_tool.h"
+#include "host/metaball_pack_bvh.h"
 #include "host/metaball_simulation.h"
 #include "host/organ_shapes.h"
 #include "host/pbd_builders.h"
 #include "host/pbd_model.h"
 #include "host/pbd_render_layers.h"
 #include "host/skin_binding.h"
+#include "physics/mls_integrate.h"
+#include "physics/pbd_block.h"
+#include "physics/pbd_rotation.h"
 
 namespace inc {
 
@@ -28,25 +36,68 @@ double msSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
+// A scripted stroke: one scalpel tool, cutting from its first keyframe's time to its last.
+struct ScriptedStroke {
+  ToolSpec tool;
+  double start = 0, end = 0;  // s
+  bool begun = false, done = false;
+};
+
+// The cut in progress: the model when it began (base indices), its swept surface, its nodal points, and where
+// each base sphere sits in the PBD model now (-1: converted into points and removed).
+struct ActiveStroke {
+  MetaballModel base;
+  SweptSurface swept;
+  std::unique_ptr<NodalRegion> region;
+  std::vector<std::int32_t> base_to_pbd, pbd_to_base;
+  int scripted = -1;  // index into the scripted strokes, -1: the mouse's
+};
+
+void addStages(std::vector<StageTime>& into, const std::vector<StageTime>& add) {
+  for (const StageTime& s : add) {
+    auto it = std::find_if(into.begin(), into.end(), [&](const StageTime& t) { return t.stage == s.stage; });
+    if (it == into.end())
+      into.push_back(s);
+    else
+      it->ms += s.ms;
+  }
+}
+
 template <typename T>
 class DissectionSimulation final : public SimulationModel {
  public:
-  DissectionSimulation(const Scene& scene, BackendKind backend) : scene_(scene), kind_(backend) {
+  DissectionSimulation(const Scene& scene, BackendKind backend) : scene_(scene) {
     const std::string& f = scene.file;
     if (!scene.models.cutting) throw InputError(f, "models.cutting", "the dissection model needs cutting: true");
     if (!scene.models.pbd_metaballs) throw InputError(f, "models.pbd_metaballs", "cutting needs the PBD metaball organ");
     if (scene.pbd.iterations < 1) throw InputError(f, "pbd.iterations", "must be >= 1");
-    for (const ToolSpec& t : scene.tools)
+    validateCutting(scene);
+    for (std::size_t k = 0; k < scene.tools.size(); ++k) {
+      const ToolSpec& t = scene.tools[k];
+      const std::string key = "tools[" + std::to_string(k) + "]";
       if (t.kind == "scalpel") {
-        scalpel_ = t;
-        has_scalpel_ = true;
-        break;
+        if (t.path.size() < 2) throw InputError(f, key + ".path", "a scalpel needs >= 2 keyframes");
+        if (!(t.length > 0)) throw InputError(f, key + ".length_m", "must be > 0");
+        strokes_.push_back({t, t.path.front().t, t.path.back().t});
+      } else if (t.kind == "grasper") {
+        if (t.path.empty()) throw InputError(f, key + ".path", "needs at least one keyframe");
+        graspers_.emplace_back(t, t.radius + scene.geometry.spacing, 1.0e-6);
+      } else if (t.kind == "probe") {
+        if (t.path.empty()) throw InputError(f, key + ".path", "needs at least one keyframe");
+        probes_.push_back(t);
       }
+    }
     // With models.haptics the blade may come only from a haptic device (applyTool), without a scripted one.
-    if (!has_scalpel_ && !scene.models.haptics) throw InputError(f, "tools", "cutting needs a tool of kind \"scalpel\"");
-    if (has_scalpel_ && scalpel_.path.size() < 2)
-      throw InputError(f, "tools." + scalpel_.name + ".path", "a scalpel needs >= 2 keyframes");
-    if (has_scalpel_ && !(scalpel_.length > 0)) throw InputError(f, "tools." + scalpel_.name + ".length_m", "must be > 0");
+    if (strokes_.empty() && !scene.models.haptics) throw InputError(f, "tools", "cutting needs a tool of kind \"scalpel\"");
+    // Several scalpels are several strokes, one after the other (a stroke is re-packed before the next begins).
+    std::stable_sort(strokes_.begin(), strokes_.end(),
+                     [](const ScriptedStroke& a, const ScriptedStroke& b) { return a.start < b.start; });
+    for (std::size_t k = 1; k < strokes_.size(); ++k)
+      if (strokes_[k].start < strokes_[k - 1].end)
+        throw InputError(f, "tools", "scalpel \"" + strokes_[k].tool.name + "\" starts at t = " +
+                                         std::to_string(strokes_[k].start) + " s, before scalpel \"" +
+                                         strokes_[k - 1].tool.name + "\" leaves the tissue at t = " +
+                                         std::to_string(strokes_[k - 1].end) + " s: strokes must not overlap");
     params_.solver = parsePbdSolver(scene.pbd.solver, f, "pbd.solver");
     params_.iterations = scene.pbd.iterations;
     // CUDA single-block fused frame: measured on an H100 (docs/BENCHMARKS.md) it beats per-phase launches for
@@ -60,8 +111,38 @@ class DissectionSimulation final : public SimulationModel {
     base_substeps_ = scene.solver.substeps > 0 ? scene.solver.substeps : 4;
     spheres_ = buildSceneMetaballs(scene);
     rest_surface_ = sceneSurfaceMesh(scene);
+    surface_ = cutSurfaceState(rest_surface_);
     backend_ = makePbdBackend<T>(backend);
-    rebuild(nullptr);
+    region_.samples_per_diameter = scene.cutting.samples_per_diameter;
+    region_.backend = backend_->kind();  // the nodal points run on the backend the scene asked for
+    region_.precision = sizeof(T) == 8 ? Precision::Float64 : Precision::Float32;
+    region_.fixed = scene.fixed;
+    region_.youngs_modulus = scene.material.youngs_modulus;
+    region_.stretch_compliance = scene.pbd.stretch_compliance;
+    MlsBuildInput& m = region_.mls;
+    m.source = f;
+    m.support_factor = scene.mls.support_factor;
+    m.condition_limit = scene.mls.condition_limit;
+    m.material.youngs_modulus = scene.material.youngs_modulus;
+    m.material.poisson_ratio = scene.material.poisson_ratio;
+    m.material.density = scene.material.density;
+    m.material.damping = scene.material.damping;
+    m.material.volume_preservation = scene.mls.volume_preservation;
+    m.material.volume_stiffness = scene.mls.volume_stiffness;
+    m.gravity = scene.solver.gravity;
+    m.safety = scene.solver.safety;
+    checkFixedMlsSubsteps();
+    // The organ as first packed: its typical sphere sets the re-packing's budget and radius cap for every cut
+    // (a mean over re-packed spheres would drift), and its surface bounds where converted spheres put points.
+    for (std::size_t i = 0; i < spheres_.size(); ++i) {
+      reference_mass_ += spheres_.masses[i] / double(spheres_.size());
+      reference_radius_ += spheres_.rest_radii[i] / double(spheres_.size());
+    }
+    tissue_ = std::make_shared<pack::SurfaceDistance>(rest_surface_);
+    region_.inside = [tissue = tissue_](const Vec3d& x) { return tissue->insideByRays(x); };
+    std::vector<Vec3d> x(spheres_.rest_centers), v(spheres_.size());
+    setSpheres(spheres_, x, v, {});
+    bindSurface();
     sphere_components_ = sphereGraphComponents(spheres_);
     saveCheckpoint();
   }
@@ -73,104 +154,103 @@ class DissectionSimulation final : public SimulationModel {
   FrameReport advance(double frame_dt) override {
     FrameReport rep;
     const double t0 = time_, t1 = time_ + frame_dt;
-    double sweep_ms = 0.0, apply_ms = 0.0;
-    if (has_scalpel_ && !cut_applied_ && t1 >= scalpel_.path.front().t) {
-      const double ts = scalpel_.path.front().t, te = scalpel_.path.back().t;
-      const auto c0 = std::chrono::steady_clock::now();
-      // One strip per frame from the blade at max(t0, ts) to the blade at min(t1, te) (eq.-free: section 5.1).
-      const BladePose b1 = blade(std::min(t1, te));
-      if (swept_.vertices.empty()) {
-        const BladePose b0 = blade(std::max(t0, ts));
-        swept_.vertices = {b0.base, b0.tip};
-      }
-      const Vec3d last = swept_.vertices[swept_.vertices.size() - 2];
-      if (norm(b1.base - last) > 1e-12) extendSweptSurface(swept_, b1);
-      pending_ = swept_.empty() ? 0 : findCutSpheres(swept_, spheres_.rest_centers, spheres_.rest_radii).size();
-      sweep_ms = msSince(c0);
-      if (t1 >= te) {
-        const auto c1 = std::chrono::steady_clock::now();
-        cut_applied_ = true;
-        applyCut(swept_);
-        apply_ms = msSince(c1);
+    timers_ = Timers{};
+    timers_.apply_ms = mouse_cut_ms_;
+    timers_.convert_ms = mouse_convert_ms_;
+    mouse_cut_ms_ = mouse_convert_ms_ = 0.0;
+    scriptedStrokes(t0, t1);
+    updateGraspers(t0);
+    PbdFrameInput<T> in;
+    for (Grasper& g : graspers_) {
+      const ToolPose a = toolPoseAt(g.tool(), t0), b = toolPoseAt(g.tool(), t1);
+      if (g.holding()) {
+        g.appendAttachments(a.position, b.position, in);
+      } else {
+        in.tools_from.push_back(capsule(toolCapsule(g.tool(), a)));
+        in.tools_to.push_back(capsule(toolCapsule(g.tool(), b)));
       }
     }
-    apply_ms += mouse_cut_ms_;
-    mouse_cut_ms_ = 0.0;
-    PbdFrameInput<T> in;
+    for (const ToolSpec& t : probes_) {
+      in.tools_from.push_back(capsule(toolCapsule(t, toolPoseAt(t, t0))));
+      in.tools_to.push_back(capsule(toolCapsule(t, toolPoseAt(t, t1))));
+    }
     appendMouseAttachments(mouse_, in);
-    PbdStepParams<T> p = params_;
-    p.frame_dt = T(frame_dt);
-    p.substeps = std::max(1, int(std::ceil(base_substeps_ * substep_scale_ - 1e-9)));
-    const PbdFrameStats st = backend_->advanceFrame(p, in);
-    backend_->getState(state_);
+    PbdFrameStats st;
+    MlsFrameStats mls;
+    int exchanges = 0, pbd_substeps = 0;
+    bool mls_finite = true;
+    if (coupled()) {
+      coupledFrame(frame_dt, in, st, mls, mls_finite, exchanges, pbd_substeps);
+    } else {
+      PbdStepParams<T> p = params_;
+      p.frame_dt = T(frame_dt);
+      p.substeps = pbd_substeps = std::max(1, int(std::ceil(base_substeps_ * substep_scale_ - 1e-9)));
+      st = backend_->advanceFrame(p, in);
+      backend_->getState(state_);
+    }
     mouse_.frameDone();
     time_ = t1;
-    rep.substeps = p.substeps;
-    rep.dt = frame_dt / p.substeps;
+    rep.substeps = pbd_substeps;
+    rep.dt = frame_dt / std::max(1, pbd_substeps);
     rep.stages = st.stages;
-    rep.stages.push_back({"cut_sweep", sweep_ms});
-    rep.stages.push_back({"cut_apply", apply_ms});
-    rep.finite = st.finite;
+    rep.stages.push_back({"cut_sweep", timers_.sweep_ms});
+    rep.stages.push_back({"cut_convert", timers_.convert_ms});
+    rep.stages.push_back({"mls_integrate", mls.ms_integrate});
+    rep.stages.push_back({"mls_coupling", mls.ms_coupling});
+    rep.stages.push_back({"mls_stress", mls.ms_stress});
+    rep.stages.push_back({"mls_forces", mls.ms_forces + mls.ms_reduce});
+    rep.stages.push_back({"coupling_exchange", timers_.exchange_ms});
+    rep.stages.push_back({"cut_repack", timers_.repack_ms});
+    rep.stages.push_back({"cut_apply", timers_.apply_ms});
+    rep.finite = st.finite && mls_finite;
     if (!st.finite) {
       rep.failure_stage = "pbd";
       rep.failure_particle = st.failure_particle;
+    } else if (!mls_finite) {
+      rep.failure_stage = "mls_" + mls.totals.bad_stage;
+      rep.failure_particle = mls.totals.first_bad;
     }
-    double ke = 0, pe = 0, disp = 0;
-    for (std::size_t i = 0; i < model_.size(); ++i) {
-      const Vec3d x(state_.positions[i]), x0(model_.rest_positions[i]), v(state_.velocities[i]);
-      ke += 0.5 * double(model_.masses[i]) * norm2(v);
-      pe -= double(model_.masses[i]) * dot(scene_.solver.gravity, x - x0);
-      disp = std::max(disp, norm(x - x0));
-    }
-    rep.kinetic_energy = ke;
-    rep.potential_energy = pe;
-    rep.max_displacement = disp;
-    rep.counters["spheres"] = double(model_.size());
-    rep.counters["links"] = double(spheres_.links.size());
-    rep.counters["cut_spheres_pending"] = double(pending_);
-    rep.counters["cuts_applied"] = double(cuts_done_);
-    rep.counters["sphere_components"] = double(sphere_components_);
-    rep.counters["grasped"] = double(mouse_.held());
-    rep.counters["nodal_points_last_cut"] = double(last_points_);
-    rep.counters["spheres_added_last_cut"] = double(last_added_);
-    rep.counters["surface_split"] = surface_split_ ? 1.0 : 0.0;
-    rep.counters["surface_components"] = double(surface_components_);
-    rep.counters["sweep_ms"] = sweep_ms;
-    rep.counters["cut_apply_ms"] = apply_ms;
+    report(rep, mls, exchanges);
     return rep;
   }
 
   void saveCheckpoint() override {
     saved_state_ = state_;
     saved_time_ = time_;
-    saved_cuts_ = cuts_done_;
+    saved_version_ = version_;
+    saved_graspers_ = graspers_;
+    if (active_ && active_->region) active_->region->saveCheckpoint();
   }
   void restoreCheckpoint() override {
-    // A checkpoint taken before the cut cannot be restored after it (the topology changed); the guard then
-    // retries from the current state, which the runner treats like a restored one.
+    // A checkpoint taken before a topology change (a conversion or a re-pack) cannot be restored after it; the
+    // guard then retries from the current state, which the runner treats like a restored one.
     time_ = saved_time_;
-    if (saved_cuts_ == cuts_done_) {
+    if (saved_version_ == version_) {
       state_ = saved_state_;
+      graspers_ = saved_graspers_;
       backend_->setState(state_);
+      if (active_ && active_->region) active_->region->restoreCheckpoint();
     }
   }
   void scaleTimeStep(double factor) override {
-    if (factor > 0 && std::isfinite(factor)) substep_scale_ /= factor;
+    if (!(factor > 0) || !std::isfinite(factor)) return;
+    substep_scale_ /= factor;
+    mls_safety_scale_ *= factor;
+    if (active_ && active_->region) active_->region->scaleSafety(factor);
   }
   void currentPositions(std::vector<Vec3d>& out) const override {
     out.resize(state_.positions.size());
     for (std::size_t i = 0; i < out.size(); ++i) out[i] = Vec3d(state_.positions[i]);
   }
-  // Translation skinning: v = v0 + sum_j w_j (x_j - c_j) over the vertex's bound spheres.
+  // Translation skinning: v = v0 + sum_j w_j u_j over the vertex's bound spheres, u_j the sphere's displacement;
+  // during a stroke a converted sphere's displacement is eq. 13 over its points (the piece nearest the vertex).
   bool currentSurface(TriangleMesh& out) const override {
     out = rest_surface_;
     const int k = skin_.k;
     for (std::size_t v = 0; v < out.vertices.size(); ++v) {
       Vec3d d;
-      for (int j = 0; j < k; ++j) {
-        const int s = skin_.sphere[v * k + j];
-        d += (Vec3d(state_.positions[s]) - spheres_.rest_centers[s]) * skin_.weight[v * k + j];
-      }
+      for (int j = 0; j < k; ++j)
+        d += skinSphereDisplacement(skin_.sphere[v * k + j], skin_.rest_vertices[v]) * skin_.weight[v * k + j];
       out.vertices[v] = skin_.rest_vertices[v] + d;
     }
     return true;
@@ -179,31 +259,59 @@ class DissectionSimulation final : public SimulationModel {
     MemoryReport m = backend_->memory();
     m.host_bytes += model_.size() * (sizeof(Vec3<T>) * 3 + sizeof(T) * 4) +
                     rest_surface_.vertices.size() * sizeof(Vec3d) + rest_surface_.triangles.size() * 12;
+    if (active_ && active_->region && active_->region->solver()) {
+      const MemoryReport r = active_->region->solver()->memory();
+      m.host_bytes += r.host_bytes;
+      m.device_bytes += r.device_bytes;
+    }
     return m;
   }
   void cutWallTriangles(std::vector<std::uint8_t>& out) const override { out = wall_flags_; }
-  // The viewer's layers: spheres, fixed spheres, the mouse grasp (host/pbd_render_layers.h), the swept
-  // surfaces (applied cuts, the running stroke) and the last cut's nodal points (host/dissection_render_layers.h).
+  // The viewer's layers: spheres, fixed spheres, the spheres the graspers and the mouse hold
+  // (host/pbd_render_layers.h), the swept surfaces of the applied cuts and of the stroke in progress carried by the
+  // spheres (host/dissection_render_layers.h), and, while a stroke is in the tissue, the nodal points where the
+  // MLS solver has them now (they go back to zero when the stroke ends).
   void renderLayers(RenderLayers& out) const override {
     out = RenderLayers{};
     appendPbdSpheres(state_, out);
     appendPbdFixed(model_, state_, out);
-    PbdFrameInput<T> in;
-    appendMouseAttachments(mouse_, in);
-    appendAttachmentLayers(in, state_, params_.xpbd, mouse_.tip(), out);
-    std::vector<const SweptSurface*> swept;
-    for (const SweptSurface& c : earlier_cuts_) swept.push_back(&c);
-    if (!cut_applied_) swept.push_back(&swept_);
-    swept.push_back(&stroke_);
-    cut_layers_.update(swept, last_nodal_, earlier_cuts_.empty() ? nullptr : &earlier_cuts_.back(), spheres_);
+    // The held spheres as the frame's input is assembled: scripted graspers first, then the mouse's others; a
+    // kinematic (interface) sphere is held by its points, not by a grasp (coupledFrame skips its attachment).
+    const auto held = [&](const PbdFrameInput<T>& in, std::size_t from) {
+      PbdFrameInput<T> o;
+      for (std::size_t k = from; k < in.attach_ids.size(); ++k) {
+        if (coupled() && isKinematic(in.attach_ids[k])) continue;
+        o.attach_ids.push_back(in.attach_ids[k]);
+        o.attach_from.push_back(in.attach_from[k]);
+        o.attach_to.push_back(in.attach_to[k]);
+        o.attach_compliance.push_back(in.attach_compliance[k]);
+      }
+      return o;
+    };
+    PbdFrameInput<T> all;
+    for (const Grasper& g : graspers_) {
+      if (!g.holding()) continue;
+      const Vec3d tip = toolPoseAt(g.tool(), time_).position;
+      PbdFrameInput<T> one;
+      g.appendAttachments(tip, tip, one);
+      appendAttachmentLayers(held(one, 0), state_, params_.xpbd, tip, out);
+      g.appendAttachments(tip, tip, all);
+    }
+    const std::size_t scripted = all.attach_ids.size();
+    appendMouseAttachments(mouse_, all);
+    appendAttachmentLayers(held(all, scripted), state_, params_.xpbd, mouse_.tip(), out);
+    std::vector<const SweptSurface*> swept = earlierCuts();
+    if (active_) swept.push_back(&active_->swept);
+    cut_layers_.update(swept, spheres_);
     cut_layers_.apply(out.sphere_centres, out);
+    if (coupled() && active_->region->solver()) active_->region->solver()->positions(out.nodal_points);
   }
 
   ToolSupport toolSupport() const override { return {true, true}; }
   // Grasp & drag (host/interactive_tool.h) and the mouse scalpel: each blade pose is taken back to the rest
-  // configuration (restPointFromCurrent: the material point under it) and extends the stroke's swept
-  // surface; Release applies the cut exactly as the scripted scalpel's end does (applyCut). A cut changes
-  // the sphere indices, so it releases any grasp.
+  // configuration (restPointFromCurrent: the material point under it) and extends the stroke exactly as the
+  // scripted scalpel does (spheres it reaches become nodal points, simulated in the frames that follow);
+  // Release ends the stroke (re-packing). A conversion changes the sphere indices, so it releases any grasp.
   ToolResult applyTool(const ToolEvent& e) override {
     std::vector<Vec3d> x(model_.size());
     for (std::size_t i = 0; i < x.size(); ++i) x[i] = Vec3d(state_.positions[i]);
@@ -212,7 +320,7 @@ class DissectionSimulation final : public SimulationModel {
       std::vector<std::uint8_t> movable(model_.size());
       for (std::size_t i = 0; i < r.size(); ++i) {
         r[i] = double(state_.radii[i]);
-        movable[i] = model_.inv_mass[i] > T(0) ? 1 : 0;
+        movable[i] = model_.inv_mass[i] > T(0) && !isKinematic(std::int32_t(i)) ? 1 : 0;
       }
       return mouse_.apply(e, x, r, movable);
     }
@@ -221,146 +329,563 @@ class DissectionSimulation final : public SimulationModel {
     const BladePose world = bladeFromToolEvent(e);
     const BladePose rest{restPointFromCurrent(world.base, x, spheres_.rest_centers),
                          restPointFromCurrent(world.tip, x, spheres_.rest_centers)};
-    if (e.phase == ToolPhase::Press || stroke_.vertices.empty()) {
-      stroke_ = SweptSurface{};
-      stroke_.vertices = {rest.base, rest.tip};
+    const auto c0 = std::chrono::steady_clock::now();
+    if (e.phase == ToolPhase::Press || !active_ || active_->scripted >= 0) {
+      if (active_) finishStroke();
+      beginStroke(rest, -1);
     } else {
-      const std::size_t n = stroke_.vertices.size();
-      // A blade that has not moved adds nothing (extendSweptSurface also drops zero-area triangles).
-      if (norm(rest.base - stroke_.vertices[n - 2]) > 1e-9 || norm(rest.tip - stroke_.vertices[n - 1]) > 1e-9)
-        extendSweptSurface(stroke_, rest);
+      extendStroke(rest);
     }
+    mouse_convert_ms_ += msSince(c0);
     if (e.phase == ToolPhase::Release) {
-      const auto c0 = std::chrono::steady_clock::now();
-      if (!stroke_.empty()) {
-        applyCut(stroke_);
+      const auto c1 = std::chrono::steady_clock::now();
+      const bool swept = !active_->swept.empty();
+      finishStroke();
+      if (swept)
         res.cut_applied = true;
-      } else {
+      else
         res.message = "the stroke swept no surface (the blade did not move)";
-      }
-      stroke_ = SweptSurface{};
-      mouse_cut_ms_ += msSince(c0);
+      mouse_cut_ms_ += msSince(c1);
     }
     res.grasped = mouse_.held();
     return res;
   }
 
  private:
-  BladePose blade(double t) const {
-    const ToolPose pose = toolPoseAt(scalpel_, t);
-    const Vec3d d = pose.direction * (0.5 * scalpel_.length / std::max(norm(pose.direction), 1e-300));
+  struct Timers {
+    double sweep_ms = 0, convert_ms = 0, exchange_ms = 0, repack_ms = 0, apply_ms = 0;
+  };
+
+  static pbd::CapsuleCollider<T> capsule(const pbd::CapsuleCollider<double>& c) {
+    pbd::CapsuleCollider<T> o;
+    o.a = Vec3<T>(c.a);
+    o.b = Vec3<T>(c.b);
+    o.radius = T(c.radius);
+    return o;
+  }
+
+  // Programmatic scenes bypass the JSON loader: the same ranges, the same keys.
+  static void validateCutting(const Scene& s) {
+    const CuttingSpec& c = s.cutting;
+    const auto range = [&](int v, int lo, int hi, const char* key) {
+      if (v < lo || v > hi)
+        throw InputError(s.file, std::string("cutting.") + key,
+                         "must lie in [" + std::to_string(lo) + ", " + std::to_string(hi) + "] (got " + std::to_string(v) + ")");
+    };
+    range(c.samples_per_diameter, 2, 12, "samples_per_diameter");
+    range(c.exchanges_per_frame, 1, 64, "exchanges_per_frame");
+    range(c.pbd_substeps_per_exchange, 1, 64, "pbd_substeps_per_exchange");
+    range(c.pbd_iterations, 0, 1000, "pbd_iterations");
+    range(c.mls_substeps_per_exchange, 0, 100000, "mls_substeps_per_exchange");
+    if (!(c.repack_boundary_offset > 0 && c.repack_boundary_offset < 1))
+      throw InputError(s.file, "cutting.repack_boundary_offset", "must lie in (0, 1)");
+    if (!(c.repack_spacing_factor > 0 && c.repack_spacing_factor <= 4))
+      throw InputError(s.file, "cutting.repack_spacing_factor", "must lie in (0, 4]");
+    if (!(c.repack_sphere_budget > 0 && c.repack_sphere_budget <= 8))
+      throw InputError(s.file, "cutting.repack_sphere_budget", "must lie in (0, 8]");
+  }
+
+  // A fixed MLS substep count is checked against the nodal points' nominal stable step (the finest lattice,
+  // the material's P-wave speed; section 5.1 eq. 10): a step above it is refused as bad input. At run time the
+  // count is raised where the points' actual limit (densities, deformation, coupling springs) needs more.
+  void checkFixedMlsSubsteps() const {
+    const int fixed = scene_.cutting.mls_substeps_per_exchange;
+    if (fixed <= 0) return;
+    double rmin = std::numeric_limits<double>::infinity();
+    for (double r : spheres_.rest_radii) rmin = std::min(rmin, r);
+    const double spacing = 2.0 * rmin / scene_.cutting.samples_per_diameter;
+    const MlsCoefficients<double> c = mlsCoefficients(region_.mls.material);
+    const double stable = mlsStableTimeStep(c.mu, c.lambda, c.k_volume, scene_.material.density, spacing);
+    const double dt = scene_.solver.frame_dt / scene_.cutting.exchanges_per_frame / fixed;
+    if (dt > stable)
+      throw InputError(scene_.file, "cutting.mls_substeps_per_exchange",
+                       std::to_string(fixed) + " substeps give dt = " + std::to_string(dt) +
+                           " s, above the nodal points' stable step " + std::to_string(stable) + " s (needs at least " +
+                           std::to_string(int(std::ceil(scene_.solver.frame_dt / scene_.cutting.exchanges_per_frame / stable))) +
+                           "); use more, or 0 to choose automatically");
+  }
+
+  BladePose blade(const ToolSpec& tool, double t) const {
+    const ToolPose pose = toolPoseAt(tool, t);
+    const Vec3d d = pose.direction * (0.5 * tool.length / std::max(norm(pose.direction), 1e-300));
     return {pose.position - d, pose.position + d};
   }
 
-  // (Re)builds the PBD model from spheres_; `carry` maps new sphere -> old state index (-1: new sphere), and a
-  // new sphere takes its state from the nearest kept one not across `cut`.
-  void rebuild(const std::vector<std::int32_t>* carry, const SweptSurface* cut = nullptr) {
+  bool coupled() const { return active_ && active_->region && active_->region->active(); }
+  bool isKinematic(std::int32_t pbd) const {
+    if (!active_ || !active_->region) return false;
+    const std::int32_t b = active_->pbd_to_base[std::size_t(pbd)];
+    return active_->region->role(b) == SphereRole::Interface;
+  }
+
+  // --- Strokes --------------------------------------------------------------------------------------------
+
+  void scriptedStrokes(double t0, double t1) {
+    for (std::size_t k = 0; k < strokes_.size(); ++k) {
+      ScriptedStroke& s = strokes_[k];
+      if (s.done || t1 < s.start) continue;
+      const auto c0 = std::chrono::steady_clock::now();
+      if (!s.begun) {
+        if (active_) finishStroke();  // a mouse stroke still open ends here
+        s.begun = true;
+        beginStroke(blade(s.tool, std::max(t0, s.start)), int(k));
+      }
+      extendStroke(blade(s.tool, std::min(t1, s.end)));
+      timers_.sweep_ms += msSince(c0) - last_convert_ms_;
+      timers_.convert_ms += last_convert_ms_;
+      if (t1 >= s.end) {
+        s.done = true;
+        const auto c1 = std::chrono::steady_clock::now();
+        finishStroke();
+        timers_.apply_ms += msSince(c1);
+      }
+    }
+  }
+
+  void beginStroke(const BladePose& pose, int scripted) {
+    active_ = std::make_unique<ActiveStroke>();
+    active_->scripted = scripted;
+    active_->base = spheres_;
+    active_->swept.vertices = {pose.base, pose.tip};
+    active_->base_to_pbd.resize(spheres_.size());
+    active_->pbd_to_base.resize(spheres_.size());
+    for (std::size_t i = 0; i < spheres_.size(); ++i) active_->base_to_pbd[i] = active_->pbd_to_base[i] = std::int32_t(i);
+    last_convert_ms_ = 0;
+  }
+
+  // Extends the swept surface to `pose`; spheres the new strip enters become nodal points (with their PBD-role
+  // neighbours as interface spheres), or, when none does, supports crossing the new strip are cut.
+  void extendStroke(const BladePose& pose) {
+    last_convert_ms_ = 0;
+    ActiveStroke& a = *active_;
+    const std::size_t nv = a.swept.vertices.size(), nt = a.swept.triangles.size();
+    if (norm(pose.base - a.swept.vertices[nv - 2]) <= 1e-9 && norm(pose.tip - a.swept.vertices[nv - 1]) <= 1e-9) return;
+    extendSweptSurface(a.swept, pose);
+    if (a.swept.triangles.size() == nt) return;
+    SweptSurface fresh;  // the new strip alone
+    fresh.vertices.assign(a.swept.vertices.end() - 4, a.swept.vertices.end());
+    for (std::size_t t = nt; t < a.swept.triangles.size(); ++t) {
+      const auto& tri = a.swept.triangles[t];
+      fresh.triangles.push_back({tri[0] - int(nv) + 2, tri[1] - int(nv) + 2, tri[2] - int(nv) + 2});
+    }
+    std::vector<std::int32_t> hit = findCutSpheres(fresh, a.base.rest_centers, a.base.rest_radii);
+    if (a.region) hit.erase(std::remove_if(hit.begin(), hit.end(), [&](std::int32_t b) { return a.region->role(b) == SphereRole::Cut; }), hit.end());
+    const auto c0 = std::chrono::steady_clock::now();
+    if (!hit.empty()) {
+      if (!a.region) a.region = std::make_unique<NodalRegion>(a.base, regionSettings(), earlierCuts());
+      a.region->convert(hit, [&](std::int32_t b) { return sphereState(b); }, a.swept);
+      rebuildStrokePbd();
+    } else if (a.region && a.region->active()) {
+      a.region->cutSupports(fresh);
+    }
+    last_convert_ms_ = msSince(c0);
+  }
+
+  NodalRegionSettings regionSettings() const {
+    NodalRegionSettings s = region_;
+    s.mls.safety = std::min(1.0, s.mls.safety * mls_safety_scale_);  // the guard's retries (scaleTimeStep)
+    return s;
+  }
+  std::vector<const SweptSurface*> earlierCuts() const {
+    std::vector<const SweptSurface*> out;
+    for (const SweptSurface& c : earlier_cuts_) out.push_back(&c);
+    return out;
+  }
+
+  // A base sphere's current state from the PBD model (it is still there when it is converted).
+  ConvertedSphereState sphereState(std::int32_t b) const {
+    ConvertedSphereState s;
+    const std::int32_t i = active_->base_to_pbd[std::size_t(b)];
+    s.position = Vec3d(state_.positions[std::size_t(i)]);
+    s.velocity = Vec3d(state_.velocities[std::size_t(i)]);
+    if (std::size_t(i) < state_.rotations.size()) s.rotation = Mat3d(pbd::quatToMatrix(state_.rotations[std::size_t(i)]));
+    return s;
+  }
+
+  // The PBD model during a stroke: the base spheres that are not cut (interface spheres stay, kinematic).
+  void rebuildStrokePbd() {
+    ActiveStroke& a = *active_;
+    MetaballModel m;
+    std::vector<std::int32_t> base_to_pbd(a.base.size(), -1), pbd_to_base;
+    for (std::size_t b = 0; b < a.base.size(); ++b) {
+      if (a.region->role(std::int32_t(b)) == SphereRole::Cut) continue;
+      base_to_pbd[b] = std::int32_t(m.size());
+      pbd_to_base.push_back(std::int32_t(b));
+      m.rest_centers.push_back(a.base.rest_centers[b]);
+      m.rest_radii.push_back(a.base.rest_radii[b]);
+      m.masses.push_back(a.base.masses[b]);
+    }
+    for (std::size_t l = 0; l < a.base.links.size(); ++l) {
+      const std::int32_t i = base_to_pbd[std::size_t(a.base.links[l][0])], j = base_to_pbd[std::size_t(a.base.links[l][1])];
+      if (i < 0 || j < 0) continue;  // a link never crosses the stroke without entering one of its spheres
+      m.links.push_back({std::min(i, j), std::max(i, j)});
+      m.link_rest_lengths.push_back(a.base.link_rest_lengths[l]);
+    }
+    std::vector<Vec3d> x(m.size()), v(m.size());
+    std::vector<std::int32_t> old_to_new(model_.size(), -1);
+    for (std::size_t i = 0; i < m.size(); ++i) {
+      const std::int32_t old = a.base_to_pbd[std::size_t(pbd_to_base[i])];
+      x[i] = Vec3d(state_.positions[std::size_t(old)]);
+      v[i] = Vec3d(state_.velocities[std::size_t(old)]);
+      old_to_new[std::size_t(old)] = std::int32_t(i);
+    }
+    a.base_to_pbd = std::move(base_to_pbd);
+    a.pbd_to_base = std::move(pbd_to_base);
+    mouse_.release();  // sphere indices change
+    setSpheres(std::move(m), x, v, old_to_new);
+  }
+
+  // The blade leaves: Algorithm 1 on the cut spheres' points, interface spheres back to PBD (eq. 13 state), the
+  // surface split, the PBD model rebuilt, the skin re-bound. The nodal points go back to zero.
+  void finishStroke() {
+    std::unique_ptr<ActiveStroke> a = std::move(active_);
+    ++cuts_done_;
+    if (a->swept.empty()) return;
+    const auto c0 = std::chrono::steady_clock::now();
+    std::vector<const SweptSurface*> cuts{&a->swept};
+    for (const SweptSurface& c : earlier_cuts_) cuts.push_back(&c);
+    last_points_ = 0;
+    last_added_ = 0;
+    if (a->region && a->region->active()) {
+      last_points_ = a->region->pointCount();
+      NodalRegionFinal fin = a->region->finish();
+      // New model: base spheres not cut (PBD and interface), then the re-packed ones.
+      MetaballModel m;
+      std::vector<std::int32_t> base_to_new(a->base.size(), -1);
+      std::vector<Vec3d> x, v;
+      std::vector<std::int32_t> old_to_new(model_.size(), -1);
+      std::map<std::int32_t, std::size_t> iface;
+      for (std::size_t k = 0; k < fin.interface_ids.size(); ++k) iface[fin.interface_ids[k]] = k;
+      for (std::size_t b = 0; b < a->base.size(); ++b) {
+        const SphereRole role = a->region->role(std::int32_t(b));
+        if (role == SphereRole::Cut) continue;
+        base_to_new[b] = std::int32_t(m.size());
+        m.rest_centers.push_back(a->base.rest_centers[b]);
+        m.rest_radii.push_back(a->base.rest_radii[b]);
+        m.masses.push_back(a->base.masses[b]);
+        const std::int32_t pbd = a->base_to_pbd[b];
+        old_to_new[std::size_t(pbd)] = std::int32_t(m.size() - 1);
+        const auto it = iface.find(std::int32_t(b));
+        if (it != iface.end()) {
+          x.push_back(fin.interface_position[it->second]);  // eq. 13
+          v.push_back(fin.interface_velocity[it->second]);
+        } else {
+          x.push_back(Vec3d(state_.positions[std::size_t(pbd)]));
+          v.push_back(Vec3d(state_.velocities[std::size_t(pbd)]));
+        }
+      }
+      for (std::size_t l = 0; l < a->base.links.size(); ++l) {
+        const std::int32_t i = base_to_new[std::size_t(a->base.links[l][0])], j = base_to_new[std::size_t(a->base.links[l][1])];
+        if (i < 0 || j < 0) continue;
+        m.links.push_back({std::min(i, j), std::max(i, j)});
+        m.link_rest_lengths.push_back(a->base.link_rest_lengths[l]);
+      }
+      RepackSettings rs;
+      rs.boundary_offset = scene_.cutting.repack_boundary_offset;
+      rs.spacing_factor = scene_.cutting.repack_spacing_factor;
+      rs.sphere_budget = scene_.cutting.repack_sphere_budget;
+      rs.reference_mass = reference_mass_;
+      rs.max_radius = 1.5 * reference_radius_;
+      rs.earlier_cuts.assign(cuts.begin() + 1, cuts.end());
+      const RepackResult r = packNodalPoints(fin.points, a->swept, rs);
+      last_repack_ = r;
+      // New spheres take the mass-weighted mean displacement and velocity of the points they took.
+      std::vector<Vec3d> nu(r.centres.size()), nv(r.centres.size());
+      std::vector<double> nm(r.centres.size(), 0.0);
+      for (std::size_t i = 0; i < fin.points.size(); ++i) {
+        if (fin.points.context[i]) continue;
+        const std::size_t s = std::size_t(r.owner[i]);
+        nu[s] += fin.displacement[i] * fin.points.mass[i];
+        nv[s] += fin.velocity[i] * fin.points.mass[i];
+        nm[s] += fin.points.mass[i];
+      }
+      for (std::size_t s = 0; s < r.centres.size(); ++s) {
+        x.push_back(r.centres[s] + nu[s] * (1.0 / nm[s]));
+        v.push_back(nv[s] * (1.0 / nm[s]));
+      }
+      appendRepackedSpheres(m, r, cuts);
+      last_added_ = r.centres.size();
+      timers_.repack_ms += msSince(c0);
+      surfaceAfterCut(a->swept);
+      earlier_cuts_.push_back(a->swept);
+      setSpheres(std::move(m), x, v, old_to_new);
+    } else {
+      surfaceAfterCut(a->swept);
+      earlier_cuts_.push_back(a->swept);
+    }
+    bindSurface();
+    surface_components_ = analyzeMesh(rest_surface_).components;
+    sphere_components_ = sphereGraphComponents(spheres_);
+  }
+
+  // The surface: split along the swept surface whatever its shape (a partial cut leaves one closed mesh with a
+  // slit), at every cut; CGAL walls (host/cut_surface_split.h). A blade that never crossed the surface (or a split
+  // that failed: CutSplitFailed) leaves it as it was.
+  void surfaceAfterCut(const SweptSurface& cut) {
+    if (applySurfaceCut(surface_, cut).split) {
+      rest_surface_ = surface_.mesh;
+      wall_flags_ = surface_.wall;
+      surface_split_ = true;
+    }
+  }
+
+  // --- PBD model ------------------------------------------------------------------------------------------
+
+  // Replaces the PBD model by `m` with the given positions and velocities; old_to_new maps the previous PBD
+  // indices (grasps follow their spheres).
+  void setSpheres(MetaballModel m, const std::vector<Vec3d>& x, const std::vector<Vec3d>& v,
+                  const std::vector<std::int32_t>& old_to_new) {
     MetaballPbdOptions opt;
     opt.youngs_modulus = scene_.material.youngs_modulus;
     opt.stretch_compliance = scene_.pbd.stretch_compliance;
     opt.laplacian_compliance = scene_.pbd.laplacian_compliance;
     opt.fixed = scene_.fixed;
     opt.volume_samples = scene_.pbd.volume_preservation ? 64 : 0;
-    const PbdState<T> old = state_;
+    spheres_ = std::move(m);
     model_ = buildMetaballPbdModel<T>(spheres_, opt);
     backend_->setModel(model_);
     backend_->getState(state_);
-    if (carry) {
-      // Kept spheres keep their state; a new sphere takes the displacement and velocity of the nearest kept
-      // sphere on its side of the cut (the nodal points it replaces moved with their neighbours).
-      for (std::size_t i = 0; i < carry->size(); ++i)
-        if ((*carry)[i] >= 0) {
-          state_.positions[i] = old.positions[(*carry)[i]];
-          state_.velocities[i] = old.velocities[(*carry)[i]];
-        }
-      for (std::size_t i = 0; i < carry->size(); ++i) {
-        if ((*carry)[i] >= 0) continue;
-        double best = std::numeric_limits<double>::infinity();
-        int src = -1;
-        const Vec3d c = spheres_.rest_centers[i];
-        for (std::size_t j = 0; j < carry->size(); ++j) {
-          if ((*carry)[j] < 0) continue;
-          const double d = norm2(spheres_.rest_centers[j] - c);
-          if (d < best && !(cut && segmentCrossesSweptSurface(*cut, c, spheres_.rest_centers[j]))) best = d, src = int(j);
-        }
-        if (src >= 0) {
-          state_.positions[i] = Vec3<T>(c + (Vec3d(state_.positions[src]) - spheres_.rest_centers[src]));
-          state_.velocities[i] = state_.velocities[src];
-        }
-      }
-      backend_->setState(state_);
+    for (std::size_t i = 0; i < spheres_.size(); ++i) {
+      if (model_.inv_mass[i] == T(0)) continue;  // fixed spheres stay at rest
+      state_.positions[i] = Vec3<T>(x[i]);
+      state_.velocities[i] = Vec3<T>(v[i]);
     }
-    bindSurface();
+    backend_->setState(state_);
+    for (Grasper& g : graspers_) g.remap(old_to_new);
+    ++version_;
   }
 
   // Binds the surface to the spheres. After a cut each vertex binds only to spheres it sees without crossing
   // any cut (no skin weight across a swept surface; host/cut_surface_state.h).
   void bindSurface() {
-    const SkinBinding b = earlier_cuts_.empty() ? bindSkin(rest_surface_, spheres_, 4, scene_.file)
-                                                : bindSkinAcrossCuts(surface_, spheres_, earlier_cuts_, 4, scene_.file);
+    skin_rest_centres_ = spheres_.rest_centers;
+    const int k = std::min<int>(4, int(spheres_.size()));
+    const SkinBinding b = earlier_cuts_.empty() ? bindSkin(rest_surface_, spheres_, k, scene_.file)
+                                                : bindSkinAcrossCuts(surface_, spheres_, earlier_cuts_, k, scene_.file);
     skin_ = Skin{b.k, b.rest_vertices, b.sphere, b.weight};
   }
 
-  // The cut pipeline of section 5 for one finished swept surface (scripted or drawn with the mouse).
-  void applyCut(const SweptSurface& cut) {
-    ++cuts_done_;
-    if (cut.empty()) return;
-    mouse_.release();  // sphere indices change
-    SphereCutResult r = cutSpheres(spheres_, cut);
-    double rmax = 0.0;
-    for (auto i : r.cut) rmax = std::max(rmax, spheres_.rest_radii[i]);
-    last_points_ = r.points.size();
-    last_nodal_ = r.points;
-    // Earlier cuts: the new spheres are grouped and linked only on their own side of each (successive cuts).
-    last_added_ = repackSpheres(r.spheres, r.points, cut, rmax, RepackOptions{}, earlier_cuts_);
-    earlier_cuts_.push_back(cut);
-    std::vector<std::int32_t> carry(r.kept.begin(), r.kept.end());
-    carry.resize(r.spheres.size(), -1);
-    // The surface: split along the swept surface whatever its shape (a partial cut leaves one closed mesh with
-    // a slit), at every cut; CGAL walls (host/cut_surface_split.h).
-    if (!surface_split_) surface_ = cutSurfaceState(rest_surface_);
-    if (applySurfaceCut(surface_, cut).split) {
-      rest_surface_ = surface_.mesh;
-      wall_flags_ = surface_.wall;
-      surface_split_ = true;
+  // The displacement of skin sphere s (an index of the model the skin was bound to: during a stroke, the
+  // stroke's base) seen from rest vertex p.
+  Vec3d skinSphereDisplacement(std::int32_t s, const Vec3d& p) const {
+    std::int32_t i = s;
+    if (active_) {
+      Vec3d u;
+      if (active_->region && active_->region->role(s) == SphereRole::Cut && active_->region->sphereDisplacement(s, p, u))
+        return u;
+      i = active_->base_to_pbd[std::size_t(s)];
+      if (i < 0) return Vec3d();
     }
-    surface_components_ = analyzeMesh(rest_surface_).components;
-    spheres_ = std::move(r.spheres);
-    sphere_components_ = sphereGraphComponents(spheres_);
-    rebuild(&carry, &cut);
+    return Vec3d(state_.positions[std::size_t(i)]) - skin_rest_centres_[std::size_t(s)];
+  }
+
+  // --- Graspers -------------------------------------------------------------------------------------------
+
+  void updateGraspers(double t0) {
+    for (Grasper& g : graspers_) {
+      if (g.holding() && t0 >= g.releaseTime()) g.release();
+      if (!g.holding() && !g.finished() && t0 >= g.closeTime() && t0 < g.releaseTime()) {
+        std::vector<Vec3d> c(model_.size());
+        std::vector<double> r(model_.size());
+        std::vector<std::uint8_t> movable(model_.size());
+        for (std::size_t i = 0; i < model_.size(); ++i) {
+          c[i] = Vec3d(state_.positions[i]);
+          r[i] = double(state_.radii[i]);
+          movable[i] = model_.inv_mass[i] > T(0) && !isKinematic(std::int32_t(i)) ? 1 : 0;
+        }
+        g.grasp(toolPoseAt(g.tool(), t0).position, c, r, movable);
+      }
+    }
+  }
+
+  // --- The coupled frame (section 5.3) --------------------------------------------------------------------
+
+  // K = cutting.exchanges_per_frame intervals of frame_dt / K. Each: the springs' anchors from the PBD spheres
+  // (held over the interval), the nodal points advance (MLS, eqs. 4-10, with the springs' share eqs. 11-12 on
+  // the interface spheres' points every substep), then the interface spheres take their eq. 13 positions as
+  // kinematic targets of the PBD step over the same interval (pbd_substeps_per_exchange substeps of
+  // cutting.pbd_iterations iterations). Tools and grasps are interpolated over the frame.
+  void coupledFrame(double frame_dt, const PbdFrameInput<T>& in, PbdFrameStats& st, MlsFrameStats& mls, bool& mls_finite,
+                    int& exchanges, int& pbd_substeps) {
+    ActiveStroke& a = *active_;
+    NodalRegion& region = *a.region;
+    const int K = scene_.cutting.exchanges_per_frame;
+    const double dt = frame_dt / K;
+    PbdStepParams<T> p = params_;
+    p.frame_dt = T(dt);
+    p.substeps = std::max(1, int(std::ceil(scene_.cutting.pbd_substeps_per_exchange * substep_scale_ - 1e-9)));
+    if (scene_.cutting.pbd_iterations > 0) p.iterations = scene_.cutting.pbd_iterations;
+    std::vector<std::int32_t> ids;
+    std::vector<Vec3d> targets;
+    region.interfacePositions(ids, targets);
+    std::vector<Vec3<T>> from(ids.size());
+    for (std::size_t k = 0; k < ids.size(); ++k) from[k] = state_.positions[std::size_t(a.base_to_pbd[std::size_t(ids[k])])];
+    std::vector<char> kinematic(model_.size(), 0);
+    for (std::int32_t b : ids) kinematic[std::size_t(a.base_to_pbd[std::size_t(b)])] = 1;
+    const auto pbdPosition = [&](std::int32_t b) { return Vec3d(state_.positions[std::size_t(a.base_to_pbd[std::size_t(b)])]); };
+    st = PbdFrameStats{};
+    for (int e = 0; e < K; ++e) {
+      const MlsFrameStats ms = region.advance(dt, scene_.cutting.mls_substeps_per_exchange, pbdPosition);
+      mls.substeps += ms.substeps;
+      mls.ms_integrate += ms.ms_integrate;
+      mls.ms_coupling += ms.ms_coupling;
+      mls.ms_stress += ms.ms_stress;
+      mls.ms_forces += ms.ms_forces;
+      mls.ms_reduce += ms.ms_reduce;
+      mls.totals = ms.totals;
+      if (!ms.totals.finite) {
+        mls_finite = false;
+        break;
+      }
+      const auto c0 = std::chrono::steady_clock::now();
+      region.interfacePositions(ids, targets);  // eq. 13
+      PbdFrameInput<T> ie;
+      const T s0 = T(double(e) / K), s1 = T(double(e + 1) / K);
+      for (std::size_t k = 0; k < ids.size(); ++k) {
+        ie.kinematic_ids.push_back(a.base_to_pbd[std::size_t(ids[k])]);
+        ie.kinematic_from.push_back(from[k]);
+        ie.kinematic_to.push_back(Vec3<T>(targets[k]));
+        from[k] = Vec3<T>(targets[k]);
+      }
+      for (std::size_t k = 0; k < in.attach_ids.size(); ++k) {
+        if (kinematic[std::size_t(in.attach_ids[k])]) continue;  // held by its points now
+        ie.attach_ids.push_back(in.attach_ids[k]);
+        ie.attach_from.push_back(pbd::lerp(in.attach_from[k], in.attach_to[k], s0));
+        ie.attach_to.push_back(pbd::lerp(in.attach_from[k], in.attach_to[k], s1));
+        ie.attach_compliance.push_back(in.attach_compliance[k]);
+      }
+      for (std::size_t k = 0; k < in.tools_from.size(); ++k) {
+        ie.tools_from.push_back(pbd::lerpCapsule(in.tools_from[k], in.tools_to[k], s0));
+        ie.tools_to.push_back(pbd::lerpCapsule(in.tools_from[k], in.tools_to[k], s1));
+      }
+      timers_.exchange_ms += msSince(c0);
+      const PbdFrameStats ps = backend_->advanceFrame(p, ie);
+      addStages(st.stages, ps.stages);
+      st.residual_max = ps.residual_max;
+      st.residual_rms = ps.residual_rms;
+      st.colors = ps.colors;
+      st.iterations += ps.iterations;
+      st.volume_active = ps.volume_active;
+      st.max_radius_ratio = ps.max_radius_ratio;
+      const auto c1 = std::chrono::steady_clock::now();
+      backend_->getState(state_);  // the next exchange's anchors
+      timers_.exchange_ms += msSince(c1);
+      ++exchanges;
+      pbd_substeps += p.substeps;
+      if (!ps.finite) {
+        st.finite = false;
+        st.failure_particle = ps.failure_particle;
+        break;
+      }
+    }
+  }
+
+  // --- Frame report ---------------------------------------------------------------------------------------
+
+  void report(FrameReport& rep, const MlsFrameStats& mls, int exchanges) const {
+    double ke = 0, pe = 0, disp = 0, mass = 0;
+    const NodalRegion* region = coupled() ? active_->region.get() : nullptr;
+    for (std::size_t i = 0; i < model_.size(); ++i) {
+      if (region && isKinematic(std::int32_t(i))) continue;  // its mass and motion are its points'
+      const Vec3d x(state_.positions[i]), x0(model_.rest_positions[i]), v(state_.velocities[i]);
+      ke += 0.5 * double(model_.masses[i]) * norm2(v);
+      pe -= double(model_.masses[i]) * dot(scene_.solver.gravity, x - x0);
+      disp = std::max(disp, norm(x - x0));
+      mass += double(model_.masses[i]);
+    }
+    double spring = 0.0;
+    if (region) {
+      const MlsReduction& r = region->lastReduction();
+      ke += r.kinetic_energy;
+      pe += r.potential_energy;
+      rep.elastic_energy = r.elastic_energy;
+      disp = std::max(disp, r.max_displacement);
+      mass += region->pointMass();
+      spring = region->springEnergy();
+      rep.elastic_energy += spring;
+    }
+    rep.kinetic_energy = ke;
+    rep.potential_energy = pe;
+    rep.max_displacement = disp;
+    std::size_t pending = 0, interface = 0;
+    if (active_ && active_->region)
+      for (std::size_t b = 0; b < active_->base.size(); ++b) {
+        pending += active_->region->role(std::int32_t(b)) == SphereRole::Cut;
+        interface += active_->region->role(std::int32_t(b)) == SphereRole::Interface;
+      }
+    const MlsModelStats* ms = region && region->solver() ? &region->solver()->modelStats() : nullptr;
+    rep.counters["spheres"] = double(model_.size());
+    rep.counters["mass_kg"] = mass;
+    rep.counters["cut_spheres_pending"] = double(pending);
+    rep.counters["interface_spheres"] = double(interface);
+    rep.counters["nodal_points"] = region ? double(region->pointCount()) : 0.0;
+    rep.counters["nodal_max_displacement_m"] = region ? region->lastReduction().max_displacement : 0.0;
+    rep.counters["coupling_springs"] = region ? double(region->springCount()) : 0.0;
+    rep.counters["coupling_spring_energy_j"] = spring;
+    rep.counters["coupling_exchanges"] = double(exchanges);
+    rep.counters["mls_substeps"] = double(mls.substeps);
+    rep.counters["mls_isolated_points"] = ms ? double(ms->isolated) : 0.0;
+    rep.counters["mls_regularised_points"] = ms ? double(ms->regularised) : 0.0;
+    rep.counters["supports_cut"] = region ? double(region->supportsRemoved()) : 0.0;
+    rep.counters["cuts_applied"] = double(cuts_done_);
+    rep.counters["sphere_components"] = double(sphere_components_);
+    rep.counters["links"] = double(spheres_.links.size());
+    int grasped = mouse_.held();
+    for (const Grasper& g : graspers_) grasped += int(g.grasped().size());
+    rep.counters["grasped"] = double(grasped);
+    rep.counters["nodal_points_last_cut"] = double(last_points_);
+    rep.counters["spheres_added_last_cut"] = double(last_added_);
+    rep.counters["repack_groups"] = double(last_repack_.groups);
+    rep.counters["repack_boundary_points"] = double(last_repack_.boundary);
+    rep.counters["repack_medial_points"] = double(last_repack_.medial);
+    rep.counters["repack_middle_points"] = double(last_repack_.middle);
+    rep.counters["repack_packed"] = double(last_repack_.packed);
+    rep.counters["repack_merged"] = double(last_repack_.merged);
+    rep.counters["repack_spacing_m"] = last_repack_.spacing_max;
+    rep.counters["surface_split"] = surface_split_ ? 1.0 : 0.0;
+    rep.counters["surface_components"] = double(surface_components_);
+    rep.counters["sweep_ms"] = timers_.sweep_ms;
+    rep.counters["convert_ms"] = timers_.convert_ms;
+    rep.counters["repack_ms"] = timers_.repack_ms;
+    rep.counters["cut_apply_ms"] = timers_.apply_ms;
   }
 
   Scene scene_;
-  BackendKind kind_;
-  ToolSpec scalpel_;
-  bool has_scalpel_ = false;
-  MetaballModel spheres_;
-  TriangleMesh rest_surface_;
-  CutSurfaceState surface_;  // the split surface with its wall flags and binding probes (after the first split)
-  struct Skin {  // translation skinning slots v * k + j (sphere index into spheres_, weight)
+  std::vector<ScriptedStroke> strokes_;
+  std::vector<Grasper> graspers_, saved_graspers_;
+  std::vector<ToolSpec> probes_;
+  NodalRegionSettings region_;
+  double reference_mass_ = 0.0, reference_radius_ = 0.0;  // kg, m: the organ's mean sphere before any cut
+  std::shared_ptr<const pack::SurfaceDistance> tissue_;   // the organ's rest surface (inside test)
+  MetaballModel spheres_;  // the spheres of the PBD model (during a stroke: the base minus the cut ones)
+  TriangleMesh rest_surface_;  // the surface after every cut so far (rest configuration) = surface_.mesh
+  CutSurfaceState surface_;    // the split surface with its wall flags and binding probes
+  struct Skin {  // translation skinning slots v * k + j (sphere index into the bound model, weight)
     int k = 0;
     std::vector<Vec3d> rest_vertices;
     std::vector<std::int32_t> sphere;
     std::vector<double> weight;
   } skin_;
+  std::vector<Vec3d> skin_rest_centres_;  // rest centres of the model the skin is bound to
   PbdModel<T> model_;
   std::unique_ptr<PbdBackend<T>> backend_;
   PbdStepParams<T> params_;
   PbdState<T> state_, saved_state_;
-  SweptSurface swept_;
-  std::size_t pending_ = 0, last_points_ = 0, last_added_ = 0;
-  bool cut_applied_ = false, surface_split_ = false;
-  int cuts_done_ = 0, saved_cuts_ = 0;  // cuts applied (scripted and mouse)
+  std::unique_ptr<ActiveStroke> active_;
+  std::vector<SweptSurface> earlier_cuts_;  // every stroke finished so far (rest configuration)
+  std::size_t last_points_ = 0, last_added_ = 0;
+  RepackResult last_repack_;
+  bool surface_split_ = false;
+  int cuts_done_ = 0;
+  long version_ = 0, saved_version_ = -1;  // topology version (every PBD rebuild)
   int surface_components_ = 1, sphere_components_ = 1;
   std::vector<std::uint8_t> wall_flags_;  // per rest_surface_ triangle: 1 = cut wall
   PbdMouseGrasp mouse_;                   // the viewer's grasp
-  SweptSurface stroke_;                   // the mouse scalpel's stroke so far (rest configuration)
-  std::vector<SweptSurface> earlier_cuts_;  // every cut applied so far (rest configuration)
-  double mouse_cut_ms_ = 0.0;
-  NodalPoints last_nodal_;                // the last cut's nodal points (rest configuration), for the viewer
-  mutable CutLayerBinding cut_layers_;    // renderLayers' bindings (rebuilt when the cut geometry changes)
+  mutable CutLayerBinding cut_layers_;    // renderLayers' binding of the swept surfaces (rebuilt when they change)
+  Timers timers_;
+  double last_convert_ms_ = 0.0, mouse_cut_ms_ = 0.0, mouse_convert_ms_ = 0.0;
   int base_substeps_ = 4;
-  double substep_scale_ = 1.0;
+  double substep_scale_ = 1.0, mls_safety_scale_ = 1.0;
   double time_ = 0, saved_time_ = 0;
 };
 

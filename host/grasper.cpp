@@ -64,6 +64,20 @@ int Grasper::grasp(const Vec3d& tip, const std::vector<Vec3d>& centers, const st
   return int(ids_.size());
 }
 
+void Grasper::remap(const std::vector<std::int32_t>& new_index) {
+  std::vector<std::int32_t> ids;
+  std::vector<Vec3d> offsets;
+  for (std::size_t k = 0; k < ids_.size(); ++k) {
+    const std::int32_t i = ids_[k];
+    if (i < 0 || std::size_t(i) >= new_index.size() || new_index[std::size_t(i)] < 0) continue;
+    ids.push_back(new_index[std::size_t(i)]);
+    offsets.push_back(offsets_[k]);
+  }
+  ids_ = std::move(ids);
+  offsets_ = std::move(offsets);
+  if (holding_ && ids_.empty()) release();
+}
+
 void Grasper::release() {
   holding_ = false;
   finished_ = true;

@@ -45,6 +45,9 @@ class Grasper {
   int grasp(const Vec3d& tip, const std::vector<Vec3d>& centers, const std::vector<double>& radii,
             const std::vector<std::uint8_t>& movable);
   void release();
+  // The sphere indices changed (a cut rebuilt the model): old index i is now new_index[i]; spheres that are gone
+  // (-1) drop out of the grasp, which lets go when nothing is left.
+  void remap(const std::vector<std::int32_t>& new_index);
 
   // The frame's attachments for a tip moving from tip_from to tip_to (no-op unless holding).
   template <typename T>

@@ -82,7 +82,20 @@ MlsModel<T> buildMlsModel(const MlsBuildInput& in) {
   md.spacing = T(spacing);
   md.support = T(h);
   const T h_t = md.support;
-  md.neighbors = buildMlsRestNeighbors(md.rest, h_t);
+  if (in.neighbors.offsets.empty()) {
+    md.neighbors = buildMlsRestNeighbors(md.rest, h_t);
+  } else {
+    const NeighborLists& l = in.neighbors;
+    require(l.offsets.size() == n + 1 && l.offsets.front() == 0 && std::size_t(l.offsets.back()) == l.indices.size(), in,
+            "neighbors", "CSR offsets must hold one entry per particle plus one, from 0 to the index count");
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::int64_t p = l.offsets[i]; p < l.offsets[i + 1]; ++p) {
+        const std::int32_t j = l.indices[std::size_t(p)];
+        require(j >= 0 && std::size_t(j) < n && std::size_t(j) != i, in, "neighbors",
+                "particle " + std::to_string(i) + ": neighbour index out of range or itself");
+      }
+    md.neighbors = l;
+  }
 
   const double rho0 = in.material.density;
   std::vector<double> mass(n);

@@ -47,6 +47,10 @@ struct MlsBuildInput {
   Vec3d gravity{0, 0, -9.81};         // m/s^2
   double safety = 0.5;                // fraction of the stable step used when substepping, (0, 1]
   std::string source = "<mls>";       // for error messages (scene file)
+  // Optional rest neighbourhoods chosen by the caller (a cut's visibility-filtered supports): CSR over the
+  // particles, symmetric, no self pairs, each pair within the support h. Empty (no offsets): the closed ball of
+  // radius h found by the grid search.
+  NeighborLists neighbors;
 };
 
 // Facts about the rest configuration, computed once per build (reported in metrics).

@@ -1,7 +1,13 @@
 // MLS solver factory: builds the model in the requested precision and picks the CPU or CUDA backend.
 #include "host/mls_solver.h"
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
 #include "cpu_fallback/mls_solver_cpu.h"
+#include "physics/cut_coupling.h"
 #if INCISION_HAVE_CUDA
 #include "kernels/mls_solver_cuda.h"
 #endif
@@ -12,6 +18,46 @@ void MlsSolver::positions(std::vector<Vec3d>& out) const {
   displacements(out);
   const std::vector<Vec3d> rest = restPositions();
   for (std::size_t i = 0; i < out.size(); ++i) out[i] += rest[i];
+}
+
+void validateMlsCouplingGroups(const MlsCouplingGroups& g, std::size_t particles) {
+  const char* f = "coupling";
+  const std::size_t n = g.size();
+  if (g.member_offsets.size() != n + 1 || g.spring_offsets.size() != n + 1)
+    throw InputError(f, "offsets", "need one member and one spring offset per group plus one");
+  if (g.member_offsets.front() != 0 || std::size_t(g.member_offsets.back()) != g.members.size())
+    throw InputError(f, "member_offsets", "must start at 0 and end at the member count");
+  if (g.spring_offsets.front() != 0 || std::size_t(g.spring_offsets.back()) != g.springs() ||
+      g.stiffnesses.size() != g.springs())
+    throw InputError(f, "spring_offsets", "must start at 0 and end at the spring count (one stiffness per spring)");
+  std::vector<char> seen(particles, 0);
+  for (std::size_t k = 0; k < n; ++k) {
+    if (!(g.member_offsets[k + 1] > g.member_offsets[k]))
+      throw InputError(f, "members", "group " + std::to_string(k) + " has no member");
+    if (g.spring_offsets[k + 1] < g.spring_offsets[k]) throw InputError(f, "spring_offsets", "must not decrease");
+    if (!isFinite(g.rest_centres[k])) throw InputError(f, "rest_centres", "not finite");
+  }
+  for (const std::int32_t i : g.members) {
+    if (i < 0 || std::size_t(i) >= particles) throw InputError(f, "members", "particle index out of range");
+    if (seen[std::size_t(i)]) throw InputError(f, "members", "particle " + std::to_string(i) + " is in two groups");
+    seen[std::size_t(i)] = 1;
+  }
+  for (std::size_t s = 0; s < g.springs(); ++s) {
+    if (!(std::isfinite(g.rest_lengths[s]) && g.rest_lengths[s] > 0))
+      throw InputError(f, "rest_lengths", "must be finite and > 0");
+    if (!(std::isfinite(g.stiffnesses[s]) && g.stiffnesses[s] >= 0))
+      throw InputError(f, "stiffnesses", "must be finite and >= 0");
+  }
+}
+
+double mlsCouplingStableStep(const MlsCouplingGroups& g, const std::vector<double>& mass) {
+  double omega = 0.0;
+  for (std::size_t k = 0; k < g.size(); ++k) {
+    double m = 0.0;
+    for (std::int32_t p = g.member_offsets[k]; p < g.member_offsets[k + 1]; ++p) m += mass[std::size_t(g.members[std::size_t(p)])];
+    omega = std::max(omega, couplingGroupOmega(g.stiffnesses.data(), g.spring_offsets[k], g.spring_offsets[k + 1], m));
+  }
+  return omega > 0.0 ? 2.0 / omega : std::numeric_limits<double>::infinity();
 }
 
 std::unique_ptr<MlsSolver> makeMlsSolver(const MlsBuildInput& input, BackendKind backend, Precision precision) {

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -35,8 +36,32 @@ struct MlsFrameStats {
   double ms_stress = 0.0;          // pass 1
   double ms_forces = 0.0;          // pass 2 + second half kick
   double ms_reduce = 0.0;
+  double ms_coupling = 0.0;        // coupling group pass (eqs. 11-13), summed over substeps
   MlsReduction totals;
 };
+
+// Coupling groups of the dissection model (section 5.2, physics/cut_coupling.h): group g is one sphere converted
+// into nodal points, its member particles (each particle in at most one group), its rest centre and the springs
+// that tie it to spheres still simulated by PBD. Every substep the solver computes each group's displacement
+// (eq. 13) and spring force and adds the force's per-member share (eqs. 11-12) to its members.
+struct MlsCouplingGroups {
+  std::vector<std::int32_t> member_offsets{0};  // CSR: group g's particles members[member_offsets[g] .. [g+1])
+  std::vector<std::int32_t> members;
+  std::vector<Vec3d> rest_centres;              // C_a (m, absolute)
+  std::vector<std::int32_t> spring_offsets{0};  // CSR: group g's springs [spring_offsets[g] .. [g+1])
+  std::vector<double> rest_lengths;             // m, > 0
+  std::vector<double> stiffnesses;              // N/m, >= 0
+  std::size_t size() const { return rest_centres.size(); }
+  std::size_t springs() const { return rest_lengths.size(); }
+};
+
+// Throws InputError("coupling", key, reason) on inconsistent CSR arrays, a particle index out of [0, n), a
+// particle in two groups, a group without members, or a non-finite / non-positive spring parameter.
+void validateMlsCouplingGroups(const MlsCouplingGroups& groups, std::size_t particles);
+
+// The explicit limit of the groups' rigid modes on their springs, min over groups of 2 / sqrt(sum k / m_group)
+// (s; m_group the sum of its members' masses, kg); infinity when no group has a spring.
+double mlsCouplingStableStep(const MlsCouplingGroups& groups, const std::vector<double>& masses);
 
 // Upper bound on substeps per frame: beyond it a frame would take minutes; refused as bad input.
 constexpr std::int64_t kMlsMaxSubsteps = 10000000;
@@ -71,9 +96,13 @@ class MlsSolver {
   virtual const MlsModelStats& modelStats() const = 0;
   virtual Vec3d origin() const = 0;                 // rest positions are relative to this (m)
   virtual std::vector<Vec3d> restPositions() const = 0;  // absolute (m)
-  double stableTimeStep() const { return modelStats().stable_dt; }  // s, safety 1, rest state
+  // s, safety 1, rest state; with coupling springs (setCouplingGroups) combined with their limit 2 / omega
+  // as 1 / sqrt(1/dt_e^2 + 1/dt_c^2), below the true limit 2 / sqrt(omega_e^2 + omega_c^2) of both together.
+  double stableTimeStep() const { return withCoupling(modelStats().stable_dt); }
   // The limit at the current deformation (rest limit / sqrt(stiffening) of the last reduction), safety 1.
-  double currentStableTimeStep() const { return stableTimeStep() / std::sqrt(stiffening_ > 1.0 ? stiffening_ : 1.0); }
+  double currentStableTimeStep() const {
+    return withCoupling(modelStats().stable_dt / std::sqrt(stiffening_ > 1.0 ? stiffening_ : 1.0));
+  }
   double safety() const { return safety_; }
   void setSafety(double s) { safety_ = s; }
 
@@ -92,7 +121,7 @@ class MlsSolver {
   virtual void setVelocities(const std::vector<Vec3d>& v) = 0;      // m/s
   virtual void displacements(std::vector<Vec3d>& out) const = 0;
   virtual void velocities(std::vector<Vec3d>& out) const = 0;
-  virtual void forces(std::vector<Vec3d>& out) const = 0;           // elastic forces (N), current u
+  virtual void forces(std::vector<Vec3d>& out) const = 0;           // elastic (+ coupling) forces (N), current u
   virtual void energies(std::vector<double>& out) const = 0;        // v_i psi_i (J), current u
   void positions(std::vector<Vec3d>& out) const;                    // origin + X_i + u_i (m)
 
@@ -100,6 +129,13 @@ class MlsSolver {
   // the next frame (or step() call); release() returns them to free dynamics. Fixed particles stay fixed.
   virtual void setPrescribed(const std::vector<std::int32_t>& particles, const std::vector<Vec3d>& targets) = 0;
   virtual void release(const std::vector<std::int32_t>& particles) = 0;
+
+  // Coupling (dissection): set the groups (replaces any earlier; an empty set switches coupling off), the
+  // anchors (absolute positions of each spring's PBD sphere, m, held until the next call; zero-length springs
+  // before the first call) and read each group's displacement u_a (eq. 13) at the current state.
+  virtual void setCouplingGroups(const MlsCouplingGroups& groups) = 0;
+  virtual void setCouplingAnchors(const std::vector<Vec3d>& anchors) = 0;
+  virtual void couplingDisplacements(std::vector<Vec3d>& out) = 0;
 
   virtual void saveCheckpoint() = 0;
   virtual void restoreCheckpoint() = 0;
@@ -127,11 +163,16 @@ class MlsSolver {
     return st;
   }
   void forgetStiffening() { stiffening_known_ = false; }  // the state was replaced: measure again
+  void setCouplingStableStep(double dt) { coupling_dt_ = dt; }  // s; infinity: no coupling springs
+  double withCoupling(double dt) const {
+    return std::isfinite(coupling_dt_) ? 1.0 / std::sqrt(1.0 / (dt * dt) + 1.0 / (coupling_dt_ * coupling_dt_)) : dt;
+  }
   void noteReduction(const MlsReduction& r) {
     stiffening_ = r.finite ? r.stiffening : stiffening_;
     stiffening_known_ = true;
   }
   double safety_ = 0.5;
+  double coupling_dt_ = std::numeric_limits<double>::infinity();
   double stiffening_ = 1.0;
   bool stiffening_known_ = false;
 };

@@ -105,6 +105,19 @@ struct TearingSpec {
   std::vector<TearingRegionSpec> regions;
 };
 
+// Dissection (models.cutting, issue 6; docs/cutting.md): nodal sampling, the PBD <-> MLS synchronisation of
+// section 5.3 while nodal points exist, and the re-packing of Algorithm 1.
+struct CuttingSpec {
+  int samples_per_diameter = 4;        // [2, 12]: nodal lattice cells across a converted sphere's diameter
+  int exchanges_per_frame = 4;         // [1, 64]: coupling exchanges (forces to the points, eq. 13 back) per frame
+  int pbd_substeps_per_exchange = 1;   // [1, 64]: PBD substeps between two exchanges
+  int pbd_iterations = 0;              // [0, 1000]: PBD iterations per substep while points exist; 0: pbd.iterations
+  int mls_substeps_per_exchange = 0;   // [0, 100000]: 0: as many as the points' stable explicit step needs
+  double repack_boundary_offset = 0.3;   // (0, 1): one-sided neighbourhood (centroid offset / support) = boundary
+  double repack_spacing_factor = 0.5;    // (0, 4]: eq. 14's factor, d = factor * max distance of medial points to the cut
+  double repack_sphere_budget = 1.0;     // (0, 8]: new spheres per converted sphere's mass, per group (merging)
+};
+
 struct OutputSpec {
   int every_frames = 0;         // 0: final state only; N: also every N frames
   bool particles_ply = true;
@@ -128,6 +141,7 @@ struct Scene {
   std::vector<ToolSpec> tools;
   OutputSpec output;
   TearingSpec tearing;
+  CuttingSpec cutting;
 };
 
 }  // namespace inc

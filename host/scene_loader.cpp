@@ -387,6 +387,36 @@ TearingSpec readTearing(const ObjectReader& top) {
   return t;
 }
 
+int intInRange(const ObjectReader& r, const std::string& key, int fallback, int lo, int hi) {
+  const long long v = r.integer(key, fallback);
+  if (v < lo || v > hi)
+    r.fail(key, "must lie in [" + std::to_string(lo) + ", " + std::to_string(hi) + "] (got " + std::to_string(v) + ")");
+  return static_cast<int>(v);
+}
+
+CuttingSpec readCutting(const ObjectReader& top) {
+  CuttingSpec c;
+  if (!top.has("cutting")) return c;
+  const ObjectReader r = top.object("cutting");
+  r.allowOnly({"samples_per_diameter", "exchanges_per_frame", "pbd_substeps_per_exchange", "pbd_iterations",
+               "mls_substeps_per_exchange", "repack_boundary_offset", "repack_spacing_factor", "repack_sphere_budget"});
+  c.samples_per_diameter = intInRange(r, "samples_per_diameter", c.samples_per_diameter, 2, 12);
+  c.exchanges_per_frame = intInRange(r, "exchanges_per_frame", c.exchanges_per_frame, 1, 64);
+  c.pbd_substeps_per_exchange = intInRange(r, "pbd_substeps_per_exchange", c.pbd_substeps_per_exchange, 1, 64);
+  c.pbd_iterations = intInRange(r, "pbd_iterations", c.pbd_iterations, 0, 1000);
+  c.mls_substeps_per_exchange = intInRange(r, "mls_substeps_per_exchange", c.mls_substeps_per_exchange, 0, 100000);
+  c.repack_boundary_offset = r.number("repack_boundary_offset", c.repack_boundary_offset);
+  if (!(c.repack_boundary_offset > 0 && c.repack_boundary_offset < 1))
+    r.fail("repack_boundary_offset", "must lie in (0, 1) (a fraction of the support radius)" + got(c.repack_boundary_offset));
+  c.repack_spacing_factor = r.number("repack_spacing_factor", c.repack_spacing_factor);
+  if (!(c.repack_spacing_factor > 0 && c.repack_spacing_factor <= 4))
+    r.fail("repack_spacing_factor", "must lie in (0, 4] (eq. 14 uses 0.5)" + got(c.repack_spacing_factor));
+  c.repack_sphere_budget = r.number("repack_sphere_budget", c.repack_sphere_budget);
+  if (!(c.repack_sphere_budget > 0 && c.repack_sphere_budget <= 8))
+    r.fail("repack_sphere_budget", "must lie in (0, 8] (new spheres per converted sphere's mass)" + got(c.repack_sphere_budget));
+  return c;
+}
+
 // nlohmann's indented dump puts each element of an array on its own line; a vec3 reads better as
 // [x, y, z]. Joins every array whose elements are all scalars. Safe on strings: a dumped string never
 // holds a raw newline, and the scan only acts on '[' that ends a line.
@@ -433,7 +463,7 @@ Scene parseScene(const std::string& json_text, const std::string& file_label, co
   const nlohmann::json doc = scene_json::parseChecked(json_text, file_label);
   const ObjectReader top(doc, file_label, "");
   top.allowOnly({"name", "description", "duration_s", "geometry", "material", "models", "mls", "pbd", "solver",
-                 "fixed", "tools", "output", "tearing"});
+                 "fixed", "tools", "output", "tearing", "cutting"});
   Scene s;
   s.file = file_label;
   s.name = top.string("name", std::filesystem::path(file_label).stem().string());
@@ -450,6 +480,7 @@ Scene parseScene(const std::string& json_text, const std::string& file_label, co
   s.tools = readTools(top);
   s.output = readOutput(top);
   s.tearing = readTearing(top);
+  s.cutting = readCutting(top);
   return s;
 }
 
@@ -558,6 +589,14 @@ std::string sceneToJson(const Scene& s) {
                    {"random_range", s.tearing.random_range},
                    {"seed", s.tearing.seed},
                    {"regions", regions}};
+  j["cutting"] = J{{"samples_per_diameter", s.cutting.samples_per_diameter},
+                   {"exchanges_per_frame", s.cutting.exchanges_per_frame},
+                   {"pbd_substeps_per_exchange", s.cutting.pbd_substeps_per_exchange},
+                   {"pbd_iterations", s.cutting.pbd_iterations},
+                   {"mls_substeps_per_exchange", s.cutting.mls_substeps_per_exchange},
+                   {"repack_boundary_offset", s.cutting.repack_boundary_offset},
+                   {"repack_spacing_factor", s.cutting.repack_spacing_factor},
+                   {"repack_sphere_budget", s.cutting.repack_sphere_budget}};
   return compactScalarArrays(j.dump(2)) + "\n";
 }
 

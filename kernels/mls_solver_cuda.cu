@@ -10,6 +10,7 @@
 
 #include "kernels/cuda_check.h"
 #include "kernels/device_buffer.h"
+#include "physics/cut_coupling.h"
 #include "physics/mls_passes.h"
 
 namespace inc::cuda {
@@ -39,6 +40,13 @@ template <typename T>
 __global__ void forceKernel(MlsView<T> s, T half_dt, bool kick) {
   const std::int64_t k = std::int64_t(blockIdx.x) * blockDim.x + threadIdx.x;
   if (k < s.n) mlsForcePass(s, k, half_dt, kick);
+}
+
+// Coupling groups (eqs. 11-13): one thread per group gathers its members' displacements and its springs.
+template <typename T>
+__global__ void couplingKernel(CouplingView<T> c, const Vec3<T>* u) {
+  const std::int64_t g = std::int64_t(blockIdx.x) * blockDim.x + threadIdx.x;
+  if (g < c.groups) couplingGroupPass(c, u, std::int32_t(g));
 }
 
 // Tools: particle idx[p] (unique, validated on the host) becomes prescribed with target tgt[p], unless fixed.
@@ -162,6 +170,7 @@ class MlsCudaSolver final : public MlsSolver {
   void computeForces() override {
     const MlsView<T> s = view();
     if (s.n == 0) return;
+    couplingPass();
     stressKernel<T><<<gridFor(s.n), kBlock, 0, stream_>>>(s);
     INC_CUDA_LAUNCH("mls stressKernel");
     forceKernel<T><<<gridFor(s.n), kBlock, 0, stream_>>>(s, T(0), false);
@@ -190,11 +199,13 @@ class MlsCudaSolver final : public MlsSolver {
     st.ms_reduce = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     // Stage times from the events recorded around each stage of each substep (the stream is idle now).
     for (int k = 0; k < st.substeps; ++k) {
-      float a = 0, b = 0, c = 0;
-      INC_CUDA(cudaEventElapsedTime(&a, events_[4 * k], events_[4 * k + 1]));
-      INC_CUDA(cudaEventElapsedTime(&b, events_[4 * k + 1], events_[4 * k + 2]));
-      INC_CUDA(cudaEventElapsedTime(&c, events_[4 * k + 2], events_[4 * k + 3]));
+      float a = 0, cp = 0, b = 0, c = 0;
+      INC_CUDA(cudaEventElapsedTime(&a, events_[5 * k], events_[5 * k + 1]));
+      INC_CUDA(cudaEventElapsedTime(&cp, events_[5 * k + 1], events_[5 * k + 2]));
+      INC_CUDA(cudaEventElapsedTime(&b, events_[5 * k + 2], events_[5 * k + 3]));
+      INC_CUDA(cudaEventElapsedTime(&c, events_[5 * k + 3], events_[5 * k + 4]));
       st.ms_integrate += a;
+      st.ms_coupling += cp;
       st.ms_stress += b;
       st.ms_forces += c;
     }
@@ -282,6 +293,53 @@ class MlsCudaSolver final : public MlsSolver {
     kind_.upload(model_.kind);  // rare (a tool lets go): one upload of the kind array
   }
 
+  // Groups in precision T relative to the model origin; one upload per topology change.
+  void setCouplingGroups(const MlsCouplingGroups& g) override {
+    validateMlsCouplingGroups(g, size());
+    groups_ = std::int32_t(g.size());
+    springs_ = g.springs();
+    std::vector<Vec3<T>> centre(g.size()), anchor(g.springs());
+    for (std::size_t k = 0; k < g.size(); ++k) centre[k] = Vec3<T>(g.rest_centres[k] - model_.origin);
+    // Until anchors arrive every spring sits at its rest length from the group's rest centre (no force).
+    for (std::size_t k = 0; k < g.size(); ++k)
+      for (std::int32_t q = g.spring_offsets[k]; q < g.spring_offsets[k + 1]; ++q)
+        anchor[std::size_t(q)] = centre[k] + Vec3<T>(T(g.rest_lengths[std::size_t(q)]), T(0), T(0));
+    std::vector<std::int32_t> group(size(), -1);
+    for (std::size_t k = 0; k < g.size(); ++k)
+      for (std::int32_t p = g.member_offsets[k]; p < g.member_offsets[k + 1]; ++p)
+        group[std::size_t(g.members[std::size_t(p)])] = std::int32_t(k);
+    INC_CUDA(cudaStreamSynchronize(stream_));
+    cg_member_offsets_.upload(g.member_offsets);
+    cg_members_.upload(g.members);
+    cg_spring_offsets_.upload(g.spring_offsets);
+    cg_rest_centre_.upload(centre);
+    cg_anchor_.upload(anchor);
+    cg_rest_length_.upload(std::vector<T>(g.rest_lengths.begin(), g.rest_lengths.end()));
+    cg_stiffness_.upload(std::vector<T>(g.stiffnesses.begin(), g.stiffnesses.end()));
+    particle_group_.upload(group);
+    cg_displacement_.resize(g.size());
+    cg_displacement_.fillZero();
+    cg_force_.resize(g.size());
+    cg_force_.fillZero();
+    setCouplingStableStep(mlsCouplingStableStep(g, std::vector<double>(model_.mass.begin(), model_.mass.end())));
+    forces_valid_ = false;
+  }
+  void setCouplingAnchors(const std::vector<Vec3d>& anchors) override {
+    if (anchors.size() != springs_)
+      throw std::invalid_argument("MlsSolver: coupling anchors has " + std::to_string(anchors.size()) + " entries for " +
+                                  std::to_string(springs_) + " springs");
+    std::vector<Vec3<T>> a(anchors.size());
+    for (std::size_t q = 0; q < a.size(); ++q) a[q] = Vec3<T>(anchors[q] - model_.origin);
+    INC_CUDA(cudaStreamSynchronize(stream_));  // the previous anchors may still be read by queued substeps
+    cg_anchor_.upload(a);
+    forces_valid_ = false;
+  }
+  // One small download per call (n_groups vectors): the exchange the PBD side needs.
+  void couplingDisplacements(std::vector<Vec3d>& out) override {
+    couplingPass();
+    download(cg_displacement_, out);
+  }
+
   void saveCheckpoint() override {
     saved_u_.resize(size());
     saved_v_.resize(size());
@@ -303,7 +361,10 @@ class MlsCudaSolver final : public MlsSolver {
                      moment_inverse_.capacityBytes() + kind_.capacityBytes() + offsets_.capacityBytes() +
                      indices_.capacityBytes() + u_.capacityBytes() + v_.capacityBytes() + f_.capacityBytes() +
                      target_.capacityBytes() + stress_moment_.capacityBytes() + energy_.capacityBytes() +
-                     stiffening_buf_.capacityBytes() +
+                     stiffening_buf_.capacityBytes() + cg_member_offsets_.capacityBytes() +
+                     cg_members_.capacityBytes() + cg_spring_offsets_.capacityBytes() + particle_group_.capacityBytes() +
+                     cg_rest_centre_.capacityBytes() + cg_anchor_.capacityBytes() + cg_displacement_.capacityBytes() +
+                     cg_force_.capacityBytes() + cg_rest_length_.capacityBytes() + cg_stiffness_.capacityBytes() +
                      partials_.capacityBytes() + saved_u_.capacityBytes() + saved_v_.capacityBytes();
     m.host_bytes = model_.bytes();
     return m;
@@ -329,7 +390,31 @@ class MlsCudaSolver final : public MlsSolver {
     v.target = target_.data();
     v.stress_moment = stress_moment_.data();
     v.energy = energy_.data();
+    if (groups_ > 0) {
+      v.coupling_group = particle_group_.data();
+      v.coupling_force = cg_force_.data();
+    }
     return v;
+  }
+
+  CouplingView<T> couplingView() {
+    CouplingView<T> c;
+    c.groups = groups_;
+    c.member_offsets = cg_member_offsets_.data();
+    c.members = cg_members_.data();
+    c.rest_centre = cg_rest_centre_.data();
+    c.spring_offsets = cg_spring_offsets_.data();
+    c.anchor = cg_anchor_.data();
+    c.rest_length = cg_rest_length_.data();
+    c.stiffness = cg_stiffness_.data();
+    c.group_displacement = cg_displacement_.data();
+    c.member_force = cg_force_.data();
+    return c;
+  }
+  void couplingPass() {
+    if (groups_ == 0) return;
+    couplingKernel<T><<<gridFor(groups_), kBlock, 0, stream_>>>(couplingView(), u_.data());
+    INC_CUDA_LAUNCH("mls couplingKernel");
   }
 
   // n substeps of dt, all launched asynchronously on the stream; with `timed`, events around each stage.
@@ -337,20 +422,22 @@ class MlsCudaSolver final : public MlsSolver {
     if (!forces_valid_) computeForces();
     const MlsView<T> s = view();
     if (s.n == 0) return;
-    if (timed) ensureEvents(std::size_t(4) * std::size_t(n));
+    if (timed) ensureEvents(std::size_t(5) * std::size_t(n));
     const T half = T(0.5) * dt;
     const int grid = gridFor(s.n);
     for (int k = 0; k < n; ++k) {
-      if (timed) INC_CUDA(cudaEventRecord(events_[4 * k], stream_));
+      if (timed) INC_CUDA(cudaEventRecord(events_[5 * k], stream_));
       driftKernel<T><<<grid, kBlock, 0, stream_>>>(s, dt, n - k);
       INC_CUDA_LAUNCH("mls driftKernel");
-      if (timed) INC_CUDA(cudaEventRecord(events_[4 * k + 1], stream_));
+      if (timed) INC_CUDA(cudaEventRecord(events_[5 * k + 1], stream_));
+      couplingPass();  // the groups' spring forces at the drifted displacement, before the force gather
+      if (timed) INC_CUDA(cudaEventRecord(events_[5 * k + 2], stream_));
       stressKernel<T><<<grid, kBlock, 0, stream_>>>(s);
       INC_CUDA_LAUNCH("mls stressKernel");
-      if (timed) INC_CUDA(cudaEventRecord(events_[4 * k + 2], stream_));
+      if (timed) INC_CUDA(cudaEventRecord(events_[5 * k + 3], stream_));
       forceKernel<T><<<grid, kBlock, 0, stream_>>>(s, half, true);
       INC_CUDA_LAUNCH("mls forceKernel");
-      if (timed) INC_CUDA(cudaEventRecord(events_[4 * k + 3], stream_));
+      if (timed) INC_CUDA(cudaEventRecord(events_[5 * k + 4], stream_));
     }
   }
 
@@ -395,6 +482,11 @@ class MlsCudaSolver final : public MlsSolver {
   DeviceBuffer<Partial> partials_;
   DeviceBuffer<std::int32_t> pres_idx_;
   DeviceBuffer<Vec3<T>> pres_tgt_;
+  DeviceBuffer<std::int32_t> cg_member_offsets_, cg_members_, cg_spring_offsets_, particle_group_;
+  DeviceBuffer<Vec3<T>> cg_rest_centre_, cg_anchor_, cg_displacement_, cg_force_;
+  DeviceBuffer<T> cg_rest_length_, cg_stiffness_;
+  std::int32_t groups_ = 0;
+  std::size_t springs_ = 0;
   cudaStream_t stream_ = nullptr;
   std::vector<cudaEvent_t> events_;
   bool forces_valid_ = false;

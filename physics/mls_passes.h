@@ -36,6 +36,10 @@ struct MlsView {
   // pass-1 output consumed by pass 2
   Mat3<T>* stress_moment = nullptr;       // M_i = v_i P_i A_i^{-1} (N m^2)
   T* energy = nullptr;                    // v_i psi_i (J)
+  // Optional coupling to PBD spheres (physics/cut_coupling.h): particle k's group (-1: none) and each group's
+  // force per member (N), recomputed from the displacement before every force pass. Null: no coupling.
+  const std::int32_t* coupling_group = nullptr;
+  const Vec3<T>* coupling_force = nullptr;
 };
 
 // eq. 5: G_i = [sum_j w_ij (u_j - u_i) x_ij^T] A_i^{-1}, x_ij = X_j - X_i.
@@ -80,10 +84,12 @@ INC_HD Vec3<T> mlsElasticForce(const MlsView<T>& s, std::int64_t k) {
   return f;
 }
 
-// Pass 2 at particle k: gather the force, then the second half kick (free particles only).
+// Pass 2 at particle k: gather the force (plus its coupling group's share, eq. 12), then the second half kick
+// (free particles only). The stored force is what the next drift's first half kick uses.
 template <typename T>
 INC_HD void mlsForcePass(const MlsView<T>& s, std::int64_t k, T half_dt, bool kick) {
-  const Vec3<T> f = mlsElasticForce(s, k);
+  Vec3<T> f = mlsElasticForce(s, k);
+  if (s.coupling_group && s.coupling_group[k] >= 0) f += s.coupling_force[s.coupling_group[k]];
   s.force[k] = f;
   if (kick && s.kind[k] == kMlsFree)
     s.velocity[k] = mlsHalfKick(s.velocity[k], f, s.mass[k], s.gravity, half_dt, s.coeffs.damping);

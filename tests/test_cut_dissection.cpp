@@ -125,22 +125,39 @@ TEST(CutDissection, MissingScalpelOrCuttingFlagIsAnInputError) {
   EXPECT_THROW(makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64), InputError);
 }
 
-TEST(CutDissection, LiverCutSceneRunsAndSplitsTheSurface) {
-  const Scene s = loadSceneFile(std::string(INCISION_SOURCE_DIR) + "/scenes/liver_cut.json");
+// The shipped liver scene: a curved scalpel path cuts the right tip off (the sphere graph splits in two), the
+// nodal points exist only while the blade is in, the mass is kept (float32: 1e-5), and the grasper then takes
+// the tip and pulls the cut open by more than 1 cm. To stay fast the test samples the converted spheres with 2
+// cells per diameter (8 points each; the scene asks for 3), exchanges twice per frame (the scene: 4) and takes 5
+// PBD iterations (the scene: 10); everything else is the scene file's.
+TEST(CutDissection, LiverCutSceneCutsACurvedPathAndTheGrasperOpensIt) {
+  Scene s = loadSceneFile(std::string(INCISION_SOURCE_DIR) + "/scenes/liver_cut.json");
+  s.cutting.samples_per_diameter = 2;
+  s.cutting.exchanges_per_frame = 2;
+  s.pbd.iterations = 5;
   auto sim = makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float32);
-  FrameReport rep;
-  for (int f = 0; f < 38; ++f) {  // past the end of the cut at 0.6 s
+  FrameReport rep = sim->advance(s.solver.frame_dt);
+  const double m0 = rep.counters["mass_kg"];
+  double points_max = 0, grasped = 0, disp_before_grasp = 0;
+  for (int f = 1; f < 57; ++f) {  // to 0.95 s: the cut (0.1 .. 0.6 s) and most of the pull (0.7 .. 1.1 s)
     rep = sim->advance(s.solver.frame_dt);
     ASSERT_TRUE(rep.finite) << f;
+    EXPECT_NEAR(rep.counters["mass_kg"] / m0, 1.0, 1e-5) << f;
+    points_max = std::max(points_max, rep.counters["nodal_points"]);
+    grasped = std::max(grasped, rep.counters["grasped"]);
+    if (f == 40) {
+      EXPECT_EQ(rep.counters["cuts_applied"], 1.0);
+      EXPECT_EQ(rep.counters["nodal_points"], 0.0);
+      EXPECT_EQ(rep.counters["sphere_components"], 2.0);
+      disp_before_grasp = rep.max_displacement;
+    }
   }
-  EXPECT_EQ(rep.counters["cuts_applied"], 1.0);
-  EXPECT_EQ(rep.counters["surface_split"], 1.0);
+  EXPECT_GT(points_max, 100.0);
+  EXPECT_GT(grasped, 0.0);
+  EXPECT_GT(rep.max_displacement, disp_before_grasp + 0.01);
   TriangleMesh surf;
   ASSERT_TRUE(sim->currentSurface(surf));
-  const MeshReport m = analyzeMesh(surf);
-  EXPECT_TRUE(m.closed());
-  EXPECT_EQ(m.inconsistent_edges, 0);
-  EXPECT_EQ(m.components, 2);
+  for (const auto& v : surf.vertices) ASSERT_TRUE(isFinite(v));
 }
 
 }  // namespace

@@ -65,7 +65,7 @@ TEST(CutNodal, MassConservedThroughSpheresPointsSpheresAndFullCutSeparates) {
   const SweptSurface s = fullCut();
   SphereCutResult r = cutSpheres(m, s);
   EXPECT_EQ(linkComponents(m), 1);
-  const std::size_t added = repackSpheres(r.spheres, r.points, s, 0.0075);
+  const std::size_t added = repackSpheres(r.spheres, r.points, s);
   EXPECT_GT(added, 0u);
   EXPECT_LT(added, r.points.size());
   EXPECT_NEAR(totalMass(r.spheres) / totalMass(m), 1.0, 1e-12);  // the issue asks 1e-6
@@ -77,14 +77,17 @@ TEST(CutNodal, MassConservedThroughSpheresPointsSpheresAndFullCutSeparates) {
   }
   for (double mass : r.spheres.masses) EXPECT_GT(mass, 0.0);
   EXPECT_EQ(linkComponents(r.spheres), 2);
-  // Every nodal point lies in a new sphere of its own side (the cover is complete).
+  // The new spheres of each side cover at least 95 % of its nodal points (Algorithm 1's balls are inscribed in
+  // the point groups, docs/cutting.md).
+  std::size_t covered = 0;
   for (std::size_t p = 0; p < r.points.size(); ++p) {
     bool in = false;
     for (std::size_t i = r.spheres.size() - added; i < r.spheres.size() && !in; ++i)
       in = norm(r.points.positions[p] - r.spheres.rest_centers[i]) <= r.spheres.rest_radii[i] + 1e-15 &&
            (r.spheres.rest_centers[i].z > 0) == (r.points.side[p] > 0);
-    ASSERT_TRUE(in) << p;
+    covered += in;
   }
+  EXPECT_GE(double(covered), 0.95 * double(r.points.size()));
 }
 
 TEST(CutNodal, PartialCutLeavesOnePiece) {
@@ -94,7 +97,7 @@ TEST(CutNodal, PartialCutLeavesOnePiece) {
   // The two middle layers for the 6 columns with x < 0, plus the column at x = 0.005, whose spheres are
   // sqrt(0.005^2 + 0.005^2) = 0.00707 m < r = 0.0075 m from the blade's end line x = 0.
   EXPECT_EQ(r.cut.size(), 2u * 7u * 8u);
-  repackSpheres(r.spheres, r.points, s, 0.0075);
+  repackSpheres(r.spheres, r.points, s);
   EXPECT_NEAR(totalMass(r.spheres) / totalMass(m), 1.0, 1e-12);
   EXPECT_EQ(linkComponents(r.spheres), 1);
 }
@@ -108,8 +111,8 @@ TEST(CutNodal, SameCutGivesBitIdenticalResult) {
   }
   const SweptSurface s = sweepSurface(poses);
   SphereCutResult a = cutSpheres(m, s), b = cutSpheres(m, s);
-  repackSpheres(a.spheres, a.points, s, 0.0075);
-  repackSpheres(b.spheres, b.points, s, 0.0075);
+  repackSpheres(a.spheres, a.points, s);
+  repackSpheres(b.spheres, b.points, s);
   ASSERT_EQ(a.spheres.size(), b.spheres.size());
   ASSERT_EQ(a.spheres.links, b.spheres.links);
   for (std::size_t i = 0; i < a.spheres.size(); ++i) {

@@ -45,19 +45,21 @@ TEST(CutSequence, TwentyCutsKeepMassBoundTheSphereCountAndCloseEveryPiece) {
     Vec3d pp, pn;
     ASSERT_TRUE(planeOfSweptSurface(s, pp, pn, 1e-9));
     EXPECT_NEAR(dot(pn, n), 1.0, 1e-9);
-    SphereCutResult r = cutSpheres(m, s);
-    double rmax = 0.0;
-    for (auto i : r.cut) rmax = std::max(rmax, m.rest_radii[i]);
+    CutOptions opt;
+    opt.samples_per_diameter = 3;  // 19 points per sphere: the re-packing classifies them with their supports
+    SphereCutResult r = cutSpheres(m, s, opt);
     const std::size_t before = m.size();
-    const std::size_t added = repackSpheres(r.spheres, r.points, s, rmax, RepackOptions{}, cuts);
+    RepackOptions ro;
+    ro.reference_mass = mass0 / double(n0);  // the block's own sphere: the budget and radius cap do not drift
+    ro.max_radius = 1.5 * 0.0075;
+    const std::size_t added = repackSpheres(r.spheres, r.points, s, ro, cuts);
     m = std::move(r.spheres);
     std::printf("[cut sequence] cut %d: %zu spheres, %zu cut, %zu nodal points, %zu added -> %zu\n", k, before,
                 r.cut.size(), r.points.size(), added, m.size());
     cuts.push_back(s);
     EXPECT_NEAR(totalMass(m) / mass0, 1.0, 1e-12) << "cut " << k;
-    // Bounded: 20 slices 4.7 mm apart make 21 slabs thinner than the 10 mm lattice, each needing its own layer
-    // of at least 8 x 6 spheres (>= 1008 in all); the re-packing keeps the count within 5 x the original 480
-    // (measured: 2044 after 20 cuts, about +80 per cut; no merging of small spheres yet, docs/cutting.md).
+    // Bounded: the re-packing keeps each group within its mass budget (merging small spheres, Algorithm 1 in
+    // host/cut_repack.h); asserted within 5 x the original 480 (measured: 513 after 20 slices 4.7 mm apart).
     EXPECT_LT(m.size(), 5 * n0) << "cut " << k << " cut spheres " << r.cut.size() << " points " << r.points.size();
     std::vector<TriangleMesh> next;
     for (const auto& piece : pieces) {

@@ -174,9 +174,11 @@ TEST(RenderLayers, MlsClampAndGraspForcesBalanceTheWeightAtRest) {
 }
 
 // The dissection block cut by a mouse stroke on the plane y = 2 mm: while the stroke runs its swept surface
-// is reported on that plane over the stroke's extent; once released, the cut's nodal points (as many as the
-// cut made, all within two sphere radii of the plane) and the applied cut's swept surface are. With the y < 2 mm
-// half fixed and gravity on, the free half falls and its nodal points go with it while the held half's stay.
+// is reported on that plane over the stroke's extent, and the stroke's nodal points where the MLS solver has them
+// (as many as the nodal_points counter, all within two sphere radii of the plane). With the y < 2 mm half fixed
+// and gravity on, the free half's points fall while the held half's stay. Once released, the points are re-packed
+// and go back to zero (none reported; since the merge of s6-cut-mls the nodal points live only while the blade is
+// in the tissue, where before they were the last cut's, skinned) and the applied cut's swept surface is.
 TEST(RenderLayers, DissectionSweptSurfaceAndNodalPointsFollowTheCut) {
   Scene s;
   s.file = "<test:render_layers_cut>";
@@ -187,6 +189,8 @@ TEST(RenderLayers, DissectionSweptSurfaceAndNodalPointsFollowTheCut) {
   s.models.cutting = true;
   s.solver.substeps = 2;
   s.pbd.iterations = 5;
+  s.cutting.samples_per_diameter = 3;
+  s.cutting.exchanges_per_frame = 2;
   s.fixed = {{Vec3d(-1, -1, -1), Vec3d(1, 0.002, 1)}};
   ToolSpec t;  // the scene's scripted scalpel never runs here (its path starts at t = 100 s)
   t.name = "scalpel";
@@ -210,6 +214,7 @@ TEST(RenderLayers, DissectionSweptSurfaceAndNodalPointsFollowTheCut) {
     ASSERT_TRUE(m->applyTool(e).supported);
   }
   m->renderLayers(l);
+  EXPECT_EQ(l.sphere_centres.size(), m->particleCount());  // the cut spheres left the PBD model
   ASSERT_EQ(l.swept_surface.triangles.size(), 6u);  // 3 quads of the strip
   double xmin = 1, xmax = -1;
   for (const Vec3d& v : l.swept_surface.vertices) {
@@ -219,28 +224,26 @@ TEST(RenderLayers, DissectionSweptSurfaceAndNodalPointsFollowTheCut) {
   }
   EXPECT_NEAR(xmin, -0.05, 1e-9);
   EXPECT_NEAR(xmax, 0.025, 1e-9);
-  e.phase = ToolPhase::Release;
-  e.tip = Vec3d(0.05, 0.002, 0.0);
-  ASSERT_TRUE(m->applyTool(e).cut_applied);
-  const FrameReport first = m->advance(1e-6);  // a negligible step: the counters of the cut
+  e.tip = Vec3d(0.05, 0.002, 0.0);  // a fourth drag: through the block, still in the tissue
+  ASSERT_TRUE(m->applyTool(e).supported);
+  const FrameReport first = m->advance(1e-6);  // a negligible step: the counters of the stroke
   ASSERT_TRUE(first.finite);
   RenderLayers cut;
   m->renderLayers(cut);
-  EXPECT_EQ(double(cut.nodal_points.size()), first.counters.at("nodal_points_last_cut"));
+  EXPECT_EQ(double(cut.nodal_points.size()), first.counters.at("nodal_points"));
   ASSERT_FALSE(cut.nodal_points.empty());
-  // A nodal point lies in a cut sphere, whose centre is within its radius (7.5 mm) of the plane.
-  for (const Vec3d& p : cut.nodal_points) EXPECT_LT(std::fabs(p.y - 0.002), 2 * 0.0075 + 1e-6);
-  EXPECT_EQ(cut.swept_surface.triangles.size(), 8u);  // the released stroke: 4 quads
-  for (const Vec3d& v : cut.swept_surface.vertices) EXPECT_NEAR(v.y, 0.002, 1e-6);
+  // A nodal point lies in a converted (cut or interface) sphere, whose centre is within 1.5 spacings of the plane.
+  for (const Vec3d& p : cut.nodal_points) EXPECT_LT(std::fabs(p.y - 0.002), 0.015 + 0.0075 + 1e-6);
+  EXPECT_EQ(cut.swept_surface.triangles.size(), 8u);  // the stroke so far: 4 quads
   for (int f = 0; f < 6; ++f) ASSERT_TRUE(m->advance(1.0 / 60.0).finite);
   RenderLayers later;
   m->renderLayers(later);
-  ASSERT_EQ(later.nodal_points.size(), cut.nodal_points.size());
+  ASSERT_EQ(later.nodal_points.size(), cut.nodal_points.size());  // no conversion since: the same points
   int held_side = 0, free_side = 0;
   for (std::size_t i = 0; i < cut.nodal_points.size(); ++i) {
     const double dz = later.nodal_points[i].z - cut.nodal_points[i].z;
     if (cut.nodal_points[i].y < 0.002) {
-      EXPECT_NEAR(dz, 0.0, 1e-3) << i;  // bound only to fixed spheres
+      EXPECT_NEAR(dz, 0.0, 1e-3) << i;  // points of fixed spheres
       ++held_side;
     } else {
       EXPECT_LT(dz, -0.02) << i;  // falls with the free half (~5 cm in 6 frames)
@@ -249,6 +252,17 @@ TEST(RenderLayers, DissectionSweptSurfaceAndNodalPointsFollowTheCut) {
   }
   EXPECT_GT(held_side, 0);
   EXPECT_GT(free_side, 0);
+  e.phase = ToolPhase::Release;
+  ASSERT_TRUE(m->applyTool(e).cut_applied);
+  const FrameReport after = m->advance(1e-6);
+  ASSERT_TRUE(after.finite);
+  EXPECT_EQ(after.counters.at("nodal_points"), 0.0);
+  EXPECT_EQ(after.counters.at("nodal_points_last_cut"), double(cut.nodal_points.size()));
+  RenderLayers done;
+  m->renderLayers(done);
+  EXPECT_TRUE(done.nodal_points.empty());
+  EXPECT_EQ(done.sphere_centres.size(), m->particleCount());
+  EXPECT_EQ(done.swept_surface.triangles.size(), 8u);  // the applied cut's strip
 }
 
 // The tearing sheet: the particles of its fixed strip and those its grasper holds.

@@ -352,9 +352,10 @@ TEST_F(ViewerApp, GraspDragShowsTheToolForceArrow) {
 }
 
 // The layers together on a dissection block (8 x 5 x 4 cm, 1 cm metaballs, no gravity, the top row fixed) with a
-// cut through its left half (a stroke on y = 5 mm from x = -6 cm to 0): the grasp pulls the lower-left part down,
-// opening the cut. Wireframe surface, the fixed spheres' markers (yellow), the cut's nodal points (green), the
-// applied cut's swept surface (cyan) and the grasp's force arrows all show at once. INCISION_DOC_LAYERS=PATH also
+// stroke through its left half (on y = 5 mm from x = -6 cm to 0) still in the tissue: the grasp pulls the
+// lower-left part down, opening the cut. Wireframe surface, the fixed spheres' markers (yellow), the stroke's nodal
+// points (green; since the merge of s6-cut-mls they live only while the blade is in, so the stroke is not
+// released), its swept surface (cyan) and the grasp's force arrows all show at once. INCISION_DOC_LAYERS=PATH also
 // writes the picture there, at 960 x 600 (docs/images/viewer_layers.png).
 TEST_F(ViewerApp, CutBlockShowsAllLayersTogether) {
   Scene s;
@@ -380,10 +381,10 @@ TEST_F(ViewerApp, CutBlockShowsAllLayersTogether) {
   e.kind = ToolKind::Cut;
   e.axis = Vec3d(0, 0, -1);
   e.blade_length_m = 0.1;
-  for (int k = 0; k <= 3; ++k) {
-    e.phase = k == 0 ? ToolPhase::Press : k == 3 ? ToolPhase::Release : ToolPhase::Drag;
+  for (int k = 0; k <= 3; ++k) {  // press and three drags, not released
+    e.phase = k == 0 ? ToolPhase::Press : ToolPhase::Drag;
     e.tip = Vec3d(-0.06 + 0.02 * k, 0.005, 0.0);
-    ASSERT_TRUE(m->applyTool(e).cut_applied || k < 3);
+    ASSERT_TRUE(m->applyTool(e).supported);
   }
   const char* doc = std::getenv("INCISION_DOC_LAYERS");
   ViewerOptions o;

@@ -1,0 +1,142 @@
+// The nodal points of one scalpel stroke (sections 5.1-5.3): spheres converted into MLS points while the blade is in
+// the tissue, their visibility-filtered supports, the MLS solver and the coupling groups that tie them to the PBD spheres.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <set>
+#include <memory>
+#include <vector>
+
+#include "host/backend.h"
+#include "host/cut_repack.h"
+#include "host/cut_swept_surface.h"
+#include "host/metaball_model.h"
+#include "host/mls_model.h"
+#include "host/mls_solver.h"
+#include "host/scene.h"
+
+namespace inc {
+
+// What a sphere of the stroke's base model is now: simulated by PBD, converted into points but still in the PBD
+// model as a kinematic sphere driven by its points (an interface sphere: its points are the "overlapping points"
+// of section 5.2), or converted and gone from the PBD model (a cut sphere).
+enum class SphereRole : std::uint8_t { Pbd = 0, Interface = 1, Cut = 2 };
+
+struct NodalRegionSettings {
+  int samples_per_diameter = 4;        // lattice cells across a converted sphere's (mean) diameter
+  MlsBuildInput mls;                   // material, support_factor, condition_limit, gravity, safety, source
+  BackendKind backend = BackendKind::Cpu;  // resolved (Cpu or Cuda)
+  Precision precision = Precision::Float32;
+  std::vector<FixedRegion> fixed;      // a sphere whose rest centre lies inside is fixed: so are its points
+  double youngs_modulus = 3.0e3;       // Pa: link stiffness k = 1 / alpha with alpha as the PBD links
+  double stretch_compliance = 0.0;     // m/N; 0: alpha = d / (E pi rbar^2) (host/pbd_builders.h)
+  std::function<bool(const Vec3d&)> inside;  // the tissue: points are sampled only inside it (empty: everywhere)
+};
+
+// A sphere's state when it is converted: its points start rigidly attached, x = x_b + R_b (X - C_b), v = v_b.
+struct ConvertedSphereState {
+  Vec3d position, velocity;            // m, m/s
+  Mat3d rotation = Mat3d::identity();  // the sphere's shape-matching rotation
+};
+
+// What the stroke leaves when the blade exits: the cut spheres' points for re-packing (Algorithm 1) with their
+// state, and the interface spheres' state by eq. 13 (they return to PBD).
+struct NodalRegionFinal {
+  RepackPoints points;                 // all points (the interface spheres' as context), rest configuration
+  std::vector<Vec3d> displacement, velocity;   // per point of `points` (m, m/s)
+  std::vector<std::int32_t> interface_ids;     // base indices
+  std::vector<Vec3d> interface_position, interface_velocity;  // eq. 13 position, mean velocity of its points
+};
+
+class NodalRegion {
+ public:
+  // `base`: the sphere model when the stroke began (its indices are the "base" indices used below).
+  // `earlier_cuts`: cuts applied before this stroke (visibility), kept by pointer: they must outlive the region.
+  NodalRegion(const MetaballModel& base, const NodalRegionSettings& settings, std::vector<const SweptSurface*> earlier_cuts);
+
+  const MetaballModel& base() const { return base_; }
+  SphereRole role(std::int32_t b) const { return role_[std::size_t(b)]; }
+  std::size_t pointCount() const { return rest_.size(); }
+  bool active() const { return !rest_.empty(); }
+  std::size_t interfaceCount() const;
+  std::size_t springCount() const { return groups_.springs(); }
+  double pointSpacing() const { return spacing_; }
+  double pointMass() const;                 // kg, sum over the points
+  std::size_t supportsRemoved() const { return supports_removed_; }  // directed pairs dropped by the cuts so far
+  const MlsSolver* solver() const { return solver_.get(); }
+  const NeighborLists& supports() const { return supports_; }
+  const std::vector<Vec3d>& restPoints() const { return rest_; }
+  const std::vector<std::int32_t>& pointSphere() const { return source_; }
+
+  // Converts the listed base spheres to role Cut (sampling the ones not converted yet) and their PBD-role link
+  // neighbours to role Interface; `state(b)` gives a sphere's state when it is sampled. `stroke`: the stroke's
+  // swept surface so far (kept by pointer until the next call). Rebuilds the supports (visibility against the
+  // stroke and the earlier cuts), the coupling groups and the MLS model (moment matrices of every point
+  // recomputed), carrying the existing points' state. Returns the number of spheres that changed role.
+  std::size_t convert(const std::vector<std::int32_t>& cut, const std::function<ConvertedSphereState(std::int32_t)>& state,
+                      const SweptSurface& stroke);
+  // The stroke grew by `fresh` (a surface holding only the new triangles): supports crossing it are dropped and,
+  // if any was, the groups and the MLS model are rebuilt (moment matrices recomputed). Returns the pairs dropped.
+  std::size_t cutSupports(const SweptSurface& fresh);
+
+  // One coupling exchange: the springs' anchors from the PBD spheres' current positions (`pbd_position(j)` for
+  // base index j), then `dt` of MLS (eqs. 4-10 with the springs of eqs. 11-12 every substep). `fixed_substeps`
+  // > 0 takes at least that many (more when the stable step needs them). Updates the groups' eq. 13 state.
+  MlsFrameStats advance(double dt, int fixed_substeps, const std::function<Vec3d(std::int32_t)>& pbd_position);
+
+  // eq. 13: the position (C_a + u_a) of every interface sphere after the last advance (or conversion).
+  void interfacePositions(std::vector<std::int32_t>& ids, std::vector<Vec3d>& positions) const;
+  // The displacement (m) of base sphere b as the skin sees it near rest point p: a converted sphere's by eq. 13
+  // of its point group nearest p (a cut sphere has one group per piece of it), else nothing (returns false).
+  bool sphereDisplacement(std::int32_t b, const Vec3d& p, Vec3d& out) const;
+  // Stored energy of the coupling springs, sum k/2 (l' - l)^2 (J), at the last anchors.
+  double springEnergy() const;
+  // Kinetic, elastic and gravity energy of the points (J) and their largest displacement (m): the last reduction.
+  const MlsReduction& lastReduction() const { return last_reduction_; }
+
+  void saveCheckpoint();
+  void restoreCheckpoint();
+  void scaleSafety(double factor);
+
+  // Ends the stroke: the state the PBD side needs back. The region is empty afterwards (no nodal points).
+  NodalRegionFinal finish();
+
+ private:
+  struct Link {
+    std::int32_t other;
+    double rest, stiffness;
+  };
+  void sample(const std::vector<std::int32_t>& batch, const std::function<ConvertedSphereState(std::int32_t)>& state);
+  void rebuild();
+  void regroup();
+  void syncState();  // host copies of u, v from the solver
+
+  MetaballModel base_;
+  NodalRegionSettings settings_;
+  std::vector<const SweptSurface*> earlier_;
+  std::vector<SphereRole> role_;
+  std::vector<std::vector<Link>> adjacency_;      // base links per sphere with their spring stiffness
+  std::vector<std::vector<std::int32_t>> sphere_points_;  // base sphere -> its points
+  // points
+  std::vector<Vec3d> rest_;
+  std::vector<double> mass_;
+  std::vector<std::int32_t> source_;
+  std::vector<std::uint8_t> kind_;      // MlsParticleKind
+  std::vector<Vec3d> u_, v_;            // host copies (valid after syncState)
+  double spacing_ = 0.0;                // m, the shared sampling lattice's spacing
+  std::set<std::array<std::int64_t, 3>> occupied_;  // lattice cells already holding a point
+  NeighborLists supports_;
+  std::size_t supports_removed_ = 0;
+  // coupling groups: group g belongs to base sphere group_sphere_[g]
+  MlsCouplingGroups groups_;
+  std::vector<std::int32_t> group_sphere_;
+  std::vector<std::int32_t> spring_other_;  // per spring: the base index of its PBD sphere
+  std::vector<Vec3d> group_u_, anchors_;
+  std::unique_ptr<MlsSolver> solver_;
+  MlsReduction last_reduction_;
+  double safety_scale_ = 1.0;
+};
+
+}  // namespace inc

@@ -1,0 +1,165 @@
+// Coupling math (eqs. 11-13, physics/cut_coupling.h) and the MLS solver's coupling groups: gradients, an analytic oscillator.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "host/input_error.h"
+#include "host/mls_solver.h"
+#include "physics/cut_coupling.h"
+#include "tests/mls_test_scenes.h"
+
+namespace inc {
+namespace {
+
+using mls_test::hashSigned;
+
+// E of one group: the springs' Hooke energies at x_a = C_a + mean(u) (eqs. 11 and 13).
+double groupEnergy(const std::vector<Vec3d>& u, const Vec3d& c, const std::vector<Vec3d>& anchors,
+                   const std::vector<double>& rest, const std::vector<double>& k) {
+  std::vector<std::int32_t> members(u.size());
+  for (std::size_t i = 0; i < u.size(); ++i) members[i] = std::int32_t(i);
+  const Vec3d xa = c + couplingSphereDisplacement(u.data(), members.data(), 0, std::int32_t(u.size()));
+  double e = 0.0;
+  for (std::size_t s = 0; s < anchors.size(); ++s) e += couplingSpringEnergy(xa, anchors[s], rest[s], k[s]);
+  return e;
+}
+
+// The spring force is -dE/dx_a of k/2 (|x_a - x_j| - l)^2: central differences agree to 1e-7 of its size.
+TEST(CouplingMath, SpringForceIsTheNegativeEnergyGradient) {
+  for (int t = 0; t < 20; ++t) {
+    const Vec3d xa(0.01 * hashSigned(3 * t), 0.01 * hashSigned(3 * t + 1), 0.01 * hashSigned(3 * t + 2));
+    const Vec3d xj(0.012 + 0.003 * hashSigned(100 + t), 0.004 * hashSigned(200 + t), 0.002 * hashSigned(300 + t));
+    const double l = 0.01 + 0.005 * hashSigned(400 + t), k = 50.0 + 20.0 * hashSigned(500 + t);
+    const Vec3d f = couplingSpringForce(xa, xj, l, k);
+    const double h = 1e-7;
+    for (int c = 0; c < 3; ++c) {
+      Vec3d p = xa, m = xa;
+      p[c] += h;
+      m[c] -= h;
+      const double g = (couplingSpringEnergy(p, xj, l, k) - couplingSpringEnergy(m, xj, l, k)) / (2 * h);
+      EXPECT_NEAR(f[c], -g, 1e-7 * (norm(f) + 1e-12)) << "case " << t << " component " << c;
+    }
+  }
+  EXPECT_EQ(norm(couplingSpringForce(Vec3d(1, 2, 3), Vec3d(1, 2, 3), 0.01, 10.0)), 0.0);  // coincident ends
+}
+
+// eq. 12 as the chain rule of eq. 13: the force share on each overlapping point is -dE/du_i of the group's
+// spring energy with x_a = C_a + mean(u) (central differences, 1e-6 of the share).
+TEST(CouplingMath, GroupShareIsTheGradientWithRespectToEachMember) {
+  const int n = 7;
+  std::vector<Vec3d> u(n);
+  for (int i = 0; i < n; ++i) u[i] = Vec3d(hashSigned(i), hashSigned(10 + i), hashSigned(20 + i)) * 0.002;
+  const Vec3d c(0.001, -0.002, 0.0005);
+  const std::vector<Vec3d> anchors{{0.012, 0.0, 0.0}, {0.0, -0.011, 0.002}, {-0.004, 0.003, 0.01}};
+  const std::vector<double> rest{0.01, 0.0105, 0.0095}, k{80.0, 120.0, 60.0};
+  std::vector<std::int32_t> offsets{0, n}, members(n), soff{0, 3};
+  for (int i = 0; i < n; ++i) members[i] = i;
+  Vec3d disp, share;
+  CouplingView<double> view;
+  view.groups = 1;
+  view.member_offsets = offsets.data();
+  view.members = members.data();
+  view.rest_centre = &c;
+  view.spring_offsets = soff.data();
+  view.anchor = anchors.data();
+  view.rest_length = rest.data();
+  view.stiffness = k.data();
+  view.group_displacement = &disp;
+  view.member_force = &share;
+  couplingGroupPass(view, u.data(), 0);
+  // eq. 13: the mean displacement.
+  Vec3d mean;
+  for (const auto& v : u) mean += v * (1.0 / n);
+  EXPECT_LT(norm(disp - mean), 1e-18);
+  const double h = 1e-8;
+  for (int i = 0; i < n; ++i)
+    for (int comp = 0; comp < 3; ++comp) {
+      std::vector<Vec3d> p = u, m = u;
+      p[i][comp] += h;
+      m[i][comp] -= h;
+      const double g = (groupEnergy(p, c, anchors, rest, k) - groupEnergy(m, c, anchors, rest, k)) / (2 * h);
+      EXPECT_NEAR(share[comp], -g, 1e-6 * norm(share)) << "member " << i << " component " << comp;
+    }
+  // A group with no spring feels nothing.
+  std::vector<std::int32_t> none{0, 0};
+  view.spring_offsets = none.data();
+  couplingGroupPass(view, u.data(), 0);
+  EXPECT_EQ(norm(share), 0.0);
+}
+
+// A 3 x 3 x 3 MLS block, all 27 points one group on one spring (k = 1 N/m) to a fixed anchor, displaced 1 mm
+// along the spring, undamped, no gravity: the block moves rigidly and its centre oscillates at omega =
+// sqrt(k / M), amplitude kept (leapfrog is symplectic). Period within 0.5 %, amplitude within 1 %.
+TEST(MlsCouplingGroups, GroupOnASpringOscillatesAtSqrtKOverM) {
+  MlsBuildInput in = mls_test::blockInput(3, 3, 3, 0.005);
+  in.material.youngs_modulus = 1.0e3;
+  auto solver = makeMlsSolver(in, BackendKind::Cpu, Precision::Float64);
+  const std::size_t n = solver->size();
+  ASSERT_EQ(n, 27u);
+  const std::vector<Vec3d> rest = solver->restPositions();
+  Vec3d c;
+  for (const auto& x : rest) c += x * (1.0 / double(n));
+  MlsCouplingGroups g;
+  for (std::size_t i = 0; i < n; ++i) g.members.push_back(std::int32_t(i));
+  g.member_offsets = {0, std::int32_t(n)};
+  g.rest_centres = {c};
+  g.spring_offsets = {0, 1};
+  g.rest_lengths = {0.02};
+  g.stiffnesses = {1.0};
+  const double dt_elastic = solver->stableTimeStep();
+  solver->setCouplingGroups(g);
+  solver->setCouplingAnchors({c + Vec3d(0.02, 0, 0)});
+  const double mass = solver->modelStats().total_mass;
+  const double omega = std::sqrt(1.0 / mass);
+  // The stable step combines the elastic and the spring limit 2 / omega (exactly, as documented).
+  const double dt_spring = 2.0 / omega;
+  EXPECT_NEAR(solver->stableTimeStep(), 1.0 / std::sqrt(1.0 / (dt_elastic * dt_elastic) + 1.0 / (dt_spring * dt_spring)),
+              1e-12 * dt_elastic);
+  solver->setDisplacements(std::vector<Vec3d>(n, Vec3d(0.001, 0, 0)));
+  const double dt = 0.5 * solver->stableTimeStep();
+  const double period = 2.0 * 3.141592653589793 / omega;
+  const int steps = int(std::ceil(2.2 * period / dt));
+  std::vector<Vec3d> ua;
+  double prev = 0.001, t = 0.0, amp = 0.0;
+  std::vector<double> crossings;  // downward zero crossings of the centre's x displacement
+  for (int s = 0; s < steps; ++s) {
+    solver->step(dt, 1);
+    t += dt;
+    solver->couplingDisplacements(ua);
+    const double x = ua[0].x;
+    amp = std::max(amp, std::fabs(x));
+    if (prev > 0 && x <= 0) crossings.push_back(t - dt * x / (x - prev));
+    prev = x;
+  }
+  ASSERT_GE(crossings.size(), 2u);
+  EXPECT_NEAR((crossings[1] - crossings[0]) / period, 1.0, 5e-3);
+  EXPECT_NEAR(amp / 0.001, 1.0, 1e-2);
+  // Rigid: every point has the centre's displacement (no elastic deformation from a uniform share).
+  std::vector<Vec3d> u;
+  solver->displacements(u);
+  for (const auto& v : u) EXPECT_LT(norm(v - ua[0]), 1e-9);
+}
+
+TEST(MlsCouplingGroups, BadGroupsAreInputErrors) {
+  auto solver = makeMlsSolver(mls_test::blockInput(3, 3, 3, 0.005), BackendKind::Cpu, Precision::Float64);
+  MlsCouplingGroups g;
+  g.members = {0, 1, 1};
+  g.member_offsets = {0, 2, 3};
+  g.rest_centres = {Vec3d(), Vec3d()};
+  g.spring_offsets = {0, 0, 0};
+  EXPECT_THROW(solver->setCouplingGroups(g), InputError);  // particle 1 in two groups
+  g.members = {0, 1, 99};
+  EXPECT_THROW(solver->setCouplingGroups(g), InputError);  // out of range
+  g.members = {0, 1, 2};
+  g.spring_offsets = {0, 1, 1};
+  g.rest_lengths = {0.01};
+  g.stiffnesses = {-1.0};
+  EXPECT_THROW(solver->setCouplingGroups(g), InputError);  // negative stiffness
+  g.stiffnesses = {1.0};
+  EXPECT_NO_THROW(solver->setCouplingGroups(g));
+  EXPECT_THROW(solver->setCouplingAnchors({}), std::exception);  // one anchor per spring
+}
+
+}  // namespace
+}  // namespace inc
