@@ -149,6 +149,9 @@ TEST(CutDissection, LiverCutSceneCutsACurvedPathAndTheGrasperOpensIt) {
       EXPECT_EQ(rep.counters["cuts_applied"], 1.0);
       EXPECT_EQ(rep.counters["nodal_points"], 0.0);
       EXPECT_EQ(rep.counters["sphere_components"], 2.0);
+      // Since the merge with s6-cut-surface the curved stroke also splits the surface: the tip is a piece of its own.
+      EXPECT_EQ(rep.counters["surface_split"], 1.0);
+      EXPECT_EQ(rep.counters["surface_components"], 2.0);
       disp_before_grasp = rep.max_displacement;
     }
   }
@@ -158,6 +161,9 @@ TEST(CutDissection, LiverCutSceneCutsACurvedPathAndTheGrasperOpensIt) {
   TriangleMesh surf;
   ASSERT_TRUE(sim->currentSurface(surf));
   for (const auto& v : surf.vertices) ASSERT_TRUE(isFinite(v));
+  const MeshReport m = analyzeMesh(surf);
+  EXPECT_TRUE(m.closed());
+  EXPECT_EQ(m.components, 2);
 }
 
 }  // namespace
