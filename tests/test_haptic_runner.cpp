@@ -1,5 +1,4 @@
-// Tests of the runner with a haptics scene: the loop thread beside the simulation, its statistics, and nothing
-// of it in a scene that does not switch haptics on.
+// Tests of the runner's haptic loop: a thread beside the simulation with its statistics, none without haptics.
 #include <gtest/gtest.h>
 
 #include <unistd.h>

@@ -1,5 +1,4 @@
-// A real-time haptic cutting session: the cutting tool's decisions at the loop rate on the haptic thread, the
-// dissection model stepping at its frame rate on the simulation thread.
+// Real-time haptic cutting session: cut decisions at 1 kHz on the haptic thread, the model cut between its frames.
 #pragma once
 
 #include <cstdint>
