@@ -13,6 +13,7 @@
 #include <system_error>
 
 #include "host/haptics/cutting_scene.h"
+#include "host/haptics/haptics_scene.h"
 #include "host/input_error.h"
 #include "host/mesh.h"
 #include "host/scene_json.h"
@@ -433,7 +434,7 @@ Scene parseScene(const std::string& json_text, const std::string& file_label, co
   const nlohmann::json doc = scene_json::parseChecked(json_text, file_label);
   const ObjectReader top(doc, file_label, "");
   top.allowOnly({"name", "description", "duration_s", "geometry", "material", "models", "mls", "pbd", "solver",
-                 "fixed", "tools", "output", "tearing"});
+                 "fixed", "tools", "output", "tearing", "haptics"});
   Scene s;
   s.file = file_label;
   s.name = top.string("name", std::filesystem::path(file_label).stem().string());
@@ -450,6 +451,7 @@ Scene parseScene(const std::string& json_text, const std::string& file_label, co
   s.tools = readTools(top);
   s.output = readOutput(top);
   s.tearing = readTearing(top);
+  s.haptics = readHapticsSpec(top, base_dir);  // host/haptics/haptics_scene.h
   return s;
 }
 
@@ -558,6 +560,7 @@ std::string sceneToJson(const Scene& s) {
                    {"random_range", s.tearing.random_range},
                    {"seed", s.tearing.seed},
                    {"regions", regions}};
+  j["haptics"] = hapticsSpecJson(s.haptics);
   return compactScalarArrays(j.dump(2)) + "\n";
 }
 
