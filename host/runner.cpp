@@ -7,7 +7,9 @@
 #include <filesystem>
 #include <iomanip>
 #include <sstream>
+#include <thread>
 
+#include "host/haptics/haptic_scene_model.h"
 #include "host/input_error.h"
 #include "host/metrics_csv.h"
 #include "host/numerical_guard.h"
@@ -73,6 +75,7 @@ std::string RunSummary::line() const {
     << " m; energy " << final_total_energy << " J; memory host " << std::fixed << std::setprecision(1)
     << double(memory.host_bytes) / 1048576.0 << " MiB, device " << double(memory.device_bytes) / 1048576.0
     << " MiB; retries " << retries;
+  if (!haptic.empty()) s << "; " << haptic;
   if (failed) s << "; " << failure;
   return s.str();
 }
@@ -103,6 +106,10 @@ RunSummary runScene(const Scene& scene_in, const RunOptions& opt, const ModelFac
   auto models = factory(scene, choice.kind);
   if (models.empty()) throw InputError(scene.file, "models", "the scene switches on no model that can run");
   for (const auto& m : models) sum.model_names += (sum.model_names.empty() ? "" : "+") + m->name();
+  // models.haptics: the haptic loop starts on its own thread beside this one (docs/haptics.md); none otherwise.
+  SceneHapticsOptions haptic_options;
+  haptic_options.record_s = std::min(600.0, 1.5 * double(sum.frames_requested) * dt + 5.0);
+  HapticSceneModel* haptic = attachSceneHaptics(models, scene, haptic_options);
 
   std::vector<Vec3d> pts;
   double floor = 0.0;
@@ -118,6 +125,9 @@ RunSummary runScene(const Scene& scene_in, const RunOptions& opt, const ModelFac
   Progress progress("incision run " + scene.name, sum.frames_requested, opt.quiet);
   const auto t0 = std::chrono::steady_clock::now();
   for (long f = 1; f <= sum.frames_requested && !sum.failed; ++f) {
+    // A haptics run is real time: the device moves in wall time, so frame f starts no earlier than (f - 1) dt.
+    if (haptic) std::this_thread::sleep_until(t0 + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                                       std::chrono::duration<double>(double(f - 1) * dt)));
     for (std::size_t k = 0; k < models.size() && !sum.failed; ++k) {
       SimulationModel& m = *models[k];
       const auto fs0 = std::chrono::steady_clock::now();
@@ -157,6 +167,13 @@ RunSummary runScene(const Scene& scene_in, const RunOptions& opt, const ModelFac
     progress.update(f);
   }
   sum.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (haptic) {
+    haptic->haptics().stop();
+    sum.haptic = haptic->haptics().summary();
+    sum.haptic_stats = haptic->haptics().stats();
+    if (scene.haptics.record_trajectory)
+      writeTrajectory((out / "haptic_trajectory.traj").string(), haptic->haptics().recordedTrajectory());
+  }
   sum.simulated_s = double(sum.frames_done) * dt;
   progress.finish(sum.failed ? "stopped" : "");
   for (const auto& m : models) {

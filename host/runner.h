@@ -6,6 +6,7 @@
 #include <optional>
 #include <string>
 
+#include "host/haptics/haptic_loop.h"
 #include "host/scene.h"
 #include "host/simulation_model.h"
 
@@ -35,6 +36,8 @@ struct RunSummary {
   double max_displacement = 0.0;
   double final_total_energy = 0.0;
   MemoryReport memory;
+  std::string haptic;         // a models.haptics scene: the haptic loop's statistics (SceneHaptics::summary)
+  PeriodStats haptic_stats;   // ... and its period statistics (ticks == 0: no haptic loop ran)
   std::string line() const;  // the one-line summary printed at the end
 };
 

@@ -118,6 +118,32 @@ struct CuttingSpec {
   double repack_sphere_budget = 1.0;     // (0, 8]: new spheres per converted sphere's mass, per group (merging)
 };
 
+// The haptic loop of a scene with models.haptics (docs/scene-format.md `haptics`, docs/haptics.md). Read by the
+// runner (`incision run`: the device below) and the viewer (`incision view`: the mouse drives the tip).
+struct HapticsSpec {
+  std::string device = "scripted";     // "scripted" | "udp" | "openhaptics"
+  std::string trajectory;              // scripted: trajectory file (absolute once loaded; docs/haptics.md format)
+  std::string playback = "time";       // scripted: "time" (interpolate by loop time) | "tick" (bit-exact replay)
+  int udp_port = 47000;                // udp: 127.0.0.1 port, [1, 65535]
+  int udp_device = 0;                  // udp: device id in the datagrams, [0, 65535]
+  std::string openhaptics_device;      // openhaptics: configuration name; "" = the default device
+  double workspace_scale = 1.0;        // openhaptics: scene metres per device metre, > 0
+  Vec3d workspace_offset_m{0, 0, 0};   // openhaptics: scene position of the device origin
+  double max_force_n = 3.3;            // clamp (scripted/udp; openhaptics reads its own), > 0
+  double rate_hz = 1000.0;             // loop rate, [100, 10000]
+  double max_force_rate_n_per_s = 1000.0;  // rate limiter, > 0
+  bool realtime = true;                // ask SCHED_FIFO for the loop thread
+  int cpu = -1;                        // >= 0: pin the loop thread to this CPU
+  bool has_surface_point = false;      // false: the organ's highest point along surface_normal
+  Vec3d surface_point_m{0, 0, 0};      // the tissue plane of the tool's contact model
+  Vec3d surface_normal{0, 0, 1};       // its outward unit normal (normalised on load)
+  double local_radius_m = 0.008;       // MFS local model: half-ball radius around the tip, > 0
+  double local_spacing_m = 0.002;      // MFS local model: inner node spacing, (0, local_radius_m / 2]
+  double blade_length_m = 0.05;        // cutting: the blade segment centred on the tip, > 0
+  Vec3d blade_axis{0, 0, 1};           // cutting: blade direction in the device frame (normalised on load)
+  bool record_trajectory = false;      // write the device trajectory (hex floats) as haptic_trajectory.traj in --out
+};
+
 struct OutputSpec {
   int every_frames = 0;         // 0: final state only; N: also every N frames
   bool particles_ply = true;
@@ -142,6 +168,7 @@ struct Scene {
   OutputSpec output;
   TearingSpec tearing;
   CuttingSpec cutting;
+  HapticsSpec haptics;
 };
 
 }  // namespace inc

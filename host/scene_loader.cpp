@@ -13,6 +13,7 @@
 #include <system_error>
 
 #include "host/haptics/cutting_scene.h"
+#include "host/haptics/haptics_scene.h"
 #include "host/input_error.h"
 #include "host/mesh.h"
 #include "host/scene_json.h"
@@ -463,7 +464,7 @@ Scene parseScene(const std::string& json_text, const std::string& file_label, co
   const nlohmann::json doc = scene_json::parseChecked(json_text, file_label);
   const ObjectReader top(doc, file_label, "");
   top.allowOnly({"name", "description", "duration_s", "geometry", "material", "models", "mls", "pbd", "solver",
-                 "fixed", "tools", "output", "tearing", "cutting"});
+                 "fixed", "tools", "output", "tearing", "cutting", "haptics"});
   Scene s;
   s.file = file_label;
   s.name = top.string("name", std::filesystem::path(file_label).stem().string());
@@ -481,6 +482,7 @@ Scene parseScene(const std::string& json_text, const std::string& file_label, co
   s.output = readOutput(top);
   s.tearing = readTearing(top);
   s.cutting = readCutting(top);
+  s.haptics = readHapticsSpec(top, base_dir);  // host/haptics/haptics_scene.h
   return s;
 }
 
@@ -597,6 +599,7 @@ std::string sceneToJson(const Scene& s) {
                    {"repack_boundary_offset", s.cutting.repack_boundary_offset},
                    {"repack_spacing_factor", s.cutting.repack_spacing_factor},
                    {"repack_sphere_budget", s.cutting.repack_sphere_budget}};
+  j["haptics"] = hapticsSpecJson(s.haptics);
   return compactScalarArrays(j.dump(2)) + "\n";
 }
 

@@ -1,11 +1,16 @@
 // Tests of the scene keys of the cutting force model (material.cutting): values reach the model, bad ones are refused.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
 #include <string>
 
 #include <nlohmann/json.hpp>
 
 #include "host/haptics/cutting_force_model.h"
+#include "host/haptics/haptics_scene.h"
 #include "host/input_error.h"
 #include "host/scene_loader.h"
 
@@ -97,6 +102,106 @@ TEST(HapticScene, BadCutThresholdsNameFileAndKey) {
   // Unknown key (typo) and a wrong type.
   expectRefused(sceneWithCutting({{"static_friction", 0.6}}).dump(), k + "static_friction", "did you mean");
   expectRefused(sceneWithCutting({{"press_threshold_n", "1"}}).dump(), k + "press_threshold_n", "expected a number");
+}
+
+nlohmann::json sceneWithHaptics(const nlohmann::json& haptics) {
+  nlohmann::json j = nlohmann::json::parse(R"({"geometry": {"kind": "box"}, "models": {"mls": true, "haptics": true}})");
+  j["haptics"] = haptics;
+  return j;
+}
+
+// The haptics section: every key read (the trajectory resolved against the scene's folder and loaded once to
+// check it), written and read back to the same values; absent keys keep the defaults.
+TEST(HapticScene, HapticsKeysAreReadAndRoundTrip) {
+  const auto dir = std::filesystem::temp_directory_path() / ("incision_haptics_keys_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "stroke.traj") << "0 0 0 0.02 1 0 0 0 0\n0.5 0.01 0 0.01 1 0 0 0 1\n";
+  const std::string scene_file = (dir / "scene.json").string();
+  const Scene s = parseScene(sceneWithHaptics({{"device", "scripted"},
+                                               {"trajectory", "stroke.traj"},
+                                               {"playback", "tick"},
+                                               {"udp_port", 47123},
+                                               {"udp_device", 3},
+                                               {"max_force_n", 2.5},
+                                               {"rate_hz", 2000},
+                                               {"max_force_rate_n_per_s", 500},
+                                               {"realtime", false},
+                                               {"cpu", 1},
+                                               {"surface_point_m", {0, 0, 0.03}},
+                                               {"surface_normal", {0, 0, 2}},
+                                               {"local_radius_m", 0.01},
+                                               {"local_spacing_m", 0.0025},
+                                               {"blade_length_m", 0.04},
+                                               {"blade_axis", {1, 0, 0}},
+                                               {"record_trajectory", true}})
+                                 .dump(),
+                             scene_file, dir.string());
+  const HapticsSpec& h = s.haptics;
+  EXPECT_EQ(h.trajectory, (dir / "stroke.traj").lexically_normal().string());
+  EXPECT_EQ(h.playback, "tick");
+  EXPECT_EQ(h.udp_port, 47123);
+  EXPECT_EQ(h.udp_device, 3);
+  EXPECT_EQ(h.max_force_n, 2.5);
+  EXPECT_EQ(h.rate_hz, 2000.0);
+  EXPECT_FALSE(h.realtime);
+  EXPECT_EQ(h.cpu, 1);
+  EXPECT_TRUE(h.has_surface_point);
+  EXPECT_EQ(h.surface_point_m.z, 0.03);
+  EXPECT_EQ(h.surface_normal.z, 1.0);  // normalised
+  EXPECT_EQ(h.local_spacing_m, 0.0025);
+  EXPECT_EQ(h.blade_axis.x, 1.0);
+  EXPECT_TRUE(h.record_trajectory);
+  const Scene r = parseScene(sceneToJson(s), scene_file, dir.string());
+  EXPECT_EQ(sceneToJson(r), sceneToJson(s));
+  EXPECT_EQ(r.haptics.trajectory, h.trajectory);
+  EXPECT_EQ(r.haptics.local_radius_m, h.local_radius_m);
+  const Scene d = parseScene(R"({"geometry": {"kind": "box"}, "models": {"mls": true}})", kFile, ".");
+  EXPECT_EQ(d.haptics.device, "scripted");
+  EXPECT_EQ(d.haptics.rate_hz, 1000.0);
+  EXPECT_FALSE(d.haptics.has_surface_point);
+  EXPECT_EQ(parseScene(sceneToJson(d), kFile, ".").haptics.rate_hz, 1000.0);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(HapticScene, BadHapticsKeysNameFileAndKey) {
+  const std::string k = "haptics.";
+  expectRefused(sceneWithHaptics({{"device", "phantom"}}).dump(), k + "device", "expected one of");
+  if (!openHapticsBuilt())
+    expectRefused(sceneWithHaptics({{"device", "openhaptics"}}).dump(), k + "device", "not built");
+  expectRefused(sceneWithHaptics({{"trajectory", "no_such_stroke.traj"}}).dump(), k + "trajectory",
+                "cannot open trajectory file");
+  expectRefused(sceneWithHaptics({{"trajectory", ""}}).dump(), k + "trajectory", "must name");
+  expectRefused(sceneWithHaptics({{"playback", "bytime"}}).dump(), k + "playback", "expected one of");
+  expectRefused(sceneWithHaptics({{"udp_port", 0}}).dump(), k + "udp_port", "[1, 65535]");
+  expectRefused(sceneWithHaptics({{"udp_port", 70000}}).dump(), k + "udp_port", "[1, 65535]");
+  expectRefused(sceneWithHaptics({{"udp_device", -1}}).dump(), k + "udp_device", "[0, 65535]");
+  expectRefused(sceneWithHaptics({{"max_force_n", 0}}).dump(), k + "max_force_n", "> 0");
+  expectRefused(sceneWithHaptics({{"rate_hz", 50}}).dump(), k + "rate_hz", "[100, 10000]");
+  expectRefused(sceneWithHaptics({{"rate_hz", "nan"}}).dump(), k + "rate_hz", "NaN");
+  expectRefused(sceneWithHaptics({{"max_force_rate_n_per_s", -1}}).dump(), k + "max_force_rate_n_per_s", "> 0");
+  expectRefused(sceneWithHaptics({{"cpu", -2}}).dump(), k + "cpu", "[-1, 4095]");
+  expectRefused(sceneWithHaptics({{"surface_normal", {0, 0, 0}}}).dump(), k + "surface_normal", "non-zero");
+  expectRefused(sceneWithHaptics({{"local_radius_m", -0.01}}).dump(), k + "local_radius_m", "> 0");
+  expectRefused(sceneWithHaptics({{"local_spacing_m", 0.005}}).dump(), k + "local_spacing_m", "at most half");
+  expectRefused(sceneWithHaptics({{"local_spacing_m", 1e-5}}).dump(), k + "local_spacing_m", "too fine");
+  expectRefused(sceneWithHaptics({{"blade_length_m", 0}}).dump(), k + "blade_length_m", "> 0");
+  expectRefused(sceneWithHaptics({{"blade_axis", {0, 0, 0}}}).dump(), k + "blade_axis", "non-zero");
+  expectRefused(sceneWithHaptics({{"rate", 1000}}).dump(), k + "rate", "did you mean");
+  expectRefused(sceneWithHaptics({{"realtime", 1}}).dump(), k + "realtime", "expected a boolean");
+  // A trajectory file with a bad line: the scene key, and the file and line in the reason.
+  const auto dir = std::filesystem::temp_directory_path() / ("incision_haptics_bad_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "bad.traj") << "0 0 0 0 1 0 0 0 0\n0.1 0 0 zero 1 0 0 0 0\n";
+  try {
+    parseScene(sceneWithHaptics({{"trajectory", "bad.traj"}}).dump(), kFile, dir.string());
+    ADD_FAILURE() << "accepted a bad trajectory";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), kFile);
+    EXPECT_EQ(e.key(), k + "trajectory");
+    EXPECT_NE(e.reason().find("bad.traj"), std::string::npos) << e.what();
+    EXPECT_NE(e.reason().find("line 2"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -242,7 +242,9 @@ int runViewer(const ViewerOptions& opt) {
     double last_x = 0, last_y = 0;
     ZContact contact;
     bool tool_valid = false;
-    Vec3d tool_tip;
+    Vec3d tool_tip, surface_hit;   // the tip, and the drawn surface under the cursor (when the tip is on it)
+    double haptic_shift_m = 0.0;   // pointer pose = tip + plane normal x this (frozen while a drag is held)
+    bool tip_on_surface = false;   // this frame's tip is surface_hit pressed in by press_depth_m
     std::string status;
     auto t_prev = std::chrono::steady_clock::now();
 
@@ -365,6 +367,7 @@ int runViewer(const ViewerOptions& opt) {
 
       // --- the tool under the mouse: z-buffer depth under the cursor places it on the drawn surface ---
       tool_valid = false;
+      tip_on_surface = false;
       contact = ZContact{};
       const double cx = mx * px_scale, cy = f.fb_h - my * px_scale;  // GL pixels, origin bottom-left
       if (layers.tool && (scripted_cursor || !io.WantCaptureMouse) && cx >= 0 && cy >= 0 && cx < f.fb_w && cy < f.fb_h) {
@@ -374,7 +377,8 @@ int runViewer(const ViewerOptions& opt) {
           Vec3d o, dir;
           f.cam.pixelRay(std::floor(cx) + 0.5, std::floor(cy) + 0.5, o, dir);
           tool_tip = hit + dir * press_depth_m;
-          tool_valid = true;
+          surface_hit = hit;
+          tool_valid = tip_on_surface = true;
           if (collision == ToolCollision::SplatZBuffer) {
             const ViewCamera zc = cameraRayDepthCamera(f.cam.eye, tool_tip, 0.01 * scene_radius, f.cam.far_m, 33);
             // The paper's GPU z-buffer test needs oriented splats: the surface's (view-facing particle
@@ -408,6 +412,10 @@ int runViewer(const ViewerOptions& opt) {
             tool_valid = true;
           }
         }
+        // In a haptics scene the haptic cutting tool cuts: the mouse stroke only moves its blade.
+        auto send = [&](const ToolEvent& e) {
+          if (!(opt.haptic_pointer && e.kind == ToolKind::Cut)) runner.queueTool(e);
+        };
         ToolEvent ev;
         ev.kind = tool_active ? active_kind : tool_mode == ToolMode::Cut ? ToolKind::Cut : ToolKind::Grasp;
         ev.axis = f.cam.forward;
@@ -429,18 +437,25 @@ int runViewer(const ViewerOptions& opt) {
           tool_view_depth = f.cam.viewDepth(tool_tip);
           ev.phase = ToolPhase::Press;
           ev.tip = tool_sent = tool_tip;
-          runner.queueTool(ev);
+          send(ev);
         } else if (tool_active && (down && supported)) {
           if (norm(tool_tip - tool_sent) > 1e-3 * scene_radius) {
             ev.phase = ToolPhase::Drag;
             ev.tip = tool_sent = tool_tip;
-            runner.queueTool(ev);
+            send(ev);
           }
         } else if (tool_active) {
           ev.phase = ToolPhase::Release;
           ev.tip = tool_sent = tool_tip;
-          runner.queueTool(ev);
+          send(ev);
           tool_active = false;
+        }
+        // The haptic pointer: the tip's pose every frame, pressed into the tissue plane by the press depth.
+        if (opt.haptic_pointer && tool_valid) {
+          const Vec3d& n = opt.haptic_plane_normal;
+          if (!tool_active && tip_on_surface) haptic_shift_m = dot(opt.haptic_plane_point_m - surface_hit, n);
+          const double identity[4] = {1.0, 0.0, 0.0, 0.0};
+          opt.haptic_pointer->setPose(tool_tip + n * haptic_shift_m, identity, down ? 1u : 0u);
         }
       }
       force_scale_used = forceArrowScale(model_layers.layers().forces, force_scale_m_per_n, scene_radius);
@@ -569,6 +584,10 @@ int runViewer(const ViewerOptions& opt) {
             blade_length_m = blade_mm * 1e-3;
           if (snap.tool_support.grasp || snap.tool_support.cut)
             ImGui::Text("held: %d%s", snap.last_tool.grasped, snap.last_tool.cut_applied ? "   last stroke cut" : "");
+          if (opt.haptic_pointer) {
+            const Vec3d hf = opt.haptic_pointer->displayForce();
+            ImGui::Text("haptic force %.3f N (%.3f, %.3f, %.3f)", norm(hf), hf.x, hf.y, hf.z);
+          }
           int mode = collision == ToolCollision::DepthBuffer ? 0 : 1;
           ImGui::RadioButton("depth under cursor", &mode, 0);
           ImGui::SameLine();

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "host/haptics/pointer_device.h"
 #include "host/simulation_model.h"
 #include "viewer/sim_runner.h"
 #include "viewer/zbuffer_collision.h"
@@ -80,6 +81,14 @@ struct ViewerOptions {
   // button is down and may set the cursor (window fractions; negative: unchanged). Overrides the real button
   // for the grasp / cut tool.
   std::function<bool(int frame, double& cursor_x, double& cursor_y)> scripted_mouse;
+  // A haptics scene (models.haptics): the mouse drives this device of the model's haptic loop. Every frame the
+  // tip under the cursor is sent as its pose (left button = button bit 0), shifted along the tissue plane's
+  // normal so that the depth below the plane is the tip's press depth below the drawn surface (ctrl + wheel);
+  // while a grasp / cut drag is held the tip moves in its view plane. In cut mode the haptic cutting tool's
+  // decisions (eqs. 15-16) cut instead of the mouse stroke. The loop's force shows as the tool arrow.
+  std::shared_ptr<PointerDevice> haptic_pointer;
+  Vec3d haptic_plane_point_m;             // the tissue plane of the haptic contact model (SceneHaptics::plane)
+  Vec3d haptic_plane_normal{0, 0, 1};
   std::function<void(const ViewerFrameInfo&)> on_frame;  // called after each frame is drawn
   bool verbose = false;            // print the GL version and progress to stdout
 };

@@ -9,6 +9,7 @@
 #include "host/cli/tradeoff_command.h"
 #include "host/cli/view_command.h"
 #include "host/embedded_scenes.h"
+#include "host/haptics/haptics_scene.h"
 #include "host/input_error.h"
 #include "host/runner.h"
 #include "host/scene_loader.h"
@@ -39,6 +40,12 @@ int cmdDevices() {
                 d.name.c_str(), d.sm_major, d.sm_minor, d.multiprocessors, double(d.global_memory_bytes) / (1 << 30),
                 d.peak_bandwidth_gbs);
   }
+  // Haptic device drivers (scene key haptics.device; docs/haptics.md).
+  std::printf("haptic devices: scripted, udp (127.0.0.1), pointer (the viewer's mouse)%s\n",
+              inc::openHapticsBuilt() ? ", openhaptics" : "");
+  std::printf("OpenHaptics driver: %s\n", inc::openHapticsBuilt()
+                                               ? "built (Phantom / Geomagic Touch through the HD API; untested here)"
+                                               : "not built (CMake did not find the OpenHaptics SDK: HD/hd.h and libHD)");
   return 0;
 }
 
@@ -76,7 +83,7 @@ int main(int argc, char** argv) {
   validate->add_option("scene", validate_arg, "Scene file (JSON)")->required();
 
   auto* scenes = app.add_subcommand("scenes", "List the embedded scenes");
-  auto* devices = app.add_subcommand("devices", "Report the CUDA devices this build can use");
+  auto* devices = app.add_subcommand("devices", "Report the CUDA devices and haptic device drivers this build can use");
 
   std::string tradeoff_arg, tradeoff_budgets = "1,16", tradeoff_out = "tradeoff", tradeoff_backend, tradeoff_models,
       tradeoff_cost = "wall";

@@ -5,6 +5,8 @@
 
 #include "host/input_error.h"
 #if INCISION_HAVE_VIEWER
+#include "host/haptics/haptic_scene_model.h"
+#include "host/haptics/pointer_device.h"
 #include "viewer/scene_knobs.h"
 #include "viewer/viewer_app.h"
 #endif
@@ -19,7 +21,35 @@ int runViewCommand(const Scene& scene_in, const ViewCommandOptions& options) {
   if (!setup.backend_note.empty()) std::fprintf(stderr, "%s\n", setup.backend_note.c_str());
   const Scene& scene = *setup.scene;
   viewer::ViewerOptions vo;
+  // models.haptics: the mouse drives a PointerDevice; each model the factory builds runs its haptic loop on it
+  // (the scene's own device is for `incision run`). The pointer's triple buffers have one reader and one writer,
+  // so a rebuild stops the previous model's loop first (and restarts it when the rebuild fails).
+  std::shared_ptr<PointerDevice> pointer;
+  if (scene.models.haptics) {
+    pointer = std::make_shared<PointerDevice>(scene.haptics.max_force_n);
+    auto last = std::make_shared<HapticSceneModel*>(nullptr);
+    setup.factory = [base = setup.factory, sc = setup.scene, pointer, last]() -> std::unique_ptr<SimulationModel> {
+      if (*last) (*last)->haptics().stop();
+      try {
+        SceneHapticsOptions ho;
+        ho.device = pointer;
+        ho.record_s = 10.0;  // the viewer plots the loop through the model counters, not the records
+        auto m = std::make_unique<HapticSceneModel>(base(), *sc, ho);
+        *last = m.get();
+        return m;
+      } catch (...) {
+        if (*last) (*last)->haptics().start();
+        throw;
+      }
+    };
+  }
   vo.model = setup.factory();
+  if (pointer) {
+    const TissuePlane plane = static_cast<HapticSceneModel&>(*vo.model).haptics().plane();
+    vo.haptic_pointer = pointer;
+    vo.haptic_plane_point_m = plane.point_m;
+    vo.haptic_plane_normal = plane.normal;
+  }
   vo.factory = setup.factory;
   vo.knobs = setup.knobs;
   vo.title = "Incision: " + scene.name;

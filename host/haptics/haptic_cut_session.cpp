@@ -56,14 +56,19 @@ HapticCutSession::HapticCutSession(SimulationModel& sim, HapticDevice& device, C
   ticks_per_frame_ = std::max(1, int(std::lround(config_.frame_dt_s / loop_->period_s())));
 }
 
-ToolEvent HapticCutSession::bladeEvent(ToolPhase phase, const Vec3d& tip, const double orientation[4]) const {
+ToolEvent bladeToolEvent(ToolPhase phase, const Vec3d& tip, const double orientation[4], const Vec3d& blade_axis_device,
+                         double blade_length_m) {
   ToolEvent e;
   e.kind = ToolKind::Cut;
   e.phase = phase;
   e.tip = tip;
-  e.axis = rotate(orientation, config_.blade_axis_device);
-  e.blade_length_m = config_.blade_length_m;
+  e.axis = rotate(orientation, blade_axis_device);
+  e.blade_length_m = blade_length_m;
   return e;
+}
+
+ToolEvent HapticCutSession::bladeEvent(ToolPhase phase, const Vec3d& tip, const double orientation[4]) const {
+  return bladeToolEvent(phase, tip, orientation, config_.blade_axis_device, config_.blade_length_m);
 }
 
 void HapticCutSession::runFrames(int frames) {

@@ -33,6 +33,12 @@ struct TopologySummary {
 };
 TopologySummary summarizeTopology(const SimulationModel& sim, const FrameReport& report);
 
+// The blade of a cut decision as a tool event for the cutting pipeline: a segment of blade_length_m centred on
+// `tip` along blade_axis_device (unit) turned by the device orientation (w, x, y, z). Lockstep and real-time
+// sessions build their events with it.
+ToolEvent bladeToolEvent(ToolPhase phase, const Vec3d& tip, const double orientation[4], const Vec3d& blade_axis_device,
+                         double blade_length_m);
+
 struct SessionFrame {
   std::uint64_t ticks_done = 0;  // haptic ticks run before this frame advanced
   int cut_events = 0;            // start/stop decisions handed to the cutting pipeline in this frame
@@ -47,7 +53,7 @@ struct SessionFrame {
 // while a cut is open, and advances the model one frame. The haptic forces depend only on the device
 // samples, the topology only on the decisions and poses, so replaying the recorded device trajectory
 // (HapticLoop::recordedTrajectory, ScriptedDevice kByTick) reproduces forces and topology bit for bit on
-// the same backend. A real-time session runs the loop on its own thread instead (HapticLoop::start) and
+// the same backend. The real-time session (haptic_cut_realtime.h) runs the loop on its own thread instead and
 // consumes tool.events() between frames the same way.
 class HapticCutSession {
  public:

@@ -24,6 +24,8 @@ std::int64_t steadyNs() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
       .count();
 }
+std::atomic<std::uint64_t> g_threads_started{0};
+
 double percentile(std::vector<double> v, double q) {
   if (v.empty()) return 0.0;
   const std::size_t k = std::min(v.size() - 1, static_cast<std::size_t>(std::ceil(q * double(v.size())) - 1));
@@ -180,6 +182,7 @@ void HapticLoop::start() {
   const std::size_t kept = records_.size();
   records_.resize(records_.capacity());
   records_.resize(kept);
+  g_threads_started.fetch_add(1, std::memory_order_relaxed);
   std::promise<HapticScheduling> ready;
   std::future<HapticScheduling> result = ready.get_future();
   thread_ = std::thread([this, ready = std::move(ready)]() mutable {
@@ -194,6 +197,8 @@ void HapticLoop::stop() {
   if (thread_.joinable()) thread_.join();
   running_.store(false);
 }
+
+std::uint64_t hapticLoopThreadsStarted() { return g_threads_started.load(std::memory_order_relaxed); }
 
 PeriodStats computePeriodStats(const std::vector<TickRecord>& records, double nominal_s, double late_tolerance) {
   PeriodStats s;

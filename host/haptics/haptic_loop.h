@@ -112,6 +112,8 @@ struct PeriodStats {
   std::uint64_t skipped = 0;   // deadlines dropped to resynchronise after falling a whole period behind
 };
 PeriodStats computePeriodStats(const std::vector<TickRecord>& records, double nominal_s, double late_tolerance);
+// Loop threads started by HapticLoop::start() in this process (a scene without haptics starts none).
+std::uint64_t hapticLoopThreadsStarted();
 
 // Latest tick, published for the simulation and viewer threads (read with status().update()/front()).
 struct HapticStatus {
