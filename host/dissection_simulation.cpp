@@ -640,6 +640,9 @@ class DissectionSimulation final : public SimulationModel {
     opt.stretch_compliance = scene_.pbd.stretch_compliance;
     opt.laplacian_compliance = scene_.pbd.laplacian_compliance;
     opt.fixed = scene_.fixed;
+    opt.file = scene_.file;
+    // The scene's supports must hold the organ as built; after a cut the clamped part may be gone.
+    opt.require_fixed_held = model_.size() == 0;
     opt.volume_samples = scene_.pbd.volume_preservation ? 64 : 0;
     spheres_ = std::move(m);
     model_ = buildMetaballPbdModel<T>(spheres_, opt);

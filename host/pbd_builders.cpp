@@ -75,7 +75,7 @@ PbdModel<T> buildMetaballPbdModel(const MetaballModel& mb, const MetaballPbdOpti
   }
   // A support that holds nothing lets the organ fall: say so instead (a coarse packing can leave a thin
   // clamp box between sphere centres).
-  for (std::size_t k = 0; k < opt.fixed.size(); ++k) {
+  for (std::size_t k = 0; opt.require_fixed_held && k < opt.fixed.size(); ++k) {
     double nearest = 1e300;
     bool held = false;
     for (std::size_t i = 0; i < n && !held; ++i) {

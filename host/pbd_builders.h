@@ -23,6 +23,8 @@ struct MetaballPbdOptions {
   std::vector<FixedRegion> fixed;    // spheres whose rest centre lies inside are fixed; a box that holds no
                                      // centre is an InputError naming fixed[k] (the body would fall)
   std::string file = "metaball options";  // named in errors (the scene file when built from a scene)
+  bool require_fixed_held = true;    // false: a box that holds no centre is allowed (a re-packed organ whose
+                                     // clamped part was cut away: the scene was checked when it was built)
   int volume_samples = 64;           // per sphere, for the power-cell volumes (0: no volume preservation)
 };
 

@@ -89,7 +89,8 @@ int main(int argc, char** argv) {
       tradeoff_cost = "wall";
   bool tradeoff_quick = false;
   auto* tradeoff = app.add_subcommand("tradeoff", "Sweep the scene's model knobs: ms per frame vs error (CSV, table, plot)");
-  tradeoff->add_option("scene", tradeoff_arg, "Scene file (JSON) or embedded scene name; default: the embedded default");
+  tradeoff->add_option("scene", tradeoff_arg,
+                       "Scene file (JSON) or embedded scene name; default: the embedded beam (analytic reference)");
   tradeoff->add_option("--budget-ms", tradeoff_budgets, "Comma list of frame budgets in ms for the Pareto tables");
   tradeoff->add_option("--out", tradeoff_out, "Output folder (tradeoff.csv, tradeoff.md, tradeoff.png)");
   tradeoff->add_option("--backend", tradeoff_backend, "auto | cuda | cpu (default cpu)");
@@ -131,7 +132,7 @@ int main(int argc, char** argv) {
       to.out_dir = tradeoff_out;
       to.models = tradeoff_models;
       to.cost = tradeoff_cost;
-      return inc::cli::runTradeoffCommand(resolveScene(tradeoff_arg), to);
+      return inc::cli::runTradeoffCommand(resolveScene(tradeoff_arg.empty() ? "beam" : tradeoff_arg), to);
     }
     if (*run) {
       const inc::Scene scene = resolveScene(scene_arg);

@@ -136,7 +136,7 @@ TEST(CutGpu, ScriptedDissectionHasTheSameTopologyOnBothBackends) {
   s.pbd.solver = "gauss_seidel";
   s.cutting.samples_per_diameter = 3;
   s.cutting.exchanges_per_frame = 2;
-  s.fixed = {{Vec3d(-1, -1, -1), Vec3d(1, 1, -0.012)}};
+  s.fixed = {{Vec3d(-1, -1, -1), Vec3d(1, 1, -0.008)}};  // the bottom layer of centres (z = -0.01)
   ToolSpec t;
   t.name = "scalpel";
   t.kind = "scalpel";
