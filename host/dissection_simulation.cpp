@@ -161,19 +161,8 @@ class DissectionSimulation final : public SimulationModel {
     scriptedStrokes(t0, t1);
     updateGraspers(t0);
     PbdFrameInput<T> in;
-    for (Grasper& g : graspers_) {
-      const ToolPose a = toolPoseAt(g.tool(), t0), b = toolPoseAt(g.tool(), t1);
-      if (g.holding()) {
-        g.appendAttachments(a.position, b.position, in);
-      } else {
-        in.tools_from.push_back(capsule(toolCapsule(g.tool(), a)));
-        in.tools_to.push_back(capsule(toolCapsule(g.tool(), b)));
-      }
-    }
-    for (const ToolSpec& t : probes_) {
-      in.tools_from.push_back(capsule(toolCapsule(t, toolPoseAt(t, t0))));
-      in.tools_to.push_back(capsule(toolCapsule(t, toolPoseAt(t, t1))));
-    }
+    for (const Grasper& g : graspers_) appendGrasperInput(g, t0, t1, in);
+    appendProbeInputs(probes_, t0, t1, in);
     appendMouseAttachments(mouse_, in);
     PbdFrameStats st;
     MlsFrameStats mls;
@@ -356,13 +345,6 @@ class DissectionSimulation final : public SimulationModel {
     double sweep_ms = 0, convert_ms = 0, exchange_ms = 0, repack_ms = 0, apply_ms = 0;
   };
 
-  static pbd::CapsuleCollider<T> capsule(const pbd::CapsuleCollider<double>& c) {
-    pbd::CapsuleCollider<T> o;
-    o.a = Vec3<T>(c.a);
-    o.b = Vec3<T>(c.b);
-    o.radius = T(c.radius);
-    return o;
-  }
 
   // Programmatic scenes bypass the JSON loader: the same ranges, the same keys.
   static void validateCutting(const Scene& s) {

@@ -69,4 +69,36 @@ class Grasper {
   std::vector<Vec3d> offsets_;  // centre - tip at the grasp (m)
 };
 
+// The tool capsule in the solver's precision.
+template <typename T>
+pbd::CapsuleCollider<T> capsuleAs(const pbd::CapsuleCollider<double>& c) {
+  pbd::CapsuleCollider<T> o;
+  o.a = Vec3<T>(c.a);
+  o.b = Vec3<T>(c.b);
+  o.radius = T(c.radius);
+  return o;
+}
+
+// A scripted tool's part of the frame input over [t0, t1]: a holding grasper's attachments, an open one's
+// capsule (it is a contact shape like a probe).
+template <typename T>
+void appendGrasperInput(const Grasper& g, double t0, double t1, PbdFrameInput<T>& in) {
+  const ToolPose a = toolPoseAt(g.tool(), t0), b = toolPoseAt(g.tool(), t1);
+  if (g.holding()) {
+    g.appendAttachments(a.position, b.position, in);
+  } else {
+    in.tools_from.push_back(capsuleAs<T>(toolCapsule(g.tool(), a)));
+    in.tools_to.push_back(capsuleAs<T>(toolCapsule(g.tool(), b)));
+  }
+}
+
+// Probes: contact capsules moving over [t0, t1].
+template <typename T>
+void appendProbeInputs(const std::vector<ToolSpec>& probes, double t0, double t1, PbdFrameInput<T>& in) {
+  for (const ToolSpec& t : probes) {
+    in.tools_from.push_back(capsuleAs<T>(toolCapsule(t, toolPoseAt(t, t0))));
+    in.tools_to.push_back(capsuleAs<T>(toolCapsule(t, toolPoseAt(t, t1))));
+  }
+}
+
 }  // namespace inc

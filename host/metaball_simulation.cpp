@@ -154,18 +154,9 @@ class MetaballSimulation final : public SimulationModel {
         }
         g.grasp(toolPoseAt(g.tool(), t0).position, c, r, movable_);
       }
-      const ToolPose a = toolPoseAt(g.tool(), t0), b = toolPoseAt(g.tool(), t1);
-      if (g.holding()) {
-        g.appendAttachments(a.position, b.position, in);
-      } else {
-        in.tools_from.push_back(capsule(toolCapsule(g.tool(), a)));
-        in.tools_to.push_back(capsule(toolCapsule(g.tool(), b)));
-      }
+      appendGrasperInput(g, t0, t1, in);
     }
-    for (const ToolSpec& t : probes_) {
-      in.tools_from.push_back(capsule(toolCapsule(t, toolPoseAt(t, t0))));
-      in.tools_to.push_back(capsule(toolCapsule(t, toolPoseAt(t, t1))));
-    }
+    appendProbeInputs(probes_, t0, t1, in);
     appendMouseAttachments(mouse_, in);
     PbdStepParams<T> p = params_;
     p.frame_dt = T(frame_dt);
@@ -275,13 +266,6 @@ class MetaballSimulation final : public SimulationModel {
   }
 
  private:
-  static pbd::CapsuleCollider<T> capsule(const pbd::CapsuleCollider<double>& c) {
-    pbd::CapsuleCollider<T> o;
-    o.a = Vec3<T>(c.a);
-    o.b = Vec3<T>(c.b);
-    o.radius = T(c.radius);
-    return o;
-  }
   int substeps() const { return std::max(1, int(std::ceil(base_substeps_ * substep_scale_ - 1e-9))); }
 
   // Kinetic, gravity potential (relative to rest) and compliance energy of the stretch and Laplacian
