@@ -19,4 +19,9 @@ struct DeviceReport {
 // Never throws: a missing driver or device is reported in the result.
 DeviceReport queryDevices();
 
+// The device's measured peak memory bandwidth (GB/s, bytes read + bytes written): the median of 10
+// device-to-device copies of 1 GiB (or a quarter of the free memory) after a warm-up, timed with events.
+// What the benchmarks' "of peak" divides by. 0 when no device is usable (never throws). ~0.1 s.
+double measureCopyBandwidthGbs();
+
 }  // namespace inc::cuda
