@@ -23,7 +23,7 @@ using namespace inc;
 namespace {
 
 struct Row {
-  std::string table, backend, precision, solver, path = "-";  // path (CUDA): fused | launches
+  std::string table, backend, precision, solver, path = "-";  // path (CUDA): cluster | fused | launches
   std::int64_t spheres = 0, constraints = 0;
   int iterations = 0, substeps = 0, colors = 0;
   std::string stages;  // "name=ms ..." of the last timed frame
@@ -93,7 +93,7 @@ bool pastDeadline() { return std::chrono::steady_clock::now() > g_deadline; }
 // first touch). --profile: one more frame with per-stage CUDA events (no graph, no fusion) gives the stage split.
 template <typename T>
 Row timeFrames(BackendKind kind, PbdSolverKind solver, std::int64_t n, int iterations, int substeps, int repeats,
-               int fused_max = 4096) {
+               int fused_max = 4096, int cluster_max = PbdStepParams<float>{}.cluster_max_particles) {
   Vec3d size;
   const PbdModel<T> m = blockModel<T>(n, size);
   auto be = makePbdBackend<T>(kind);
@@ -104,6 +104,7 @@ Row timeFrames(BackendKind kind, PbdSolverKind solver, std::int64_t n, int itera
   p.substeps = substeps;
   p.volume_influence = T(2 * kSpacing);
   p.fused_max_particles = fused_max;
+  p.cluster_max_particles = cluster_max;
   const PbdFrameInput<T> in = probeInput<T>(size);
   PbdFrameStats st;
   const auto row_start = std::chrono::steady_clock::now();
@@ -126,7 +127,7 @@ Row timeFrames(BackendKind kind, PbdSolverKind solver, std::int64_t n, int itera
   r.backend = backendName(be->kind());
   r.precision = sizeof(T) == 4 ? "float32" : "float64";
   r.solver = solver == PbdSolverKind::Jacobi ? "jacobi" : "gauss_seidel";
-  if (be->kind() == BackendKind::Cuda) r.path = std::int64_t(m.size()) <= fused_max ? "fused" : "launches";
+  if (be->kind() == BackendKind::Cuda) r.path = st.path;
   r.spheres = std::int64_t(m.size());
   r.constraints = solvedConstraints(m);
   r.iterations = iterations;
@@ -196,7 +197,8 @@ int main(int argc, char** argv) {
   CLI::App app{"PBD/XPBD metaball solver benchmark"};
   std::string backend = "auto", csv, precision = "float32";
   std::int64_t min_n = 100, max_n = 100000, cpu_max = 20000, accuracy_n = 570;
-  int iterations = 10, substeps = 4, repeats = 20, fused_max = 4096;
+  int iterations = 10, substeps = 4, repeats = 20, fused_max = 4096,
+      cluster_max = PbdStepParams<float>{}.cluster_max_particles;
   bool quick = false;
   app.add_option("--backend", backend, "auto (CPU and, when present, CUDA) | cpu | cuda");
   app.add_option("--precision", precision, "float32 | float64");
@@ -208,6 +210,8 @@ int main(int argc, char** argv) {
   app.add_option("--substeps", substeps, "substeps per 1/60 s frame");
   app.add_option("--repeats", repeats, "timed frames per point (median)");
   app.add_option("--fused-max", fused_max, "CUDA: largest sphere count run by the fused single-block kernel (0: never)");
+  app.add_option("--cluster-max", cluster_max,
+                 "CUDA, Jacobi: largest sphere count run by the thread-block cluster frame kernel (0: never)");
   app.add_option("--csv", csv, "write every row to this CSV file");
   app.add_flag("--quick", quick, "short run: up to 10^4 spheres, 5 repeats");
   double budget_s = 130.0;
@@ -260,13 +264,13 @@ int main(int argc, char** argv) {
             ++g_skipped;
             continue;
           }
-          const Row r = f64 ? timeFrames<double>(k, s, n, iterations, substeps, repeats, fused_max)
-                            : timeFrames<float>(k, s, n, iterations, substeps, repeats, fused_max);
+          const Row r = f64 ? timeFrames<double>(k, s, n, iterations, substeps, repeats, fused_max, cluster_max)
+                            : timeFrames<float>(k, s, n, iterations, substeps, repeats, fused_max, cluster_max);
           printRow(r);
           rows.push_back(r);
-          if (k == BackendKind::Cuda && r.path == "fused" && !pastDeadline()) {  // the same on per-phase launches, for comparison
-            const Row u = f64 ? timeFrames<double>(k, s, n, iterations, substeps, repeats, 0)
-                              : timeFrames<float>(k, s, n, iterations, substeps, repeats, 0);
+          if (k == BackendKind::Cuda && r.path != "launches" && !pastDeadline()) {  // the same on per-phase launches, for comparison
+            const Row u = f64 ? timeFrames<double>(k, s, n, iterations, substeps, repeats, 0, 0)
+                              : timeFrames<float>(k, s, n, iterations, substeps, repeats, 0, 0);
             printRow(u);
             rows.push_back(u);
           }
@@ -293,8 +297,8 @@ int main(int argc, char** argv) {
             ++g_skipped;
             continue;
           }
-          Row r = f64 ? timeFrames<double>(k, s, accuracy_n, it, substeps, std::max(3, repeats / 2), fused_max)
-                      : timeFrames<float>(k, s, accuracy_n, it, substeps, std::max(3, repeats / 2), fused_max);
+          Row r = f64 ? timeFrames<double>(k, s, accuracy_n, it, substeps, std::max(3, repeats / 2), fused_max, cluster_max)
+                      : timeFrames<float>(k, s, accuracy_n, it, substeps, std::max(3, repeats / 2), fused_max, cluster_max);
           r.table = "accuracy";
           r.deflection_m = f64 ? tipDeflection<double>(k, s, accuracy_n, it, substeps, frames, st)
                                : tipDeflection<float>(k, s, accuracy_n, it, substeps, frames, st);

@@ -87,7 +87,8 @@ class MetaballSimulation final : public SimulationModel {
     params_.solver = parsePbdSolver(scene.pbd.solver, f, "pbd.solver");
     params_.iterations = scene.pbd.iterations;
     // CUDA single-block fused frame: measured on an H100 (docs/BENCHMARKS.md) it beats per-phase launches for
-    // Gauss-Seidel up to thousands of spheres, but for Jacobi only below ~300 spheres.
+    // Gauss-Seidel up to thousands of spheres, but for Jacobi only below ~300 spheres; on sm_90 Jacobi models of up
+    // to cluster_max_particles run the thread-block cluster frame instead (faster still, docs/pbd.md).
     params_.fused_max_particles = params_.solver == PbdSolverKind::Jacobi ? 256 : 4096;
     params_.xpbd = scene.pbd.xpbd;
     params_.gravity = Vec3<T>(scene.solver.gravity);

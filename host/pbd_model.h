@@ -96,6 +96,11 @@ struct PbdStepParams {
   bool profile_stages = false;  // CUDA backend: time each stage with events (no graph, no fusion)
   int fused_max_particles = 4096; // CUDA backend: models up to this size run all substeps and iterations in one
                                   // single-block kernel (no launch per colour/block); 0 disables
+  int cluster_max_particles = 256; // CUDA backend, Jacobi: models up to this size run the frame in one thread-block
+                                   // cluster kernel (one launch, hardware barriers between phases) when it can
+                                   // (sm_90+, the replica fits shared memory); 0 disables. Measured faster than
+                                   // per-block launches up to ~250 spheres (docs/pbd.md)
+  int cluster_ctas = 0;          // CUDA cluster frame: CTAs of the cluster (1..16); 0 picks as many as the model needs
 };
 
 // What the host prescribes for one frame: kinematic particles move linearly from `from` to `to` over the
@@ -123,6 +128,7 @@ struct PbdFrameStats {
   std::vector<StageTime> stages;
   double residual_max = 0.0;   // max |C + alpha~ lambda| over Distance constraints after the last substep (m)
   double residual_rms = 0.0;
+  std::string path;            // CUDA: the frame kernel that ran (cluster | fused | launches); empty on the CPU
   int colors = 0;              // Gauss-Seidel: total colours over the solved blocks (0 for Jacobi)
   int iterations = 0;          // constraint iterations this frame (substeps * iterations)
   int volume_active = 0;       // spheres whose radius was solved this frame

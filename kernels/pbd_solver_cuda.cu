@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -13,6 +15,8 @@
 #include "kernels/device_buffer.h"
 #include "kernels/device_grow.h"
 #include "kernels/pbd_device_cuda.h"
+#include "kernels/pbd_frame_data.cuh"
+#include "kernels/pbd_cluster_frame.cuh"
 #include "kernels/pbd_group_projection.cuh"
 #include "physics/pbd_block.h"
 #include "physics/pbd_volume.h"
@@ -294,48 +298,7 @@ inline int blockArity(PbdConstraintKind k) {
 // block-strided loop over the same physics calls as the per-phase kernels above, separated by
 // __syncthreads() (which orders this block's global-memory writes), so the result equals the multi-launch
 // path bit for bit while paying one launch per frame instead of one per block, colour and iteration.
-constexpr int kMaxFusedBlocks = 8;
 constexpr int kFusedThreads = 1024;
-
-template <typename T>
-struct FusedBlock {
-  pbd::BlockView<T> view;
-  const std::int32_t* order = nullptr;          // Gauss-Seidel: constraints sorted by colour
-  const std::int32_t* color_offsets = nullptr;  // device copy, colors + 1 entries
-  int colors = 0;
-  int multipliers = 0;
-  bool solve = true;
-};
-
-template <typename T>
-struct FusedFrame {
-  int n = 0, substeps = 1, iterations = 1, nblocks = 0;
-  Vec3<T>* x = nullptr;
-  Vec3<T>* v = nullptr;
-  Vec3<T>* x_prev = nullptr;
-  const T* w = nullptr;
-  const T* r = nullptr;
-  Vec3<T> g;
-  T damp = T(1), dt = T(0);
-  pbd::SolveContext<T> ctx;
-  FusedBlock<T> blocks[kMaxFusedBlocks];
-  int n_kin = 0;
-  const std::int32_t* kin_ids = nullptr;
-  const Vec3<T>* kin_from = nullptr;
-  const Vec3<T>* kin_to = nullptr;
-  int n_att = 0;
-  const std::int32_t* att_ids = nullptr;
-  const Vec3<T>* att_from = nullptr;
-  const Vec3<T>* att_to = nullptr;
-  const T* att_comp = nullptr;
-  Vec3<T>* att_lambda = nullptr;
-  const pbd::PlaneCollider<T>* planes = nullptr;
-  const pbd::BoxCollider<T>* boxes = nullptr;
-  const pbd::CapsuleCollider<T>* tools_from = nullptr;
-  const pbd::CapsuleCollider<T>* tools_to = nullptr;
-  int np = 0, nb = 0, nt = 0;
-  bool staged = false;  // positions, inverse masses, masses and rotations copied to dynamic shared memory
-};
 
 // Dynamic shared memory the fused kernel needs to stage n particles (rotations, positions, w, mass).
 template <typename T>
@@ -471,7 +434,9 @@ bool sameKey(const GraphKey<T>& a, const GraphKey<T>& b) {
          x.rotation_iterations == y.rotation_iterations && x.volume_preservation == y.volume_preservation &&
          x.volume_influence == y.volume_influence && x.max_radius_growth == y.max_radius_growth &&
          x.volume_passes == y.volume_passes && x.bisection_steps == y.bisection_steps &&
-         x.fused_max_particles == y.fused_max_particles && a.kinematic == b.kinematic &&
+         x.fused_max_particles == y.fused_max_particles && x.cluster_max_particles == y.cluster_max_particles &&
+         x.cluster_ctas == y.cluster_ctas &&
+         a.kinematic == b.kinematic &&
          a.tools == b.tools && a.attached == b.attached && std::equal(a.ptrs, a.ptrs + 11, b.ptrs) &&
          a.n == b.n && a.topo == b.topo;
 }
@@ -552,6 +517,10 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
       d.slot_corr.resize(s.slotCount());
       d.slot_corr.fillZero();
     }
+    cluster_meta_.clear();
+    for (const PbdConstraintBlock<T>& b : m.blocks)
+      cluster_meta_.push_back({b.offsets, b.particle_slots, b.solve, int(b.kind)});
+    cluster_planned_for_ = -1;  // planned at the first Jacobi frame (planCluster)
     int reduced_blocks = 0;
     for (const DeviceBlock<T>& d : blocks_)
       if (d.kind == PbdConstraintKind::Distance && d.solve && d.count > 0) ++reduced_blocks;
@@ -610,6 +579,8 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
       for (const DeviceBlock<T>& d : blocks_)
         if (d.solve) st.colors += int(d.color_offsets.size()) - 1;
     st.iterations = p.substeps * p.iterations;
+    // The cluster frame's plan sets kernel attributes: outside any capture, before the frame is recorded.
+    if (jacobi && !patched_ && n_ <= p.cluster_max_particles) planCluster(p.cluster_ctas);
 
     if (p.profile_stages) {
       profile_ = true;
@@ -693,6 +664,8 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
         st.stages.push_back({"frame", double(e)});
       }
     }
+    st.path = last_path_;
+    if (cluster_split_.profile && std::string(last_path_) == "cluster") printClusterProfile();
     if (summaryDue() || p.profile_stages) summarize(p, st);
     ++frame_count_;
     return st;
@@ -944,6 +917,122 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     return d;
   }
 
+  // The thread-block cluster frame (kernels/pbd_cluster_frame.cuh): how many CTAs, which constraints and slots
+  // each projects, which particles each owns. Decided per model (host offsets at hand); usable when the device
+  // launches clusters and every CTA's replica fits its shared memory. Attributes are set here, outside captures.
+  void planCluster(int forced_ctas) {
+    if (cluster_planned_for_ == forced_ctas) return;
+    cluster_planned_for_ = forced_ctas;
+    cluster_ok_ = false;
+    if (n_ == 0 || cluster_meta_.size() > std::size_t(kMaxFusedBlocks) || forced_ctas > kMaxClusterCtas) return;
+    int dev = 0, major = 0, optin = 0;
+    INC_CUDA(cudaGetDevice(&dev));
+    INC_CUDA(cudaDeviceGetAttribute(&major, cudaDevAttrComputeCapabilityMajor, dev));
+    INC_CUDA(cudaDeviceGetAttribute(&optin, cudaDevAttrMaxSharedMemoryPerBlockOptin, dev));
+    if (major < 9) return;  // clusters and distributed shared memory: Hopper (sm_90) and newer
+    // Enough CTAs that every cluster constraint gets its lanes and every scalar constraint its thread in one
+    // pass (fewer CTAs: cheaper barriers), capped at the largest cluster the hardware allows.
+    const int groups_per_cta = kClusterThreads / pbdgroup::kGroup;
+    int want = (n_ + kClusterThreads - 1) / kClusterThreads;
+    for (const ClusterBlockMeta& b : cluster_meta_) {
+      const int c = int(b.offsets.size()) - 1;
+      if (!b.solve || c <= 0) continue;
+      const bool group = pbdgroup::usesGroup(b.kind);
+      want = std::max(want, group ? (c + groups_per_cta - 1) / groups_per_cta : (c + kClusterThreads - 1) / kClusterThreads);
+    }
+    int ctas = forced_ctas > 0 ? forced_ctas : std::min(want, kMaxClusterCtas);
+    ClusterSplit sp;
+    for (; ctas >= 1; --ctas) {
+      sp = ClusterSplit{};
+      sp.ctas = ctas;
+      sp.chunk = (n_ + ctas - 1) / ctas;
+      for (std::size_t bi = 0; bi < cluster_meta_.size(); ++bi) {
+        const ClusterBlockMeta& b = cluster_meta_[bi];
+        const std::int64_t c = std::int64_t(b.offsets.size()) - 1;
+        for (int r = 0; r <= ctas; ++r) {
+          sp.c_split[bi][r] = int(c * r / ctas);
+          sp.s_split[bi][r] = c > 0 ? b.offsets[std::size_t(sp.c_split[bi][r])] : 0;
+        }
+        if (b.solve)
+          for (int r = 0; r < ctas; ++r) sp.max_share = std::max(sp.max_share, sp.s_split[bi][r + 1] - sp.s_split[bi][r]);
+      }
+      const std::size_t bytes = clusterStageBytes<T>(n_, sp.max_share);
+      // The kernel's static shared memory (the split table) comes out of the same per-block limit.
+      cudaFuncAttributes fa{};
+      INC_CUDA(cudaFuncGetAttributes(&fa, clusterFrameKernel<T>));
+      const int dyn_max = optin - int(fa.sharedSizeBytes);
+      if (bytes > std::size_t(dyn_max)) break;  // fewer CTAs never shrink the replica
+      INC_CUDA(cudaFuncSetAttribute(clusterFrameKernel<T>, cudaFuncAttributeMaxDynamicSharedMemorySize, dyn_max));
+      INC_CUDA(cudaFuncSetAttribute(clusterFrameKernel<T>, cudaFuncAttributeNonPortableClusterSizeAllowed, 1));
+      cudaLaunchConfig_t cfg = {};
+      cudaLaunchAttribute attr[1];
+      attr[0].id = cudaLaunchAttributeClusterDimension;
+      attr[0].val.clusterDim.x = unsigned(ctas);
+      attr[0].val.clusterDim.y = 1;
+      attr[0].val.clusterDim.z = 1;
+      cfg.gridDim = dim3(unsigned(ctas));
+      cfg.blockDim = dim3(kClusterThreads);
+      cfg.dynamicSmemBytes = bytes;
+      cfg.attrs = attr;
+      cfg.numAttrs = 1;
+      int clusters = 0;
+      if (cudaOccupancyMaxActiveClusters(&clusters, clusterFrameKernel<T>, &cfg) != cudaSuccess) {
+        (void)cudaGetLastError();  // not sticky: this size cannot be launched
+        continue;
+      }
+      if (clusters < 1 || forced_ctas > 0) {
+        if (clusters < 1 && forced_ctas == 0) continue;
+        if (clusters < 1) return;  // the forced size cannot run here: per-launch path
+      }
+      // Each particle-slot entry's home: the CTA that projects its constraint and its place in that CTA's
+      // slot buffer.
+      cluster_home_.resize(cluster_meta_.size());
+      for (std::size_t bi = 0; bi < cluster_meta_.size(); ++bi) {
+        const ClusterBlockMeta& b = cluster_meta_[bi];
+        std::vector<std::int32_t> home(b.particle_slots.size());
+        for (std::size_t k = 0; k < home.size(); ++k) {
+          const std::int32_t slot = b.particle_slots[k];
+          int r = 0;
+          while (r + 1 < ctas && sp.s_split[bi][r + 1] <= slot) ++r;
+          home[k] = std::int32_t((std::uint32_t(r) << 24) | std::uint32_t(slot - sp.s_split[bi][r]));
+        }
+        cluster_home_[bi].upload(home);
+        sp.slot_home[bi] = cluster_home_[bi].data();
+      }
+      if (std::getenv("INCISION_PBD_CLUSTER_PROFILE")) {
+        cluster_profile_.resize(std::size_t(ctas) * kClusterProfileSlots);
+        sp.profile = cluster_profile_.data();
+      }
+      cluster_split_ = sp;
+      cluster_bytes_ = bytes;
+      cluster_ok_ = true;
+      return;
+    }
+  }
+
+  // Diagnostics (INCISION_PBD_CLUSTER_PROFILE set): microseconds per phase kind of the last cluster frame, as
+  // CTA 0 and the slowest CTA saw them, on stderr.
+  void printClusterProfile() {
+    INC_CUDA(cudaStreamSynchronize(stream_));
+    const std::vector<long long> c = cluster_profile_.download();
+    int dev = 0, khz = 0;
+    INC_CUDA(cudaGetDevice(&dev));
+    INC_CUDA(cudaDeviceGetAttribute(&khz, cudaDevAttrClockRate, dev));
+    const char* what[4] = {"project", "sync", "gather", "sync"};
+    std::fprintf(stderr, "cluster profile (%d CTAs, us: cta0/max):", cluster_split_.ctas);
+    for (int k = 0; k < kClusterProfileSlots; ++k) {
+      long long mx = 0;
+      for (int r = 0; r < cluster_split_.ctas; ++r) mx = std::max(mx, c[std::size_t(r * kClusterProfileSlots + k)]);
+      if (mx == 0) continue;
+      if (k == 0)
+        std::fprintf(stderr, " start");
+      else
+        std::fprintf(stderr, " b%d.%s", (k - 1) / 4, what[(k - 1) % 4]);
+      std::fprintf(stderr, "=%.1f/%.1f", 1e3 * double(c[std::size_t(k)]) / khz, 1e3 * double(mx) / khz);
+    }
+    std::fprintf(stderr, "\n");
+  }
+
   // Shared-memory staging of the fused kernel: used when the model fits this device's per-block opt-in limit
   // (float: up to ~6,000 particles on an H100); the attribute is set here, outside any graph capture.
   void updateStaging() {
@@ -1020,7 +1109,10 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     ctx.omega = p.jacobi_omega;
     ctx.rotation_iterations = p.rotation_iterations;
 
-    const bool fused = !profile_ && n_ > 0 && n_ <= p.fused_max_particles && int(blocks_.size()) <= kMaxFusedBlocks;
+    const bool cluster = !profile_ && cluster_ok_ && !patched_ && ctx.jacobi && n_ <= p.cluster_max_particles;
+    const bool fused =
+        cluster || (!profile_ && n_ > 0 && n_ <= p.fused_max_particles && int(blocks_.size()) <= kMaxFusedBlocks);
+    last_path_ = cluster ? "cluster" : fused ? "fused" : "launches";
     if (fused) {
       FusedFrame<T> f;
       f.n = n_;
@@ -1063,8 +1155,25 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
       f.nb = n_boxes_;
       f.nt = n_tools_;
       f.staged = staged_;
-      fusedFrameKernel<T><<<1, kFusedThreads, staged_ ? stage_bytes_ : 0, stream_>>>(f);
-      INC_CUDA_LAUNCH("pbd fused frame");
+      if (cluster) {
+        cudaLaunchConfig_t cfg = {};
+        cudaLaunchAttribute attr[1];
+        attr[0].id = cudaLaunchAttributeClusterDimension;
+        attr[0].val.clusterDim.x = unsigned(cluster_split_.ctas);
+        attr[0].val.clusterDim.y = 1;
+        attr[0].val.clusterDim.z = 1;
+        cfg.gridDim = dim3(unsigned(cluster_split_.ctas));
+        cfg.blockDim = dim3(kClusterThreads);
+        cfg.dynamicSmemBytes = cluster_bytes_;
+        cfg.stream = stream_;
+        cfg.attrs = attr;
+        cfg.numAttrs = 1;
+        INC_CUDA(cudaLaunchKernelEx(&cfg, clusterFrameKernel<T>, f, cluster_split_));
+        INC_CUDA_LAUNCH("pbd cluster frame");
+      } else {
+        fusedFrameKernel<T><<<1, kFusedThreads, staged_ ? stage_bytes_ : 0, stream_>>>(f);
+        INC_CUDA_LAUNCH("pbd fused frame");
+      }
     }
     for (int s = 0; s < (fused ? 0 : p.substeps); ++s) {
       const T t_end = T(s + 1) / T(p.substeps);
@@ -1253,6 +1362,20 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
   DeviceBuffer<pbd::CapsuleCollider<T>> tools_from_, tools_to_;
   DeviceBuffer<double> partials_;           // reduction partials: per distance block (max, sum), then summary
   std::vector<double> host_partials_;
+  struct ClusterBlockMeta {
+    std::vector<std::int32_t> offsets;  // host copy of the block's constraint -> slot offsets
+    std::vector<std::int32_t> particle_slots;  // and of its particle -> slot CSR entries
+    bool solve = true;
+    int kind = 0;
+  };
+  std::vector<ClusterBlockMeta> cluster_meta_;
+  const char* last_path_ = "launches";      // the frame kernel recordFrame chose last (reported in the stats)
+  std::vector<DeviceBuffer<std::int32_t>> cluster_home_;  // ClusterSplit::slot_home, per block
+  DeviceBuffer<long long> cluster_profile_;  // INCISION_PBD_CLUSTER_PROFILE: cycles per phase kind and CTA
+  int cluster_planned_for_ = -1;            // the cluster_ctas the current plan was made for (-1: none)
+  bool cluster_ok_ = false;                 // the cluster frame can run this model (planCluster)
+  ClusterSplit cluster_split_;
+  std::size_t cluster_bytes_ = 0;
   bool staged_ = false;                     // fused kernel stages particles in shared memory
   std::size_t stage_bytes_ = 0;
   std::vector<DeviceBlock<T>> blocks_;

@@ -49,8 +49,11 @@ PbdFrameInput<T> parityInput(const PbdModel<T>& m, int frame) {
   return in;
 }
 
+// fused_max / cluster_max: the frame paths' size limits (0 switches a path off); cluster_ctas forces the
+// cluster frame's CTA count (0: as the model needs).
 template <typename T>
-void runParity(PbdSolverKind solver, double pos_tol_m, double radius_tol_m, int fused_max = 4096) {
+void runParity(PbdSolverKind solver, double pos_tol_m, double radius_tol_m, int fused_max = 4096,
+               int cluster_max = 8192, int cluster_ctas = 0) {
   const PbdModel<T> m = parityModel<T>();
   auto cpu = cpu::makePbdCpuBackend<T>();
   auto gpu = cuda::makePbdCudaBackend<T>();
@@ -62,6 +65,8 @@ void runParity(PbdSolverKind solver, double pos_tol_m, double radius_tol_m, int 
   p.substeps = 4;
   p.volume_influence = T(0.004);
   p.fused_max_particles = fused_max;
+  p.cluster_max_particles = cluster_max;
+  p.cluster_ctas = cluster_ctas;
   PbdFrameStats sc, sg;
   for (int f = 0; f < 100; ++f) {
     const PbdFrameInput<T> in = parityInput(m, f);
@@ -123,8 +128,20 @@ TEST(PbdGpu, UnfusedLaunchesMatchCpuAfter100Frames) {
   if (!haveDevice()) {
     GTEST_SKIP() << "no CUDA device";
   }
-  runParity<double>(PbdSolverKind::Jacobi, 1e-9, 1e-9, 0);
-  runParity<double>(PbdSolverKind::GaussSeidel, 1e-9, 1e-9, 0);
+  runParity<double>(PbdSolverKind::Jacobi, 1e-9, 1e-9, 0, 0);
+  runParity<double>(PbdSolverKind::GaussSeidel, 1e-9, 1e-9, 0, 0);
+}
+// The Jacobi frame in a thread-block cluster with more CTAs than the 63-sphere beam needs, so that constraint
+// and particle ranges are split across CTAs (4 particles per CTA at 16) and nearly every gather and broadcast
+// crosses to another CTA's shared memory; also an odd count. The single-block frame is off.
+TEST(PbdGpu, ClusterFrameMatchesCpuAfter100Frames) {
+  if (!haveDevice()) {
+    GTEST_SKIP() << "no CUDA device";
+  }
+  for (int ctas : {16, 5, 1}) {
+    runParity<double>(PbdSolverKind::Jacobi, 1e-9, 1e-9, 0, 8192, ctas);
+    runParity<float>(PbdSolverKind::Jacobi, 2e-5, 2e-5, 0, 8192, ctas);
+  }
 }
 
 // The captured CUDA graph of per-phase launches, direct launches and the profiled path run the same kernels
@@ -146,6 +163,7 @@ TEST(PbdGpu, FusedGraphDirectAndProfiledFramesAreIdentical) {
       p.use_graph = mode != 1;
       p.profile_stages = mode == 2;
       p.fused_max_particles = mode == 0 ? 4096 : 0;  // mode 0: fused; 1: direct; 2: profiled; 3: graph
+      p.cluster_max_particles = 0;                   // the cluster frame: ClusterFrameMatchesLaunches...
       for (int f = 0; f < 20; ++f) {
         const PbdFrameStats st = gpu->advanceFrame(p, parityInput(m, f));
         ASSERT_TRUE(st.finite);
@@ -174,6 +192,50 @@ TEST(PbdGpu, FusedGraphDirectAndProfiledFramesAreIdentical) {
       EXPECT_NEAR(s[0].radii[i], s[1].radii[i], 1e-6f) << "fused, sphere " << i;
     }
   }
+}
+
+// A liver-sized model (16 x 6 x 6 = 576 spheres at 4 mm, the bench_pbd case's size) on the cluster frame
+// (as many CTAs as it needs: 9) against the per-block launches: the same physics calls and gather order,
+// compiled separately (multiply-add contraction may differ), so equal within 1e-5 m on a 6 cm beam after
+// 30 frames of a probe pressing and a grasp lifting (float32), and bitwise equal replays of the cluster frame
+// (deterministic: no atomics, fixed ownership).
+TEST(PbdGpu, ClusterFrameMatchesLaunchesOnLiverSizedModel) {
+  if (!haveDevice()) {
+    GTEST_SKIP() << "no CUDA device";
+  }
+  PbdModel<float> m = test::makeLatticeBeam<float>(0.06, 0.02, 0.02, 0.004, 2.0e4, true, 32);
+  ASSERT_EQ(m.size(), 576u);
+  pbd::PlaneCollider<float> ground;
+  ground.offset = -0.01f;
+  m.planes.push_back(ground);
+  PbdState<float> s[3];
+  for (int mode = 0; mode < 3; ++mode) {  // 0: launches; 1, 2: cluster frame
+    auto gpu = cuda::makePbdCudaBackend<float>();
+    gpu->setModel(m);
+    PbdStepParams<float> p;
+    p.solver = PbdSolverKind::Jacobi;
+    p.iterations = 10;
+    p.substeps = 4;
+    p.volume_influence = 0.004f;
+    p.fused_max_particles = 0;
+    p.cluster_max_particles = mode == 0 ? 0 : 8192;
+    for (int f = 0; f < 30; ++f) ASSERT_TRUE(gpu->advanceFrame(p, parityInput(m, f)).finite);
+    gpu->getState(s[mode]);
+  }
+  double dx = 0, disp = 0;
+  for (std::size_t i = 0; i < m.size(); ++i) {
+    dx = std::max(dx, double(norm(s[0].positions[i] - s[1].positions[i])));
+    disp = std::max(disp, double(norm(s[0].positions[i] - m.rest_positions[i])));
+    EXPECT_EQ(s[1].positions[i].x, s[2].positions[i].x) << "sphere " << i;
+    EXPECT_EQ(s[1].positions[i].y, s[2].positions[i].y) << "sphere " << i;
+    EXPECT_EQ(s[1].positions[i].z, s[2].positions[i].z) << "sphere " << i;
+    EXPECT_NEAR(s[0].rotations[i].w, s[1].rotations[i].w, 1e-4f) << "sphere " << i;
+    EXPECT_NEAR(s[0].rotations[i].x, s[1].rotations[i].x, 1e-4f) << "sphere " << i;
+  }
+  std::printf("576 spheres, cluster frame vs launches after 30 frames: max |dx| %.3e m (max displacement %.3e m)\n", dx,
+              disp);
+  EXPECT_GT(disp, 1e-3);
+  EXPECT_LT(dx, 1e-5);
 }
 
 #else
