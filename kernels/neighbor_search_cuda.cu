@@ -328,19 +328,27 @@ __device__ void sortRow(std::int32_t* a, std::int32_t k) {
 constexpr int kFillThreads = 128;
 constexpr int kRowCap = 48;
 constexpr int kRowStride = kFillThreads + 1;  // odd stride: the warp's column reads hit 32 distinct banks
+// The storage-order kernel keeps rows of at most 40 in shared memory and is held to 48 registers, so that ten
+// 128-thread tiles fit an SM instead of eight (shared memory and registers both limited it). Measured on an
+// H100 (docs/neighbor-search.md): 1e6 points 0.440 -> 0.420 ms, 1.6e7 6.25 -> 5.71 ms for the traversal; a cap of
+// 32 (twelve tiles) sends too many rows of the ~28-neighbour lattice down the long-row path (0.66 ms).
+constexpr int kStorageRowCap = 40;
+constexpr int kStorageMinBlocks = 10;
 
 // Appends during the traversal (a store and an increment: lanes of a warp hit at different candidates, so
 // whatever the visitor does runs for the whole warp at almost every candidate), sorts once afterwards.
 // The storage index is kept; finishColumn maps it to the original index after the loop.
-struct SharedAppendVisit {
+template <int Cap>
+struct SharedAppendVisitT {
   std::int32_t* col;  // this thread's column: entry i at col[i * kRowStride]
   std::int32_t k;
   __device__ void operator()(std::int32_t j) {
-    // Beyond kRowCap entries the row is only counted (the caller then rebuilds it in global memory).
-    if (k < kRowCap) col[k * kRowStride] = j;
+    // Beyond Cap entries the row is only counted (the caller then rebuilds it in global memory).
+    if (k < Cap) col[k * kRowStride] = j;
     ++k;
   }
 };
+using SharedAppendVisit = SharedAppendVisitT<kRowCap>;
 
 // Insertion sort of a column of k <= kRowCap entries in shared memory (linear when it is already sorted, as
 // storage-order rows of a dense grid in bucket order are).
@@ -500,12 +508,12 @@ struct SlotWriteVisit {
 // their CSR place by the whole warp (consecutive rows are contiguous: coalesced). Rows are only written when
 // the whole list fits `capacity` (the host checks offsets[nq] and runs again with an exact buffer if not);
 // the offsets are always complete. tile_status has gridDim.x zeroed words plus the tile counter.
-template <typename T>
-__global__ void __launch_bounds__(kFillThreads) storageSelfKernel(QuerySpec<T> s, std::int64_t* offsets,
+template <typename T, int Cap = kRowCap, int MinBlocks = 1>
+__global__ void __launch_bounds__(kFillThreads, MinBlocks) storageSelfKernel(QuerySpec<T> s, std::int64_t* offsets,
                                                                   std::int32_t* indices, std::uint64_t capacity,
                                                                   std::uint64_t* tile_status) {
   using Scan = cub::BlockScan<std::uint64_t, kFillThreads>;
-  __shared__ std::int32_t buf[kRowCap * kRowStride];
+  __shared__ std::int32_t buf[Cap * kRowStride];
   __shared__ typename Scan::TempStorage scan_tmp;
   __shared__ int s_tile;
   __shared__ std::uint64_t s_prefix;
@@ -518,10 +526,10 @@ __global__ void __launch_bounds__(kFillThreads) storageSelfKernel(QuerySpec<T> s
   Vec3<T> x;
   if (active) {
     x = s.g.point(t);
-    SharedAppendVisit v{buf + threadIdx.x, 0};
+    SharedAppendVisitT<Cap> v{buf + threadIdx.x, 0};
     forEachGridNeighbor(s.g, x, s.radius, t, v);
     k = v.k;
-    if (k <= kRowCap) sortColumn(buf + threadIdx.x, k);
+    if (k <= Cap) sortColumn(buf + threadIdx.x, k);
   }
   std::uint64_t local = 0, tile_total = 0;
   Scan(scan_tmp).ExclusiveSum(std::uint64_t(k), local, tile_total);
@@ -535,13 +543,13 @@ __global__ void __launch_bounds__(kFillThreads) storageSelfKernel(QuerySpec<T> s
   if (active) {
     offsets[t] = std::int64_t(begin);
     if (t == s.nq - 1) offsets[s.nq] = std::int64_t(begin + std::uint64_t(k));
-    if (k > kRowCap && fits) {  // a long row: traverse again straight into its place, then sort it there
+    if (k > Cap && fits) {  // a long row: traverse again straight into its place, then sort it there
       SlotWriteVisit v{indices + begin, 0};
       forEachGridNeighbor(s.g, x, s.radius, t, v);
       sortRow(v.row, v.k);
     }
   }
-  const std::int32_t small_k = active && fits && k <= kRowCap ? k : 0;
+  const std::int32_t small_k = active && fits && k <= Cap ? k : 0;
   __syncwarp();
   const int lane = threadIdx.x & 31;
   const int warp_base = threadIdx.x & ~31;
@@ -804,8 +812,8 @@ void GridNeighborSearch<T>::querySelfStorage(T radius, DeviceNeighborLists& out)
   cap = out.indices.capacity();
   for (int attempt = 0;; ++attempt) {
     INC_CUDA(cudaMemsetAsync(tile_status_.data(), 0, tile_status_.bytes()));
-    storageSelfKernel<T><<<tiles, kFillThreads>>>(s, out.offsets.data(), out.indices.data(), cap,
-                                                  tile_status_.data());
+    storageSelfKernel<T, kStorageRowCap, kStorageMinBlocks><<<tiles, kFillThreads>>>(
+        s, out.offsets.data(), out.indices.data(), cap, tile_status_.data());
     INC_CUDA_LAUNCH("storageSelfKernel");
     // Host sync 1 of 1 (2 when the lists outgrow the buffer): the total, to size the list exactly and to know
     // whether every row was written.
