@@ -23,26 +23,12 @@ double secondsSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// The tip tool: the tip node (singular weight, eq. 5) prescribed in x, y, z, the outer shell coupled.
-std::shared_ptr<const MfsLocalModel> tipModel(const HemisphereCloudSpec& spec, const MfsMaterial& material) {
-  HemisphereCloud c = hemisphereCloud(spec);
-  c.cloud.singular[0] = 1;
-  const int N = int(c.cloud.nodes.size());
-  std::vector<DofRole> roles(3 * N, DofRole::kFree);
-  const int outer = int(c.shell_r_m.size()) - 1;
-  for (int k = 0; k < 3; ++k) roles[k] = DofRole::kPrescribed;
-  for (int i = 1; i < N; ++i)
-    if (c.node_shell[i] == outer)
-      for (int k = 0; k < 3; ++k) roles[3 * i + k] = DofRole::kCoupled;
-  auto m = std::make_shared<MfsLocalModel>(c.cloud, material);
-  m->setRoles(roles);  // factorised once: the local cloud moves with the contact, K_bb does not change
-  return m;
-}
 }  // namespace
 
 HybridHapticModel::HybridHapticModel(BemModel& global, const HemisphereCloudSpec& local_spec,
                                      const MfsMaterial& material)
-    : global_(global), local_(tipModel(local_spec, material)) {
+    : global_(global), local_(mfsTipModel(local_spec, material)) {  // K_bb factorised once: the cloud moves with
+                                                                   // the contact, its stiffness does not
   setUp();
 }
 

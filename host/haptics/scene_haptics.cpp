@@ -100,12 +100,7 @@ SceneHaptics::SceneHaptics(const Scene& scene, const SimulationModel& model, Sce
   const HapticsSpec& h = scene.haptics;
   tip_ = mfsTipStiffness(MfsMaterial{scene.material.youngs_modulus, scene.material.poisson_ratio}, h.local_radius_m,
                          h.local_spacing_m, plane_.normal);
-  const TipStiffness tip = tip_;
-  CuttingTool::Elastic elastic = [tip](const Vec3d& d) {
-    ForceResult r;
-    r.force_n = tip.handForce(d);
-    return r;
-  };
+  const CuttingTool::Elastic elastic = tipElastic(tip_);
   const HapticLoopConfig config = loopConfig(scene, options.record_s);
   if (model.toolSupport().cut) {
     cut_tool_ = std::make_unique<CuttingTool>(elastic, scene.material.cutting, plane_.point_m, plane_.normal);
