@@ -16,6 +16,9 @@ printf '{"geometry":{"kind":"box"},"models":{"mls":true},"material":{"poisson_ra
 printf '{"geometry":{"kind":"box"},\n "models":{"mls":true},,}' >"$tmp/syntax.json"
 printf '{"geometry":{"kind":"box"},"models":{"mls":true},"solver":{"frame_dt":0.01}}' >"$tmp/typo.json"
 printf '{"geometry":{"kind":"mesh","mesh":"missing.obj"},"models":{"mls":true}}' >"$tmp/mesh.json"
+# Haptics: the second device's missing trajectory names its key path.
+printf '{"geometry":{"kind":"box","center_m":[0.005,0.005,0.005],"size_m":[0.01,0.01,0.01],"spacing_m":0.002},"models":{"mls":true,"haptics":true},"haptics":{"devices":[{"device":"udp","udp_port":47311},{"trajectory":"missing.traj"}]}}' >"$tmp/hands.json"
+expect 2 "hands.json: haptics.devices\[1\].trajectory: .*missing.traj" -- "$exe" validate "$tmp/hands.json"
 expect 2 "nope.json: .*no such file" -- "$exe" validate "$tmp/nope.json"
 expect 2 "nu.json: material.poisson_ratio: must lie" -- "$exe" validate "$tmp/nu.json"
 expect 2 "syntax.json.*line 2" -- "$exe" validate "$tmp/syntax.json"
