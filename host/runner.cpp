@@ -174,6 +174,9 @@ RunSummary runScene(const Scene& scene_in, const RunOptions& opt, const ModelFac
     sum.haptic = h.summary();
     for (std::size_t k = 0; k < h.handCount(); ++k) sum.haptic_stats.push_back(h.stats(k));
     if (scene.haptics.record_trajectory) (void)h.writeRecordings(out.string());
+    // The global model's organ, displaced by its last step (the tools' loads at the end of the run).
+    if (h.globalModel() && scene.output.mesh_obj)
+      writeObj((out / "final_haptic_organ_surface.obj").string(), h.globalModel()->deformedMesh());
   }
   sum.simulated_s = double(sum.frames_done) * dt;
   progress.finish(sum.failed ? "stopped" : "");

@@ -152,6 +152,10 @@ struct HapticsSpec {
   double local_radius_m = 0.008;       // MFS local model: half-ball radius around the tip, > 0
   double local_spacing_m = 0.002;      // MFS local model: inner node spacing, (0, local_radius_m / 2]
   bool record_trajectory = false;      // write each device's trajectory (hex floats) and tick forces to --out
+  std::string global_model = "none";   // "none" (the local model with a held boundary) | "bem" (hybrid MFS + BEM)
+  std::string global_mesh;             // bem: the organ's closed surface mesh (absolute once loaded)
+  double global_mesh_scale = 1.0;      // bem: metres per mesh file unit, > 0
+  std::string global_cache;            // bem: the precompute's cache file (absolute once loaded)
 };
 
 struct OutputSpec {

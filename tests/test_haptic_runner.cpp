@@ -10,9 +10,13 @@
 #include <string>
 #include <vector>
 
+#include "host/haptics/bem_global.h"
+#include "host/haptics/global_organ_mesh.h"
 #include "host/haptics/haptic_loop.h"
+#include "host/haptics/hybrid_model.h"
 #include "host/haptics/tip_contact.h"
 #include "host/input_error.h"
+#include "host/mesh.h"
 #include "host/runner.h"
 #include "host/scene_loader.h"
 #include "test_paths.h"
@@ -327,6 +331,80 @@ TEST(HapticRunner, TwoDeviceRecordingReplaysBitExactly) {
   std::size_t differ = 0;
   for (std::size_t i = 0; i < std::min(a.size(), b.size()); ++i) differ += a[i] != b[i];
   EXPECT_GT(differ, 10u);
+  fs::remove_all(dir);
+}
+
+// global_model "bem" through the runner: the organ (an icosphere of radius 5 cm, 80 elements, resting on a fixed box
+// around its bottom) is precomputed once, cached, and the tip pressed 2 mm into its top element feels the hybrid
+// coupling's force (HybridHapticModel touch + localTick on the same organ: 1e-9 relative), softer than the local
+// model with its boundary held; the global model steps once per frame (metrics: one contact, the organ surface
+// moved by the tip's 2 mm), the deformed organ is written, and a second run loads the cache and feels the same.
+TEST(HapticRunner, GlobalBemModelGivesTheHybridCouplingsForce) {
+  const fs::path dir = scratch("bem");
+  const TriangleMesh mesh = icosphereMesh(0.05, 1);
+  writeObj((dir / "organ.obj").string(), mesh);
+  BemModel bem(mesh, {3e3, 0.45});
+  int top = 0;
+  for (int j = 0; j < bem.elementCount(); ++j)
+    if (bem.centroids()[j].z > bem.centroids()[top].z) top = j;
+  const Vec3d c = bem.centroids()[top], n = bem.normals()[top];
+  {
+    std::ofstream t(dir / "press.traj");
+    t.precision(17);
+    for (const auto& [time, depth] : {std::pair{0.0, -2e-3}, std::pair{0.1, 2e-3}}) {
+      const Vec3d p = c - n * depth;
+      t << time << ' ' << p.x << ' ' << p.y << ' ' << p.z << " 1 0 0 0 0\n";
+    }
+  }
+  Scene s = slabScene((dir / "press.traj").string());
+  s.fixed = {FixedRegion{{-1, -1, -1}, {1, 1, -0.035}}};
+  s.haptics.global_model = "bem";
+  s.haptics.global_mesh = (dir / "organ.obj").string();
+  s.haptics.global_cache = (dir / "organ.bemcache").string();
+  s.haptics.has_surface_point = true;
+  s.haptics.surface_point_m = c;
+  s.haptics.surface_normal = n;
+  RunOptions opt;
+  opt.frames = 12;
+  opt.quiet = true;
+  opt.out_dir = (dir / "first").string();
+  const RunSummary first = runScene(s, opt, slabFactory);
+  ASSERT_FALSE(first.failed) << first.failure;
+  EXPECT_NE(first.haptic.find("global model bem: 80 elements (240 DOFs), built"), std::string::npos) << first.haptic;
+  EXPECT_TRUE(fs::exists(dir / "organ.bemcache"));
+
+  // The same organ by hand: the BEM model, its supports, the tip's local model, the contact at the top element.
+  const std::vector<BemBc> supports = organSupports(mesh, s.fixed);
+  bem.factorBase(supports);
+  HemisphereCloudSpec local;
+  local.inner_spacing_m = s.haptics.local_spacing_m;
+  local.inner_shells = 2;
+  local.radius_m = s.haptics.local_radius_m;
+  HybridHapticModel hybrid(bem, local, MfsMaterial{3e3, 0.45});
+  hybrid.touch(top);
+  const Vec3d d = n * -2e-3;
+  hybrid.globalStep(d, 0.0);
+  const Vec3d expected = hybrid.localTick(d).force_n;
+  const Vec3d model_force = lastModelForce(fs::path(opt.out_dir) / "haptic_forces.txt");
+  EXPECT_LE(norm(model_force - expected), 1e-9 * norm(expected)) << model_force.z << " vs " << expected.z;
+  EXPECT_LT(dot(model_force, n), dot(hybrid.localOnlyForce(d), n));  // the organ gives: softer than held
+  const fs::path csv = fs::path(opt.out_dir) / "metrics.csv";
+  EXPECT_EQ(lastCsvValue(csv, "haptic_organ_contacts"), 1.0);
+  EXPECT_NEAR(lastCsvValue(csv, "haptic_organ_max_displacement_m"), 2e-3, 1e-3);  // at least the tip's 2 mm
+  EXPECT_GE(lastCsvValue(csv, "haptic_organ_max_displacement_m"), 2e-3 * (1 - 1e-6));
+  const TriangleMesh deformed = loadMesh((fs::path(opt.out_dir) / "final_haptic_organ_surface.obj").string());
+  ASSERT_EQ(deformed.vertices.size(), mesh.vertices.size());
+  // Each vertex of the pressed element moves by the mean of its (5 or 6) elements: at least its sixth of the tip's
+  // 2 mm inward, its neighbours pressed in as well.
+  for (int v : mesh.triangles[std::size_t(top)])
+    EXPECT_GT(dot(mesh.vertices[std::size_t(v)] - deformed.vertices[std::size_t(v)], n), 2e-3 / 6.0) << "vertex " << v;
+
+  opt.out_dir = (dir / "second").string();
+  const RunSummary second = runScene(s, opt, slabFactory);
+  ASSERT_FALSE(second.failed) << second.failure;
+  EXPECT_NE(second.haptic.find("loaded from the cache"), std::string::npos) << second.haptic;
+  const Vec3d again = lastModelForce(fs::path(opt.out_dir) / "haptic_forces.txt");
+  EXPECT_LE(norm(again - expected), 1e-9 * norm(expected));
   fs::remove_all(dir);
 }
 

@@ -9,9 +9,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include "host/haptics/bem_global.h"
 #include "host/haptics/cutting_force_model.h"
 #include "host/haptics/haptics_scene.h"
 #include "host/input_error.h"
+#include "host/mesh.h"
 #include "host/scene_loader.h"
 
 namespace inc {
@@ -165,6 +167,7 @@ TEST(HapticScene, HapticsKeysAreReadAndRoundTrip) {
   EXPECT_EQ(d.haptics.devices[0].device, "scripted");
   EXPECT_EQ(d.haptics.devices[0].rate_hz, 1000.0);
   EXPECT_EQ(d.haptics.devices[0].tool, "auto");
+  EXPECT_EQ(d.haptics.global_model, "none");
   EXPECT_FALSE(d.haptics.has_surface_point);
   EXPECT_EQ(parseScene(sceneToJson(d), kFile, ".").haptics.devices[0].rate_hz, 1000.0);
   std::filesystem::remove_all(dir);
@@ -289,6 +292,66 @@ TEST(HapticScene, BadDevicesNameTheDevicesKeyPath) {
   j["haptics"]["devices"] = {{{"device", "udp"}, {"tool", "scalpel"}},
                              {{"device", "udp"}, {"udp_port", 47002}, {"tool", "scalpel"}}};
   expectRefused(j.dump(), k + "[1].tool", "only one device may hold the scalpel");
+}
+
+// global_model "bem": the organ mesh is resolved against the scene's folder, loaded and checked, its cache defaults
+// to the scene file's name with .bemcache beside it, and the keys read back to the same values.
+TEST(HapticScene, GlobalModelKeysAreReadCheckedAndRoundTrip) {
+  const auto dir = std::filesystem::temp_directory_path() / ("incision_haptics_global_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  writeObj((dir / "organ.obj").string(), icosphereMesh(0.05, 1));
+  const std::string scene_file = (dir / "touch.json").string();
+  nlohmann::json j = sceneWithHaptics({{"global_model", "bem"}, {"global_mesh", "organ.obj"}});
+  j["fixed"] = {{{"min_m", {-1, -1, -1}}, {"max_m", {1, 1, -0.035}}}};
+  const Scene s = parseScene(j.dump(), scene_file, dir.string());
+  EXPECT_EQ(s.haptics.global_model, "bem");
+  EXPECT_EQ(s.haptics.global_mesh, (dir / "organ.obj").lexically_normal().string());
+  EXPECT_EQ(s.haptics.global_mesh_scale, 1.0);
+  EXPECT_EQ(s.haptics.global_cache, (dir / "touch.bemcache").lexically_normal().string());
+  const Scene r = parseScene(sceneToJson(s), scene_file, dir.string());
+  EXPECT_EQ(sceneToJson(r), sceneToJson(s));
+  EXPECT_EQ(r.haptics.global_cache, s.haptics.global_cache);
+
+  auto refused = [&](nlohmann::json scene, const std::string& key, const std::string& part) {
+    try {
+      parseScene(scene.dump(), kFile, dir.string());
+      ADD_FAILURE() << "accepted: " << scene.dump();
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.file(), kFile) << e.what();
+      EXPECT_EQ(e.key(), key) << e.what();
+      EXPECT_NE(e.reason().find(part), std::string::npos) << e.what();
+    }
+  };
+  const std::string k = "haptics.";
+  nlohmann::json bad = j;
+  bad.erase("fixed");
+  refused(bad, k + "global_mesh", "no element centroid lies in a fixed region");
+  bad = j;
+  bad["haptics"].erase("global_mesh");
+  refused(bad, k + "global_mesh", "is required");
+  bad = j;
+  bad["haptics"]["global_model"] = "none";
+  refused(bad, k + "global_mesh", "only with global_model \"bem\"");
+  bad["haptics"]["global_model"] = "fem";
+  refused(bad, k + "global_model", "expected one of");
+  bad = j;
+  bad["haptics"]["global_mesh_scale"] = 0;
+  refused(bad, k + "global_mesh_scale", "> 0");
+  bad["haptics"]["global_mesh_scale"] = 1;
+  bad["haptics"]["global_cache"] = "";
+  refused(bad, k + "global_cache", "must name a file");
+  TriangleMesh open = icosphereMesh(0.05, 1);
+  open.triangles.pop_back();
+  writeObj((dir / "open.obj").string(), open);
+  bad = j;
+  bad["haptics"]["global_mesh"] = "open.obj";
+  refused(bad, k + "global_mesh", "closed");
+  writeObj((dir / "fine.obj").string(), icosphereMesh(0.05, 4));  // 5120 triangles
+  bad["haptics"]["global_mesh"] = "fine.obj";
+  refused(bad, k + "global_mesh", "more than the 1500");
+  bad["haptics"]["global_mesh"] = "absent.obj";
+  refused(bad, k + "global_mesh", "absent.obj");
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

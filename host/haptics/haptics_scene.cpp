@@ -1,4 +1,4 @@
-// Scene keys of the haptic loops: haptics.{devices[i].*, surface_*, local_*, record_trajectory}.
+// Scene keys of the haptic loops: haptics.{devices[i].*, surface_*, local_*, record_trajectory, global_*}.
 #include "host/haptics/haptics_scene.h"
 
 #include <algorithm>
@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "host/haptics/global_organ_mesh.h"
 #include "host/haptics/haptic_device.h"
 #include "host/input_error.h"
 
@@ -28,8 +29,9 @@ const std::vector<std::string>& deviceKeys() {
   return k;
 }
 const std::vector<std::string>& sharedKeys() {
-  static const std::vector<std::string> k = {"devices",         "surface_point_m", "surface_normal",
-                                             "local_radius_m",  "local_spacing_m", "record_trajectory"};
+  static const std::vector<std::string> k = {"devices",         "surface_point_m", "surface_normal",   "local_radius_m",
+                                             "local_spacing_m", "record_trajectory", "global_model",   "global_mesh",
+                                             "global_mesh_scale", "global_cache"};
   return k;
 }
 bool contains(const std::vector<std::string>& v, const std::string& s) { return std::find(v.begin(), v.end(), s) != v.end(); }
@@ -146,7 +148,7 @@ std::string hapticDeviceKey(const HapticsSpec& h, std::size_t index, const std::
 }
 
 HapticsSpec readHapticsSpec(const ObjectReader& top, const std::string& base_dir, const ModelsSpec& models,
-                            const std::vector<FixedRegion>& /*fixed: a global model's supports*/) {
+                            const std::vector<FixedRegion>& fixed) {
   HapticsSpec h;
   if (!top.has("haptics")) return h;
   const ObjectReader r = top.object("haptics");
@@ -189,6 +191,7 @@ HapticsSpec readHapticsSpec(const ObjectReader& top, const std::string& base_dir
     r.fail("local_spacing_m", "is too fine for local_radius_m (more than 64 shells: the local model would have "
                               "tens of thousands of nodes)" + got(h.local_spacing_m));
   h.record_trajectory = r.boolean("record_trajectory", h.record_trajectory);
+  readGlobalModelKeys(r, base_dir, fixed, h);  // host/haptics/global_organ_mesh.h
   return h;
 }
 
@@ -231,6 +234,7 @@ nlohmann::ordered_json hapticsSpecJson(const HapticsSpec& h) {
   j["local_radius_m"] = h.local_radius_m;
   j["local_spacing_m"] = h.local_spacing_m;
   j["record_trajectory"] = h.record_trajectory;
+  writeGlobalModelKeys(h, j);
   return j;
 }
 

@@ -7,9 +7,11 @@
 #include <filesystem>
 #include <limits>
 
+#include "host/haptics/global_organ_mesh.h"
 #include "host/haptics/haptics_scene.h"
 #include "host/haptics/udp_device.h"
 #include "host/input_error.h"
+#include "host/scene_json.h"
 #if INCISION_HAVE_OPENHAPTICS
 #include "host/haptics/openhaptics_device.h"
 #endif
@@ -112,6 +114,42 @@ long scalpelHand(const Scene& scene, const SimulationModel& model) {
   return -1;
 }
 
+// The scene's BEM organ (global_model "bem"): mesh, supports, the local model's cloud; errors name
+// haptics.global_mesh. The tissue plane's point must lie near the organ: a wrong global_mesh_scale or a mesh of
+// another organ would otherwise couple every contact to a far-away element.
+std::unique_ptr<GlobalOrganModel> sceneGlobalModel(const Scene& scene, const TissuePlane& plane, int hands, bool quiet) {
+  const HapticsSpec& h = scene.haptics;
+  const std::string key = "haptics.global_mesh";
+  GlobalOrganSetup setup;
+  try {
+    setup.mesh = loadGlobalOrganMesh(h.global_mesh, h.global_mesh_scale);
+  } catch (const InputError& e) {
+    throw InputError(scene.file, key, e.what());
+  }
+  const MeshReport rep = analyzeMesh(setup.mesh);
+  Vec3d gap;
+  for (int a = 0; a < 3; ++a)
+    gap[a] = std::max({rep.bbox_min[a] - plane.point_m[a], plane.point_m[a] - rep.bbox_max[a], 0.0});
+  const double diag = norm(rep.bbox_max - rep.bbox_min);
+  if (norm(gap) > 0.1 * diag)
+    throw InputError(scene.file, key,
+                     h.global_mesh + ": the organ mesh lies " + scene_json::formatNumber(norm(gap)) +
+                         " m from the tissue plane's point (its box is " + scene_json::formatNumber(diag) +
+                         " m across): is global_mesh_scale right, and is it the mesh of this organ?");
+  setup.supports = organSupports(setup.mesh, scene.fixed);
+  setup.material = BemMaterial{scene.material.youngs_modulus, scene.material.poisson_ratio};
+  setup.local.inner_spacing_m = h.local_spacing_m;
+  setup.local.inner_shells = 2;  // as mfsTipStiffness: the held and the coupled local model are the same cloud
+  setup.local.radius_m = h.local_radius_m;
+  setup.cache_path = h.global_cache;
+  setup.quiet = quiet;
+  try {
+    return std::make_unique<GlobalOrganModel>(std::move(setup), hands);
+  } catch (const InputError& e) {
+    throw InputError(scene.file, key, e.what());
+  }
+}
+
 }  // namespace
 
 SceneHaptics::SceneHaptics(const Scene& scene, const SimulationModel& model, SceneHapticsOptions options) {
@@ -123,6 +161,7 @@ SceneHaptics::SceneHaptics(const Scene& scene, const SimulationModel& model, Sce
   tip_ = mfsTipStiffness(MfsMaterial{scene.material.youngs_modulus, scene.material.poisson_ratio}, h.local_radius_m,
                          h.local_spacing_m, plane_.normal);
   const long scalpel = scalpelHand(scene, model);
+  if (h.global_model == "bem") organ_ = sceneGlobalModel(scene, plane_, int(h.devices.size()), options.quiet);
   // Every device is built before any loop exists: a device that cannot be opened starts nothing.
   std::vector<std::shared_ptr<HapticDevice>> devices;
   for (std::size_t k = 0; k < h.devices.size(); ++k)
@@ -134,7 +173,7 @@ SceneHaptics::SceneHaptics(const Scene& scene, const SimulationModel& model, Sce
     c.counter_prefix = k == 0 ? "haptic" : "haptic" + std::to_string(k);
     c.scalpel = long(k) == scalpel;
     c.plane = plane_;
-    c.elastic = tipElastic(tip_);
+    c.elastic = organ_ ? organ_->contactElastic(int(k)) : tipElastic(tip_);
     c.cut = scene.material.cutting;
     c.blade_length_m = d.blade_length_m;
     c.blade_axis_device = d.blade_axis;
@@ -159,6 +198,11 @@ void SceneHaptics::beforeFrame(SimulationModel& model) {
 
 void SceneHaptics::afterFrame(FrameReport& report) {
   for (auto& hnd : hands_) hnd->afterFrame(report);
+  if (organ_) {  // the global model at the visual rate: once per frame
+    organ_->step();
+    report.counters["haptic_organ_max_displacement_m"] = organ_->maxSurfaceDisplacement_m();
+    report.counters["haptic_organ_contacts"] = organ_->contacts();
+  }
 }
 
 bool SceneHaptics::cutting() const {
@@ -182,6 +226,7 @@ int SceneHaptics::cutsApplied() const {
 std::string SceneHaptics::summary() const {
   std::string out;
   for (const auto& hnd : hands_) out += (out.empty() ? "" : "; ") + hnd->summary();
+  if (organ_) out += "; " + organ_->summary();
   return out;
 }
 

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "host/haptics/global_organ_model.h"
 #include "host/haptics/haptic_hand.h"
 #include "host/haptics/tip_contact.h"
 #include "host/scene.h"
@@ -32,7 +33,8 @@ struct SceneHapticsOptions {
 
 // Built for the model the haptic tools touch. Each device is a HapticHand on its own thread at its own rate; its
 // tip's elastic reaction is the MFS local model (haptics.local_*, the scene's material) condensed to a 3 x 3 tip
-// stiffness with its outer shell held. On a model that can be cut one hand may hold the scalpel (tool "scalpel", or "auto" for the first
+// stiffness: with its outer shell held (global_model "none"), or coupled to the BEM organ (global_model "bem": a
+// GlobalOrganModel built here, its precompute cached; it steps once per frame in afterFrame). On a model that can be cut one hand may hold the scalpel (tool "scalpel", or "auto" for the first
 // device): its CuttingTool (material.cutting, eqs. 15-16) decides where cuts start and stop and the model is cut
 // between frames; every other hand holds a probe (contact force only). The loops' stall fade starts when the
 // simulation's data is two frames old (the simulation thread late by more than a frame). Nothing runs until
@@ -50,8 +52,11 @@ class SceneHaptics {
   // Simulation thread: the scalpel's cut decisions to the pipeline (cutting models; nothing otherwise).
   void beforeFrame(SimulationModel& model);
   // Simulation thread: each hand's data time and counters (HapticHand::afterFrame; the first hand's prefix is
-  // "haptic", hand k's "haptic<k>").
+  // "haptic", hand k's "haptic<k>"); with the global model its step and the counters
+  // haptic_organ_max_displacement_m and haptic_organ_contacts.
   void afterFrame(FrameReport& report);
+  // The BEM global model (global_model "bem"), else nullptr.
+  const GlobalOrganModel* globalModel() const { return organ_.get(); }
 
   std::size_t handCount() const { return hands_.size(); }
   HapticHand& hand(std::size_t k) { return *hands_.at(k); }
@@ -60,7 +65,8 @@ class SceneHaptics {
   PeriodStats stats(std::size_t k = 0) const { return loop(k).stats(); }
   const HapticScheduling& scheduling(std::size_t k = 0) const { return loop(k).scheduling(); }
   Trajectory recordedTrajectory(std::size_t k = 0) const { return loop(k).recordedTrajectory(); }
-  // One summary per hand ("haptic loop 1000 Hz, device scripted, ..."), joined by "; " (after stop()).
+  // One summary per hand ("haptic loop 1000 Hz, device scripted, ..."), then the global model's, joined by "; "
+  // (after stop()).
   std::string summary() const;
   // After stop(): each hand's device trajectory (hex floats, replayable with playback "tick") and tick forces
   // (writeTickForces) in `dir`: haptic_trajectory.traj and haptic_forces.txt for the single-device form,
@@ -78,6 +84,7 @@ class SceneHaptics {
  private:
   TissuePlane plane_;
   TipStiffness tip_;
+  std::unique_ptr<GlobalOrganModel> organ_;  // before the hands: their elastic models refer to it
   std::vector<std::unique_ptr<HapticHand>> hands_;
 };
 
