@@ -174,6 +174,7 @@ void GlobalOrganModel::step() {
   }
   max_u_ = 0.0;
   for (int j = 0; j < elementCount(); ++j) max_u_ = std::max(max_u_, u_.segment<3>(3 * j).norm());
+  peak_u_ = std::max(peak_u_, max_u_);
   ++steps_;
   last_step_s_ = secondsSince(t0);
 }
@@ -196,9 +197,9 @@ std::string GlobalOrganModel::summary() const {
   char buf[320];
   std::snprintf(buf, sizeof buf,
                 "global model bem: %d elements (%d DOFs), %s, precompute %.2f s; %llu steps (one per frame), last "
-                "step %.1f us, organ surface max displacement %.3g m",
+                "step %.1f us, organ surface max displacement %.3g m now, %.3g m at most",
                 elementCount(), 3 * elementCount(), precompute_.source.c_str(), precompute_.seconds,
-                static_cast<unsigned long long>(steps_), 1e6 * last_step_s_, max_u_);
+                static_cast<unsigned long long>(steps_), 1e6 * last_step_s_, max_u_, peak_u_);
   std::string out = buf;
   if (!precompute_.note.empty()) out += " (" + precompute_.note + ")";
   return out;

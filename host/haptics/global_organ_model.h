@@ -74,12 +74,14 @@ class GlobalOrganModel {
   void step();
   const Eigen::VectorXd& surfaceDisplacement() const { return u_; }  // 3 per element, world, m
   double maxSurfaceDisplacement_m() const { return max_u_; }
+  double peakSurfaceDisplacement_m() const { return peak_u_; }  // the largest of maxSurfaceDisplacement_m so far
   int contacts() const { return contacts_; }
   std::uint64_t steps() const { return steps_; }
   double lastStepSeconds() const { return last_step_s_; }
   // The organ mesh displaced by the last step (each vertex by the mean of its elements' displacements).
   TriangleMesh deformedMesh() const;
-  // "global model bem: 80 elements (240 DOFs), loaded from the cache, precompute 0.01 s; 50 steps, ..." .
+  // "global model bem: 80 elements (240 DOFs), loaded from the cache, precompute 0.01 s; 50 steps (one per frame),
+  // last step 2.0 us, organ surface max displacement 0 m now, 0.002 m at most" .
   std::string summary() const;
 
  private:
@@ -90,7 +92,7 @@ class GlobalOrganModel {
   GlobalOrganPrecompute precompute_;
   std::vector<std::unique_ptr<TripleBuffer<OrganContact>>> channels_;
   Eigen::VectorXd u_;
-  double max_u_ = 0.0, last_step_s_ = 0.0;
+  double max_u_ = 0.0, peak_u_ = 0.0, last_step_s_ = 0.0;
   int contacts_ = 0;
   std::uint64_t steps_ = 0;
 };
