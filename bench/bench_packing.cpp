@@ -145,7 +145,7 @@ Row skinCuda(const SkinArrays<T>& arr, const SphereNeighbourhoods<T>& nb, const 
 template <typename T>
 int run(const std::string& backend, const std::string& precision, int min_v, int max_v, int cpu_max, int k,
         const PackingOptions& popt, bool quick, int repeats, const std::string& csv) {
-  const bool want_gpu = backend != "cpu";
+  [[maybe_unused]] const bool want_gpu = backend != "cpu";  // read only with CUDA
   bool have_gpu = false;
 #if INCISION_HAVE_CUDA
   have_gpu = want_gpu && cuda::queryDevices().device_count > 0;

@@ -109,6 +109,7 @@ RunSummary runScene(const Scene& scene_in, const RunOptions& opt, const ModelFac
   // models.haptics: the haptic loop starts on its own thread beside this one (docs/haptics.md); none otherwise.
   SceneHapticsOptions haptic_options;
   haptic_options.record_s = std::min(600.0, 1.5 * double(sum.frames_requested) * dt + 5.0);
+  haptic_options.quiet = opt.quiet;
   HapticSceneModel* haptic = attachSceneHaptics(models, scene, haptic_options);
 
   std::vector<Vec3d> pts;
@@ -168,11 +169,14 @@ RunSummary runScene(const Scene& scene_in, const RunOptions& opt, const ModelFac
   }
   sum.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (haptic) {
-    haptic->haptics().stop();
-    sum.haptic = haptic->haptics().summary();
-    sum.haptic_stats = haptic->haptics().stats();
-    if (scene.haptics.record_trajectory)
-      writeTrajectory((out / "haptic_trajectory.traj").string(), haptic->haptics().recordedTrajectory());
+    SceneHaptics& h = haptic->haptics();
+    h.stop();
+    sum.haptic = h.summary();
+    for (std::size_t k = 0; k < h.handCount(); ++k) sum.haptic_stats.push_back(h.stats(k));
+    if (scene.haptics.record_trajectory) (void)h.writeRecordings(out.string());
+    // The global model's organ, displaced by its last step (the tools' loads at the end of the run).
+    if (h.globalModel() && scene.output.mesh_obj)
+      writeObj((out / "final_haptic_organ_surface.obj").string(), h.globalModel()->deformedMesh());
   }
   sum.simulated_s = double(sum.frames_done) * dt;
   progress.finish(sum.failed ? "stopped" : "");

@@ -5,6 +5,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "host/haptics/haptic_loop.h"
 #include "host/scene.h"
@@ -36,8 +37,8 @@ struct RunSummary {
   double max_displacement = 0.0;
   double final_total_energy = 0.0;
   MemoryReport memory;
-  std::string haptic;         // a models.haptics scene: the haptic loop's statistics (SceneHaptics::summary)
-  PeriodStats haptic_stats;   // ... and its period statistics (ticks == 0: no haptic loop ran)
+  std::string haptic;         // a models.haptics scene: each haptic loop's statistics (SceneHaptics::summary)
+  std::vector<PeriodStats> haptic_stats;  // ... and its period statistics, one per device (empty: no haptic loop)
   std::string line() const;  // the one-line summary printed at the end
 };
 

@@ -118,9 +118,10 @@ struct CuttingSpec {
   double repack_sphere_budget = 1.0;     // (0, 8]: new spheres per converted sphere's mass, per group (merging)
 };
 
-// The haptic loop of a scene with models.haptics (docs/scene-format.md `haptics`, docs/haptics.md). Read by the
-// runner (`incision run`: the device below) and the viewer (`incision view`: the mouse drives the tip).
-struct HapticsSpec {
+// One haptic device of a scene and its loop (docs/scene-format.md `haptics`, docs/haptics.md): the single-device
+// form's keys sit in `haptics` itself, the list form's in each `haptics.devices[i]`.
+struct HapticDeviceSpec {
+  std::string name;                    // unique among the devices; "" in the single-device form
   std::string device = "scripted";     // "scripted" | "udp" | "openhaptics"
   std::string trajectory;              // scripted: trajectory file (absolute once loaded; docs/haptics.md format)
   std::string playback = "time";       // scripted: "time" (interpolate by loop time) | "tick" (bit-exact replay)
@@ -134,14 +135,27 @@ struct HapticsSpec {
   double max_force_rate_n_per_s = 1000.0;  // rate limiter, > 0
   bool realtime = true;                // ask SCHED_FIFO for the loop thread
   int cpu = -1;                        // >= 0: pin the loop thread to this CPU
+  std::string tool = "auto";           // "auto" | "scalpel" | "probe" (auto: the first device on a model that can
+                                       // be cut holds the scalpel, every other device a probe)
+  double blade_length_m = 0.05;        // scalpel: the blade segment centred on the tip, > 0
+  Vec3d blade_axis{0, 0, 1};           // scalpel: blade direction in the device frame (normalised on load)
+};
+
+// The haptic loops of a scene with models.haptics (docs/scene-format.md `haptics`, docs/haptics.md). Read by the
+// runner (`incision run`: one loop per device) and the viewer (`incision view`: the mouse drives the first device).
+struct HapticsSpec {
+  std::vector<HapticDeviceSpec> devices{HapticDeviceSpec{}};  // one per hand: 1 to 4
+  bool devices_listed = false;         // the scene used the list form (`haptics.devices`); written back the same
   bool has_surface_point = false;      // false: the organ's highest point along surface_normal
-  Vec3d surface_point_m{0, 0, 0};      // the tissue plane of the tool's contact model
+  Vec3d surface_point_m{0, 0, 0};      // the tissue plane of the tools' contact model
   Vec3d surface_normal{0, 0, 1};       // its outward unit normal (normalised on load)
   double local_radius_m = 0.008;       // MFS local model: half-ball radius around the tip, > 0
   double local_spacing_m = 0.002;      // MFS local model: inner node spacing, (0, local_radius_m / 2]
-  double blade_length_m = 0.05;        // cutting: the blade segment centred on the tip, > 0
-  Vec3d blade_axis{0, 0, 1};           // cutting: blade direction in the device frame (normalised on load)
-  bool record_trajectory = false;      // write the device trajectory (hex floats) as haptic_trajectory.traj in --out
+  bool record_trajectory = false;      // write each device's trajectory (hex floats) and tick forces to --out
+  std::string global_model = "none";   // "none" (the local model with a held boundary) | "bem" (hybrid MFS + BEM)
+  std::string global_mesh;             // bem: the organ's closed surface mesh (absolute once loaded)
+  double global_mesh_scale = 1.0;      // bem: metres per mesh file unit, > 0
+  std::string global_cache;            // bem: the precompute's cache file (absolute once loaded)
 };
 
 struct OutputSpec {

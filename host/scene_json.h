@@ -76,6 +76,10 @@ class ObjectReader {
 std::string joinPath(const std::string& parent, const std::string& key);
 std::string indexPath(const std::string& parent, std::size_t index);
 
+// A file path a scene names: relative paths are taken from base_dir (the scene file's folder; "" = the current
+// folder); the result is absolute and normalised.
+std::string resolvePath(const std::string& path, const std::string& base_dir);
+
 // Reads a finite number / integer / 3-vector from a JSON value at `path` (for array elements).
 double numberAt(const nlohmann::json& v, const std::string& file, const std::string& path);
 Vec3d vec3At(const nlohmann::json& v, const std::string& file, const std::string& path);

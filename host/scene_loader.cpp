@@ -81,14 +81,6 @@ std::vector<std::string> kindKeys(GeometrySpec::Kind k) {
   return {};
 }
 
-std::string resolveMeshPath(const std::string& mesh, const std::string& base_dir) {
-  std::filesystem::path p(mesh);
-  if (p.is_relative()) p = std::filesystem::path(base_dir.empty() ? "." : base_dir) / p;
-  std::error_code ec;
-  const std::filesystem::path abs = std::filesystem::absolute(p, ec);
-  return (ec ? p : abs).lexically_normal().string();
-}
-
 // Loads and checks the mesh of a "mesh" geometry; returns its extent and volume in metres for the sampling checks.
 void checkMeshGeometry(const ObjectReader& g, const GeometrySpec& spec, double& min_extent, double& volume) {
   TriangleMesh mesh;
@@ -157,7 +149,7 @@ GeometrySpec readGeometry(const ObjectReader& top, const std::string& base_dir) 
       if (!g.has("mesh")) g.fail("mesh", "is required when geometry.kind is \"mesh\" (a .obj, .ply or .stl file)");
       const std::string rel = g.string("mesh", "");
       if (rel.empty()) g.fail("mesh", "must name a mesh file");
-      s.mesh_path = resolveMeshPath(rel, base_dir);
+      s.mesh_path = scene_json::resolvePath(rel, base_dir);
       checkMeshGeometry(g, s, min_extent, volume);
       break;
     }
@@ -482,7 +474,7 @@ Scene parseScene(const std::string& json_text, const std::string& file_label, co
   s.output = readOutput(top);
   s.tearing = readTearing(top);
   s.cutting = readCutting(top);
-  s.haptics = readHapticsSpec(top, base_dir);  // host/haptics/haptics_scene.h
+  s.haptics = readHapticsSpec(top, base_dir, s.models, s.fixed);  // host/haptics/haptics_scene.h
   return s;
 }
 

@@ -95,8 +95,8 @@ inline SessionRun runSession(HapticDevice& device, int frames, BackendKind backe
   const Scene scene = blockScene();
   auto sim = makeDissectionSimulation(scene, backend, precision);
   const TipModel tip;
-  CuttingTool tool([&tip](const Vec3d& d) { return tip(d); }, scene.material.cutting, Vec3d{0, 0, 0.015},
-                   Vec3d{0, 0, 1});
+  CuttingTool tool([&tip](const TipContact& c) { return tip(c.displacement_m); }, scene.material.cutting,
+                   Vec3d{0, 0, 0.015}, Vec3d{0, 0, 1});
   HapticCutSessionConfig cfg;
   cfg.frame_dt_s = 0.02;
   cfg.blade_length_m = 0.08;  // vertical blade through the whole block height

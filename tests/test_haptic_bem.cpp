@@ -79,27 +79,6 @@ TEST(HapticBem, InteriorDisplacementOfRigidTranslation) {
   }
 }
 
-TEST(HapticBem, InverseCacheRoundTripsAndDetectsStaleFiles) {
-  const std::string path = std::string(INCISION_BINARY_DIR) + "/haptic_bem_cache_test.bin";
-  std::remove(path.c_str());
-  const TriangleMesh mesh = icosphereMesh(0.03, 1);
-  std::vector<BemBc> base(80, BemBc::kTraction);
-  for (int j = 0; j < 10; ++j) base[j] = BemBc::kDisplacement;
-  BemModel a(mesh, {3e3, 0.45});
-  EXPECT_FALSE(a.factorBaseCached(base, path));  // computed and written
-  BemModel b(mesh, {3e3, 0.45});
-  EXPECT_TRUE(b.factorBaseCached(base, path));   // loaded
-  Eigen::VectorXd known = Eigen::VectorXd::LinSpaced(240, -1e-3, 1e-3);
-  EXPECT_EQ((a.solve(known) - b.solve(known)).norm(), 0.0);  // bit-identical inverse
-  BemModel c(mesh, {3e3, 0.3});                  // other material: stale key
-  EXPECT_FALSE(c.factorBaseCached(base, path));
-  base[20] = BemBc::kDisplacement;               // other conditions: stale key
-  EXPECT_FALSE(c.factorBaseCached(base, path));
-  EXPECT_TRUE(c.factorBaseCached(base, path));
-  EXPECT_THROW(c.factorBaseCached(base, "/nonexistent-dir/x.bin"), InputError);
-  std::remove(path.c_str());
-}
-
 TEST(HapticBem, BadInputIsInputError) {
   TriangleMesh bad = icosphereMesh(0.01, 0);
   bad.triangles[3] = {0, 0, 1};

@@ -7,7 +7,8 @@ namespace inc {
 namespace {
 
 // Elastic half-space spring: normal stiffness 500 N/m, tangential 200 N/m (force on the hand).
-ForceResult spring(const Vec3d& d) {
+ForceResult spring(const TipContact& c) {
+  const Vec3d& d = c.displacement_m;
   ForceResult r;
   r.force_n = Vec3d{-200.0 * d.x, -200.0 * d.y, -500.0 * d.z};
   return r;

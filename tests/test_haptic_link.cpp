@@ -7,7 +7,8 @@ namespace inc {
 namespace {
 
 // 100 periods of 1 ms and one of 5 ms: rate = periods / their sum, p99 = the ceil(0.99 n)-th smallest period
-// (the same rule as computePeriodStats), so one late period in 101 is not the p99 and two are.
+// (the same rule as computePeriodStats), so one late period in 101 is not the p99 and two are; p50 is the median,
+// max the longest period of the window.
 TEST(HapticLink, WindowRateAndP99FollowTheTickTimes) {
   HapticLink link;
   double t = 0.0;
@@ -20,6 +21,8 @@ TEST(HapticLink, WindowRateAndP99FollowTheTickTimes) {
   EXPECT_EQ(w.periods, 101u);
   EXPECT_NEAR(w.rate_hz, 101.0 / 0.105, 1e-6);
   EXPECT_NEAR(w.p99_ms, 1.0, 1e-9);
+  EXPECT_NEAR(w.p50_ms, 1.0, 1e-9);
+  EXPECT_NEAR(w.max_ms, 5.0, 1e-9);
   link.stamp(r, t += 5e-3);  // a second late period: now 2 of 102 are above the 99th percentile's rank
   w = link.frameDone();
   EXPECT_EQ(w.periods, 102u);
@@ -30,6 +33,8 @@ TEST(HapticLink, WindowRateAndP99FollowTheTickTimes) {
   EXPECT_EQ(w.periods, 1000u);
   EXPECT_NEAR(w.rate_hz, 500.0, 1e-6);
   EXPECT_NEAR(w.p99_ms, 2.0, 1e-9);
+  EXPECT_NEAR(w.p50_ms, 2.0, 1e-9);
+  EXPECT_NEAR(w.max_ms, 2.0, 1e-9);  // the 5 ms periods left the window
 }
 
 // The force is stamped with the newest tick time the simulation thread saw after its last frame; before any

@@ -48,7 +48,7 @@ TEST(HapticRealtime, ThreadedCuttingSessionCutsTheBlockInTwo) {
   auto sim = makeDissectionSimulation(scene, BackendKind::Cpu, Precision::Float32);
   const TipStiffness tip = mfsTipStiffness(MfsMaterial{scene.material.youngs_modulus, scene.material.poisson_ratio},
                                            0.008, 0.002, Vec3d{0, 0, 1});
-  CuttingTool tool([tip](const Vec3d& d) { return ForceResult{tip.handForce(d), -1.0}; }, scene.material.cutting,
+  CuttingTool tool(tipElastic(tip), scene.material.cutting,
                    Vec3d{0, 0, 0.015}, Vec3d{0, 0, 1});
   ScriptedDevice device(throughStroke(), ScriptedDevice::Mode::kByTime, 3.3);
   RealtimeCutConfig cfg;
@@ -93,7 +93,7 @@ TEST(HapticRealtime, DecisionsNeedAModelThatCuts) {
   Scene scene = blockScene();
   scene.models.cutting = false;
   auto sim = makeMetaballSimulation(scene, BackendKind::Cpu, Precision::Float32);
-  CuttingTool tool([](const Vec3d&) { return ForceResult{}; }, scene.material.cutting, Vec3d{0, 0, 0.015},
+  CuttingTool tool([](const TipContact&) { return ForceResult{}; }, scene.material.cutting, Vec3d{0, 0, 0.015},
                    Vec3d{0, 0, 1});
   ScriptedDevice device(throughStroke(), ScriptedDevice::Mode::kByTime, 3.3);
   RealtimeHapticCutSession session(device, tool, RealtimeCutConfig{});

@@ -57,8 +57,7 @@ ForceRequest at(const Vec3d& p) {
 // slide); leaving and re-entering elsewhere anchors anew.
 TEST(HapticTipContact, ProbeAnchorsWhereTheTipEntersTheTissuePlane) {
   const TipStiffness k = mfsTipStiffness(kTissue, 0.008, 0.002, Vec3d{0, 0, 1});
-  ProbeTool probe([k](const Vec3d& d) { return ForceResult{k.handForce(d), -1.0}; }, Vec3d{0, 0, 0.01},
-                  Vec3d{0, 0, 1});
+  ProbeTool probe(tipElastic(k), Vec3d{0, 0, 0.01}, Vec3d{0, 0, 1});
   EXPECT_EQ(norm(probe.tick(at({0.001, 0, 0.011})).force_n), 0.0);
   EXPECT_FALSE(probe.inContact());
   const Vec3d f1 = probe.tick(at({0.001, 0, 0.009})).force_n;  // 1 mm in

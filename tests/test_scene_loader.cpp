@@ -663,8 +663,13 @@ TEST_F(SceneLoader, DocumentedExamplesLoad) {
       block += line + "\n";
     }
   }
-  ASSERT_EQ(blocks.size(), 3u);  // cantilever, mesh organ, haptics (udp)
+  ASSERT_EQ(blocks.size(), 4u);  // cantilever, mesh organ, haptics (udp), two hands with the BEM global model
   write("organs/liver.obj", cubeObj());  // stands in for the organ the second example names
+  // The fourth example's BEM mesh: the block's surface (6 x 4 x 3 cm, its bottom at z = 0), 12 triangles.
+  std::string block_bem = cubeObj();
+  block_bem.replace(0, block_bem.find('f'), "v -0.03 -0.02 0\nv 0.03 -0.02 0\nv 0.03 0.02 0\nv -0.03 0.02 0\n"
+                                    "v -0.03 -0.02 0.03\nv 0.03 -0.02 0.03\nv 0.03 0.02 0.03\nv -0.03 0.02 0.03\n");
+  write("organs/block_bem.obj", block_bem);
   for (const std::string& b : blocks) {
     SCOPED_TRACE(b);
     const Scene s = parseScene(b, kLabel, dir_.string());

@@ -21,12 +21,13 @@ int runViewCommand(const Scene& scene_in, const ViewCommandOptions& options) {
   if (!setup.backend_note.empty()) std::fprintf(stderr, "%s\n", setup.backend_note.c_str());
   const Scene& scene = *setup.scene;
   viewer::ViewerOptions vo;
-  // models.haptics: the mouse drives a PointerDevice; each model the factory builds runs its haptic loop on it
-  // (the scene's own device is for `incision run`). The pointer's triple buffers have one reader and one writer,
+  // models.haptics: the mouse drives a PointerDevice in place of the first device; each model the factory builds
+  // runs that hand's haptic loop on it (the first device's own driver is for `incision run`; any further device
+  // runs its own driver here too). The pointer's triple buffers have one reader and one writer,
   // so a rebuild stops the previous model's loop first (and restarts it when the rebuild fails).
   std::shared_ptr<PointerDevice> pointer;
   if (scene.models.haptics) {
-    pointer = std::make_shared<PointerDevice>(scene.haptics.max_force_n);
+    pointer = std::make_shared<PointerDevice>(scene.haptics.devices.at(0).max_force_n);
     auto last = std::make_shared<HapticSceneModel*>(nullptr);
     setup.factory = [base = setup.factory, sc = setup.scene, pointer, last]() -> std::unique_ptr<SimulationModel> {
       if (*last) (*last)->haptics().stop();

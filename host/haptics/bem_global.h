@@ -52,12 +52,13 @@ class BemModel {
   Eigen::VectorXd solveTractionProblem(const Eigen::VectorXd& t) const;
 
   // Mixed problem: column j of A is H_j (traction known, u unknown) or -G_j (displacement known).
-  // factorBase() inverts A for the base conditions explicitly (O(N^3), the precomputation).
-  void factorBase(const std::vector<BemBc>& base);
-  // factorBase() through an on-disk cache: the file holds A^-1 and a 64-bit key hashed from H, G and
-  // the base conditions; a matching file is loaded (returns true), anything else (absent, stale,
-  // truncated) is recomputed and rewritten (returns false). Throws InputError if it cannot be written.
-  bool factorBaseCached(const std::vector<BemBc>& base, const std::string& cache_path);
+  // factorBase() inverts A for the base conditions explicitly (O(N^3), the precomputation): an LU, then
+  // A^-1 by blocks of columns, reporting the fraction done to `progress` after each block.
+  void factorBase(const std::vector<BemBc>& base, const Progress& progress = {});
+  // The same from an inverse computed before (a cache, host/haptics/bem_cache.h): A^-1 of `base`, N x N and
+  // finite, else InputError.
+  void setBaseInverse(const std::vector<BemBc>& base, Eigen::MatrixXd a_inv);
+  const Eigen::MatrixXd& baseInverse() const { return a_inv_; }
   double factorSeconds() const { return factor_s_; }
   // Elements switched to displacement BCs relative to the base (the contact). Rank 3k SMW update:
   // Z = A^-1 D, C = I + Z_S (D: column changes); cost O(N^2 k). Throws InputError for bad indices.

@@ -28,9 +28,10 @@ ForceResult CuttingTool::tick(const ForceRequest& q) {
     in_contact_ = true;
     // Cutting divides the tissue ahead of the blade: the anchor follows the tip along the surface.
     if (was_cutting) anchor_ = p + normal_ * depth;
-    r = elastic_(p - anchor_);
+    r = elastic_(TipContact{true, anchor_, p - anchor_});
   } else {
     in_contact_ = false;  // out of the tissue: no force (a linear model would pull the blade back in)
+    (void)elastic_(TipContact{});
   }
   // The force the tool applies to the tissue (eq. 15): minus the elastic reaction, and while cutting minus
   // the friction it overcomes.

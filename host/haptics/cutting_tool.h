@@ -18,8 +18,15 @@ struct CutEvent {
   double orientation[4] = {1.0, 0.0, 0.0, 0.0};  // the device's orientation then (w, x, y, z)
 };
 
+// What a tool tells its elastic model every tick (haptic thread).
+struct TipContact {
+  bool in_contact = false;  // the tip is below the tissue surface plane
+  Vec3d anchor_m;           // in contact: the tissue point the elastic model measures the tip from
+  Vec3d displacement_m;     // in contact: tip minus anchor
+};
+
 // Composes an elastic force model (the local model's force on the hand for a tip displacement from the
-// tissue point under the blade, e.g. HybridHapticModel::localTick) with the cutting model (eqs. 15-16) on
+// tissue point under the blade, e.g. a TipStiffness or a GlobalOrganModel contact) with the cutting model (eqs. 15-16) on
 // the tissue surface plane through `surface_point_m` with outward `unit_normal`. Each tick:
 // - depth = how far the tip is below the plane; no depth, no contact: zero force, state idle.
 // - the anchor (the tissue point the elastic model measures the tip from) is set where the tip enters;
@@ -34,7 +41,9 @@ struct CutEvent {
 // blocking; a full queue drops the event and counts it).
 class CuttingTool {
  public:
-  using Elastic = std::function<ForceResult(const Vec3d& tip_displacement_m)>;
+  // Called every tick, out of contact too (a coupled global model learns there that the contact ended); out of
+  // contact the tool renders no force whatever it returns.
+  using Elastic = std::function<ForceResult(const TipContact& contact)>;
   CuttingTool(Elastic elastic, const CutThresholds<double>& thresholds, const Vec3d& surface_point_m,
               const Vec3d& unit_normal);
   ForceResult tick(const ForceRequest& request);

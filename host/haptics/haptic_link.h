@@ -1,4 +1,4 @@
-// What the simulation thread learns from a running haptic loop (tick times -> rate, p99) and tells it (data time).
+// What the simulation thread learns from a running haptic loop (tick times -> rate, periods) and tells it (data time).
 #pragma once
 
 #include <algorithm>
@@ -13,10 +13,12 @@
 
 namespace inc {
 
-// The loop's rate and period p99 over its newest ticks, for the model counters haptic_hz / haptic_p99_ms.
+// The loop's rate and periods over its newest ticks, for the model counters haptic_hz, haptic_p50_ms, ...
 struct HapticWindow {
   double rate_hz = 0.0;       // ticks per second over the window (1 / mean period)
+  double p50_ms = 0.0;        // median of the window's periods
   double p99_ms = 0.0;        // 99th percentile of the window's periods
+  double max_ms = 0.0;        // longest period of the window
   std::size_t periods = 0;    // periods in the window
   std::uint64_t ticks = 0;    // ticks seen so far
 };
@@ -68,13 +70,19 @@ class HapticLink {
     w.periods = count_;
     if (count_ == 0) return w;
     sorted_.assign(ring_.begin(), ring_.begin() + std::ptrdiff_t(count_));
-    double sum = 0.0;
-    for (double p : sorted_) sum += p;
+    double sum = 0.0, longest = 0.0;
+    for (double p : sorted_) {
+      sum += p;
+      longest = std::max(longest, p);
+    }
     w.rate_hz = sum > 0.0 ? double(count_) / sum : 0.0;
-    // The same percentile as computePeriodStats: the ceil(q n)-th smallest.
-    const std::size_t k = std::min(count_ - 1, std::size_t(std::ceil(0.99 * double(count_))) - 1);
-    std::nth_element(sorted_.begin(), sorted_.begin() + std::ptrdiff_t(k), sorted_.end());
-    w.p99_ms = 1e3 * sorted_[k];
+    w.max_ms = 1e3 * longest;
+    // The same percentiles as computePeriodStats: the ceil(q n)-th smallest.
+    for (const double q : {0.99, 0.5}) {
+      const std::size_t k = std::min(count_ - 1, std::size_t(std::ceil(q * double(count_))) - 1);
+      std::nth_element(sorted_.begin(), sorted_.begin() + std::ptrdiff_t(k), sorted_.end());
+      (q > 0.9 ? w.p99_ms : w.p50_ms) = 1e3 * sorted_[k];
+    }
     return w;
   }
 

@@ -10,6 +10,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <future>
 #include <memory>
@@ -230,6 +231,18 @@ PeriodStats HapticLoop::stats() const {
   PeriodStats s = computePeriodStats(records_, period_s_, config_.late_tolerance);
   s.skipped = skipped_;
   return s;
+}
+
+void writeTickForces(const std::string& path, const std::vector<TickRecord>& records) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (!f) throw InputError(path, "", "cannot open the tick force file for writing");
+  std::fprintf(f, "# tick t_s model_fx model_fy model_fz sent_fx sent_fy sent_fz (N; hex floats: bit-exact)\n");
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    const TickRecord& r = records[i];
+    std::fprintf(f, "%zu %a %a %a %a %a %a %a\n", i, r.t_s, r.model_force_n.x, r.model_force_n.y, r.model_force_n.z,
+                 r.force_n.x, r.force_n.y, r.force_n.z);
+  }
+  if (std::fclose(f) != 0) throw InputError(path, "", "writing the tick force file failed");
 }
 
 Trajectory HapticLoop::recordedTrajectory() const {

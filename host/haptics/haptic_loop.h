@@ -112,6 +112,10 @@ struct PeriodStats {
   std::uint64_t skipped = 0;   // deadlines dropped to resynchronise after falling a whole period behind
 };
 PeriodStats computePeriodStats(const std::vector<TickRecord>& records, double nominal_s, double late_tolerance);
+// Writes one line per tick: `tick t_s model_fx model_fy model_fz sent_fx sent_fy sent_fz` (newtons, C99 hex floats:
+// bit-exact), `#` comment header. A replay's model forces compare bit for bit with a recording's. Throws
+// InputError(path, "", reason) when it cannot be written.
+void writeTickForces(const std::string& path, const std::vector<TickRecord>& records);
 // Loop threads started by HapticLoop::start() in this process (a scene without haptics starts none).
 std::uint64_t hapticLoopThreadsStarted();
 

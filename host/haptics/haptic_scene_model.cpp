@@ -24,14 +24,17 @@ FrameReport HapticSceneModel::advance(double frame_dt) {
 
 MemoryReport HapticSceneModel::memory() const {
   MemoryReport m = model_->memory();
-  m.host_bytes += haptics_->loop().records().capacity() * sizeof(TickRecord);
+  for (std::size_t k = 0; k < haptics_->handCount(); ++k)
+    m.host_bytes += haptics_->loop(k).records().capacity() * sizeof(TickRecord);
   return m;
 }
 
 void HapticSceneModel::renderLayers(RenderLayers& out) const {
   model_->renderLayers(out);
-  const HapticStatus& s = haptics_->newest();
-  if (s.tick > 0) out.forces.push_back(ForceArrow{s.sample.position_m, s.force_n, ForceArrowKind::Tool});
+  for (std::size_t k = 0; k < haptics_->handCount(); ++k) {
+    const HapticStatus& s = haptics_->newest(k);
+    if (s.tick > 0) out.forces.push_back(ForceArrow{s.sample.position_m, s.force_n, ForceArrowKind::Tool});
+  }
 }
 
 std::unique_ptr<SimulationModel> withSceneHaptics(std::unique_ptr<SimulationModel> model, const Scene& scene,

@@ -9,10 +9,11 @@
 
 namespace inc {
 
-// Wraps the model a haptics scene's tool touches (the runner's and the viewer's model) and its SceneHaptics:
+// Wraps the model a haptics scene's tools touch (the runner's and the viewer's model) and its SceneHaptics:
 // advance() hands the cut decisions to the model before the frame and publishes the data time and the counters
-// haptic_hz / haptic_p99_ms after it; renderLayers() adds the force on the hand as a Tool arrow at the device's
-// tip. Everything else is the wrapped model's. The loop starts here and stops when the model is destroyed.
+// haptic_hz, haptic_p99_ms, ... of each loop after it; renderLayers() adds the force on each hand as a Tool arrow at
+// its device's tip. Everything else is the wrapped model's. The loops start here and stop when the model is
+// destroyed.
 class HapticSceneModel final : public SimulationModel {
  public:
   HapticSceneModel(std::unique_ptr<SimulationModel> model, const Scene& scene, SceneHapticsOptions options = {});

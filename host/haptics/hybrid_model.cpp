@@ -23,26 +23,12 @@ double secondsSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// The tip tool: the tip node (singular weight, eq. 5) prescribed in x, y, z, the outer shell coupled.
-std::shared_ptr<const MfsLocalModel> tipModel(const HemisphereCloudSpec& spec, const MfsMaterial& material) {
-  HemisphereCloud c = hemisphereCloud(spec);
-  c.cloud.singular[0] = 1;
-  const int N = int(c.cloud.nodes.size());
-  std::vector<DofRole> roles(3 * N, DofRole::kFree);
-  const int outer = int(c.shell_r_m.size()) - 1;
-  for (int k = 0; k < 3; ++k) roles[k] = DofRole::kPrescribed;
-  for (int i = 1; i < N; ++i)
-    if (c.node_shell[i] == outer)
-      for (int k = 0; k < 3; ++k) roles[3 * i + k] = DofRole::kCoupled;
-  auto m = std::make_shared<MfsLocalModel>(c.cloud, material);
-  m->setRoles(roles);  // factorised once: the local cloud moves with the contact, K_bb does not change
-  return m;
-}
 }  // namespace
 
 HybridHapticModel::HybridHapticModel(BemModel& global, const HemisphereCloudSpec& local_spec,
                                      const MfsMaterial& material)
-    : global_(global), local_(tipModel(local_spec, material)) {
+    : global_(global), local_(mfsTipModel(local_spec, material)) {  // K_bb factorised once: the cloud moves with
+                                                                   // the contact, its stiffness does not
   setUp();
 }
 
@@ -89,11 +75,7 @@ void HybridHapticModel::touch(int element) {
     throw InputError(f, "element", "is held by a displacement condition: the tool cannot press a clamped surface");
   contact_element_ = element;
   contact_point_ = global_.centroids()[element];
-  const Vec3d n = global_.normals()[element];
-  const Vec3d helper = std::fabs(n.x) < 0.9 ? Vec3d{1, 0, 0} : Vec3d{0, 1, 0};
-  frame_[0] = cross(helper, n) * (1.0 / norm(cross(helper, n)));
-  frame_[1] = cross(n, frame_[0]);
-  frame_[2] = n;
+  contactFrame(global_.normals()[element], frame_);
   const double G = global_.shearModulus_pa(), nu = global_.poisson();
   const int E = global_.elementCount();
 
@@ -163,6 +145,43 @@ void HybridHapticModel::touch(int element) {
   published_.tip_stiffness = tip_tool_ ? Eigen::Matrix3d(tool_op_) : Eigen::Matrix3d::Zero();
   coupling_.write(published_);
   last_touch_s_ = secondsSince(t0);
+}
+
+void contactFrame(const Vec3d& n, Vec3d frame[3]) {
+  const Vec3d helper = std::fabs(n.x) < 0.9 ? Vec3d{1, 0, 0} : Vec3d{0, 1, 0};
+  frame[0] = cross(helper, n) * (1.0 / norm(cross(helper, n)));
+  frame[1] = cross(n, frame[0]);
+  frame[2] = n;
+}
+
+namespace {
+// R K R^T with R's columns the frame's axes: a local-frame 3 x 3 operator in the world frame.
+Eigen::Matrix3d toWorldFrame(const Eigen::Matrix3d& k, const Vec3d frame[3]) {
+  Eigen::Matrix3d r;
+  for (int a = 0; a < 3; ++a) r.col(a) << frame[a].x, frame[a].y, frame[a].z;
+  return r * k * r.transpose();
+}
+}  // namespace
+
+Eigen::Matrix3d HybridHapticModel::worldToolStiffness() const {
+  if (!tip_tool_) throw InputError("<hybrid model>", "tool", "worldToolStiffness needs a tip tool");
+  if (!touching_) return Eigen::Matrix3d::Zero();
+  return toWorldFrame(Eigen::Matrix3d(tool_op_), frame_);
+}
+
+Eigen::MatrixXd HybridHapticModel::worldSurfaceCompliance() const {
+  if (!touching_) return Eigen::MatrixXd::Zero(3 * global_.elementCount(), 3);
+  Eigen::Matrix3d rt;  // R^T: a world force to the local frame
+  for (int a = 0; a < 3; ++a) rt.row(a) << frame_[a].x, frame_[a].y, frame_[a].z;
+  return (surface_b_ + surface_r_) * rt;
+}
+
+Eigen::Matrix3d HybridHapticModel::worldLocalOnlyStiffness(int element) const {
+  if (!tip_tool_) throw InputError("<hybrid model>", "tool", "worldLocalOnlyStiffness needs a tip tool");
+  if (element < 0 || element >= global_.elementCount()) throw InputError("<hybrid model>", "element", "out of range");
+  Vec3d frame[3];
+  contactFrame(global_.normals()[element], frame);
+  return toWorldFrame(Eigen::Matrix3d(p_ * local_->condensedAA()), frame);
 }
 
 void HybridHapticModel::release() {

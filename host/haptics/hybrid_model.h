@@ -73,6 +73,16 @@ class HybridHapticModel {
   // data_time_s = time of the newest global step.
   ForceResult localTick(const Vec3d& tip_displacement_world);
 
+  // Tip tools, for the current contact, in the world frame: the force on the organ per tip displacement (3 x 3,
+  // N/m: the published tip stiffness) and the organ's surface displacement per unit force on the organ (3E x 3,
+  // m/N; at the contact element itself the half-space field is singular: globalStep puts the tip's displacement
+  // there instead).
+  Eigen::Matrix3d worldToolStiffness() const;
+  Eigen::MatrixXd worldSurfaceCompliance() const;
+  // The local model alone (coupled DOFs held) at element `element`'s contact frame, world: force on the organ
+  // per tip displacement (N/m). Tip tools; any element, also a held one.
+  Eigen::Matrix3d worldLocalOnlyStiffness(int element) const;
+
   const MfsLocalModel& local() const { return *local_; }
   std::uint64_t globalSteps() const { return global_steps_.load(); }
   double lastGlobalSeconds() const { return last_global_s_; }
@@ -112,6 +122,9 @@ class HybridHapticModel {
   std::atomic<std::uint64_t> global_steps_{0};
   double last_global_s_ = 0.0, last_touch_s_ = 0.0;
 };
+
+// The contact frame at a surface point with outward unit normal n: frame[0], frame[1] tangent, frame[2] = n.
+void contactFrame(const Vec3d& n, Vec3d frame[3]);
 
 // Runs globalStep() on its own thread at rate_hz, reading the tool pose from the haptic loop's status.
 // The thread runs at a lower CPU priority than normal (nice +5 where permitted): its work can wait a few

@@ -310,4 +310,20 @@ Eigen::VectorXd MfsLocalModel::freeDisplacement(const Eigen::VectorXd& u_a, cons
 
 double MfsLocalModel::energyNorm(const Eigen::VectorXd& u) const { return u.dot(impl_->K * u); }
 
+std::shared_ptr<MfsLocalModel> mfsTipModel(const HemisphereCloudSpec& spec, const MfsMaterial& material,
+                                           bool coupled_moves) {
+  HemisphereCloud c = hemisphereCloud(spec);
+  c.cloud.singular[0] = 1;  // eq. 5: the tip node interpolates the prescribed displacement
+  const int N = int(c.cloud.nodes.size());
+  std::vector<DofRole> roles(std::size_t(3 * N), DofRole::kFree);
+  const int outer = int(c.shell_r_m.size()) - 1;
+  for (int k = 0; k < 3; ++k) roles[std::size_t(k)] = DofRole::kPrescribed;
+  for (int i = 1; i < N; ++i)
+    if (c.node_shell[std::size_t(i)] == outer)
+      for (int k = 0; k < 3; ++k) roles[std::size_t(3 * i + k)] = DofRole::kCoupled;
+  auto m = std::make_shared<MfsLocalModel>(c.cloud, material);
+  m->setRoles(roles, coupled_moves);
+  return m;
+}
+
 }  // namespace inc

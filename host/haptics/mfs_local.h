@@ -105,4 +105,9 @@ class MfsLocalModel {
   double assembly_s_ = 0.0, factor_s_ = 0.0;
 };
 
+// The tip tool's local model: the cloud of `spec` with the tip node's singular weight (eq. 5), its x, y, z
+// prescribed and the outer shell coupled (held at zero when coupled_moves is false), factorised once.
+std::shared_ptr<MfsLocalModel> mfsTipModel(const HemisphereCloudSpec& spec, const MfsMaterial& material,
+                                           bool coupled_moves = true);
+
 }  // namespace inc

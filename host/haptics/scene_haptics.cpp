@@ -1,14 +1,17 @@
-// A scene's haptic loop: its device, the tissue plane, the MFS tip contact or cutting tool, and the frame hooks.
+// A scene's haptic loops: one hand per device, the tissue plane, the MFS tip contact, the scalpel, the frame hooks.
 #include "host/haptics/scene_haptics.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <limits>
 
+#include "host/haptics/global_organ_mesh.h"
 #include "host/haptics/haptics_scene.h"
 #include "host/haptics/udp_device.h"
 #include "host/input_error.h"
+#include "host/scene_json.h"
 #if INCISION_HAVE_OPENHAPTICS
 #include "host/haptics/openhaptics_device.h"
 #endif
@@ -36,18 +39,21 @@ TissuePlane sceneTissuePlane(const Scene& scene, const SimulationModel& model) {
   return p;
 }
 
-std::unique_ptr<HapticDevice> makeSceneHapticDevice(const Scene& scene) {
-  const HapticsSpec& h = scene.haptics;
+std::unique_ptr<HapticDevice> makeSceneHapticDevice(const Scene& scene, std::size_t index) {
+  const HapticsSpec& hs = scene.haptics;
+  if (index >= hs.devices.size()) throw InputError(scene.file, "haptics.devices", "no device " + std::to_string(index));
+  const HapticDeviceSpec& h = hs.devices[index];
+  const auto key = [&](const char* k) { return hapticDeviceKey(hs, index, k); };
   if (h.device == "scripted") {
     if (h.trajectory.empty())
-      throw InputError(scene.file, "haptics.trajectory",
+      throw InputError(scene.file, key("trajectory"),
                        "is required for device \"scripted\" (a trajectory file: t x y z qw qx qy qz buttons per line; "
-                       "`incision view` drives the tip with the mouse instead)");
+                       "`incision view` drives the first device's tip with the mouse instead)");
     Trajectory tr;
     try {
       tr = loadTrajectory(h.trajectory);
     } catch (const InputError& e) {
-      throw InputError(scene.file, "haptics.trajectory", e.what());
+      throw InputError(scene.file, key("trajectory"), e.what());
     }
     const auto mode = h.playback == "tick" ? ScriptedDevice::Mode::kByTick : ScriptedDevice::Mode::kByTime;
     return std::make_unique<ScriptedDevice>(std::move(tr), mode, h.max_force_n);
@@ -56,7 +62,7 @@ std::unique_ptr<HapticDevice> makeSceneHapticDevice(const Scene& scene) {
     try {
       return std::make_unique<UdpDevice>(std::uint16_t(h.udp_port), std::uint16_t(h.udp_device), h.max_force_n);
     } catch (const InputError& e) {
-      throw InputError(scene.file, "haptics.udp_port", e.what());
+      throw InputError(scene.file, key("udp_port"), e.what());
     }
   }
   if (h.device == "openhaptics") {
@@ -67,19 +73,18 @@ std::unique_ptr<HapticDevice> makeSceneHapticDevice(const Scene& scene) {
     try {
       return std::make_unique<OpenHapticsDevice>(h.openhaptics_device, map);
     } catch (const InputError& e) {
-      throw InputError(scene.file, "haptics.device", e.what());
+      throw InputError(scene.file, key("device"), e.what());
     }
 #else
-    throw InputError(scene.file, "haptics.device", "the OpenHaptics driver is not built (no SDK found by CMake)");
+    throw InputError(scene.file, key("device"), "the OpenHaptics driver is not built (no SDK found by CMake)");
 #endif
   }
-  throw InputError(scene.file, "haptics.device", "unknown device \"" + h.device + "\"");
+  throw InputError(scene.file, key("device"), "unknown device \"" + h.device + "\"");
 }
 
 namespace {
 
-HapticLoopConfig loopConfig(const Scene& scene, double record_s) {
-  const HapticsSpec& h = scene.haptics;
+HapticLoopConfig loopConfig(const Scene& scene, const HapticDeviceSpec& h, double record_s) {
   HapticLoopConfig c;
   c.rate_hz = h.rate_hz;
   c.max_force_rate_n_per_s = h.max_force_rate_n_per_s;
@@ -91,87 +96,152 @@ HapticLoopConfig loopConfig(const Scene& scene, double record_s) {
   return c;
 }
 
+// Which device holds the scalpel on `model`: the one whose tool is "scalpel", else the first "auto" one on a
+// model that can be cut; -1: none. Throws for a scalpel on a model that cannot be cut.
+long scalpelHand(const Scene& scene, const SimulationModel& model) {
+  const auto& devices = scene.haptics.devices;
+  const bool can_cut = model.toolSupport().cut;
+  for (std::size_t k = 0; k < devices.size(); ++k)
+    if (devices[k].tool == "scalpel") {
+      if (!can_cut)
+        throw InputError(scene.file, hapticDeviceKey(scene.haptics, k, "tool"),
+                         "\"scalpel\": the model the tools touch (" + model.name() + ") cannot be cut");
+      return long(k);
+    }
+  if (!can_cut) return -1;
+  for (std::size_t k = 0; k < devices.size(); ++k)
+    if (devices[k].tool == "auto") return long(k);
+  return -1;
+}
+
+// The scene's BEM organ (global_model "bem"): mesh, supports, the local model's cloud; errors name
+// haptics.global_mesh. The tissue plane's point must lie near the organ: a wrong global_mesh_scale or a mesh of
+// another organ would otherwise couple every contact to a far-away element.
+std::unique_ptr<GlobalOrganModel> sceneGlobalModel(const Scene& scene, const TissuePlane& plane, int hands, bool quiet) {
+  const HapticsSpec& h = scene.haptics;
+  const std::string key = "haptics.global_mesh";
+  GlobalOrganSetup setup;
+  try {
+    setup.mesh = loadGlobalOrganMesh(h.global_mesh, h.global_mesh_scale);
+  } catch (const InputError& e) {
+    throw InputError(scene.file, key, e.what());
+  }
+  const MeshReport rep = analyzeMesh(setup.mesh);
+  Vec3d gap;
+  for (int a = 0; a < 3; ++a)
+    gap[a] = std::max({rep.bbox_min[a] - plane.point_m[a], plane.point_m[a] - rep.bbox_max[a], 0.0});
+  const double diag = norm(rep.bbox_max - rep.bbox_min);
+  if (norm(gap) > 0.1 * diag)
+    throw InputError(scene.file, key,
+                     h.global_mesh + ": the organ mesh lies " + scene_json::formatNumber(norm(gap)) +
+                         " m from the tissue plane's point (its box is " + scene_json::formatNumber(diag) +
+                         " m across): is global_mesh_scale right, and is it the mesh of this organ?");
+  setup.supports = organSupports(setup.mesh, scene.fixed);
+  setup.material = BemMaterial{scene.material.youngs_modulus, scene.material.poisson_ratio};
+  setup.local.inner_spacing_m = h.local_spacing_m;
+  setup.local.inner_shells = 2;  // as mfsTipStiffness: the held and the coupled local model are the same cloud
+  setup.local.radius_m = h.local_radius_m;
+  setup.cache_path = h.global_cache;
+  setup.quiet = quiet;
+  try {
+    return std::make_unique<GlobalOrganModel>(std::move(setup), hands);
+  } catch (const InputError& e) {
+    throw InputError(scene.file, key, e.what());
+  }
+}
+
 }  // namespace
 
-SceneHaptics::SceneHaptics(const Scene& scene, const SimulationModel& model, SceneHapticsOptions options)
-    : device_(options.device) {
-  if (!device_) device_ = makeSceneHapticDevice(scene);
-  plane_ = sceneTissuePlane(scene, model);
+SceneHaptics::SceneHaptics(const Scene& scene, const SimulationModel& model, SceneHapticsOptions options) {
   const HapticsSpec& h = scene.haptics;
+  if (h.devices.empty()) throw InputError(scene.file, "haptics.devices", "lists no device");
+  if (options.clock && h.devices.size() > 1)
+    throw InputError(scene.file, "haptics.devices", "one test clock cannot drive several loop threads");
+  plane_ = sceneTissuePlane(scene, model);
   tip_ = mfsTipStiffness(MfsMaterial{scene.material.youngs_modulus, scene.material.poisson_ratio}, h.local_radius_m,
                          h.local_spacing_m, plane_.normal);
-  const TipStiffness tip = tip_;
-  CuttingTool::Elastic elastic = [tip](const Vec3d& d) {
-    ForceResult r;
-    r.force_n = tip.handForce(d);
-    return r;
-  };
-  const HapticLoopConfig config = loopConfig(scene, options.record_s);
-  if (model.toolSupport().cut) {
-    cut_tool_ = std::make_unique<CuttingTool>(elastic, scene.material.cutting, plane_.point_m, plane_.normal);
-    RealtimeCutConfig rc;
-    rc.blade_length_m = h.blade_length_m;
-    rc.blade_axis_device = h.blade_axis;
-    rc.loop = config;
-    cut_session_ = std::make_unique<RealtimeHapticCutSession>(*device_, *cut_tool_, rc, options.clock);
-  } else {
-    probe_ = std::make_unique<ProbeTool>(elastic, plane_.point_m, plane_.normal);
-    probe_loop_ = std::make_unique<HapticLoop>(
-        *device_, [this](const ForceRequest& q) { return probe_link_.stamp(probe_->tick(q), q.t_s); }, config,
-        options.clock);
+  const long scalpel = scalpelHand(scene, model);
+  if (h.global_model == "bem") organ_ = sceneGlobalModel(scene, plane_, int(h.devices.size()), options.quiet);
+  // Every device is built before any loop exists: a device that cannot be opened starts nothing.
+  std::vector<std::shared_ptr<HapticDevice>> devices;
+  for (std::size_t k = 0; k < h.devices.size(); ++k)
+    devices.push_back(k == 0 && options.device ? options.device : std::shared_ptr<HapticDevice>(makeSceneHapticDevice(scene, k)));
+  for (std::size_t k = 0; k < h.devices.size(); ++k) {
+    const HapticDeviceSpec& d = h.devices[k];
+    HapticHandConfig c;
+    c.name = d.name;
+    c.counter_prefix = k == 0 ? "haptic" : "haptic" + std::to_string(k);
+    c.scalpel = long(k) == scalpel;
+    c.plane = plane_;
+    c.elastic = organ_ ? organ_->contactElastic(int(k)) : tipElastic(tip_);
+    c.cut = scene.material.cutting;
+    c.blade_length_m = d.blade_length_m;
+    c.blade_axis_device = d.blade_axis;
+    c.loop = loopConfig(scene, d, options.record_s);
+    hands_.push_back(std::make_unique<HapticHand>(devices[k], c, options.clock));
   }
 }
 
 SceneHaptics::~SceneHaptics() { stop(); }
 
-const HapticLoop& SceneHaptics::loop() const { return cut_session_ ? cut_session_->loop() : *probe_loop_; }
-
 void SceneHaptics::start() {
-  if (cut_session_) {
-    cut_session_->start();
-  } else {
-    probe_link_.setDataTime(0.0);  // a first frame that never ends fades the force like any later stall
-    probe_loop_->start();
-  }
+  for (auto& hnd : hands_) hnd->start();
 }
 
 void SceneHaptics::stop() {
-  if (cut_session_) cut_session_->stop();
-  else if (probe_loop_) probe_loop_->stop();
+  for (auto& hnd : hands_) hnd->stop();
 }
 
 void SceneHaptics::beforeFrame(SimulationModel& model) {
-  if (cut_session_) cut_session_->applyDecisions(model);
+  for (auto& hnd : hands_) hnd->beforeFrame(model);
 }
 
 void SceneHaptics::afterFrame(FrameReport& report) {
-  const HapticWindow w = cut_session_ ? cut_session_->frameDone() : probe_link_.frameDone();
-  report.counters["haptic_hz"] = w.rate_hz;
-  report.counters["haptic_p99_ms"] = w.p99_ms;
-  if (cut_session_) {
-    report.counters["haptic_cut_decisions"] = cut_session_->decisions();
-    newest_ = cut_session_->newestStatus();
-  } else {
-    probe_loop_->status().update();
-    newest_ = probe_loop_->status().front();
+  for (auto& hnd : hands_) hnd->afterFrame(report);
+  if (organ_) {  // the global model at the visual rate: once per frame
+    organ_->step();
+    report.counters["haptic_organ_max_displacement_m"] = organ_->maxSurfaceDisplacement_m();
+    report.counters["haptic_organ_contacts"] = organ_->contacts();
   }
 }
 
+bool SceneHaptics::cutting() const {
+  for (const auto& hnd : hands_)
+    if (hnd->scalpel()) return true;
+  return false;
+}
+
+int SceneHaptics::cutDecisions() const {
+  int n = 0;
+  for (const auto& hnd : hands_) n += hnd->cutDecisions();
+  return n;
+}
+
+int SceneHaptics::cutsApplied() const {
+  int n = 0;
+  for (const auto& hnd : hands_) n += hnd->cutsApplied();
+  return n;
+}
+
 std::string SceneHaptics::summary() const {
-  const PeriodStats s = stats();
-  char buf[512];
-  std::snprintf(buf, sizeof buf,
-                "haptic loop %.0f Hz, device %s, %s: %llu ticks, period p50 %.3f ms, p99 %.3f ms, max %.3f ms, "
-                "missed %llu, skipped %llu, compute p99 %.1f us",
-                1.0 / loop().period_s(), device_->name().c_str(), scheduling().realtime ? "SCHED_FIFO" : "normal scheduling",
-                static_cast<unsigned long long>(s.ticks), 1e3 * s.p50_s, 1e3 * s.p99_s, 1e3 * s.max_s,
-                static_cast<unsigned long long>(s.missed), static_cast<unsigned long long>(s.skipped),
-                1e6 * s.compute_p99_s);
-  std::string out = buf;
-  if (cut_session_)
-    out += ", cut decisions " + std::to_string(cut_session_->decisions()) + ", cuts applied " +
-           std::to_string(cut_session_->cutsApplied());
+  std::string out;
+  for (const auto& hnd : hands_) out += (out.empty() ? "" : "; ") + hnd->summary();
+  if (organ_) out += "; " + organ_->summary();
   return out;
+}
+
+std::vector<std::string> SceneHaptics::writeRecordings(const std::string& dir) const {
+  std::vector<std::string> files;
+  for (const auto& hnd : hands_) {
+    const std::string suffix = hnd->name().empty() ? "" : "_" + hnd->name();
+    const std::string traj = (std::filesystem::path(dir) / ("haptic_trajectory" + suffix + ".traj")).string();
+    const std::string forces = (std::filesystem::path(dir) / ("haptic_forces" + suffix + ".txt")).string();
+    writeTrajectory(traj, hnd->loop().recordedTrajectory());
+    writeTickForces(forces, hnd->loop().records());
+    files.push_back(traj);
+    files.push_back(forces);
+  }
+  return files;
 }
 
 }  // namespace inc

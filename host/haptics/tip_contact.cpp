@@ -17,18 +17,8 @@ TipStiffness mfsTipStiffness(const MfsMaterial& material, double radius_m, doubl
   spec.inner_spacing_m = spacing_m;
   spec.inner_shells = 2;
   spec.radius_m = radius_m;
-  HemisphereCloud cc = hemisphereCloud(spec);
-  cc.cloud.singular[0] = 1;  // eq. 5: the tip node interpolates the prescribed displacement
-  const int nodes = int(cc.cloud.nodes.size());
-  const int outer = int(cc.shell_r_m.size()) - 1;
-  std::vector<DofRole> roles(std::size_t(3 * nodes), DofRole::kFree);
-  for (int k = 0; k < 3; ++k) roles[std::size_t(k)] = DofRole::kPrescribed;
-  for (int i = 1; i < nodes; ++i)
-    if (cc.node_shell[std::size_t(i)] == outer)
-      for (int k = 0; k < 3; ++k) roles[std::size_t(3 * i + k)] = DofRole::kCoupled;
-  MfsLocalModel model(cc.cloud, material);
-  model.setRoles(roles, false);
-  const Eigen::MatrixXd& s = model.condensedAA();  // local frame: z = outward normal
+  const std::shared_ptr<MfsLocalModel> model = mfsTipModel(spec, material, false);
+  const Eigen::MatrixXd& s = model->condensedAA();  // local frame: z = outward normal
   // World frame R = [t1 t2 n]: K_world = R S R^T.
   const Vec3d helper = std::fabs(n.z) < 0.9 ? Vec3d{0, 0, 1} : Vec3d{1, 0, 0};
   const Vec3d t1 = cross(helper, n) * (1.0 / norm(cross(helper, n)));
@@ -45,6 +35,14 @@ TipStiffness mfsTipStiffness(const MfsMaterial& material, double radius_m, doubl
   return out;
 }
 
+CuttingTool::Elastic tipElastic(const TipStiffness& tip) {
+  return [tip](const TipContact& c) {
+    ForceResult r;
+    if (c.in_contact) r.force_n = tip.handForce(c.displacement_m);
+    return r;
+  };
+}
+
 ProbeTool::ProbeTool(CuttingTool::Elastic elastic, const Vec3d& surface_point_m, const Vec3d& unit_normal)
     : elastic_(std::move(elastic)), surface_(surface_point_m), normal_(unit_normal) {
   if (!elastic_) throw InputError("<probe tool>", "elastic", "no elastic force model");
@@ -57,11 +55,12 @@ ForceResult ProbeTool::tick(const ForceRequest& q) {
   const double depth = -dot(p - surface_, normal_);
   if (!(depth > 0.0)) {
     in_contact_ = false;
+    (void)elastic_(TipContact{});  // the elastic model hears that the contact ended; no force out of the tissue
     return ForceResult{};
   }
   if (!in_contact_) anchor_ = p + normal_ * depth;  // where the tip entered, on the plane
   in_contact_ = true;
-  return elastic_(p - anchor_);
+  return elastic_(TipContact{true, anchor_, p - anchor_});
 }
 
 }  // namespace inc

@@ -16,6 +16,17 @@ printf '{"geometry":{"kind":"box"},"models":{"mls":true},"material":{"poisson_ra
 printf '{"geometry":{"kind":"box"},\n "models":{"mls":true},,}' >"$tmp/syntax.json"
 printf '{"geometry":{"kind":"box"},"models":{"mls":true},"solver":{"frame_dt":0.01}}' >"$tmp/typo.json"
 printf '{"geometry":{"kind":"mesh","mesh":"missing.obj"},"models":{"mls":true}}' >"$tmp/mesh.json"
+# Haptics: the second device's missing trajectory names its key path; a BEM organ held nowhere, or far from the
+# tissue plane (found only when the run builds the model), names haptics.global_mesh.
+printf 'v 0 0 0\nv 0.01 0 0\nv 0.01 0.01 0\nv 0 0.01 0\nv 0 0 0.01\nv 0.01 0 0.01\nv 0.01 0.01 0.01\nv 0 0.01 0.01\nf 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n' >"$tmp/organ.obj"
+printf '{"geometry":{"kind":"box","center_m":[0.005,0.005,0.005],"size_m":[0.01,0.01,0.01],"spacing_m":0.002},"models":{"mls":true,"haptics":true},"haptics":{"devices":[{"device":"udp","udp_port":47311},{"trajectory":"missing.traj"}]}}' >"$tmp/hands.json"
+printf '{"geometry":{"kind":"box","center_m":[0.005,0.005,0.005],"size_m":[0.01,0.01,0.01],"spacing_m":0.002},"models":{"mls":true,"haptics":true},"haptics":{"device":"udp","udp_port":47312,"global_model":"bem","global_mesh":"organ.obj"}}' >"$tmp/unheld.json"
+printf '{"geometry":{"kind":"box","center_m":[0.005,0.005,0.005],"size_m":[0.01,0.01,0.01],"spacing_m":0.002},"models":{"mls":true,"haptics":true},"fixed":[{"min_m":[-1,-1,-1],"max_m":[1,1,0.001]}],"haptics":{"device":"udp","udp_port":47313,"surface_point_m":[1,1,1],"global_model":"bem","global_mesh":"organ.obj","global_cache":"far.bemcache"}}' >"$tmp/far.json"
+expect 2 "hands.json: haptics.devices\[1\].trajectory: .*missing.traj" -- "$exe" validate "$tmp/hands.json"
+expect 2 "unheld.json: haptics.global_mesh: .*no element centroid lies in a fixed region" -- "$exe" validate "$tmp/unheld.json"
+expect 0 "" -- "$exe" validate "$tmp/far.json"
+expect 2 "far.json: haptics.global_mesh: .*lies .* from the tissue plane" -- "$exe" run "$tmp/far.json" --backend cpu --steps 1 --out "$tmp/o"
+expect 0 "" -- "$exe" validate "$(dirname "$0")/../../scenes/haptic_two_hands.json"
 expect 2 "nope.json: .*no such file" -- "$exe" validate "$tmp/nope.json"
 expect 2 "nu.json: material.poisson_ratio: must lie" -- "$exe" validate "$tmp/nu.json"
 expect 2 "syntax.json.*line 2" -- "$exe" validate "$tmp/syntax.json"
