@@ -2,10 +2,16 @@
 #include "cpu_fallback/neighbor_search_cpu.h"
 
 #include <algorithm>
+#include <atomic>
+#include <cstring>
 #include <limits>
 #include <new>
 #include <sstream>
 #include <string>
+
+#if defined(__x86_64__) || defined(__SSE2__)
+#include <immintrin.h>
+#endif
 
 #include "cpu_fallback/parallel.h"
 #include "host/input_error.h"
@@ -58,8 +64,216 @@ std::vector<std::int32_t> radixSortIndices(const std::vector<std::uint32_t>& key
   return idx;
 }
 
+// No FMA contraction in the query code between these markers: d^2 must round exactly like distance2Exact
+// ((dx^2 + dy^2) + dz^2, each operation rounded on its own). Everything the per-block loop inlines sits
+// inside, so that the optimisation options agree where GCC inlines.
+#if defined(__clang__)
+#define INC_NO_CONTRACT_BEGIN _Pragma("STDC FP_CONTRACT OFF")
+#define INC_NO_CONTRACT_END _Pragma("STDC FP_CONTRACT ON")
+#elif defined(__GNUC__)
+#define INC_NO_CONTRACT_BEGIN _Pragma("GCC push_options") _Pragma("GCC optimize(\"fp-contract=off\")")
+#define INC_NO_CONTRACT_END _Pragma("GCC pop_options")
+#else
+#define INC_NO_CONTRACT_BEGIN
+#define INC_NO_CONTRACT_END
+#endif
+
+#if (defined(__GNUC__) || defined(__clang__)) && defined(__x86_64__)
+#define INC_NEIGHBOR_AVX2 1
+#define INC_TARGET_AVX2 __attribute__((target("avx2,popcnt")))
+#else
+#define INC_NEIGHBOR_AVX2 0
+#endif
+#if defined(__GNUC__) || defined(__clang__)
+#define INC_FORCE_INLINE inline __attribute__((always_inline))
+#define INC_NOINLINE __attribute__((noinline))
+#else
+#define INC_FORCE_INLINE inline
+#define INC_NOINLINE
+#endif
+
+// Lanes read past the end of a run (masked off, never listed): the slot arrays carry this many extra entries.
+constexpr std::size_t kRunPad = 8;
+// Entries a scan may write past its last neighbour (the lanes of a vector store that are not kept).
+constexpr std::size_t kScanSlack = 8;
+
+std::atomic<bool> g_scan_portable_only{false};
+
+bool cpuHasAvx2() {
+#if INC_NEIGHBOR_AVX2
+  static const bool has = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("popcnt");
+  return has;
+#else
+  return false;
+#endif
+}
+
+INC_NO_CONTRACT_BEGIN
+
+// The candidate scans. Each writes ids[e] for every slot e in [e, e1) with d^2 <= r2 and ids[e] != skip, in
+// slot order, and returns the end: d = query - point, d^2 = (dx^2 + dy^2) + dz^2 rounded like distance2Exact.
+// They read up to kRunPad slots past e1 (masked off) and write up to kScanSlack entries past the end.
+
+// Portable: four floats or two doubles per step with SSE2 (any x86-64), one at a time elsewhere. The kept
+// ids are stored branch-free: every lane writes at dst, and dst advances by that lane's bit.
+struct PortableScan {
+  // Every run [runs[2k], runs[2k + 1]) of one query in turn.
+  template <typename T>
+  static INC_FORCE_INLINE std::int32_t* scanRuns(const T* xs, const T* ys, const T* zs, const std::int32_t* ids,
+                                                 const std::int32_t* runs, int nrun, T qx, T qy, T qz, T r2,
+                                                 std::int32_t skip, std::int32_t* dst) {
+    for (int k = 0; k < nrun; ++k) dst = run(xs, ys, zs, ids, runs[2 * k], runs[2 * k + 1], qx, qy, qz, r2, skip, dst);
+    return dst;
+  }
+  template <typename T>
+  static INC_FORCE_INLINE std::int32_t* run(const T* xs, const T* ys, const T* zs, const std::int32_t* ids,
+                                            std::int32_t e, std::int32_t e1, T qx, T qy, T qz, T r2,
+                                            std::int32_t skip, std::int32_t* dst) {
+    for (; e < e1; ++e) {
+      const T dx = qx - xs[e], dy = qy - ys[e], dz = qz - zs[e];
+      const T xx = dx * dx, yy = dy * dy, zz = dz * dz;
+      const T d2 = (xx + yy) + zz;
+      const std::int32_t o = ids[e];
+      *dst = o;
+      dst += (d2 <= r2) & (o != skip);
+    }
+    return dst;
+  }
+#if defined(__SSE2__)
+  static INC_FORCE_INLINE std::int32_t* run(const float* xs, const float* ys, const float* zs,
+                                            const std::int32_t* ids, std::int32_t e, std::int32_t e1, float qx,
+                                            float qy, float qz, float r2, std::int32_t skip, std::int32_t* dst) {
+    const __m128 vx = _mm_set1_ps(qx), vy = _mm_set1_ps(qy), vz = _mm_set1_ps(qz), vr2 = _mm_set1_ps(r2);
+    const __m128i vskip = _mm_set1_epi32(skip), vend = _mm_set1_epi32(e1);
+    __m128i lane = _mm_add_epi32(_mm_set1_epi32(e), _mm_set_epi32(3, 2, 1, 0));
+    for (; e < e1; e += 4) {
+      const __m128 dx = _mm_sub_ps(vx, _mm_loadu_ps(xs + e));
+      const __m128 dy = _mm_sub_ps(vy, _mm_loadu_ps(ys + e));
+      const __m128 dz = _mm_sub_ps(vz, _mm_loadu_ps(zs + e));
+      const __m128 d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+      const __m128i o = _mm_loadu_si128(reinterpret_cast<const __m128i*>(ids + e));
+      // kept: d2 <= r2 (false for NaN), not the skipped id, lane inside the run
+      const __m128i keep = _mm_andnot_si128(_mm_cmpeq_epi32(o, vskip), _mm_cmplt_epi32(lane, vend));
+      const unsigned bits = unsigned(_mm_movemask_ps(_mm_and_ps(_mm_cmple_ps(d2, vr2), _mm_castsi128_ps(keep))));
+      lane = _mm_add_epi32(lane, _mm_set1_epi32(4));
+      dst[0] = ids[e];
+      dst += bits & 1u;
+      dst[0] = ids[e + 1];
+      dst += (bits >> 1) & 1u;
+      dst[0] = ids[e + 2];
+      dst += (bits >> 2) & 1u;
+      dst[0] = ids[e + 3];
+      dst += bits >> 3;
+    }
+    return dst;
+  }
+  static INC_FORCE_INLINE std::int32_t* run(const double* xs, const double* ys, const double* zs,
+                                            const std::int32_t* ids, std::int32_t e, std::int32_t e1, double qx,
+                                            double qy, double qz, double r2, std::int32_t skip, std::int32_t* dst) {
+    const __m128d vx = _mm_set1_pd(qx), vy = _mm_set1_pd(qy), vz = _mm_set1_pd(qz), vr2 = _mm_set1_pd(r2);
+    for (; e < e1; e += 2) {
+      const __m128d dx = _mm_sub_pd(vx, _mm_loadu_pd(xs + e));
+      const __m128d dy = _mm_sub_pd(vy, _mm_loadu_pd(ys + e));
+      const __m128d dz = _mm_sub_pd(vz, _mm_loadu_pd(zs + e));
+      const __m128d d2 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(dx, dx), _mm_mul_pd(dy, dy)), _mm_mul_pd(dz, dz));
+      const unsigned bits = unsigned(_mm_movemask_pd(_mm_cmple_pd(d2, vr2)));
+      const std::int32_t o0 = ids[e], o1 = ids[e + 1];
+      dst[0] = o0;
+      dst += (bits & 1u) & unsigned(o0 != skip);
+      dst[0] = o1;
+      dst += (bits >> 1) & unsigned(o1 != skip) & unsigned(e + 1 < e1);
+    }
+    return dst;
+  }
+#endif
+};
+
+#if INC_NEIGHBOR_AVX2
+// For each 8-bit mask, the lanes of its set bits in ascending order, one per nibble (for a permute that packs
+// the kept lanes to the front).
+struct CompressTable {
+  std::uint32_t lanes[256];
+  constexpr CompressTable() : lanes() {
+    for (unsigned m = 0; m < 256; ++m) {
+      unsigned k = 0;
+      for (unsigned i = 0; i < 8; ++i)
+        if ((m >> i) & 1u) lanes[m] |= i << (4 * k++);
+    }
+  }
+};
+constexpr CompressTable kCompress{};
+
+// AVX2: eight floats or four doubles per step; the kept ids are packed to the front by one permute (the lane
+// order from kCompress) and stored as a vector, and dst advances by the number of kept lanes. scanRuns is the
+// one AVX2 function the query loop calls (once per query, not inlined: GCC inlines AVX2 code only into AVX2
+// functions).
+struct Avx2Scan {
+  template <typename T>
+  INC_TARGET_AVX2 static INC_NOINLINE std::int32_t* scanRuns(const T* xs, const T* ys, const T* zs,
+                                                             const std::int32_t* ids, const std::int32_t* runs,
+                                                             int nrun, T qx, T qy, T qz, T r2, std::int32_t skip,
+                                                             std::int32_t* dst) {
+    for (int k = 0; k < nrun; ++k) dst = run(xs, ys, zs, ids, runs[2 * k], runs[2 * k + 1], qx, qy, qz, r2, skip, dst);
+    return dst;
+  }
+  INC_TARGET_AVX2 static INC_FORCE_INLINE __m256i packOrder(unsigned bits) {
+    const __m256i shifts = _mm256_setr_epi32(0, 4, 8, 12, 16, 20, 24, 28);
+    return _mm256_and_si256(_mm256_srlv_epi32(_mm256_set1_epi32(std::int32_t(kCompress.lanes[bits])), shifts),
+                            _mm256_set1_epi32(7));
+  }
+  INC_TARGET_AVX2 static INC_FORCE_INLINE std::int32_t* run(const float* xs, const float* ys, const float* zs,
+                                                            const std::int32_t* ids, std::int32_t e,
+                                                            std::int32_t e1, float qx, float qy, float qz,
+                                                            float r2, std::int32_t skip, std::int32_t* dst) {
+    const __m256 vx = _mm256_set1_ps(qx), vy = _mm256_set1_ps(qy), vz = _mm256_set1_ps(qz), vr2 = _mm256_set1_ps(r2);
+    const __m256i vskip = _mm256_set1_epi32(skip), vend = _mm256_set1_epi32(e1);
+    __m256i lane = _mm256_add_epi32(_mm256_set1_epi32(e), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+    for (; e < e1; e += 8) {
+      const __m256 dx = _mm256_sub_ps(vx, _mm256_loadu_ps(xs + e));
+      const __m256 dy = _mm256_sub_ps(vy, _mm256_loadu_ps(ys + e));
+      const __m256 dz = _mm256_sub_ps(vz, _mm256_loadu_ps(zs + e));
+      const __m256 d2 =
+          _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
+      const __m256i o = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(ids + e));
+      const __m256i keep = _mm256_andnot_si256(_mm256_cmpeq_epi32(o, vskip), _mm256_cmpgt_epi32(vend, lane));
+      const unsigned bits = unsigned(
+          _mm256_movemask_ps(_mm256_and_ps(_mm256_cmp_ps(d2, vr2, _CMP_LE_OQ), _mm256_castsi256_ps(keep))));
+      lane = _mm256_add_epi32(lane, _mm256_set1_epi32(8));
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst), _mm256_permutevar8x32_epi32(o, packOrder(bits)));
+      dst += __builtin_popcount(bits);
+    }
+    return dst;
+  }
+  INC_TARGET_AVX2 static INC_FORCE_INLINE std::int32_t* run(const double* xs, const double* ys, const double* zs,
+                                                            const std::int32_t* ids, std::int32_t e,
+                                                            std::int32_t e1, double qx, double qy, double qz,
+                                                            double r2, std::int32_t skip, std::int32_t* dst) {
+    const __m256d vx = _mm256_set1_pd(qx), vy = _mm256_set1_pd(qy), vz = _mm256_set1_pd(qz), vr2 = _mm256_set1_pd(r2);
+    const __m128i vskip = _mm_set1_epi32(skip), vend = _mm_set1_epi32(e1);
+    __m128i lane = _mm_add_epi32(_mm_set1_epi32(e), _mm_setr_epi32(0, 1, 2, 3));
+    for (; e < e1; e += 4) {
+      const __m256d dx = _mm256_sub_pd(vx, _mm256_loadu_pd(xs + e));
+      const __m256d dy = _mm256_sub_pd(vy, _mm256_loadu_pd(ys + e));
+      const __m256d dz = _mm256_sub_pd(vz, _mm256_loadu_pd(zs + e));
+      const __m256d d2 =
+          _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)), _mm256_mul_pd(dz, dz));
+      const __m128i o = _mm_loadu_si128(reinterpret_cast<const __m128i*>(ids + e));
+      const __m128i keep = _mm_andnot_si128(_mm_cmpeq_epi32(o, vskip), _mm_cmpgt_epi32(vend, lane));
+      const unsigned bits = unsigned(_mm256_movemask_pd(
+          _mm256_and_pd(_mm256_cmp_pd(d2, vr2, _CMP_LE_OQ), _mm256_castsi256_pd(_mm256_cvtepi32_epi64(keep)))));
+      lane = _mm_add_epi32(lane, _mm_set1_epi32(4));
+      // (4-bit masks only name lanes 0-3, so the undefined upper half of the cast is never read into the store)
+      const __m256i packed = _mm256_permutevar8x32_epi32(_mm256_castsi128_si256(o), packOrder(bits));
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(dst), _mm256_castsi256_si128(packed));
+      dst += __builtin_popcount(bits);
+    }
+    return dst;
+  }
+};
+#endif
+
 // Lists are short (tens of entries): insertion sort beats std::sort's set-up there.
-void sortList(std::int32_t* a, std::size_t k) {
+INC_FORCE_INLINE void sortList(std::int32_t* a, std::size_t k) {
   if (k > 32) {
     std::sort(a, a + k);
     return;
@@ -72,39 +286,47 @@ void sortList(std::int32_t* a, std::size_t k) {
   }
 }
 
-// Dense-grid fast path of forEachGridNeighbor (same cell range, same rows, same d^2 decision, so the same
-// set; the caller sorts it): each (y, z) row of the range is one contiguous run of bucket slots, scanned over
-// separate coordinate arrays with a branch-free append into `out` (room for every candidate: `capacity`
-// grows as needed). Returns false where the generic traversal must be used (hashed grid, or a range with
-// more cells than points); otherwise the number of neighbours written.
-// No FMA contraction: d^2 must round exactly like distance2Exact ((dx^2 + dy^2) + dz^2, each rounded).
-#if defined(__clang__)
-#define INC_NO_CONTRACT_BEGIN  // clang: the pragma at the top of the function body
-#define INC_NO_CONTRACT_END
-#elif defined(__GNUC__)
-#define INC_NO_CONTRACT_BEGIN _Pragma("GCC push_options") _Pragma("GCC optimize(\"fp-contract=off\")")
-#define INC_NO_CONTRACT_END _Pragma("GCC pop_options")
-#else
-#define INC_NO_CONTRACT_BEGIN
-#define INC_NO_CONTRACT_END
-#endif
-
-struct DenseRowsResult {
-  bool handled;
-  std::size_t count;
+// What the per-block query loop reads.
+template <typename T>
+struct QueryJob {
+  NeighborGridView<T> g;                  // the generic traversal's view (storage order)
+  const T *xs, *ys, *zs;                  // the dense fast path's coordinates in bucket-slot order
+  const std::int32_t* ids;                // ... and the id each slot is listed as (original index or storage slot)
+  const std::int32_t* perm;               // storage slot -> original index; null for storage-order lists
+  const Vec3<T>* queries;                 // null for self-queries (the queries are the stored points)
+  const T* radii;
+  bool per_query;
+  std::int64_t* counts;                   // counts[q]: row q's length
 };
 
-INC_NO_CONTRACT_BEGIN
+// Appends perm[j] (original index), or j itself when perm is null (storage-order lists).
+struct AppendIndex {
+  detail::IndexBuffer* out;
+  const std::int32_t* perm;
+  void operator()(std::int32_t j) { out->push(perm ? perm[j] : j); }
+};
+
+// The shared traversal (hashed grids, huge radii): appends the neighbours of x to buf, unsorted.
 template <typename T>
-DenseRowsResult denseRows(const NeighborGridParams<T>& p, const std::int32_t* start, const T* xs, const T* ys,
-                          const T* zs, const std::int32_t* orig, std::int32_t n, const Vec3<T>& x, T r,
-                          std::int32_t skip_orig, std::vector<std::int32_t>& out) {
-#if defined(__clang__)
-#pragma clang fp contract(off)
-#endif
-  if (!p.dense) return {false, 0};
-  if (n <= 0) return {true, 0};
-  const T r2 = r * r;
+INC_NOINLINE void genericQuery(const QueryJob<T>& job, const Vec3<T>& x, T r, std::int32_t skip,
+                                            detail::IndexBuffer& buf) {
+  AppendIndex visit{&buf, job.perm};
+  forEachGridNeighbor(job.g, x, r, skip, visit);
+}
+
+// Dense-grid fast path of forEachGridNeighbor: the same cell range, so no neighbour can be missed, and the same
+// d^2 decision, so the same set (the caller sorts it). Each (y, z) row of the range is one contiguous run of
+// bucket slots, scanned over separate coordinate arrays. Rows are not trimmed to the ball (neighborRowXRange):
+// with a vector scan, testing a row's extra candidates costs less than computing its trimmed range.
+// Writes the neighbours at buf.data + buf.size and returns their number, or -1 where the generic traversal
+// must be used (hashed grid, or a range with more cells than points).
+template <typename Scan, typename T>
+INC_FORCE_INLINE std::int64_t denseQuery(const QueryJob<T>& job, const Vec3<T>& x, T r, std::int32_t skip,
+                                         detail::IndexBuffer& buf) {
+  const NeighborGridParams<T>& p = job.g.p;
+  if (!p.dense) return -1;
+  const std::int32_t n = job.g.n;
+  if (n <= 0) return 0;
   const T reach = neighborSearchReach(r);
   std::int32_t lo[3], hi[3];
   std::uint64_t cells = 1;
@@ -112,54 +334,71 @@ DenseRowsResult denseRows(const NeighborGridParams<T>& p, const std::int32_t* st
     lo[a] = neighborCellCoord(x[a] - reach, p.origin[a], p.inv_cell);
     const std::int32_t h = neighborCellCoord(x[a] + reach, p.origin[a], p.inv_cell);
     hi[a] = h < p.dims[a] - 1 ? h : p.dims[a] - 1;
-    if (lo[a] > hi[a]) return {true, 0};
+    if (lo[a] > hi[a]) return 0;
     cells *= std::uint64_t(hi[a] - lo[a] + 1);
   }
-  if (cells > std::uint64_t(n)) return {false, 0};
-  // The slot run of each row after trimming (the same rows and ranges as forEachGridNeighbor), and room
-  // for every candidate.
-  const std::int32_t qc[3] = {neighborCellCoord(x.x, p.origin.x, p.inv_cell),
-                              neighborCellCoord(x.y, p.origin.y, p.inv_cell),
-                              neighborCellCoord(x.z, p.origin.z, p.inv_cell)};
+  if (cells > std::uint64_t(n)) return -1;
+  const std::int32_t rows_y = hi[1] - lo[1] + 1, rows_z = hi[2] - lo[2] + 1;
+  if (std::int64_t(rows_y) * rows_z > 64) return -1;
+  // The slot run of each row, and room for every candidate.
   std::int32_t runs[2 * 64];
+  const std::int32_t* start = job.g.bucket_start;
+  const std::uint32_t dx = std::uint32_t(p.dims[0]), dxy = dx * std::uint32_t(p.dims[1]);
+  const std::uint32_t width = std::uint32_t(hi[0] - lo[0]) + 1u;
   int nrun = 0;
   std::size_t candidates = 0;
-  if (std::uint64_t(hi[1] - lo[1] + 1) * std::uint64_t(hi[2] - lo[2] + 1) > 64) return {false, 0};
-  for (std::int32_t cz = lo[2]; cz <= hi[2]; ++cz)
-    for (std::int32_t cy = lo[1]; cy <= hi[1]; ++cy) {
-      std::int32_t xl = lo[0], xh = hi[0];
-      if (!neighborRowXRange(p, x, reach, qc, cy, cz, xl, xh)) continue;
-      const std::uint32_t b0 = neighborBucket(p, xl, cy, cz);
-      runs[2 * nrun] = start[b0];
-      runs[2 * nrun + 1] = start[b0 + std::uint32_t(xh - xl) + 1u];
+  for (std::int32_t cz = lo[2]; cz <= hi[2]; ++cz) {
+    std::uint32_t b = std::uint32_t(lo[0]) + dx * std::uint32_t(lo[1]) + dxy * std::uint32_t(cz);
+    for (std::int32_t cy = 0; cy < rows_y; ++cy, b += dx, ++nrun) {
+      runs[2 * nrun] = start[b];
+      runs[2 * nrun + 1] = start[b + width];
       candidates += std::size_t(runs[2 * nrun + 1] - runs[2 * nrun]);
-      ++nrun;
-    }
-  if (out.size() < candidates) out.resize(candidates);
-  std::int32_t* dst = out.data();
-  std::size_t m = 0;
-  const T qx = x.x, qy = x.y, qz = x.z;
-  for (int k = 0; k < nrun; ++k) {
-    const std::int32_t e1 = runs[2 * k + 1];
-    for (std::int32_t e = runs[2 * k]; e < e1; ++e) {
-      const T dx = qx - xs[e], dy = qy - ys[e], dz = qz - zs[e];
-      const T xx = dx * dx, yy = dy * dy, zz = dz * dz;
-      const T d2 = (xx + yy) + zz;
-      const std::int32_t o = orig[e];
-      dst[m] = o;
-      m += std::size_t((d2 <= r2) & (o != skip_orig));
     }
   }
-  return {true, m};
+  std::int32_t* const first = buf.room(candidates + kScanSlack);
+  std::int32_t* dst = first;
+  const T r2 = r * r;
+  dst = Scan::scanRuns(job.xs, job.ys, job.zs, job.ids, runs, nrun, x.x, x.y, x.z, r2, skip, dst);
+  return dst - first;
 }
-INC_NO_CONTRACT_END
 
-// Appends perm[j] (original index), or j itself when perm is null (storage-order lists).
-struct AppendIndex {
-  std::vector<std::int32_t>* out;
-  const std::int32_t* perm;
-  void operator()(std::int32_t j) { out->push_back(perm ? perm[j] : j); }
-};
+// Queries [i0, i1) (storage order for self-queries, for locality): each sorted row is appended to buf and its
+// length written to counts.
+template <typename Scan, typename T>
+INC_FORCE_INLINE void queryBlock(const QueryJob<T>& job, std::size_t i0, std::size_t i1, detail::IndexBuffer& buf) {
+  const bool self = job.queries == nullptr;
+  for (std::size_t i = i0; i < i1; ++i) {
+    const std::size_t q = self && job.perm ? std::size_t(job.perm[i]) : i;
+    const Vec3<T> x = self ? job.g.points[i] : job.queries[i];
+    const T r = job.per_query ? job.radii[q] : job.radii[0];
+    // the query itself, as the fast path lists it (its id) and as the generic one sees it (its storage slot)
+    const std::int32_t skip_id = self ? std::int32_t(q) : -1, skip_slot = self ? std::int32_t(i) : -1;
+    const std::size_t first = buf.size;
+    std::int64_t k = denseQuery<Scan>(job, x, r, skip_id, buf);
+    if (k < 0) {
+      genericQuery(job, x, r, skip_slot, buf);
+      k = std::int64_t(buf.size - first);
+    }
+    sortList(buf.data.get() + first, std::size_t(k));
+    buf.size = first + std::size_t(k);
+    job.counts[q] = k;
+  }
+}
+
+template <typename T>
+void queryBlockPortable(const QueryJob<T>& job, std::size_t i0, std::size_t i1, detail::IndexBuffer& buf) {
+  queryBlock<PortableScan>(job, i0, i1, buf);
+}
+
+#if INC_NEIGHBOR_AVX2
+// The same loop with the AVX2 scan (only called when the CPU has it).
+template <typename T>
+void queryBlockAvx2(const QueryJob<T>& job, std::size_t i0, std::size_t i1, detail::IndexBuffer& buf) {
+  queryBlock<Avx2Scan>(job, i0, i1, buf);
+}
+#endif
+
+INC_NO_CONTRACT_END
 
 }  // namespace
 
@@ -216,11 +455,16 @@ void GridNeighborSearch<T>::build(const std::vector<Vec3<T>>& points, T cell_siz
   }
   inv_perm_.resize(n);
   parallelFor(std::int64_t(n), [&](std::int64_t s) { inv_perm_[std::size_t(perm_[std::size_t(s)])] = std::int32_t(s); });
-  slot_x_.resize(n);
-  slot_y_.resize(n);
-  slot_z_.resize(n);
-  slot_orig_.resize(n);
-  slot_store_.resize(n);
+  // kRunPad readable entries past the end for the vectorised scan (never listed: masked off)
+  slot_x_.resize(n + kRunPad);
+  slot_y_.resize(n + kRunPad);
+  slot_z_.resize(n + kRunPad);
+  slot_orig_.resize(n + kRunPad);
+  slot_store_.resize(n + kRunPad);
+  for (std::size_t e = n; e < n + kRunPad; ++e) {
+    slot_x_[e] = slot_y_[e] = slot_z_[e] = T(0);
+    slot_orig_[e] = slot_store_[e] = -1;
+  }
   parallelFor(std::int64_t(n), [&](std::int64_t e) {
     const std::size_t s = entries_.empty() ? std::size_t(e) : std::size_t(entries_[std::size_t(e)]);
     slot_x_[std::size_t(e)] = sorted_[s].x;
@@ -244,32 +488,68 @@ NeighborGridView<T> GridNeighborSearch<T>::view() const {
 
 template <typename T>
 NeighborLists GridNeighborSearch<T>::querySelf(T radius) const {
-  return run(nullptr, size(), std::vector<T>{radius}, true);
+  NeighborLists out;
+  querySelf(radius, out);
+  return out;
 }
 
 template <typename T>
 NeighborLists GridNeighborSearch<T>::querySelf(const std::vector<T>& radii) const {
-  return run(nullptr, size(), radii, true);
+  NeighborLists out;
+  querySelf(radii, out);
+  return out;
 }
 
 template <typename T>
 NeighborLists GridNeighborSearch<T>::querySelfStorage(T radius) const {
-  return run(nullptr, size(), std::vector<T>{radius}, true, true);
+  NeighborLists out;
+  querySelfStorage(radius, out);
+  return out;
 }
 
 template <typename T>
 NeighborLists GridNeighborSearch<T>::query(const std::vector<Vec3<T>>& queries, const std::vector<T>& radii) const {
-  return run(queries.data(), queries.size(), radii, false);
+  NeighborLists out;
+  query(queries, radii, out);
+  return out;
 }
 
 template <typename T>
 NeighborLists GridNeighborSearch<T>::query(const std::vector<Vec3<T>>& queries, T radius) const {
-  return run(queries.data(), queries.size(), std::vector<T>{radius}, false);
+  NeighborLists out;
+  query(queries, radius, out);
+  return out;
 }
 
 template <typename T>
-NeighborLists GridNeighborSearch<T>::run(const Vec3<T>* queries, std::size_t nq, const std::vector<T>& radii,
-                                         bool self, bool storage) const {
+void GridNeighborSearch<T>::querySelf(T radius, NeighborLists& out) const {
+  run(nullptr, size(), std::vector<T>{radius}, true, false, out);
+}
+
+template <typename T>
+void GridNeighborSearch<T>::querySelf(const std::vector<T>& radii, NeighborLists& out) const {
+  run(nullptr, size(), radii, true, false, out);
+}
+
+template <typename T>
+void GridNeighborSearch<T>::querySelfStorage(T radius, NeighborLists& out) const {
+  run(nullptr, size(), std::vector<T>{radius}, true, true, out);
+}
+
+template <typename T>
+void GridNeighborSearch<T>::query(const std::vector<Vec3<T>>& queries, const std::vector<T>& radii,
+                                  NeighborLists& out) const {
+  run(queries.data(), queries.size(), radii, false, false, out);
+}
+
+template <typename T>
+void GridNeighborSearch<T>::query(const std::vector<Vec3<T>>& queries, T radius, NeighborLists& out) const {
+  run(queries.data(), queries.size(), std::vector<T>{radius}, false, false, out);
+}
+
+template <typename T>
+void GridNeighborSearch<T>::run(const Vec3<T>* queries, std::size_t nq, const std::vector<T>& radii, bool self,
+                                bool storage, NeighborLists& out) const {
   if (radii.size() != 1 && radii.size() != nq)
     throw InputError("", "radii", "expected 1 radius or one per query (" + std::to_string(nq) + "), got " +
                                       std::to_string(radii.size()));
@@ -284,70 +564,121 @@ NeighborLists GridNeighborSearch<T>::run(const Vec3<T>* queries, std::size_t nq,
       if (!neighborPointFinite(queries[i]))
         throw InputError("", "queries[" + std::to_string(i) + "]", "position " + describe(queries[i]) + " is not finite");
 
-  const bool per_query = radii.size() == nq && nq > 1;
-  const NeighborGridView<T> g = view();
-  NeighborLists out;
-  out.offsets.assign(nq + 1, 0);
-  // One pass: each block of queries (in storage order for self-queries, for locality) appends its sorted
-  // lists to its own buffer and records the counts; a prefix sum places the buffers. The GPU counts first
-  // instead, because it cannot grow buffers; the lists are the same.
-  const std::int64_t blocks = std::max<std::int64_t>(1, std::min<std::int64_t>(std::int64_t(nq), 4 * threadCount()));
-  std::vector<std::vector<std::int32_t>> buffers(std::size_t(blocks), std::vector<std::int32_t>{});
-  std::vector<char> out_of_memory(std::size_t(blocks), 0);  // exceptions must not leave the OpenMP region
+  // Every entry of offsets and indices is written below: resizing a reused `out` to the same sizes writes
+  // nothing, and nothing is zeroed twice.
+  out.offsets.resize(nq + 1);
+  out.offsets[0] = 0;
+  QueryJob<T> job;
+  job.g = view();
+  job.xs = slot_x_.data();
+  job.ys = slot_y_.data();
+  job.zs = slot_z_.data();
+  // Storage-order lists name slots, original-order lists original indices (the fast path's id array).
+  job.ids = storage ? slot_store_.data() : slot_orig_.data();
+  job.perm = storage ? nullptr : perm_.data();
+  job.queries = self ? nullptr : queries;
+  job.radii = radii.data();
+  job.per_query = radii.size() == nq && nq > 1;
+  job.counts = out.offsets.data() + 1;
+  // Rows of query i land in row q = perm[i] for original-order self-queries, else in row i (contiguous per block).
+  const bool scattered = self && !storage;
+
+  // One pass: each block of queries (one per thread, in storage order for self-queries, for locality) appends
+  // its sorted rows to its own buffer and records their lengths; a prefix sum places the buffers. The GPU
+  // counts first instead, because it cannot grow buffers; the lists are the same.
+  const std::int64_t blocks = std::max<std::int64_t>(1, std::min<std::int64_t>(std::int64_t(nq), threadCount()));
   auto blockBegin = [&](std::int64_t b) { return std::size_t(b * std::int64_t(nq) / blocks); };
+  std::unique_lock<std::mutex> lock(scratch_.mutex, std::try_to_lock);
+  std::vector<detail::IndexBuffer> own;
+  std::vector<detail::IndexBuffer>& buffers = lock.owns_lock() ? scratch_.blocks : own;
+  if (buffers.size() < std::size_t(blocks)) buffers.resize(std::size_t(blocks));
+  std::vector<char> out_of_memory(std::size_t(blocks), 0);  // exceptions must not leave the OpenMP region
+  const bool avx2 = neighborScanUsesAvx2();
   parallelFor(blocks, [&](std::int64_t b) {
-    std::vector<std::int32_t>& buf = buffers[std::size_t(b)];
-    std::vector<std::int32_t> row;  // the dense fast path's candidates / hits of one query
-    AppendIndex visit{&buf, storage ? nullptr : perm_.data()};
-    // Storage-order lists name slots, original-order lists original indices (the fast path's id array).
-    const std::int32_t* slot_ids = storage ? slot_store_.data() : slot_orig_.data();
+    detail::IndexBuffer& buf = buffers[std::size_t(b)];
+    buf.size = 0;
     try {
-      buf.reserve(std::size_t(blockBegin(b + 1) - blockBegin(b)) * 32);
-      for (std::size_t i = blockBegin(b); i < blockBegin(b + 1); ++i) {
-        const std::size_t q = self && !storage ? std::size_t(perm_[i]) : i;
-        const Vec3<T>& x = self ? sorted_[i] : queries[i];
-        const T r = per_query ? radii[q] : radii[0];
-        const std::size_t first = buf.size();
-        const DenseRowsResult fast =
-            denseRows(g.p, g.bucket_start, slot_x_.data(), slot_y_.data(), slot_z_.data(), slot_ids, g.n,
-                      x, r, self ? std::int32_t(q) : -1, row);
-        if (fast.handled) {
-          sortList(row.data(), fast.count);
-          buf.insert(buf.end(), row.begin(), row.begin() + std::ptrdiff_t(fast.count));
-        } else {
-          forEachGridNeighbor(g, x, r, self ? std::int32_t(i) : -1, visit);
-          sortList(buf.data() + first, buf.size() - first);
-        }
-        out.offsets[q + 1] = std::int64_t(buf.size() - first);
+#if INC_NEIGHBOR_AVX2
+      if (avx2) {
+        queryBlockAvx2(job, blockBegin(b), blockBegin(b + 1), buf);
+        return;
       }
+#endif
+      queryBlockPortable(job, blockBegin(b), blockBegin(b + 1), buf);
     } catch (const std::bad_alloc&) {
       out_of_memory[std::size_t(b)] = 1;
-      std::vector<std::int32_t>().swap(buf);
+      buf = detail::IndexBuffer{};
     }
   });
+  (void)avx2;
   bool failed = std::find(out_of_memory.begin(), out_of_memory.end(), 1) != out_of_memory.end();
+  std::vector<std::int64_t> block_base(std::size_t(blocks) + 1, 0);
+  for (std::int64_t b = 0; b < blocks; ++b)
+    block_base[std::size_t(b) + 1] = block_base[std::size_t(b)] + std::int64_t(buffers[std::size_t(b)].size);
   if (!failed) {
-    for (std::size_t q = 0; q < nq; ++q) out.offsets[q + 1] += out.offsets[q];
     try {
-      out.indices.resize(std::size_t(out.offsets[nq]));
+      out.indices.resize(std::size_t(block_base[std::size_t(blocks)]));
     } catch (const std::bad_alloc&) {
       failed = true;
     }
   }
-  if (failed)  // never truncate: either every list is complete or the caller gets an error
+  if (failed) {  // never truncate: either every list is complete or the caller gets an error
+    for (detail::IndexBuffer& buf : buffers) buf = detail::IndexBuffer{};
     throw InputError("", "radius", "the neighbour lists of " + std::to_string(nq) +
                                        " queries do not fit in memory; use a smaller radius");
+  }
+  std::int64_t* const offsets = out.offsets.data();
+  std::int32_t* const indices = out.indices.data();
+  if (!scattered) {
+    // Block b holds rows [i0, i1) back to back: its offsets are a running sum from its base, its buffer one copy.
+    parallelFor(blocks, [&](std::int64_t b) {
+      std::int64_t at = block_base[std::size_t(b)];
+      for (std::size_t i = blockBegin(b); i < blockBegin(b + 1); ++i) offsets[i + 1] = at += offsets[i + 1];
+      const detail::IndexBuffer& buf = buffers[std::size_t(b)];
+      if (buf.size) std::memcpy(indices + block_base[std::size_t(b)], buf.data.get(), buf.size * sizeof(std::int32_t));
+    });
+    return;
+  }
+  // Original-order rows: a prefix sum over q (chunk sums, then each chunk's running sum from its base), then
+  // each block copies its rows to their places.
+  std::vector<std::int64_t> chunk_base(std::size_t(blocks) + 1, 0);
   parallelFor(blocks, [&](std::int64_t b) {
-    const std::int32_t* src = buffers[std::size_t(b)].data();
+    std::int64_t sum = 0;
+    for (std::size_t q = blockBegin(b); q < blockBegin(b + 1); ++q) sum += offsets[q + 1];
+    chunk_base[std::size_t(b) + 1] = sum;
+  });
+  for (std::int64_t b = 0; b < blocks; ++b) chunk_base[std::size_t(b) + 1] += chunk_base[std::size_t(b)];
+  parallelFor(blocks, [&](std::int64_t b) {
+    std::int64_t at = chunk_base[std::size_t(b)];
+    for (std::size_t q = blockBegin(b); q < blockBegin(b + 1); ++q) offsets[q + 1] = at += offsets[q + 1];
+  });
+  parallelFor(blocks, [&](std::int64_t b) {
+    const std::int32_t* src = buffers[std::size_t(b)].data.get();
     for (std::size_t i = blockBegin(b); i < blockBegin(b + 1); ++i) {
-      const std::size_t q = self && !storage ? std::size_t(perm_[i]) : i;
-      const std::size_t k = std::size_t(out.offsets[q + 1] - out.offsets[q]);
-      std::copy(src, src + k, out.indices.begin() + out.offsets[q]);
+      const std::size_t q = std::size_t(perm_[i]);
+      const std::size_t k = std::size_t(offsets[q + 1] - offsets[q]);
+      std::memcpy(indices + offsets[q], src, k * sizeof(std::int32_t));
       src += k;
     }
   });
-  return out;
 }
+
+void setNeighborScanPortable(bool portable_only) { g_scan_portable_only = portable_only; }
+
+bool neighborScanUsesAvx2() { return !g_scan_portable_only && cpuHasAvx2(); }
+
+namespace detail {
+std::int32_t* IndexBuffer::room(std::size_t extra) {
+  if (size + extra > capacity) {
+    const std::size_t grown = std::max(size + extra, capacity + capacity / 2 + 64);
+    std::unique_ptr<std::int32_t[]> bigger(new std::int32_t[grown]);  // not value-initialised
+    if (size) std::memcpy(bigger.get(), data.get(), size * sizeof(std::int32_t));
+    data = std::move(bigger);
+    capacity = grown;
+  }
+  return data.get() + size;
+}
+}  // namespace detail
 
 template class GridNeighborSearch<float>;
 template class GridNeighborSearch<double>;
