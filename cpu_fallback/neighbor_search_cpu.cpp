@@ -110,78 +110,105 @@ bool cpuHasAvx2() {
 
 INC_NO_CONTRACT_BEGIN
 
-// The candidate scans. Each writes ids[e] for every slot e in [e, e1) with d^2 <= r2 and ids[e] != skip, in
-// slot order, and returns the end: d = query - point, d^2 = (dx^2 + dy^2) + dz^2 rounded like distance2Exact.
-// They read up to kRunPad slots past e1 (masked off) and write up to kScanSlack entries past the end.
+// Lists are short (tens of entries): insertion sort beats std::sort's set-up there.
+INC_FORCE_INLINE void sortList(std::int32_t* a, std::size_t k) {
+  if (k > 32) {
+    std::sort(a, a + k);
+    return;
+  }
+  for (std::size_t i = 1; i < k; ++i) {
+    const std::int32_t v = a[i];
+    std::size_t j = i;
+    for (; j > 0 && a[j - 1] > v; --j) a[j] = a[j - 1];
+    a[j] = v;
+  }
+}
+
+// One query's candidates on a dense grid: rows_z planes of rows_y rows of cells, each row the contiguous run
+// of bucket slots [start[b], start[b + width]) of its first bucket b, which advances by dx per row and by dxy
+// per plane from b0.
+template <typename T>
+struct QueryRows {
+  const T *xs, *ys, *zs;     // coordinates in bucket-slot order
+  const std::int32_t* ids;   // the id each slot is listed as (original index or storage slot)
+  const std::int32_t* start;  // bucket start table
+  std::uint32_t b0, dx, dxy, width, rows_y, rows_z;
+  T qx, qy, qz, r2;
+  std::int32_t skip;         // the query's own id (self-queries), else -1
+};
+
+// The scans. query() writes the ids of every slot of the rows with d^2 <= r2 and an id other than skip, in
+// slot order, and sorts them when asked; it returns the end. d = query - point, d^2 = (dx^2 + dy^2) + dz^2,
+// each operation rounded on its own (distance2Exact). A scan reads up to kRunPad slots past the end of a run
+// (masked off) and writes up to kScanSlack entries past the end of the row (lanes that are not kept), and a
+// row of at most kSortWidth is sorted in a block of kSortWidth entries: the destination needs room for
+// max(candidates, kSortWidth) + kScanSlack.
+constexpr std::size_t kSortWidth = 32;
 
 // Portable: four floats or two doubles per step with SSE2 (any x86-64), one at a time elsewhere. The kept
 // ids are stored branch-free: every lane writes at dst, and dst advances by that lane's bit.
 struct PortableScan {
-  // Every run [runs[2k], runs[2k + 1]) of one query in turn.
   template <typename T>
-  static INC_FORCE_INLINE std::int32_t* scanRuns(const T* xs, const T* ys, const T* zs, const std::int32_t* ids,
-                                                 const std::int32_t* runs, int nrun, T qx, T qy, T qz, T r2,
-                                                 std::int32_t skip, std::int32_t* dst) {
-    for (int k = 0; k < nrun; ++k) dst = run(xs, ys, zs, ids, runs[2 * k], runs[2 * k + 1], qx, qy, qz, r2, skip, dst);
+  static INC_FORCE_INLINE std::int32_t* query(const QueryRows<T>& w, bool sort, std::int32_t* dst) {
+    std::int32_t* const first = dst;
+    for (std::uint32_t z = 0, b = w.b0; z < w.rows_z; ++z, b += w.dxy)
+      for (std::uint32_t y = 0, by = b; y < w.rows_y; ++y, by += w.dx) dst = run(w, w.start[by], w.start[by + w.width], dst);
+    if (sort) sortList(first, std::size_t(dst - first));
     return dst;
   }
   template <typename T>
-  static INC_FORCE_INLINE std::int32_t* run(const T* xs, const T* ys, const T* zs, const std::int32_t* ids,
-                                            std::int32_t e, std::int32_t e1, T qx, T qy, T qz, T r2,
-                                            std::int32_t skip, std::int32_t* dst) {
+  static INC_FORCE_INLINE std::int32_t* run(const QueryRows<T>& w, std::int32_t e, std::int32_t e1, std::int32_t* dst) {
     for (; e < e1; ++e) {
-      const T dx = qx - xs[e], dy = qy - ys[e], dz = qz - zs[e];
+      const T dx = w.qx - w.xs[e], dy = w.qy - w.ys[e], dz = w.qz - w.zs[e];
       const T xx = dx * dx, yy = dy * dy, zz = dz * dz;
       const T d2 = (xx + yy) + zz;
-      const std::int32_t o = ids[e];
+      const std::int32_t o = w.ids[e];
       *dst = o;
-      dst += (d2 <= r2) & (o != skip);
+      dst += (d2 <= w.r2) & (o != w.skip);
     }
     return dst;
   }
 #if defined(__SSE2__)
-  static INC_FORCE_INLINE std::int32_t* run(const float* xs, const float* ys, const float* zs,
-                                            const std::int32_t* ids, std::int32_t e, std::int32_t e1, float qx,
-                                            float qy, float qz, float r2, std::int32_t skip, std::int32_t* dst) {
-    const __m128 vx = _mm_set1_ps(qx), vy = _mm_set1_ps(qy), vz = _mm_set1_ps(qz), vr2 = _mm_set1_ps(r2);
-    const __m128i vskip = _mm_set1_epi32(skip), vend = _mm_set1_epi32(e1);
+  static INC_FORCE_INLINE std::int32_t* run(const QueryRows<float>& w, std::int32_t e, std::int32_t e1,
+                                            std::int32_t* dst) {
+    const __m128 vx = _mm_set1_ps(w.qx), vy = _mm_set1_ps(w.qy), vz = _mm_set1_ps(w.qz), vr2 = _mm_set1_ps(w.r2);
+    const __m128i vskip = _mm_set1_epi32(w.skip), vend = _mm_set1_epi32(e1);
     __m128i lane = _mm_add_epi32(_mm_set1_epi32(e), _mm_set_epi32(3, 2, 1, 0));
     for (; e < e1; e += 4) {
-      const __m128 dx = _mm_sub_ps(vx, _mm_loadu_ps(xs + e));
-      const __m128 dy = _mm_sub_ps(vy, _mm_loadu_ps(ys + e));
-      const __m128 dz = _mm_sub_ps(vz, _mm_loadu_ps(zs + e));
+      const __m128 dx = _mm_sub_ps(vx, _mm_loadu_ps(w.xs + e));
+      const __m128 dy = _mm_sub_ps(vy, _mm_loadu_ps(w.ys + e));
+      const __m128 dz = _mm_sub_ps(vz, _mm_loadu_ps(w.zs + e));
       const __m128 d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
-      const __m128i o = _mm_loadu_si128(reinterpret_cast<const __m128i*>(ids + e));
+      const __m128i o = _mm_loadu_si128(reinterpret_cast<const __m128i*>(w.ids + e));
       // kept: d2 <= r2 (false for NaN), not the skipped id, lane inside the run
       const __m128i keep = _mm_andnot_si128(_mm_cmpeq_epi32(o, vskip), _mm_cmplt_epi32(lane, vend));
       const unsigned bits = unsigned(_mm_movemask_ps(_mm_and_ps(_mm_cmple_ps(d2, vr2), _mm_castsi128_ps(keep))));
       lane = _mm_add_epi32(lane, _mm_set1_epi32(4));
-      dst[0] = ids[e];
+      dst[0] = w.ids[e];
       dst += bits & 1u;
-      dst[0] = ids[e + 1];
+      dst[0] = w.ids[e + 1];
       dst += (bits >> 1) & 1u;
-      dst[0] = ids[e + 2];
+      dst[0] = w.ids[e + 2];
       dst += (bits >> 2) & 1u;
-      dst[0] = ids[e + 3];
+      dst[0] = w.ids[e + 3];
       dst += bits >> 3;
     }
     return dst;
   }
-  static INC_FORCE_INLINE std::int32_t* run(const double* xs, const double* ys, const double* zs,
-                                            const std::int32_t* ids, std::int32_t e, std::int32_t e1, double qx,
-                                            double qy, double qz, double r2, std::int32_t skip, std::int32_t* dst) {
-    const __m128d vx = _mm_set1_pd(qx), vy = _mm_set1_pd(qy), vz = _mm_set1_pd(qz), vr2 = _mm_set1_pd(r2);
+  static INC_FORCE_INLINE std::int32_t* run(const QueryRows<double>& w, std::int32_t e, std::int32_t e1,
+                                            std::int32_t* dst) {
+    const __m128d vx = _mm_set1_pd(w.qx), vy = _mm_set1_pd(w.qy), vz = _mm_set1_pd(w.qz), vr2 = _mm_set1_pd(w.r2);
     for (; e < e1; e += 2) {
-      const __m128d dx = _mm_sub_pd(vx, _mm_loadu_pd(xs + e));
-      const __m128d dy = _mm_sub_pd(vy, _mm_loadu_pd(ys + e));
-      const __m128d dz = _mm_sub_pd(vz, _mm_loadu_pd(zs + e));
+      const __m128d dx = _mm_sub_pd(vx, _mm_loadu_pd(w.xs + e));
+      const __m128d dy = _mm_sub_pd(vy, _mm_loadu_pd(w.ys + e));
+      const __m128d dz = _mm_sub_pd(vz, _mm_loadu_pd(w.zs + e));
       const __m128d d2 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(dx, dx), _mm_mul_pd(dy, dy)), _mm_mul_pd(dz, dz));
       const unsigned bits = unsigned(_mm_movemask_pd(_mm_cmple_pd(d2, vr2)));
-      const std::int32_t o0 = ids[e], o1 = ids[e + 1];
+      const std::int32_t o0 = w.ids[e], o1 = w.ids[e + 1];
       dst[0] = o0;
-      dst += (bits & 1u) & unsigned(o0 != skip);
+      dst += (bits & 1u) & unsigned(o0 != w.skip);
       dst[0] = o1;
-      dst += (bits >> 1) & unsigned(o1 != skip) & unsigned(e + 1 < e1);
+      dst += (bits >> 1) & unsigned(o1 != w.skip) & unsigned(e + 1 < e1);
     }
     return dst;
   }
@@ -203,38 +230,54 @@ struct CompressTable {
 };
 constexpr CompressTable kCompress{};
 
+// Bitonic sorting network on 32 values in four 8-lane registers (value i in lane i % 8 of register i / 8):
+// for block size k = 2, 4, .., 32 and distance j = k / 2, .., 1, value i and i ^ j swap into order, ascending
+// where i & k == 0. Lanes that take the larger value of their pair at step (k, j) in register reg:
+constexpr int bitonicMaxLanes(int k, int j, int reg) {
+  int mask = 0;
+  for (int lane = 0; lane < 8; ++lane) {
+    const int i = 8 * reg + lane;
+    if (((i & k) == 0) != ((i & j) == 0)) mask |= 1 << lane;
+  }
+  return mask;
+}
+
 // AVX2: eight floats or four doubles per step; the kept ids are packed to the front by one permute (the lane
-// order from kCompress) and stored as a vector, and dst advances by the number of kept lanes. scanRuns is the
-// one AVX2 function the query loop calls (once per query, not inlined: GCC inlines AVX2 code only into AVX2
-// functions).
+// order from kCompress) and stored as a vector, and dst advances by the number of kept lanes. Rows of up to
+// 32 ids are sorted by the bitonic network, branch-free. query() is the one AVX2 function the query loop
+// calls (once per query, not inlined: GCC inlines AVX2 code only into AVX2 functions).
 struct Avx2Scan {
   template <typename T>
-  INC_TARGET_AVX2 static INC_NOINLINE std::int32_t* scanRuns(const T* xs, const T* ys, const T* zs,
-                                                             const std::int32_t* ids, const std::int32_t* runs,
-                                                             int nrun, T qx, T qy, T qz, T r2, std::int32_t skip,
-                                                             std::int32_t* dst) {
-    for (int k = 0; k < nrun; ++k) dst = run(xs, ys, zs, ids, runs[2 * k], runs[2 * k + 1], qx, qy, qz, r2, skip, dst);
+  INC_TARGET_AVX2 static INC_NOINLINE std::int32_t* query(const QueryRows<T>& w, bool sort, std::int32_t* dst) {
+    std::int32_t* const first = dst;
+    for (std::uint32_t z = 0, b = w.b0; z < w.rows_z; ++z, b += w.dxy)
+      for (std::uint32_t y = 0, by = b; y < w.rows_y; ++y, by += w.dx) dst = run(w, w.start[by], w.start[by + w.width], dst);
+    const std::size_t k = std::size_t(dst - first);
+    if (sort && k <= kSortWidth)
+      sort32(first, k);
+    else if (sort)
+      sortList(first, k);
     return dst;
   }
+
   INC_TARGET_AVX2 static INC_FORCE_INLINE __m256i packOrder(unsigned bits) {
     const __m256i shifts = _mm256_setr_epi32(0, 4, 8, 12, 16, 20, 24, 28);
     return _mm256_and_si256(_mm256_srlv_epi32(_mm256_set1_epi32(std::int32_t(kCompress.lanes[bits])), shifts),
                             _mm256_set1_epi32(7));
   }
-  INC_TARGET_AVX2 static INC_FORCE_INLINE std::int32_t* run(const float* xs, const float* ys, const float* zs,
-                                                            const std::int32_t* ids, std::int32_t e,
-                                                            std::int32_t e1, float qx, float qy, float qz,
-                                                            float r2, std::int32_t skip, std::int32_t* dst) {
-    const __m256 vx = _mm256_set1_ps(qx), vy = _mm256_set1_ps(qy), vz = _mm256_set1_ps(qz), vr2 = _mm256_set1_ps(r2);
-    const __m256i vskip = _mm256_set1_epi32(skip), vend = _mm256_set1_epi32(e1);
+  INC_TARGET_AVX2 static INC_FORCE_INLINE std::int32_t* run(const QueryRows<float>& w, std::int32_t e,
+                                                            std::int32_t e1, std::int32_t* dst) {
+    const __m256 vx = _mm256_set1_ps(w.qx), vy = _mm256_set1_ps(w.qy), vz = _mm256_set1_ps(w.qz);
+    const __m256 vr2 = _mm256_set1_ps(w.r2);
+    const __m256i vskip = _mm256_set1_epi32(w.skip), vend = _mm256_set1_epi32(e1);
     __m256i lane = _mm256_add_epi32(_mm256_set1_epi32(e), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
     for (; e < e1; e += 8) {
-      const __m256 dx = _mm256_sub_ps(vx, _mm256_loadu_ps(xs + e));
-      const __m256 dy = _mm256_sub_ps(vy, _mm256_loadu_ps(ys + e));
-      const __m256 dz = _mm256_sub_ps(vz, _mm256_loadu_ps(zs + e));
+      const __m256 dx = _mm256_sub_ps(vx, _mm256_loadu_ps(w.xs + e));
+      const __m256 dy = _mm256_sub_ps(vy, _mm256_loadu_ps(w.ys + e));
+      const __m256 dz = _mm256_sub_ps(vz, _mm256_loadu_ps(w.zs + e));
       const __m256 d2 =
           _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
-      const __m256i o = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(ids + e));
+      const __m256i o = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(w.ids + e));
       const __m256i keep = _mm256_andnot_si256(_mm256_cmpeq_epi32(o, vskip), _mm256_cmpgt_epi32(vend, lane));
       const unsigned bits = unsigned(
           _mm256_movemask_ps(_mm256_and_ps(_mm256_cmp_ps(d2, vr2, _CMP_LE_OQ), _mm256_castsi256_ps(keep))));
@@ -244,20 +287,19 @@ struct Avx2Scan {
     }
     return dst;
   }
-  INC_TARGET_AVX2 static INC_FORCE_INLINE std::int32_t* run(const double* xs, const double* ys, const double* zs,
-                                                            const std::int32_t* ids, std::int32_t e,
-                                                            std::int32_t e1, double qx, double qy, double qz,
-                                                            double r2, std::int32_t skip, std::int32_t* dst) {
-    const __m256d vx = _mm256_set1_pd(qx), vy = _mm256_set1_pd(qy), vz = _mm256_set1_pd(qz), vr2 = _mm256_set1_pd(r2);
-    const __m128i vskip = _mm_set1_epi32(skip), vend = _mm_set1_epi32(e1);
+  INC_TARGET_AVX2 static INC_FORCE_INLINE std::int32_t* run(const QueryRows<double>& w, std::int32_t e,
+                                                            std::int32_t e1, std::int32_t* dst) {
+    const __m256d vx = _mm256_set1_pd(w.qx), vy = _mm256_set1_pd(w.qy), vz = _mm256_set1_pd(w.qz);
+    const __m256d vr2 = _mm256_set1_pd(w.r2);
+    const __m128i vskip = _mm_set1_epi32(w.skip), vend = _mm_set1_epi32(e1);
     __m128i lane = _mm_add_epi32(_mm_set1_epi32(e), _mm_setr_epi32(0, 1, 2, 3));
     for (; e < e1; e += 4) {
-      const __m256d dx = _mm256_sub_pd(vx, _mm256_loadu_pd(xs + e));
-      const __m256d dy = _mm256_sub_pd(vy, _mm256_loadu_pd(ys + e));
-      const __m256d dz = _mm256_sub_pd(vz, _mm256_loadu_pd(zs + e));
+      const __m256d dx = _mm256_sub_pd(vx, _mm256_loadu_pd(w.xs + e));
+      const __m256d dy = _mm256_sub_pd(vy, _mm256_loadu_pd(w.ys + e));
+      const __m256d dz = _mm256_sub_pd(vz, _mm256_loadu_pd(w.zs + e));
       const __m256d d2 =
           _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)), _mm256_mul_pd(dz, dz));
-      const __m128i o = _mm_loadu_si128(reinterpret_cast<const __m128i*>(ids + e));
+      const __m128i o = _mm_loadu_si128(reinterpret_cast<const __m128i*>(w.ids + e));
       const __m128i keep = _mm_andnot_si128(_mm_cmpeq_epi32(o, vskip), _mm_cmpgt_epi32(vend, lane));
       const unsigned bits = unsigned(_mm256_movemask_pd(
           _mm256_and_pd(_mm256_cmp_pd(d2, vr2, _CMP_LE_OQ), _mm256_castsi256_pd(_mm256_cvtepi32_epi64(keep)))));
@@ -269,22 +311,66 @@ struct Avx2Scan {
     }
     return dst;
   }
+
+  // One step (k, j) of the network on register reg: min and max against the partner lane, then a blend.
+  template <int K, int J, int R>
+  INC_TARGET_AVX2 static INC_FORCE_INLINE __m256i sortLanes(__m256i v) {
+    __m256i partner;
+    if constexpr (J == 1)
+      partner = _mm256_shuffle_epi32(v, 0xB1);
+    else if constexpr (J == 2)
+      partner = _mm256_shuffle_epi32(v, 0x4E);
+    else
+      partner = _mm256_permute4x64_epi64(v, 0x4E);
+    return _mm256_blend_epi32(_mm256_min_epi32(v, partner), _mm256_max_epi32(v, partner), bitonicMaxLanes(K, J, R));
+  }
+  template <int K, int J>
+  INC_TARGET_AVX2 static INC_FORCE_INLINE void sortStep(__m256i (&x)[4]) {
+    if constexpr (J >= 8) {  // partners in registers r and r + J / 8
+      constexpr int d = J / 8;
+      for (int r = 0; r < 4; ++r) {
+        if (r & d) continue;
+        const __m256i lo = _mm256_min_epi32(x[r], x[r + d]), hi = _mm256_max_epi32(x[r], x[r + d]);
+        const bool ascending = ((8 * r) & K) == 0;
+        x[r] = ascending ? lo : hi;
+        x[r + d] = ascending ? hi : lo;
+      }
+    } else {
+      x[0] = sortLanes<K, J, 0>(x[0]);
+      x[1] = sortLanes<K, J, 1>(x[1]);
+      x[2] = sortLanes<K, J, 2>(x[2]);
+      x[3] = sortLanes<K, J, 3>(x[3]);
+    }
+  }
+  // Sorts a[0..k), k <= 32; lanes past k are filled with INT32_MAX, sort to the end and are stored after the
+  // row (into the room the caller reserved).
+  INC_TARGET_AVX2 static INC_FORCE_INLINE void sort32(std::int32_t* a, std::size_t k) {
+    __m256i x[4];
+    const __m256i lanes = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+    const __m256i pad = _mm256_set1_epi32(std::numeric_limits<std::int32_t>::max());
+    for (int c = 0; c < 4; ++c) {
+      const __m256i inside = _mm256_cmpgt_epi32(_mm256_set1_epi32(std::int32_t(k) - 8 * c), lanes);
+      x[c] = _mm256_blendv_epi8(pad, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(a + 8 * c)), inside);
+    }
+    sortStep<2, 1>(x);
+    sortStep<4, 2>(x);
+    sortStep<4, 1>(x);
+    sortStep<8, 4>(x);
+    sortStep<8, 2>(x);
+    sortStep<8, 1>(x);
+    sortStep<16, 8>(x);
+    sortStep<16, 4>(x);
+    sortStep<16, 2>(x);
+    sortStep<16, 1>(x);
+    sortStep<32, 16>(x);
+    sortStep<32, 8>(x);
+    sortStep<32, 4>(x);
+    sortStep<32, 2>(x);
+    sortStep<32, 1>(x);
+    for (int c = 0; c < 4; ++c) _mm256_storeu_si256(reinterpret_cast<__m256i*>(a + 8 * c), x[c]);
+  }
 };
 #endif
-
-// Lists are short (tens of entries): insertion sort beats std::sort's set-up there.
-INC_FORCE_INLINE void sortList(std::int32_t* a, std::size_t k) {
-  if (k > 32) {
-    std::sort(a, a + k);
-    return;
-  }
-  for (std::size_t i = 1; i < k; ++i) {
-    const std::int32_t v = a[i];
-    std::size_t j = i;
-    for (; j > 0 && a[j - 1] > v; --j) a[j] = a[j - 1];
-    a[j] = v;
-  }
-}
 
 // What the per-block query loop reads.
 template <typename T>
@@ -296,6 +382,7 @@ struct QueryJob {
   const Vec3<T>* queries;                 // null for self-queries (the queries are the stored points)
   const T* radii;
   bool per_query;
+  bool sort_rows;                         // false where the fast path visits the ids in ascending order
   std::int64_t* counts;                   // counts[q]: row q's length
 };
 
@@ -309,17 +396,17 @@ struct AppendIndex {
 // The shared traversal (hashed grids, huge radii): appends the neighbours of x to buf, unsorted.
 template <typename T>
 INC_NOINLINE void genericQuery(const QueryJob<T>& job, const Vec3<T>& x, T r, std::int32_t skip,
-                                            detail::IndexBuffer& buf) {
+                               detail::IndexBuffer& buf) {
   AppendIndex visit{&buf, job.perm};
   forEachGridNeighbor(job.g, x, r, skip, visit);
 }
 
 // Dense-grid fast path of forEachGridNeighbor: the same cell range, so no neighbour can be missed, and the same
-// d^2 decision, so the same set (the caller sorts it). Each (y, z) row of the range is one contiguous run of
-// bucket slots, scanned over separate coordinate arrays. Rows are not trimmed to the ball (neighborRowXRange):
-// with a vector scan, testing a row's extra candidates costs less than computing its trimmed range.
-// Writes the neighbours at buf.data + buf.size and returns their number, or -1 where the generic traversal
-// must be used (hashed grid, or a range with more cells than points).
+// d^2 decision, so the same set, sorted unless job.sort_rows says it is already. Each (y, z) row of the range
+// is one contiguous run of bucket slots, scanned over separate coordinate arrays. Rows are not trimmed to the
+// ball (neighborRowXRange): with a vector scan, testing a row's extra candidates costs less than computing its
+// trimmed range. Writes the neighbours at buf.data + buf.size and returns their number, or -1 where the
+// generic traversal must be used (hashed grid, or a range with more cells than points).
 template <typename Scan, typename T>
 INC_FORCE_INLINE std::int64_t denseQuery(const QueryJob<T>& job, const Vec3<T>& x, T r, std::int32_t skip,
                                          detail::IndexBuffer& buf) {
@@ -338,28 +425,28 @@ INC_FORCE_INLINE std::int64_t denseQuery(const QueryJob<T>& job, const Vec3<T>& 
     cells *= std::uint64_t(hi[a] - lo[a] + 1);
   }
   if (cells > std::uint64_t(n)) return -1;
-  const std::int32_t rows_y = hi[1] - lo[1] + 1, rows_z = hi[2] - lo[2] + 1;
-  if (std::int64_t(rows_y) * rows_z > 64) return -1;
-  // The slot run of each row, and room for every candidate.
-  std::int32_t runs[2 * 64];
-  const std::int32_t* start = job.g.bucket_start;
-  const std::uint32_t dx = std::uint32_t(p.dims[0]), dxy = dx * std::uint32_t(p.dims[1]);
-  const std::uint32_t width = std::uint32_t(hi[0] - lo[0]) + 1u;
-  int nrun = 0;
-  std::size_t candidates = 0;
-  for (std::int32_t cz = lo[2]; cz <= hi[2]; ++cz) {
-    std::uint32_t b = std::uint32_t(lo[0]) + dx * std::uint32_t(lo[1]) + dxy * std::uint32_t(cz);
-    for (std::int32_t cy = 0; cy < rows_y; ++cy, b += dx, ++nrun) {
-      runs[2 * nrun] = start[b];
-      runs[2 * nrun + 1] = start[b + width];
-      candidates += std::size_t(runs[2 * nrun + 1] - runs[2 * nrun]);
-    }
-  }
-  std::int32_t* const first = buf.room(candidates + kScanSlack);
-  std::int32_t* dst = first;
-  const T r2 = r * r;
-  dst = Scan::scanRuns(job.xs, job.ys, job.zs, job.ids, runs, nrun, x.x, x.y, x.z, r2, skip, dst);
-  return dst - first;
+  QueryRows<T> w;
+  w.xs = job.xs;
+  w.ys = job.ys;
+  w.zs = job.zs;
+  w.ids = job.ids;
+  w.start = job.g.bucket_start;
+  w.dx = std::uint32_t(p.dims[0]);
+  w.dxy = w.dx * std::uint32_t(p.dims[1]);
+  w.b0 = std::uint32_t(lo[0]) + w.dx * std::uint32_t(lo[1]) + w.dxy * std::uint32_t(lo[2]);
+  w.width = std::uint32_t(hi[0] - lo[0]) + 1u;
+  w.rows_y = std::uint32_t(hi[1] - lo[1]) + 1u;
+  w.rows_z = std::uint32_t(hi[2] - lo[2]) + 1u;
+  w.qx = x.x;
+  w.qy = x.y;
+  w.qz = x.z;
+  w.r2 = r * r;
+  w.skip = skip;
+  // Every candidate lies between the first row's first slot and the last row's last one: room for all of them.
+  const std::uint32_t b_end = w.b0 + (w.rows_z - 1u) * w.dxy + (w.rows_y - 1u) * w.dx + w.width;
+  const std::size_t bound = std::size_t(w.start[b_end] - w.start[w.b0]);
+  std::int32_t* const first = buf.room(std::max(bound, kSortWidth) + kScanSlack);
+  return Scan::query(w, job.sort_rows, first) - first;
 }
 
 // Queries [i0, i1) (storage order for self-queries, for locality): each sorted row is appended to buf and its
@@ -374,12 +461,12 @@ INC_FORCE_INLINE void queryBlock(const QueryJob<T>& job, std::size_t i0, std::si
     // the query itself, as the fast path lists it (its id) and as the generic one sees it (its storage slot)
     const std::int32_t skip_id = self ? std::int32_t(q) : -1, skip_slot = self ? std::int32_t(i) : -1;
     const std::size_t first = buf.size;
-    std::int64_t k = denseQuery<Scan>(job, x, r, skip_id, buf);
+    std::int64_t k = denseQuery<Scan>(job, x, r, skip_id, buf);  // sorted
     if (k < 0) {
       genericQuery(job, x, r, skip_slot, buf);
       k = std::int64_t(buf.size - first);
+      sortList(buf.data.get() + first, std::size_t(k));
     }
-    sortList(buf.data.get() + first, std::size_t(k));
     buf.size = first + std::size_t(k);
     job.counts[q] = k;
   }
@@ -579,6 +666,9 @@ void GridNeighborSearch<T>::run(const Vec3<T>* queries, std::size_t nq, const st
   job.queries = self ? nullptr : queries;
   job.radii = radii.data();
   job.per_query = radii.size() == nq && nq > 1;
+  // Storage-order lists in bucket order: the fast path visits rows (z, then y) and each row's slots in
+  // ascending bucket order, which is the storage order, so its rows come out sorted.
+  job.sort_rows = !(storage && entries_.empty());
   job.counts = out.offsets.data() + 1;
   // Rows of query i land in row q = perm[i] for original-order self-queries, else in row i (contiguous per block).
   const bool scattered = self && !storage;
