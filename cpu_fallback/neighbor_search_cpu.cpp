@@ -495,27 +495,55 @@ void GridNeighborSearch<T>::build(const std::vector<Vec3<T>>& points, T cell_siz
   const std::size_t n = points.size();
   if (n > kMaxPoints)
     throw InputError("", "points", "too many points for the grid search (" + std::to_string(n) + " > 2^30)");
-  for (std::size_t i = 0; i < n; ++i)
-    if (!neighborPointFinite(points[i]))
+  // One parallel pass: each chunk's first non-finite point and bounding box (exact min / max: the chunking
+  // changes nothing). The lowest bad index is the one reported.
+  const std::int64_t chunks = std::max<std::int64_t>(1, std::min<std::int64_t>(std::int64_t(n), threadCount()));
+  std::vector<std::size_t> first_bad(std::size_t(chunks), n);
+  std::vector<Vec3<T>> chunk_lo(static_cast<std::size_t>(chunks)), chunk_hi(static_cast<std::size_t>(chunks));
+  parallelFor(chunks, [&](std::int64_t c) {
+    const std::size_t i0 = std::size_t(c) * n / std::size_t(chunks), i1 = std::size_t(c + 1) * n / std::size_t(chunks);
+    if (i0 == i1) return;
+    T lx = points[i0].x, ly = points[i0].y, lz = points[i0].z, hx = lx, hy = ly, hz = lz;
+    for (std::size_t i = i0; i < i1; ++i) {
+      const T x = points[i].x, y = points[i].y, z = points[i].z;
+      // x - x is 0 for finite x and NaN for NaN and +-inf (neighborPointFinite), and NaN survives the sum
+      if (!(((x - x) + (y - y)) + (z - z) == T(0))) {
+        first_bad[std::size_t(c)] = i;
+        break;
+      }
+      lx = std::min(lx, x);
+      ly = std::min(ly, y);
+      lz = std::min(lz, z);
+      hx = std::max(hx, x);
+      hy = std::max(hy, y);
+      hz = std::max(hz, z);
+    }
+    chunk_lo[std::size_t(c)] = Vec3<T>(lx, ly, lz);
+    chunk_hi[std::size_t(c)] = Vec3<T>(hx, hy, hz);
+  });
+  for (std::size_t i : first_bad)
+    if (i < n)
       throw InputError("", "points[" + std::to_string(i) + "]", "position " + describe(points[i]) + " is not finite");
   cell_size_ = cell_size;
   morton_ = morton_order;
-
-  Vec3<T> lo, hi;
-  if (n > 0) lo = hi = points[0];
-  for (const Vec3<T>& x : points)
+  Vec3<T> lo = chunk_lo[0], hi = chunk_hi[0];
+  for (std::size_t c = 1; c < std::size_t(chunks); ++c)
     for (int a = 0; a < 3; ++a) {
-      lo[a] = std::min(lo[a], x[a]);
-      hi[a] = std::max(hi[a], x[a]);
+      lo[a] = std::min(lo[a], chunk_lo[c][a]);
+      hi[a] = std::max(hi[a], chunk_hi[c][a]);
     }
   const std::uint32_t buckets = neighborBucketCount(n);
   params_ = makeNeighborGridParams(lo, hi, cell_size, buckets, std::int64_t(n), n > 0);
   const NeighborGridParams<T> p = params_;
+  // Start table: one entry per occupied cell of a dense grid (as on the GPU), else one per hash bucket.
+  const std::uint32_t table =
+      p.dense ? std::uint32_t(p.dims[0]) * std::uint32_t(p.dims[1]) * std::uint32_t(p.dims[2]) : buckets;
   auto cellOf = [&p](const Vec3<T>& x, std::int32_t c[3]) {
     for (int a = 0; a < 3; ++a) c[a] = neighborCellCoord(x[a], p.origin[a], p.inv_cell);
   };
 
-  std::vector<std::uint32_t> keys(n);
+  keys_.resize(n);
+  std::vector<std::uint32_t>& keys = keys_;
   if (morton_order) {
     // Z order first (stable), then a stable bucket sort of the storage slots gives the lookup table.
     parallelFor(std::int64_t(n), [&](std::int64_t i) {
@@ -533,16 +561,10 @@ void GridNeighborSearch<T>::build(const std::vector<Vec3<T>>& points, T cell_siz
     cellOf(keyed[std::size_t(i)], c);
     keys[std::size_t(i)] = neighborBucket(p, c[0], c[1], c[2]);
   });
-  if (morton_order) {
-    countingSortByKey(keys, buckets, entries_, bucket_start_);
-  } else {
-    countingSortByKey(keys, buckets, perm_, bucket_start_);
-    entries_.clear();
-    parallelFor(std::int64_t(n), [&](std::int64_t s) { sorted_[std::size_t(s)] = points[std::size_t(perm_[std::size_t(s)])]; });
-  }
-  inv_perm_.resize(n);
-  parallelFor(std::int64_t(n), [&](std::int64_t s) { inv_perm_[std::size_t(perm_[std::size_t(s)])] = std::int32_t(s); });
+  countingSortByKey(keys, table, morton_order ? entries_ : perm_, bucket_start_);
+  if (!morton_order) entries_.clear();
   // kRunPad readable entries past the end for the vectorised scan (never listed: masked off)
+  inv_perm_.resize(n);
   slot_x_.resize(n + kRunPad);
   slot_y_.resize(n + kRunPad);
   slot_z_.resize(n + kRunPad);
@@ -552,12 +574,18 @@ void GridNeighborSearch<T>::build(const std::vector<Vec3<T>>& points, T cell_siz
     slot_x_[e] = slot_y_[e] = slot_z_[e] = T(0);
     slot_orig_[e] = slot_store_[e] = -1;
   }
+  // One gather pass: bucket slot e holds storage slot s (e itself unless Morton), which holds original point
+  // perm[s]; bucket order is storage order, so the sorted points are gathered here too.
   parallelFor(std::int64_t(n), [&](std::int64_t e) {
-    const std::size_t s = entries_.empty() ? std::size_t(e) : std::size_t(entries_[std::size_t(e)]);
-    slot_x_[std::size_t(e)] = sorted_[s].x;
-    slot_y_[std::size_t(e)] = sorted_[s].y;
-    slot_z_[std::size_t(e)] = sorted_[s].z;
-    slot_orig_[std::size_t(e)] = perm_[s];
+    const std::size_t s = morton_order ? std::size_t(entries_[std::size_t(e)]) : std::size_t(e);
+    const std::int32_t o = perm_[s];
+    const Vec3<T> x = points[std::size_t(o)];
+    if (!morton_order) sorted_[s] = x;
+    inv_perm_[std::size_t(o)] = std::int32_t(s);
+    slot_x_[std::size_t(e)] = x.x;
+    slot_y_[std::size_t(e)] = x.y;
+    slot_z_[std::size_t(e)] = x.z;
+    slot_orig_[std::size_t(e)] = o;
     slot_store_[std::size_t(e)] = std::int32_t(s);
   });
 }

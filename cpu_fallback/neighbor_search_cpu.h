@@ -95,13 +95,14 @@ class GridNeighborSearch {
   std::vector<Vec3<T>> sorted_;             // points in storage order
   std::vector<std::int32_t> perm_;          // storage slot -> original index
   std::vector<std::int32_t> inv_perm_;      // original index -> storage slot
-  std::vector<std::int32_t> bucket_start_;  // bucket count + 1
+  std::vector<std::int32_t> bucket_start_;  // occupied cells (dense grid) or buckets (hashed) + 1
   std::vector<std::int32_t> entries_;       // Morton mode: storage index per bucket slot (else empty)
   // The points in bucket-slot order as separate coordinate arrays plus their original indices: the dense
   // fast path of the query streams these (one contiguous run of slots per (y, z) row of cells).
   std::vector<T> slot_x_, slot_y_, slot_z_;
   std::vector<std::int32_t> slot_orig_;
   std::vector<std::int32_t> slot_store_;    // storage slot of each bucket slot (identity unless Morton)
+  std::vector<std::uint32_t> keys_;         // build scratch: each point's bucket (kept: no fresh pages per build)
   mutable detail::QueryScratch scratch_;
 };
 
