@@ -149,7 +149,8 @@ constexpr std::size_t kSortWidth = 32;
 // ids are stored branch-free: every lane writes at dst, and dst advances by that lane's bit.
 struct PortableScan {
   template <typename T>
-  static INC_FORCE_INLINE std::int32_t* query(const QueryRows<T>& w, bool sort, std::int32_t* dst) {
+  static INC_FORCE_INLINE std::int32_t* query(const QueryRows<T>& rows, bool sort, std::int32_t* dst) {
+    const QueryRows<T> w = rows;  // a local copy: the stores through dst cannot change it, so it stays in registers
     std::int32_t* const first = dst;
     for (std::uint32_t z = 0, b = w.b0; z < w.rows_z; ++z, b += w.dxy)
       for (std::uint32_t y = 0, by = b; y < w.rows_y; ++y, by += w.dx) dst = run(w, w.start[by], w.start[by + w.width], dst);
@@ -248,7 +249,8 @@ constexpr int bitonicMaxLanes(int k, int j, int reg) {
 // calls (once per query, not inlined: GCC inlines AVX2 code only into AVX2 functions).
 struct Avx2Scan {
   template <typename T>
-  INC_TARGET_AVX2 static INC_NOINLINE std::int32_t* query(const QueryRows<T>& w, bool sort, std::int32_t* dst) {
+  INC_TARGET_AVX2 static INC_NOINLINE std::int32_t* query(const QueryRows<T>& rows, bool sort, std::int32_t* dst) {
+    const QueryRows<T> w = rows;  // a local copy: the stores through dst cannot change it, so it stays in registers
     std::int32_t* const first = dst;
     for (std::uint32_t z = 0, b = w.b0; z < w.rows_z; ++z, b += w.dxy)
       for (std::uint32_t y = 0, by = b; y < w.rows_y; ++y, by += w.dx) dst = run(w, w.start[by], w.start[by + w.width], dst);
