@@ -456,6 +456,7 @@ INC_FORCE_INLINE std::int64_t denseQuery(const QueryJob<T>& job, const Vec3<T>& 
 template <typename Scan, typename T>
 INC_FORCE_INLINE void queryBlock(const QueryJob<T>& job, std::size_t i0, std::size_t i1, detail::IndexBuffer& buf) {
   const bool self = job.queries == nullptr;
+  buf.room((i1 - i0) * 32);  // a first guess (never initialised, so pages that stay unused cost nothing)
   for (std::size_t i = i0; i < i1; ++i) {
     const std::size_t q = self && job.perm ? std::size_t(job.perm[i]) : i;
     const Vec3<T> x = self ? job.g.points[i] : job.queries[i];
