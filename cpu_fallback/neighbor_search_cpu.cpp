@@ -1,4 +1,4 @@
-// CPU uniform-grid neighbour search: counting sort by bucket, shared traversal, one pass into per-block lists.
+// CPU uniform-grid neighbour search: counting sort by bucket, a vector scan of whole cell rows (AVX2 or SSE2), per-block lists.
 #include "cpu_fallback/neighbor_search_cpu.h"
 
 #include <algorithm>

@@ -98,7 +98,8 @@ class GridNeighborSearch {
   std::vector<std::int32_t> bucket_start_;  // occupied cells (dense grid) or buckets (hashed) + 1
   std::vector<std::int32_t> entries_;       // Morton mode: storage index per bucket slot (else empty)
   // The points in bucket-slot order as separate coordinate arrays plus their original indices: the dense
-  // fast path of the query streams these (one contiguous run of slots per (y, z) row of cells).
+  // fast path of the query streams these (one contiguous run of slots per (y, z) row of cells). Each carries
+  // a few padding entries past n, which the vector scan may read (masked off).
   std::vector<T> slot_x_, slot_y_, slot_z_;
   std::vector<std::int32_t> slot_orig_;
   std::vector<std::int32_t> slot_store_;    // storage slot of each bucket slot (identity unless Morton)
