@@ -322,19 +322,13 @@ TYPED_TEST(NeighborSearchCpu, MortonOrderAndPermutations) {
 // bucket and Morton order, dense and hashed grids, short and long rows.
 TYPED_TEST(NeighborSearchCpu, StorageOrderListsAreThePermutedLists) {
   using T = TypeParam;
-  struct Case {
-    std::vector<Vec3<T>> pts;
-    T r, cell;
-    const char* what;
-  };
-  auto big = randomCloud<T>(600, 9);
-  for (auto& x : big) x = x * T(1e-3);  // every point in one cell: rows of 599
-  const std::vector<Case> cases = {{randomCloud<T>(3000, 21), T(0.06), T(0.03), "random"},
-                                   {clusteredCloud<T>(3000, 22), T(0.04), T(0.04), "clustered"},
-                                   {latticeCloud<T>(12, 10, 8, T(0.125), 23), T(0.125), T(0.125), "lattice ties"},
-                                   {sparseCloud<T>(700, 24), T(1), T(1), "sparse hashed"},
-                                   {big, T(1), T(1), "one cell"}};
-  for (const Case& c : cases)
+  const std::vector<NeighborCase<T>> cases = {
+      {randomCloud<T>(3000, 21), T(0.06), T(0.03), "random"},
+      {clusteredCloud<T>(3000, 22), T(0.04), T(0.04), "clustered"},
+      {latticeCloud<T>(12, 10, 8, T(0.125), 23), T(0.125), T(0.125), "lattice ties"},
+      {sparseCloud<T>(700, 24), T(1), T(1), "sparse hashed"},
+      {oneCellCloud<T>(600, 9), T(1), T(1), "one cell"}};  // rows of 599
+  for (const NeighborCase<T>& c : cases)
     for (bool morton : {false, true}) {
       const std::string tag = std::string(c.what) + (morton ? " morton" : " bucket-order");
       cpu::GridNeighborSearch<T> s(c.pts, c.cell, morton);
@@ -353,20 +347,14 @@ TYPED_TEST(NeighborSearchCpu, StorageOrderListsAreThePermutedLists) {
 // the last slot (the vector scans read past it, masked), both list orders, self and tool queries.
 TYPED_TEST(NeighborSearchCpu, PortableAndAvx2ScansGiveTheSameLists) {
   using T = TypeParam;
-  struct Case {
-    std::vector<Vec3<T>> pts;
-    T r, cell;
-    const char* what;
-  };
-  auto big = randomCloud<T>(300, 33);
-  for (auto& x : big) x = x * T(1e-3);
-  const std::vector<Case> cases = {{randomCloud<T>(2000, 34), T(0.1), T(0.05), "random"},
-                                   {clusteredCloud<T>(2000, 35), T(0.04), T(0.02), "clustered"},
-                                   {latticeCloud<T>(11, 9, 7, T(0.125), 36), T(0.25), T(0.125), "lattice ties"},
-                                   {big, T(1), T(0.5), "one cell"}};
+  const std::vector<NeighborCase<T>> cases = {
+      {randomCloud<T>(2000, 34), T(0.1), T(0.05), "random"},
+      {clusteredCloud<T>(2000, 35), T(0.04), T(0.02), "clustered"},
+      {latticeCloud<T>(11, 9, 7, T(0.125), 36), T(0.25), T(0.125), "lattice ties"},
+      {oneCellCloud<T>(300, 33), T(1), T(0.5), "one cell"}};
   auto tool = randomCloud<T>(200, 37);
   for (std::size_t i = 0; i < tool.size(); i += 4) tool[i] = tool[i] * T(2) - Vec3<T>(T(0.5), T(0.5), T(0.5));
-  for (const Case& c : cases)
+  for (const NeighborCase<T>& c : cases)
     for (bool morton : {false, true}) {
       const std::string tag = std::string(c.what) + (morton ? " morton" : " bucket-order");
       const cpu::GridNeighborSearch<T> s(c.pts, c.cell, morton);
