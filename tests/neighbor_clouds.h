@@ -59,6 +59,23 @@ std::vector<Vec3<T>> latticeCloud(int nx, int ny, int nz, T h, unsigned seed) {
   return p;
 }
 
+// n random points in a cube of side 1e-3: with a cell size and radius of order 1, all in one cell and every
+// point a neighbour of every other (rows of n - 1).
+template <typename T>
+std::vector<Vec3<T>> oneCellCloud(std::size_t n, unsigned seed) {
+  std::vector<Vec3<T>> p = randomCloud<T>(n, seed);
+  for (auto& x : p) x = x * T(1e-3);
+  return p;
+}
+
+// A cloud with the radius and cell size to search it with, and a name for failure messages.
+template <typename T>
+struct NeighborCase {
+  std::vector<Vec3<T>> pts;
+  T r, cell;
+  const char* what;
+};
+
 // A few tight pairs and triples scattered over a box of side 2e6 (cell size ~1: far too many cells for a
 // dense grid, so the search must hash).
 template <typename T>

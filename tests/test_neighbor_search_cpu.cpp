@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <thread>
 
 #include "cpu_fallback/neighbor_bruteforce.h"
 #include "cpu_fallback/neighbor_search_cpu.h"
@@ -321,19 +322,13 @@ TYPED_TEST(NeighborSearchCpu, MortonOrderAndPermutations) {
 // bucket and Morton order, dense and hashed grids, short and long rows.
 TYPED_TEST(NeighborSearchCpu, StorageOrderListsAreThePermutedLists) {
   using T = TypeParam;
-  struct Case {
-    std::vector<Vec3<T>> pts;
-    T r, cell;
-    const char* what;
-  };
-  auto big = randomCloud<T>(600, 9);
-  for (auto& x : big) x = x * T(1e-3);  // every point in one cell: rows of 599
-  const std::vector<Case> cases = {{randomCloud<T>(3000, 21), T(0.06), T(0.03), "random"},
-                                   {clusteredCloud<T>(3000, 22), T(0.04), T(0.04), "clustered"},
-                                   {latticeCloud<T>(12, 10, 8, T(0.125), 23), T(0.125), T(0.125), "lattice ties"},
-                                   {sparseCloud<T>(700, 24), T(1), T(1), "sparse hashed"},
-                                   {big, T(1), T(1), "one cell"}};
-  for (const Case& c : cases)
+  const std::vector<NeighborCase<T>> cases = {
+      {randomCloud<T>(3000, 21), T(0.06), T(0.03), "random"},
+      {clusteredCloud<T>(3000, 22), T(0.04), T(0.04), "clustered"},
+      {latticeCloud<T>(12, 10, 8, T(0.125), 23), T(0.125), T(0.125), "lattice ties"},
+      {sparseCloud<T>(700, 24), T(1), T(1), "sparse hashed"},
+      {oneCellCloud<T>(600, 9), T(1), T(1), "one cell"}};  // rows of 599
+  for (const NeighborCase<T>& c : cases)
     for (bool morton : {false, true}) {
       const std::string tag = std::string(c.what) + (morton ? " morton" : " bucket-order");
       cpu::GridNeighborSearch<T> s(c.pts, c.cell, morton);
@@ -345,6 +340,90 @@ TYPED_TEST(NeighborSearchCpu, StorageOrderListsAreThePermutedLists) {
   EXPECT_THROW(cpu::GridNeighborSearch<T>(cases[0].pts, T(0.1)).querySelfStorage(std::numeric_limits<T>::quiet_NaN()),
                InputError);
   EXPECT_TRUE(cpu::GridNeighborSearch<T>(std::vector<Vec3<T>>{}, T(1)).querySelfStorage(T(1)).indices.empty());
+}
+
+// The AVX2 scan (used where the CPU has it) and the portable one (SSE2 on x86-64, plain C++ elsewhere) give
+// the same lists, equal to brute force: ties at the radius, rows of hundreds, clouds whose last rows end at
+// the last slot (the vector scans read past it, masked), both list orders, self and tool queries.
+TYPED_TEST(NeighborSearchCpu, PortableAndAvx2ScansGiveTheSameLists) {
+  using T = TypeParam;
+  const std::vector<NeighborCase<T>> cases = {
+      {randomCloud<T>(2000, 34), T(0.1), T(0.05), "random"},
+      {clusteredCloud<T>(2000, 35), T(0.04), T(0.02), "clustered"},
+      {latticeCloud<T>(11, 9, 7, T(0.125), 36), T(0.25), T(0.125), "lattice ties"},
+      {oneCellCloud<T>(300, 33), T(1), T(0.5), "one cell"}};
+  auto tool = randomCloud<T>(200, 37);
+  for (std::size_t i = 0; i < tool.size(); i += 4) tool[i] = tool[i] * T(2) - Vec3<T>(T(0.5), T(0.5), T(0.5));
+  for (const NeighborCase<T>& c : cases)
+    for (bool morton : {false, true}) {
+      const std::string tag = std::string(c.what) + (morton ? " morton" : " bucket-order");
+      const cpu::GridNeighborSearch<T> s(c.pts, c.cell, morton);
+      const NeighborLists want = cpu::bruteForceNeighbors(c.pts, c.pts, std::vector<T>{c.r}, true);
+      const NeighborLists want_tool = cpu::bruteForceNeighbors(tool, c.pts, std::vector<T>{c.r}, false);
+      NeighborLists self[2], storage[2], tools[2];
+      for (int portable : {1, 0}) {
+        cpu::setNeighborScanPortable(portable == 1);
+        self[portable] = s.querySelf(c.r);
+        storage[portable] = s.querySelfStorage(c.r);
+        tools[portable] = s.query(tool, c.r);
+      }
+      cpu::setNeighborScanPortable(false);
+      expectSameLists(self[1], want, tag + " portable");
+      expectSameLists(self[0], want, tag + " default scan");
+      expectSameLists(storage[0], storage[1], tag + " storage order: default vs portable");
+      expectSameLists(storageListsToOriginal(storage[1], s.sortedToOriginal()), want, tag + " storage order");
+      expectSameLists(tools[1], want_tool, tag + " tool portable");
+      expectSameLists(tools[0], want_tool, tag + " tool default scan");
+    }
+  if (!cpu::neighborScanUsesAvx2()) std::printf("note: no AVX2 on this CPU; both runs used the portable scan\n");
+}
+
+// Lists written into a reused NeighborLists, whose arrays are larger or smaller than the new lists, equal
+// fresh ones (nothing stale is left behind, nothing is lost when the arrays grow).
+TYPED_TEST(NeighborSearchCpu, ReusedOutputListsEqualFreshOnes) {
+  using T = TypeParam;
+  const auto pts = clusteredCloud<T>(3000, 38);
+  const auto tool = randomCloud<T>(300, 39);
+  cpu::GridNeighborSearch<T> s(pts, T(0.04));
+  NeighborLists out;
+  for (T r : {T(0.04), T(0.12), T(0.01), T(0.07)}) {
+    const std::string tag = "r=" + std::to_string(double(r));
+    s.querySelf(r, out);
+    expectSameLists(out, cpu::bruteForceNeighbors(pts, pts, std::vector<T>{r}, true), tag + " self");
+    s.querySelfStorage(r, out);
+    expectSameLists(out, s.querySelfStorage(r), tag + " storage order");
+    s.query(tool, r, out);
+    expectSameLists(out, cpu::bruteForceNeighbors(tool, pts, std::vector<T>{r}, false), tag + " tool");
+  }
+  const auto fewer = randomCloud<T>(500, 40);
+  s.build(fewer, T(0.1), true);
+  s.querySelf(T(0.1), out);
+  expectSameLists(out, cpu::bruteForceNeighbors(fewer, fewer, std::vector<T>{T(0.1)}, true), "rebuilt, fewer points");
+}
+
+// Const queries on one object from several threads at once (one caller takes the row buffers the object
+// keeps, the others use their own) give the same lists as a single caller.
+TYPED_TEST(NeighborSearchCpu, ConcurrentQueriesOnOneObject) {
+  using T = TypeParam;
+  const auto pts = clusteredCloud<T>(3000, 41);
+  const cpu::GridNeighborSearch<T> s(pts, T(0.05), true);
+  const NeighborLists want = s.querySelf(T(0.05));
+  const NeighborLists want_storage = s.querySelfStorage(T(0.05));
+  std::vector<NeighborLists> got(4);
+  std::vector<std::thread> threads;
+  for (std::size_t t = 0; t < got.size(); ++t)
+    threads.emplace_back([&s, &got, t] {
+      for (int k = 0; k < 4; ++k) {
+        if (t % 2) {
+          s.querySelfStorage(T(0.05), got[t]);
+        } else {
+          s.querySelf(T(0.05), got[t]);
+        }
+      }
+    });
+  for (std::thread& th : threads) th.join();
+  for (std::size_t t = 0; t < got.size(); ++t)
+    expectSameLists(got[t], t % 2 ? want_storage : want, "thread " + std::to_string(t));
 }
 
 TYPED_TEST(NeighborSearchCpu, ResultDoesNotDependOnThreadCount) {
