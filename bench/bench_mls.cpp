@@ -19,8 +19,8 @@
 #include "host/mls_model.h"
 #include "host/mls_solver.h"
 #include "host/particle_sampling.h"
+#include "kernels/device_info.h"  // measureCopyBandwidthGbs: a stub returning 0 without CUDA
 #if INCISION_HAVE_CUDA
-#include "kernels/device_info.h"
 #include "kernels/mls_solver_cuda.h"
 #endif
 

@@ -21,11 +21,11 @@
 #include "host/scene_loader.h"
 #include "host/skin_binding.h"
 #include "host/pbd_builders.h"
+#include "kernels/device_info.h"  // measureCopyBandwidthGbs: a stub returning 0 without CUDA
 #if INCISION_HAVE_CUDA
 #include <cuda_runtime.h>
 
 #include "kernels/cuda_check.h"
-#include "kernels/device_info.h"
 #include "kernels/skinning_cuda.h"
 #endif
 
