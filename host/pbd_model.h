@@ -129,6 +129,7 @@ struct PbdFrameStats {
   double max_radius_ratio = 1.0;
   bool finite = true;
   std::int64_t failure_particle = -1;
+  int threads = 0;             // CPU backend: threads the frame ran on (1 while backing off after a stalled team)
 };
 
 template <typename T>
