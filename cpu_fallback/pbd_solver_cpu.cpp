@@ -165,6 +165,7 @@ class PbdCpuBackend final : public PbdBackend<T> {
     if (threads != split_parts_) planTeam(threads);
     team_.run(threads, [&](const Team& t) { frame(t, p, in, ctx, tm); });
     st.threads = team_.lastThreads();
+    st.team_stalled = team_.lastStalled();
 
     for (std::int32_t id : in.kinematic_ids) kinematic_of_[id] = -1;
     st.iterations = p.substeps * p.iterations;
