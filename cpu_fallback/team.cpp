@@ -42,12 +42,8 @@ Team::Team(int id, detail::TeamControl* control) : id_(id), control_(control), s
 void Team::barrier() const {
   if (!control_ || control_->active.load(std::memory_order_acquire) <= 1) return;
   detail::TeamControl& c = *control_;
-  const Clock::time_point arrive = Clock::now();
+  const Clock::time_point arrive = Clock::now();  // the one clock read of a barrier released while spinning
   worked_ += arrive - since_;
-  // Latest release time before this wait counts as a stall (see Team).
-  const Clock::time_point limit =
-      arrive + std::min<Clock::duration>(std::max<Clock::duration>(kStallFloor, 2 * (arrive - since_)),
-                                         std::max<Clock::duration>(worked_ + kStallFloor - waited_, Clock::duration(0)));
   const unsigned gen = c.generation.load(std::memory_order_acquire);
   if (c.arrived.fetch_add(1, std::memory_order_acq_rel) + 1 == c.threads.load(std::memory_order_relaxed)) {
     // Last to arrive: decide the team size of the next phases, then release the others.
@@ -58,34 +54,43 @@ void Team::barrier() const {
       const std::lock_guard<std::mutex> lock(c.mutex);
       c.wake.notify_all();
     }
-  } else {
-    bool released = false;
-    for (int k = 1;; ++k) {
-      if (c.generation.load(std::memory_order_acquire) != gen) {
-        released = true;
-        break;
-      }
-      cpuRelax();
-      if (k % 64 == 0) {
-        const Clock::time_point now = Clock::now();
-        if (now - arrive > kSpin || now > limit) break;
-      }
+    since_ = arrive;
+    return;
+  }
+  // Latest release time before this wait counts as a stall (see Team): twice the work since the previous
+  // barrier (at least kStallFloor), and no more than the step's work so far plus kStallFloor minus its waits.
+  const Clock::duration phase_work = arrive - since_;
+  const Clock::time_point limit =
+      arrive + std::min<Clock::duration>(std::max<Clock::duration>(kStallFloor, 2 * phase_work),
+                                         std::max<Clock::duration>(worked_ + kStallFloor - waited_, Clock::duration(0)));
+  bool released = false, timed = false;
+  for (int k = 1;; ++k) {
+    if (c.generation.load(std::memory_order_acquire) != gen) {
+      released = true;
+      break;
     }
-    if (!released) {
-      c.sleepers.fetch_add(1);  // seq_cst: a releaser that misses it has already moved the generation on
-      std::unique_lock<std::mutex> lock(c.mutex);
-      while (c.generation.load() == gen) {
-        if (c.stall_seen.load(std::memory_order_relaxed)) {
-          c.wake.wait(lock);
-        } else if (c.wake.wait_until(lock, limit) == std::cv_status::timeout && c.generation.load() == gen) {
-          c.stall_seen.store(true);
-        }
-      }
-      lock.unlock();
-      c.sleepers.fetch_sub(1);
+    cpuRelax();
+    if (k % 64 == 0) {
+      timed = true;
+      const Clock::time_point now = Clock::now();
+      if (now - arrive > kSpin || now > limit) break;
     }
   }
-  since_ = Clock::now();
+  if (!released) {
+    c.sleepers.fetch_add(1);  // seq_cst: a releaser that misses it has already moved the generation on
+    std::unique_lock<std::mutex> lock(c.mutex);
+    while (c.generation.load() == gen) {
+      if (c.stall_seen.load(std::memory_order_relaxed)) {
+        c.wake.wait(lock);
+      } else if (c.wake.wait_until(lock, limit) == std::cv_status::timeout && c.generation.load() == gen) {
+        c.stall_seen.store(true);
+      }
+    }
+    lock.unlock();
+    c.sleepers.fetch_sub(1);
+  }
+  // A wait released within the first few dozen spins (well under a microsecond) counts as work.
+  since_ = timed || !released ? Clock::now() : arrive;
   waited_ += since_ - arrive;
 }
 
