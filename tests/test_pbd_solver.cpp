@@ -489,7 +489,9 @@ TEST(PbdSolver, CpuFrameIsIndependentOfThreadCount) {
         team_frames += st.threads > 1 ? 1 : 0;
       }
       omp_set_num_threads(old);
-      if (threads > 1) EXPECT_GE(team_frames, 1);  // the first frame always starts on a team
+      if (threads > 1) {
+        EXPECT_GE(team_frames, 1);  // the first frame always starts on a team
+      }
       PbdState<float> s;
       be->getState(s);
       std::printf("%s, %d thread(s): %d of 8 frames on a team\n",
