@@ -48,9 +48,9 @@ TEST(CpuTeam, MultiPhaseStepEqualsSerial) {
 TEST(CpuTeam, StalledBarrierHandsTheStepToTheLead) {
   cpu::TeamRunner serial, team;
   const std::vector<double> ref = smooth(serial, 1, 20);
-  // Thread 1 sleeps 100 ms in round 5 while thread 0 waits at the barrier (stall limit: 1 ms, or twice the
+  // Thread 1 sleeps 250 ms in round 5 while thread 0 waits at the barrier (stall limit: 1 ms, or twice the
   // waiter's own work): the team stalls, thread 0 finishes the step alone, and the result is unchanged.
-  const std::vector<double> got = smooth(team, 2, 20, 5, 100);
+  const std::vector<double> got = smooth(team, 2, 20, 5, 250);
   EXPECT_TRUE(team.lastStalled());
   EXPECT_EQ(team.stalledSteps(), 1);
   for (std::size_t i = 0; i < ref.size(); ++i) ASSERT_EQ(got[i], ref[i]) << "item " << i;
