@@ -113,9 +113,11 @@ Row timeFrames(BackendKind kind, PbdSolverKind solver, std::int64_t n, int itera
   };
   for (int k = 0; k < 3 && (k == 0 || spent() < 0.25 * g_row_seconds); ++k) st = be->advanceFrame(p, in);
   std::vector<double> ms;
+  int team_frames = 0;  // CPU: timed frames that ran on a team of threads from start to end
   for (int k = 0; k < repeats && (k < 3 || spent() < g_row_seconds); ++k) {
     const auto t0 = std::chrono::steady_clock::now();
     st = be->advanceFrame(p, in);
+    team_frames += st.threads > 1 && !st.team_stalled ? 1 : 0;
     const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     double ev = -1;
     for (const auto& s : st.stages)
@@ -144,6 +146,11 @@ Row timeFrames(BackendKind kind, PbdSolverKind solver, std::int64_t n, int itera
   for (const auto& s : st.stages) {
     char buf[64];
     std::snprintf(buf, sizeof buf, "%s%s=%.3f", r.stages.empty() ? "" : " ", s.stage.c_str(), s.ms);
+    r.stages += buf;
+  }
+  if (be->kind() == BackendKind::Cpu) {  // a loaded machine makes the CPU team back off to one thread
+    char buf[64];
+    std::snprintf(buf, sizeof buf, " team=%d/%zu", team_frames, ms.size());
     r.stages += buf;
   }
   return r;

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "cpu_fallback/parallel.h"
+#include "cpu_fallback/team.h"
 #include "physics/pbd_block.h"
 #include "physics/pbd_volume.h"
 
@@ -16,28 +17,51 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
-// parallelFor above a size where a parallel region pays for itself; below it a plain loop (same results:
-// every body writes only its own outputs). A PBD frame opens hundreds of regions, so for small models the
-// fork/join cost would dominate, and worse on a loaded machine.
-constexpr std::int64_t kParallelMin = 2048;
-template <typename Body>
-void loop(std::int64_t n, Body&& body) {
-  if (n >= kParallelMin) {
-    parallelFor(n, body);
-  } else {
-    for (std::int64_t i = 0; i < n; ++i) body(i);
-  }
+// A frame runs on a team of threads kept for the whole frame (cpu/team.h: one parallel region, a barrier
+// between dependent phases) when its blocks hold at least this many constraint slots; smaller models run on
+// the calling thread (a barrier costs about as much as projecting a few dozen slots).
+constexpr std::int64_t kTeamMinSlots = 4096;
+
+// Work of one constraint for the static split of a phase over the team: its slots, plus for a shape-matching
+// cluster the polar decomposition, which costs about as much as six members.
+std::int64_t constraintWeight(PbdConstraintKind kind, std::int32_t slots) {
+  return std::int64_t(slots) + (kind == PbdConstraintKind::ShapeMatching ? 6 : 0);
 }
 
-// The same for constraint projections, weighted by the block's mean slots per constraint: a shape-matching or
-// Laplacian cluster of ~15 members costs as much as ~7 distance constraints, so a Gauss-Seidel colour of a
-// few hundred clusters is worth a parallel region (10^4 spheres: ~1,000 clusters per colour ran serially).
-template <typename Body>
-void constraintLoop(std::int64_t n, std::int64_t slots_per_constraint, Body&& body) {
-  if (n * std::max<std::int64_t>(slots_per_constraint, 2) >= 2 * kParallelMin) {
-    parallelFor(n, body);
-  } else {
-    for (std::int64_t i = 0; i < n; ++i) body(i);
+// Cuts items [0, m) with weight prefix sums `prefix` (size m + 1) into `parts` contiguous ranges of about equal
+// weight: range t is [out[t], out[t + 1]).
+void balancedSplit(const std::vector<std::int64_t>& prefix, int parts, std::int32_t* out) {
+  const std::int64_t total = prefix.back();
+  const std::int32_t m = std::int32_t(prefix.size() - 1);
+  out[0] = 0;
+  for (int t = 1; t < parts; ++t) {
+    const std::int64_t target = total * t / parts;
+    out[t] = std::int32_t(std::lower_bound(prefix.begin(), prefix.end(), target) - prefix.begin());
+    out[t] = std::max(out[t - 1], std::min(out[t], m));
+  }
+  out[parts] = m;
+}
+
+// Projects constraints order[q] (or q when order is null) for q in [q0, q1) of one block: the kind's function
+// from physics/pbd_block.h called directly (the same one projectConstraint dispatches to), so the loop has no
+// per-constraint dispatch. `goals`: room for one cluster's members (shape matching keeps pass 1's goals for
+// pass 2), or null.
+template <typename T>
+void projectRange(const pbd::BlockView<T> v, const std::int32_t* order, std::int32_t q0, std::int32_t q1,
+                  const pbd::SolveContext<T> ctx, pbd::GoalCorrection<T>* goals) {
+  switch (v.kind) {
+    case pbd::kDistance:
+      for (std::int32_t q = q0; q < q1; ++q) pbd::projectDistanceConstraint(v, order ? order[q] : q, ctx);
+      break;
+    case pbd::kLaplacian:
+      for (std::int32_t q = q0; q < q1; ++q) pbd::projectLaplacianConstraint(v, order ? order[q] : q, ctx);
+      break;
+    case pbd::kShapeMatching:
+      for (std::int32_t q = q0; q < q1; ++q) pbd::projectShapeMatchingCluster(v, order ? order[q] : q, ctx, goals);
+      break;
+    default:
+      for (std::int32_t q = q0; q < q1; ++q) pbd::projectConstraint(v, order ? order[q] : q, ctx);
+      break;
   }
 }
 
@@ -56,12 +80,34 @@ class PbdCpuBackend final : public PbdBackend<T> {
     x_prev_.assign(n, Vec3<T>());
     w_.assign(n, T(0));
     radii_next_.assign(n, T(0));
+    active_.assign(n, 0);
+    kinematic_of_.assign(n, -1);
     lambda_.resize(model_.blocks.size());
     slot_corr_.resize(model_.blocks.size());
+    std::int64_t slots = 0;
+    std::size_t residuals = 0;
+    max_cluster_ = 0;
+    goals_distinct_ = true;
+    std::vector<std::uint8_t> seen(n, 0);
     for (std::size_t b = 0; b < model_.blocks.size(); ++b) {
-      lambda_[b].assign(model_.blocks[b].multiplierCount(), Vec3<T>());
-      slot_corr_[b].assign(model_.blocks[b].slotCount(), Vec3<T>());
+      const auto& bl = model_.blocks[b];
+      lambda_[b].assign(bl.multiplierCount(), Vec3<T>());
+      slot_corr_[b].assign(bl.slotCount(), Vec3<T>());
+      if (!bl.solve) continue;
+      slots += std::int64_t(bl.slotCount());
+      if (bl.kind == PbdConstraintKind::Distance) residuals += bl.count();
+      if (bl.kind == PbdConstraintKind::ShapeMatching)
+        for (std::size_t c = 0; c < bl.count(); ++c) {
+          const std::int32_t s0 = bl.offsets[c], s1 = bl.offsets[c + 1];
+          max_cluster_ = std::max(max_cluster_, std::size_t(s1 - s0));
+          // Gauss-Seidel may keep a member's goal between the passes only if no particle is in a cluster twice.
+          for (std::int32_t s = s0; s < s1; ++s) goals_distinct_ = goals_distinct_ && !seen[bl.ids[s]]++;
+          for (std::int32_t s = s0; s < s1; ++s) seen[bl.ids[s]] = 0;
+        }
     }
+    residual_.assign(residuals, 0.0);
+    solved_slots_ = slots;
+    planTeam(teamThreads());
   }
 
   void setState(const PbdState<T>& s) override {
@@ -88,21 +134,19 @@ class PbdCpuBackend final : public PbdBackend<T> {
     const std::size_t n = model_.size();
     validateFrameInput(n, p, in);
     PbdFrameStats st;
-    double t_predict = 0, t_constraints = 0, t_collisions = 0, t_velocities = 0, t_volume = 0;
+    FrameTimes tm;
     const T dt = p.frame_dt / T(p.substeps);
-    const T damp = std::exp(-p.damping * dt);
-    const std::int64_t ni = std::int64_t(n);
-    Vec3<T>* x = state_.positions.data();
-    Vec3<T>* v = state_.velocities.data();
-    const T* r = state_.radii.data();
 
     // This frame's inverse masses: kinematic (grasped) particles are prescribed, so they get w = 0.
     w_ = model_.inv_mass;
-    for (std::int32_t id : in.kinematic_ids) w_[id] = T(0);
-    const int nt = int(in.tools_from.size());
+    for (std::size_t k = 0; k < in.kinematic_ids.size(); ++k) {
+      w_[in.kinematic_ids[k]] = T(0);
+      kinematic_of_[in.kinematic_ids[k]] = std::int32_t(k);
+    }
+    attach_lambda_.assign(in.attach_ids.size(), Vec3<T>());
 
     pbd::SolveContext<T> ctx;
-    ctx.x = x;
+    ctx.x = state_.positions.data();
     ctx.w = w_.data();
     ctx.mass = model_.masses.data();
     ctx.rotation = state_.rotations.data();
@@ -114,102 +158,182 @@ class PbdCpuBackend final : public PbdBackend<T> {
     if (!ctx.jacobi)
       for (const auto& b : model_.blocks)
         if (b.solve) st.colors += b.coloring.colorCount();
+    views_.resize(model_.blocks.size());
+    for (std::size_t bi = 0; bi < model_.blocks.size(); ++bi) views_[bi] = blockView(bi);
 
-    for (int s = 0; s < p.substeps; ++s) {
-      const T t_end = T(s + 1) / T(p.substeps);
-      auto t0 = Clock::now();
-      loop(ni, [&](std::int64_t i) {
-        pbd::predictParticle(x[i], v[i], x_prev_[i], w_[i], p.gravity, damp, dt);
-      });
-      for (std::size_t k = 0; k < in.kinematic_ids.size(); ++k)
-        x[in.kinematic_ids[k]] = pbd::lerp(in.kinematic_from[k], in.kinematic_to[k], t_end);
-      for (auto& l : lambda_) std::fill(l.begin(), l.end(), Vec3<T>());
-      attach_lambda_.assign(in.attach_ids.size(), Vec3<T>());
-      t_predict += msSince(t0);
+    const int threads = teamThreads();
+    if (threads != split_parts_) planTeam(threads);
+    team_.run(threads, [&](const Team& t) { frame(t, p, in, ctx, tm); });
+    st.threads = team_.lastThreads();
+    st.team_stalled = team_.lastStalled();
 
-      for (int it = 0; it < p.iterations; ++it) {
-        t0 = Clock::now();
-        for (std::size_t bi = 0; bi < model_.blocks.size(); ++bi) {
-          const auto& b = model_.blocks[bi];
-          if (!b.solve) continue;
-          const pbd::BlockView<T> view = blockView(bi);
-          const std::int64_t spc = b.count() ? std::int64_t(b.slotCount() / b.count()) : 1;
-          if (ctx.jacobi) {
-            constraintLoop(std::int64_t(b.count()), spc, [&](std::int64_t c) { pbd::projectConstraint(view, int(c), ctx); });
-            loop(ni, [&](std::int64_t i) { x[i] += pbd::gatherCorrection(view, std::int32_t(i)); });
-          } else {
-            const ConstraintColoring& col = b.coloring;
-            for (int k = 0; k < col.colorCount(); ++k) {
-              const std::int32_t c0 = col.color_offsets[k], c1 = col.color_offsets[k + 1];
-              constraintLoop(std::int64_t(c1 - c0), spc,
-                             [&](std::int64_t q) { pbd::projectConstraint(view, col.order[c0 + q], ctx); });
-            }
-          }
-        }
-        loop(std::int64_t(in.attach_ids.size()), [&](std::int64_t k) {
-          const std::int32_t id = in.attach_ids[k];
-          pbd::projectAttachment(x[id], w_[id], pbd::lerp(in.attach_from[k], in.attach_to[k], t_end),
-                                 in.attach_compliance[k], p.xpbd, dt, attach_lambda_[k]);
-        });
-        t_constraints += msSince(t0);
-        t0 = Clock::now();
-        loop(ni, [&](std::int64_t i) {
-          if (w_[i] > T(0))
-            x[i] = pbd::resolveContacts(x[i], r[i], model_.planes.data(), int(model_.planes.size()), model_.boxes.data(),
-                                        int(model_.boxes.size()), in.tools_from.data(), in.tools_to.data(), nt, t_end);
-        });
-        t_collisions += msSince(t0);
-      }
-
-      t0 = Clock::now();
-      const T inv_dt = T(1) / dt;
-      loop(ni, [&](std::int64_t i) { v[i] = (x[i] - x_prev_[i]) * inv_dt; });
-      t_velocities += msSince(t0);
-    }
+    for (std::int32_t id : in.kinematic_ids) kinematic_of_[id] = -1;
     st.iterations = p.substeps * p.iterations;
-
-    // Rotations for skinning when the shape-matching block is only kept for them.
-    if (model_.rotation_block >= 0 && !model_.blocks[model_.rotation_block].solve) {
-      auto t0 = Clock::now();
-      const pbd::BlockView<T> view = blockView(std::size_t(model_.rotation_block));
-      loop(std::int64_t(view.count), [&](std::int64_t c) { pbd::updateClusterRotation(view, int(c), ctx); });
-      t_constraints += msSince(t0);
-    }
-
-    {
-      auto t0 = Clock::now();
-      updateRadii(p, in, st);
-      t_volume = msSince(t0);
-    }
-
-    // Residual of the distance constraints (after the last substep, with its multipliers).
-    double rmax = 0, rsum = 0;
-    std::size_t rcount = 0;
-    for (std::size_t bi = 0; bi < model_.blocks.size(); ++bi) {
-      if (model_.blocks[bi].kind != PbdConstraintKind::Distance || !model_.blocks[bi].solve) continue;
-      const pbd::BlockView<T> view = blockView(bi);
-      for (int c = 0; c < view.count; ++c) {
-        const double res = double(pbd::distanceResidual(view, c, x, p.xpbd, dt));
-        rmax = std::max(rmax, res);
-        rsum += res * res;
-        ++rcount;
-      }
-    }
-    st.residual_max = rmax;
-    st.residual_rms = rcount ? std::sqrt(rsum / double(rcount)) : 0.0;
-
-    for (std::size_t i = 0; i < n; ++i)
-      if (!isFinite(x[i]) || !isFinite(v[i]) || !std::isfinite(double(r[i]))) {
-        st.finite = false;
-        st.failure_particle = std::int64_t(i);
-        break;
-      }
-    st.stages = {{"predict", t_predict}, {"constraints", t_constraints}, {"collisions", t_collisions},
-                 {"velocities", t_velocities}, {"volume", t_volume}};
+    summarize(st);
+    st.stages = {{"predict", tm.predict}, {"constraints", tm.constraints}, {"collisions", tm.collisions},
+                 {"velocities", tm.velocities}, {"volume", tm.volume}};
     return st;
   }
 
  private:
+  struct FrameTimes {
+    double predict = 0, constraints = 0, collisions = 0, velocities = 0, volume = 0;
+  };
+
+  // The whole frame on one thread of the team. Each phase splits its items statically over the team; a barrier
+  // separates phases where one reads what another thread wrote. Per-particle phases (gather, contacts,
+  // velocities, prediction) give every thread the same particles, so one may follow another without a
+  // barrier (the team's size, hence the split, changes only in a barrier). The lead thread times the stages
+  // (its own work plus its waits).
+  void frame(const Team& t, const PbdStepParams<T>& p, const PbdFrameInput<T>& in, const pbd::SolveContext<T>& ctx,
+             FrameTimes& tm) {
+    const bool lead = t.lead();
+    const std::int64_t ni = std::int64_t(model_.size());
+    const T dt = ctx.dt;
+    const T damp = std::exp(-p.damping * dt);
+    const T inv_dt = T(1) / dt;
+    Vec3<T>* x = state_.positions.data();
+    Vec3<T>* v = state_.velocities.data();
+    const T* r = state_.radii.data();
+    const int nt = int(in.tools_from.size());
+    const std::int64_t na = std::int64_t(in.attach_ids.size());
+    pbd::GoalCorrection<T>* goals = ctx.jacobi || goals_distinct_
+                                        ? goal_scratch_.data() + std::size_t(t.id()) * std::max<std::size_t>(max_cluster_, 1)
+                                        : nullptr;
+    Clock::time_point t0;
+
+    for (int s = 0; s < p.substeps; ++s) {
+      const T t_end = T(s + 1) / T(p.substeps);
+      if (lead) t0 = Clock::now();
+      // Prediction; kinematic particles (w = 0: prediction only records x_prev) are then placed on their path.
+      for (std::int64_t i = t.begin(ni), i1 = t.end(ni); i < i1; ++i) {
+        pbd::predictParticle(x[i], v[i], x_prev_[i], w_[i], p.gravity, damp, dt);
+        const std::int32_t k = kinematic_of_[i];
+        if (k >= 0) x[i] = pbd::lerp(in.kinematic_from[k], in.kinematic_to[k], t_end);
+      }
+      for (auto& l : lambda_) {
+        const std::int64_t m = std::int64_t(l.size());
+        std::fill(l.begin() + t.begin(m), l.begin() + t.end(m), Vec3<T>());
+      }
+      std::fill(attach_lambda_.begin() + t.begin(na), attach_lambda_.begin() + t.end(na), Vec3<T>());
+      t.barrier();
+      if (lead) tm.predict += msSince(t0);
+
+      for (int it = 0; it < p.iterations; ++it) {
+        if (lead) t0 = Clock::now();
+        bool particle_phase = false;  // the last phase was per particle (the next per-particle one needs no barrier)
+        for (std::size_t bi = 0; bi < model_.blocks.size(); ++bi) {
+          const auto& b = model_.blocks[bi];
+          if (!b.solve) continue;
+          const pbd::BlockView<T>& view = views_[bi];
+          if (particle_phase) t.barrier();
+          if (ctx.jacobi) {
+            const std::int32_t nc = std::int32_t(b.count());
+            std::int32_t q0 = std::int32_t(t.begin(nc)), q1 = std::int32_t(t.end(nc));
+            if (t.size() == split_parts_ && t.id() < split_parts_) {
+              q0 = jacobi_split_[bi][std::size_t(t.id())];
+              q1 = jacobi_split_[bi][std::size_t(t.id()) + 1];
+            }
+            projectRange(view, nullptr, q0, q1, ctx, goals);
+            t.barrier();
+            for (std::int64_t i = t.begin(ni), i1 = t.end(ni); i < i1; ++i) x[i] += pbd::gatherCorrection(view, std::int32_t(i));
+            particle_phase = true;
+          } else {
+            const ConstraintColoring& col = b.coloring;
+            for (int k = 0; k < col.colorCount(); ++k) {
+              const std::int32_t c0 = col.color_offsets[k], c1 = col.color_offsets[k + 1];
+              std::int32_t q0 = c0 + std::int32_t(t.begin(c1 - c0)), q1 = c0 + std::int32_t(t.end(c1 - c0));
+              if (t.size() == split_parts_ && t.id() < split_parts_) {
+                const std::int32_t* sp = &color_split_[bi][std::size_t(k) * std::size_t(split_parts_ + 1) + std::size_t(t.id())];
+                q0 = c0 + sp[0];
+                q1 = c0 + sp[1];
+              }
+              projectRange(view, col.order.data(), q0, q1, ctx, goals);
+              t.barrier();
+            }
+            particle_phase = false;
+          }
+        }
+        if (na > 0) {
+          if (particle_phase) t.barrier();
+          for (std::int64_t k = t.begin(na), k1 = t.end(na); k < k1; ++k) {
+            const std::int32_t id = in.attach_ids[k];
+            pbd::projectAttachment(x[id], w_[id], pbd::lerp(in.attach_from[k], in.attach_to[k], t_end),
+                                   in.attach_compliance[k], p.xpbd, dt, attach_lambda_[k]);
+          }
+          t.barrier();
+        }
+        if (lead) {
+          tm.constraints += msSince(t0);
+          t0 = Clock::now();
+        }
+        for (std::int64_t i = t.begin(ni), i1 = t.end(ni); i < i1; ++i)
+          if (w_[i] > T(0))
+            x[i] = pbd::resolveContacts(x[i], r[i], model_.planes.data(), int(model_.planes.size()), model_.boxes.data(),
+                                        int(model_.boxes.size()), in.tools_from.data(), in.tools_to.data(), nt, t_end);
+        // The next iteration's projections read every particle.
+        if (it + 1 < p.iterations) t.barrier();
+        if (lead) tm.collisions += msSince(t0);
+      }
+
+      // Velocities: the same particles as the contacts just resolved and the next prediction (no barrier).
+      if (lead) t0 = Clock::now();
+      for (std::int64_t i = t.begin(ni), i1 = t.end(ni); i < i1; ++i) v[i] = (x[i] - x_prev_[i]) * inv_dt;
+      if (lead) tm.velocities += msSince(t0);
+    }
+    t.barrier();
+
+    // Rotations for skinning when the shape-matching block is only kept for them.
+    if (model_.rotation_block >= 0 && !model_.blocks[model_.rotation_block].solve) {
+      if (lead) t0 = Clock::now();
+      const pbd::BlockView<T>& view = views_[std::size_t(model_.rotation_block)];
+      for (std::int64_t c = t.begin(view.count), c1 = t.end(view.count); c < c1; ++c)
+        pbd::updateClusterRotation(view, int(c), ctx);
+      if (lead) tm.constraints += msSince(t0);
+    }
+
+    if (lead) t0 = Clock::now();
+    updateRadii(t, p, in);
+    if (lead) tm.volume += msSince(t0);
+
+    // Residuals of the distance constraints (after the last substep, with its multipliers), summed in order by
+    // summarize().
+    std::size_t off = 0;
+    for (std::size_t bi = 0; bi < model_.blocks.size(); ++bi) {
+      if (model_.blocks[bi].kind != PbdConstraintKind::Distance || !model_.blocks[bi].solve) continue;
+      const pbd::BlockView<T>& view = views_[bi];
+      for (std::int64_t c = t.begin(view.count), c1 = t.end(view.count); c < c1; ++c)
+        residual_[off + std::size_t(c)] = double(pbd::distanceResidual(view, int(c), x, p.xpbd, dt));
+      off += std::size_t(view.count);
+    }
+  }
+
+  // Frame summary on the calling thread, after the team: residuals in constraint order, the first non-finite
+  // particle, volume statistics.
+  void summarize(PbdFrameStats& st) const {
+    double rmax = 0, rsum = 0;
+    for (double res : residual_) {
+      rmax = std::max(rmax, res);
+      rsum += res * res;
+    }
+    st.residual_max = rmax;
+    st.residual_rms = residual_.empty() ? 0.0 : std::sqrt(rsum / double(residual_.size()));
+    const std::size_t n = model_.size();
+    for (std::size_t i = 0; i < n; ++i)
+      if (!isFinite(state_.positions[i]) || !isFinite(state_.velocities[i]) || !std::isfinite(double(state_.radii[i]))) {
+        st.finite = false;
+        st.failure_particle = std::int64_t(i);
+        break;
+      }
+    st.volume_active = 0;
+    st.max_radius_ratio = 1.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      st.volume_active += active_[i];
+      if (model_.rest_radii[i] > T(0))
+        st.max_radius_ratio = std::max(st.max_radius_ratio, double(state_.radii[i] / model_.rest_radii[i]));
+    }
+  }
+
   pbd::BlockView<T> blockView(std::size_t bi) {
     const PbdConstraintBlock<T>& b = model_.blocks[bi];
     pbd::BlockView<T> v;
@@ -229,49 +353,77 @@ class PbdCpuBackend final : public PbdBackend<T> {
     return v;
   }
 
+  int teamThreads() const { return solved_slots_ >= kTeamMinSlots ? std::max(1, threadCount()) : 1; }
+
+  void planTeam(int threads) {
+    goal_scratch_.assign(std::size_t(threads) * std::max<std::size_t>(max_cluster_, 1), pbd::GoalCorrection<T>{});
+    planSplits(threads);
+  }
+
+  // Static splits of every projection phase over `parts` threads, balanced by constraint weight: Jacobi by
+  // constraint index, Gauss-Seidel per colour along the colour's order (constraints of one colour are
+  // independent, so who projects which does not change the result).
+  void planSplits(int parts) {
+    split_parts_ = parts;
+    jacobi_split_.assign(model_.blocks.size(), {});
+    color_split_.assign(model_.blocks.size(), {});
+    std::vector<std::int64_t> prefix;
+    for (std::size_t bi = 0; bi < model_.blocks.size(); ++bi) {
+      const auto& b = model_.blocks[bi];
+      const auto weight = [&](std::int32_t c) { return constraintWeight(b.kind, b.offsets[c + 1] - b.offsets[c]); };
+      prefix.assign(1, 0);
+      for (std::size_t c = 0; c < b.count(); ++c) prefix.push_back(prefix.back() + weight(std::int32_t(c)));
+      jacobi_split_[bi].resize(std::size_t(parts) + 1);
+      balancedSplit(prefix, parts, jacobi_split_[bi].data());
+      const ConstraintColoring& col = b.coloring;
+      color_split_[bi].resize(std::size_t(col.colorCount()) * std::size_t(parts + 1));
+      for (int k = 0; k < col.colorCount(); ++k) {
+        prefix.assign(1, 0);
+        for (std::int32_t q = col.color_offsets[k]; q < col.color_offsets[k + 1]; ++q)
+          prefix.push_back(prefix.back() + weight(col.order[q]));
+        balancedSplit(prefix, parts, &color_split_[bi][std::size_t(k) * std::size_t(parts + 1)]);
+      }
+    }
+  }
+
   // Local volume preservation (physics/pbd_volume.h): spheres near a tool get the radius at which their
   // power-cell volume is back at rest; the rest return to their rest radius. Jacobi passes (read radii,
   // write radii_next) make it independent of the order.
-  void updateRadii(const PbdStepParams<T>& p, const PbdFrameInput<T>& in, PbdFrameStats& st) {
+  void updateRadii(const Team& t, const PbdStepParams<T>& p, const PbdFrameInput<T>& in) {
     const std::size_t n = model_.size();
     const std::int64_t ni = std::int64_t(n);
     const bool have_volume = p.volume_preservation && model_.rest_cell_volume.size() == n && !model_.ball_samples.empty();
-    std::vector<std::uint8_t> active(n, 0);
-    if (have_volume) {
-      loop(ni, [&](std::int64_t i) {
+    const Vec3<T>* x = state_.positions.data();
+    for (std::int64_t i = t.begin(ni), i1 = t.end(ni); i < i1; ++i) {
+      std::uint8_t a = 0;
+      if (have_volume) {
         if (p.volume_influence < T(0)) {
-          active[i] = 1;
-          return;
+          a = 1;
+        } else {
+          for (std::size_t k = 0; k < in.tools_to.size() && !a; ++k)
+            if (pbd::capsuleDistance(x[i], in.tools_to[k]) <= model_.rest_radii[i] + p.volume_influence) a = 1;
         }
-        for (std::size_t k = 0; k < in.tools_to.size(); ++k)
-          if (pbd::capsuleDistance(state_.positions[i], in.tools_to[k]) <= model_.rest_radii[i] + p.volume_influence) {
-            active[i] = 1;
-            return;
-          }
-      });
+      }
+      active_[i] = a;
     }
-    Vec3<T>* x = state_.positions.data();
+    // Each pass reads every sphere's radius from the previous one (the first pass: the frame's start) and only
+    // its own spheres' active flags (the same split as above: no barrier before it).
     for (int pass = 0; pass < (have_volume ? p.volume_passes : 1); ++pass) {
-      loop(ni, [&](std::int64_t i) {
+      for (std::int64_t i = t.begin(ni), i1 = t.end(ni); i < i1; ++i) {
         const T r0 = model_.rest_radii[i];
-        if (!active[i]) {
+        if (!active_[i]) {
           radii_next_[i] = r0;
-          return;
+          continue;
         }
         const std::int32_t b = model_.overlap_offsets[i], e = model_.overlap_offsets[i + 1];
         radii_next_[i] = pbd::radiusForCellVolume(x[i], r0, r0 * p.max_radius_growth, model_.rest_cell_volume[i], x,
                                                   state_.radii.data(), model_.overlap_ids.data() + b, e - b,
                                                   model_.ball_samples.data(), int(model_.ball_samples.size()),
                                                   p.bisection_steps);
-      });
-      state_.radii.swap(radii_next_);
-    }
-    st.volume_active = 0;
-    st.max_radius_ratio = 1.0;
-    for (std::size_t i = 0; i < n; ++i) {
-      st.volume_active += active[i];
-      if (model_.rest_radii[i] > T(0))
-        st.max_radius_ratio = std::max(st.max_radius_ratio, double(state_.radii[i] / model_.rest_radii[i]));
+      }
+      t.barrier();
+      if (t.lead()) state_.radii.swap(radii_next_);
+      t.barrier();
     }
   }
 
@@ -280,9 +432,21 @@ class PbdCpuBackend final : public PbdBackend<T> {
   std::vector<Vec3<T>> x_prev_;
   std::vector<T> w_;
   std::vector<T> radii_next_;
+  std::vector<std::uint8_t> active_;         // spheres whose radius is solved this frame
+  std::vector<std::int32_t> kinematic_of_;   // per particle: its index in this frame's kinematic list, or -1
   std::vector<std::vector<Vec3<T>>> lambda_;
   std::vector<std::vector<Vec3<T>>> slot_corr_;
   std::vector<Vec3<T>> attach_lambda_;
+  std::vector<pbd::BlockView<T>> views_;
+  std::vector<double> residual_;             // per solved distance constraint, this frame
+  std::int64_t solved_slots_ = 0;            // constraint slots of the solved blocks (one iteration's work)
+  int split_parts_ = 0;                      // team size the splits and scratch are planned for
+  std::vector<std::vector<std::int32_t>> jacobi_split_;  // per block: parts + 1 constraint indices
+  std::vector<std::vector<std::int32_t>> color_split_;   // per block: per colour parts + 1 positions in the colour
+  std::size_t max_cluster_ = 0;              // most members of a solved shape-matching cluster
+  bool goals_distinct_ = true;               // no particle twice in one cluster
+  std::vector<pbd::GoalCorrection<T>> goal_scratch_;  // per thread: max_cluster_ members' goal corrections
+  TeamRunner team_;
 };
 
 }  // namespace

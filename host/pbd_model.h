@@ -135,6 +135,8 @@ struct PbdFrameStats {
   double max_radius_ratio = 1.0;
   bool finite = true;
   std::int64_t failure_particle = -1;
+  int threads = 0;             // CPU backend: threads the frame started on (1 while backing off after a stalled team)
+  bool team_stalled = false;   // CPU backend: the team stalled and the lead thread finished the frame alone
 };
 
 template <typename T>

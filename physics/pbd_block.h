@@ -84,14 +84,22 @@ INC_HD GoalCorrection<T> shapeMatchGoal(const BlockView<T>& b, const SolveContex
 // ratios the sum is zero (sum_k m_k q_k = 0), but per-member compliances and Jacobi scales differ at the
 // boundary; the sum is removed by a uniform shift of the movable members, so internal shape matching never
 // creates momentum (the shift is a rigid translation: it does not change the shape error).
+// The Term forms take the member's goal correction already computed (a serial loop computes it once for both
+// passes: within one projection a member's goal depends only on its own position and the cluster frame).
+template <typename T>
+INC_HD void shapeMatchMomentumTerm(const BlockView<T>& b, const SolveContext<T>& ctx, std::int32_t s,
+                                   const GoalCorrection<T>& r, Vec3<T>& dmom, T& mov_mass) {
+  const std::int32_t p = b.ids[s];
+  if (!(ctx.w[p] > T(0))) return;
+  dmom += r.dp * (slotScale(b, ctx, s) * ctx.mass[p]);
+  mov_mass += ctx.mass[p];
+}
+
 template <typename T>
 INC_HD void shapeMatchMomentum(const BlockView<T>& b, const SolveContext<T>& ctx, std::int32_t s, const Mat3<T>& rot,
                                const Vec3<T>& x_cm, Vec3<T>& dmom, T& mov_mass) {
-  const std::int32_t p = b.ids[s];
-  if (!(ctx.w[p] > T(0))) return;
-  const GoalCorrection<T> r = shapeMatchGoal(b, ctx, s, rot, x_cm);
-  dmom += r.dp * (slotScale(b, ctx, s) * ctx.mass[p]);
-  mov_mass += ctx.mass[p];
+  if (!(ctx.w[b.ids[s]] > T(0))) return;
+  shapeMatchMomentumTerm(b, ctx, s, shapeMatchGoal(b, ctx, s, rot, x_cm), dmom, mov_mass);
 }
 
 template <typename T>
@@ -101,11 +109,10 @@ INC_HD Vec3<T> shapeMatchShift(const Vec3<T>& dmom, T mov_mass) {
 
 // Pass 2, one member: its correction (slot output for Jacobi, in place for Gauss-Seidel) and multiplier.
 template <typename T>
-INC_HD void shapeMatchApply(const BlockView<T>& b, const SolveContext<T>& ctx, std::int32_t s, const Mat3<T>& rot,
-                            const Vec3<T>& x_cm, const Vec3<T>& shift) {
+INC_HD void shapeMatchApplyTerm(const BlockView<T>& b, const SolveContext<T>& ctx, std::int32_t s,
+                                const GoalCorrection<T>& r, const Vec3<T>& shift) {
   const std::int32_t p = b.ids[s];
   const T sc = slotScale(b, ctx, s);
-  const GoalCorrection<T> r = shapeMatchGoal(b, ctx, s, rot, x_cm);
   const Vec3<T> d = ctx.w[p] > T(0) ? r.dp * sc + shift : Vec3<T>();
   if (ctx.jacobi)
     b.slot_corr[s] = d;
@@ -114,77 +121,115 @@ INC_HD void shapeMatchApply(const BlockView<T>& b, const SolveContext<T>& ctx, s
   b.lambda[s] += r.dlambda * sc;
 }
 
+template <typename T>
+INC_HD void shapeMatchApply(const BlockView<T>& b, const SolveContext<T>& ctx, std::int32_t s, const Mat3<T>& rot,
+                            const Vec3<T>& x_cm, const Vec3<T>& shift) {
+  shapeMatchApplyTerm(b, ctx, s, shapeMatchGoal(b, ctx, s, rot, x_cm), shift);
+}
+
 // The Laplacian's rest offset, turned by the centre's rotation when rotations are tracked.
 template <typename T>
 INC_HD Vec3<T> laplacianRest(const BlockView<T>& b, int c, const SolveContext<T>& ctx) {
   return ctx.rotation ? quatToMatrix(ctx.rotation[b.ids[b.offsets[c]]]) * b.rest_vec[c] : b.rest_vec[c];
 }
 
-// Projects constraint c once. Jacobi: corrections (scaled by omega * jacobi_scale) go to slot_corr and the
-// multiplier advances by the same scaled amount, so lambda always matches the displacement actually applied
-// and XPBD's equilibrium is kept; Gauss-Seidel: positions move in place (the colouring makes that race-free).
+// One constraint of each kind (projectConstraint below dispatches on the block's kind; a loop over one block
+// may call its kind's function directly). Jacobi: corrections (scaled by omega * jacobi_scale) go to slot_corr
+// and the multiplier advances by the same scaled amount, so lambda always matches the displacement actually
+// applied and XPBD's equilibrium is kept; Gauss-Seidel: positions move in place (the colouring makes that
+// race-free).
 template <typename T>
-INC_HD void projectConstraint(const BlockView<T>& b, int c, const SolveContext<T>& ctx) {
-  const std::int32_t s0 = b.offsets[c], s1 = b.offsets[c + 1];
+INC_HD void projectDistanceConstraint(const BlockView<T>& b, int c, const SolveContext<T>& ctx) {
+  const std::int32_t s0 = b.offsets[c];
+  const T scale = ctx.jacobi ? ctx.omega * b.jacobi_scale[s0] : T(1);
+  const std::int32_t i = b.ids[s0], j = b.ids[s0 + 1];
+  const XpbdTerm<T> term = xpbdTerm(ctx.xpbd, b.compliance[c], b.stiffness, ctx.dt);
+  const DistanceCorrection<T> r = projectDistance(ctx.x[i], ctx.x[j], ctx.w[i], ctx.w[j], b.rest[c], term, b.lambda[c].x);
+  emitCorrection(b, ctx, s0, r.dp0, scale);
+  emitCorrection(b, ctx, s0 + 1, r.dp1, scale);
+  b.lambda[c].x += r.dlambda * scale;
+}
+
+// Bending or tet volume (four particles).
+template <typename T>
+INC_HD void projectFourParticleConstraint(const BlockView<T>& b, int c, const SolveContext<T>& ctx) {
+  const std::int32_t s0 = b.offsets[c];
   const T scale = ctx.jacobi ? ctx.omega * b.jacobi_scale[s0] : T(1);
   const Vec3<T>* x = ctx.x;
   const T* w = ctx.w;
-  switch (b.kind) {
-    case kDistance: {
-      const std::int32_t i = b.ids[s0], j = b.ids[s0 + 1];
-      const XpbdTerm<T> term = xpbdTerm(ctx.xpbd, b.compliance[c], b.stiffness, ctx.dt);
-      const DistanceCorrection<T> r = projectDistance(x[i], x[j], w[i], w[j], b.rest[c], term, b.lambda[c].x);
-      emitCorrection(b, ctx, s0, r.dp0, scale);
-      emitCorrection(b, ctx, s0 + 1, r.dp1, scale);
-      b.lambda[c].x += r.dlambda * scale;
-      break;
-    }
-    case kBending:
-    case kTetVolume: {
-      const std::int32_t* id = b.ids + s0;
-      const XpbdTerm<T> term = xpbdTerm(ctx.xpbd, b.compliance[c], b.stiffness, ctx.dt);
-      Vec3<T> dp[4];
-      T dl;
-      if (b.kind == kBending) {
-        const BendingCorrection<T> r = projectBending(x[id[0]], x[id[1]], x[id[2]], x[id[3]], w[id[0]], w[id[1]],
+  const std::int32_t* id = b.ids + s0;
+  const XpbdTerm<T> term = xpbdTerm(ctx.xpbd, b.compliance[c], b.stiffness, ctx.dt);
+  Vec3<T> dp[4];
+  T dl;
+  if (b.kind == kBending) {
+    const BendingCorrection<T> r = projectBending(x[id[0]], x[id[1]], x[id[2]], x[id[3]], w[id[0]], w[id[1]], w[id[2]],
+                                                  w[id[3]], b.rest[c], term, b.lambda[c].x);
+    for (int k = 0; k < 4; ++k) dp[k] = r.dp[k];
+    dl = r.dlambda;
+  } else {
+    const TetVolumeCorrection<T> r = projectTetVolume(x[id[0]], x[id[1]], x[id[2]], x[id[3]], w[id[0]], w[id[1]],
                                                       w[id[2]], w[id[3]], b.rest[c], term, b.lambda[c].x);
-        for (int k = 0; k < 4; ++k) dp[k] = r.dp[k];
-        dl = r.dlambda;
-      } else {
-        const TetVolumeCorrection<T> r = projectTetVolume(x[id[0]], x[id[1]], x[id[2]], x[id[3]], w[id[0]], w[id[1]],
-                                                          w[id[2]], w[id[3]], b.rest[c], term, b.lambda[c].x);
-        for (int k = 0; k < 4; ++k) dp[k] = r.dp[k];
-        dl = r.dlambda;
-      }
-      for (int k = 0; k < 4; ++k) emitCorrection(b, ctx, s0 + k, dp[k], scale);
-      b.lambda[c].x += dl * scale;
-      break;
+    for (int k = 0; k < 4; ++k) dp[k] = r.dp[k];
+    dl = r.dlambda;
+  }
+  for (int k = 0; k < 4; ++k) emitCorrection(b, ctx, s0 + k, dp[k], scale);
+  b.lambda[c].x += dl * scale;
+}
+
+template <typename T>
+INC_HD void projectLaplacianConstraint(const BlockView<T>& b, int c, const SolveContext<T>& ctx) {
+  const std::int32_t s0 = b.offsets[c], s1 = b.offsets[c + 1];
+  const T scale = ctx.jacobi ? ctx.omega * b.jacobi_scale[s0] : T(1);
+  const Vec3<T> rest = laplacianRest(b, c, ctx);
+  const XpbdTerm<T> term = xpbdTerm(ctx.xpbd, b.compliance[c], b.stiffness, ctx.dt);
+  const LaplacianCorrection<T> r = projectLaplacian(ctx.x, ctx.w, b.ids + s0, s1 - s0, rest, term, b.lambda[c]);
+  emitCorrection(b, ctx, s0, r.d_center, scale);
+  for (std::int32_t s = s0 + 1; s < s1; ++s) emitCorrection(b, ctx, s, r.dlambda * (-ctx.w[b.ids[s]] * r.inv_n), scale);
+  b.lambda[c] += r.dlambda * scale;
+}
+
+// One shape-matching cluster: frame, rotation, then the two member passes. `goals`, when given (room for the
+// cluster's members), keeps each member's goal correction from pass 1 for pass 2 instead of computing it twice
+// (the same values: a member's goal depends only on its own position, which pass 1 does not move, and the
+// cluster frame).
+template <typename T>
+INC_HD void projectShapeMatchingCluster(const BlockView<T>& b, int c, const SolveContext<T>& ctx,
+                                        GoalCorrection<T>* goals = nullptr) {
+  const std::int32_t s0 = b.offsets[c], s1 = b.offsets[c + 1];
+  const std::int32_t centre = b.ids[s0];
+  const ClusterFrame<T> f = clusterFrame(ctx.x, ctx.mass, b.ids + s0, b.rest_vec + s0, s1 - s0);
+  const Mat3<T> rot = shapeMatchRotation(ctx, centre, f.a_pq);
+  // Pass 1: the cluster's net momentum change (see shapeMatchMomentum), removed in pass 2 by a shift.
+  Vec3<T> dmom;
+  T mov_mass = T(0);
+  if (goals) {
+    for (std::int32_t s = s0; s < s1; ++s) {
+      goals[s - s0] = shapeMatchGoal(b, ctx, s, rot, f.x_cm);
+      shapeMatchMomentumTerm(b, ctx, s, goals[s - s0], dmom, mov_mass);
     }
-    case kLaplacian: {
-      const Vec3<T> rest = laplacianRest(b, c, ctx);
-      const XpbdTerm<T> term = xpbdTerm(ctx.xpbd, b.compliance[c], b.stiffness, ctx.dt);
-      const LaplacianCorrection<T> r = projectLaplacian(x, w, b.ids + s0, s1 - s0, rest, term, b.lambda[c]);
-      emitCorrection(b, ctx, s0, r.d_center, scale);
-      for (std::int32_t s = s0 + 1; s < s1; ++s) emitCorrection(b, ctx, s, r.dlambda * (-w[b.ids[s]] * r.inv_n), scale);
-      b.lambda[c] += r.dlambda * scale;
-      break;
-    }
-    case kShapeMatching: {
-      const std::int32_t centre = b.ids[s0];
-      const ClusterFrame<T> f = clusterFrame(x, ctx.mass, b.ids + s0, b.rest_vec + s0, s1 - s0);
-      const Mat3<T> rot = shapeMatchRotation(ctx, centre, f.a_pq);
-      // Pass 1: the cluster's net momentum change (see shapeMatchMomentum), removed in pass 2 by a shift.
-      Vec3<T> dmom;
-      T mov_mass = T(0);
-      for (std::int32_t s = s0; s < s1; ++s) shapeMatchMomentum(b, ctx, s, rot, f.x_cm, dmom, mov_mass);
-      const Vec3<T> shift = shapeMatchShift(dmom, mov_mass);
-      // Pass 2: goals from the cluster frame computed above; a member's goal does not depend on its own
-      // update, so Gauss-Seidel may write each member in place.
-      for (std::int32_t s = s0; s < s1; ++s) shapeMatchApply(b, ctx, s, rot, f.x_cm, shift);
-      break;
-    }
-    default:
-      break;
+  } else {
+    for (std::int32_t s = s0; s < s1; ++s) shapeMatchMomentum(b, ctx, s, rot, f.x_cm, dmom, mov_mass);
+  }
+  const Vec3<T> shift = shapeMatchShift(dmom, mov_mass);
+  // Pass 2: goals from the cluster frame computed above; a member's goal does not depend on its own
+  // update, so Gauss-Seidel may write each member in place.
+  if (goals) {
+    for (std::int32_t s = s0; s < s1; ++s) shapeMatchApplyTerm(b, ctx, s, goals[s - s0], shift);
+  } else {
+    for (std::int32_t s = s0; s < s1; ++s) shapeMatchApply(b, ctx, s, rot, f.x_cm, shift);
+  }
+}
+
+// Projects constraint c once (any kind).
+template <typename T>
+INC_HD void projectConstraint(const BlockView<T>& b, int c, const SolveContext<T>& ctx) {
+  switch (b.kind) {
+    case kDistance: projectDistanceConstraint(b, c, ctx); break;
+    case kBending:
+    case kTetVolume: projectFourParticleConstraint(b, c, ctx); break;
+    case kLaplacian: projectLaplacianConstraint(b, c, ctx); break;
+    case kShapeMatching: projectShapeMatchingCluster(b, c, ctx); break;
+    default: break;
   }
 }
 

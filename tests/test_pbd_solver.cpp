@@ -2,8 +2,11 @@
 // dependence, convergence, momentum conservation, volume, Jacobi == Gauss-Seidel, robustness at extremes.
 #include <gtest/gtest.h>
 
+#include <omp.h>
+
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <array>
 #include <random>
 #include <set>
@@ -439,6 +442,71 @@ TEST(PbdSolver, MetaballVolumePreservationKeepsSqueezedUnionVolume) {
   }
   EXPECT_LT(loss[1], 0.05);
   EXPECT_GT(loss[0], 2.0 * loss[1]);
+}
+
+// The CPU frame runs on a team of threads (one parallel region, static splits, barriers) for models of a few
+// thousand constraint slots; who projects which constraint must not change a bit of the result: a probed,
+// grasped (kinematic + attached) metaball beam with volume preservation, 1 vs 2 vs 3 threads, both solvers.
+TEST(PbdSolver, CpuFrameIsIndependentOfThreadCount) {
+  const PbdModel<float> m = test::makeLatticeBeam<float>(0.06, 0.02, 0.02, 0.005, 5.0e3, true, 16);
+  ASSERT_GT(m.size(), 300u);  // ~9,000 constraint slots: above the CPU backend's team threshold
+  for (PbdSolverKind solver : {PbdSolverKind::Jacobi, PbdSolverKind::GaussSeidel}) {
+    auto run = [&](int threads) {
+      const int old = omp_get_max_threads();
+      omp_set_num_threads(threads);
+      auto be = cpu::makePbdCpuBackend<float>();
+      be->setModel(m);
+      PbdStepParams<float> p;
+      p.solver = solver;
+      p.iterations = 4;
+      p.volume_influence = 0.01f;
+      int team_frames = 0;
+      for (int f = 0; f < 8; ++f) {
+        PbdFrameInput<float> in;
+        pbd::CapsuleCollider<float> c;
+        c.a = Vec3<float>(0.03f, -0.01f, 0.0225f - 0.001f * f);
+        c.b = Vec3<float>(0.03f, 0.03f, 0.0225f - 0.001f * f);
+        c.radius = 0.004f;
+        in.tools_from.push_back(c);
+        c.a.z -= 0.001f;
+        c.b.z -= 0.001f;
+        in.tools_to.push_back(c);
+        for (std::size_t i = 0; i < m.size(); ++i) {
+          const Vec3<float> r = m.rest_positions[i];
+          if (r.x > 0.0549f && r.z > 0.0149f) {  // the tip's top edge is held and lifted
+            in.kinematic_ids.push_back(std::int32_t(i));
+            in.kinematic_from.push_back(r + Vec3<float>(0, 0, 0.0005f * f));
+            in.kinematic_to.push_back(r + Vec3<float>(0, 0, 0.0005f * (f + 1)));
+          } else if (r.x > 0.0549f && r.z < 0.0051f) {  // and its bottom edge pulled down by attachments
+            in.attach_ids.push_back(std::int32_t(i));
+            in.attach_from.push_back(r - Vec3<float>(0, 0, 0.0005f * f));
+            in.attach_to.push_back(r - Vec3<float>(0, 0, 0.0005f * (f + 1)));
+            in.attach_compliance.push_back(1e-4f);
+          }
+        }
+        const PbdFrameStats st = be->advanceFrame(p, in);
+        EXPECT_TRUE(st.finite);
+        team_frames += st.threads > 1 ? 1 : 0;
+      }
+      omp_set_num_threads(old);
+      if (threads > 1) {
+        EXPECT_GE(team_frames, 1);  // the first frame always starts on a team
+      }
+      PbdState<float> s;
+      be->getState(s);
+      std::printf("%s, %d thread(s): %d of 8 frames on a team\n",
+                  solver == PbdSolverKind::Jacobi ? "jacobi" : "gauss-seidel", threads, team_frames);
+      return s;
+    };
+    const PbdState<float> a = run(1), b = run(2), c = run(3);
+    for (const PbdState<float>* o : {&b, &c})
+      for (std::size_t i = 0; i < m.size(); ++i) {
+        ASSERT_EQ(std::memcmp(&a.positions[i], &o->positions[i], sizeof(a.positions[i])), 0) << "particle " << i;
+        ASSERT_EQ(std::memcmp(&a.velocities[i], &o->velocities[i], sizeof(a.velocities[i])), 0) << "particle " << i;
+        ASSERT_EQ(a.radii[i], o->radii[i]) << "particle " << i;
+        ASSERT_EQ(std::memcmp(&a.rotations[i], &o->rotations[i], sizeof(a.rotations[i])), 0) << "particle " << i;
+      }
+  }
 }
 
 // Bad frame inputs are InputErrors naming the key, never a crash.
