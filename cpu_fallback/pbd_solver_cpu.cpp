@@ -21,6 +21,10 @@ double msSince(Clock::time_point t0) { return std::chrono::duration<double, std:
 // between dependent phases) when its blocks hold at least this many constraint slots; smaller models run on
 // the calling thread (a barrier costs about as much as projecting a few dozen slots).
 constexpr std::int64_t kTeamMinSlots = 4096;
+// and one thread per this many slots at most: each thread of a team adds to every barrier's cost (about 240
+// barriers a frame for Jacobi), so a liver-sized model (~20k slots) takes 5 threads, not every core of a
+// workstation.
+constexpr std::int64_t kTeamSlotsPerThread = 4096;
 
 // Work of one constraint for the static split of a phase over the team: its slots, plus for a shape-matching
 // cluster the polar decomposition, which costs about as much as six members.
@@ -353,7 +357,10 @@ class PbdCpuBackend final : public PbdBackend<T> {
     return v;
   }
 
-  int teamThreads() const { return solved_slots_ >= kTeamMinSlots ? std::max(1, threadCount()) : 1; }
+  int teamThreads() const {
+    if (solved_slots_ < kTeamMinSlots) return 1;
+    return int(std::max<std::int64_t>(1, std::min<std::int64_t>(threadCount(), solved_slots_ / kTeamSlotsPerThread)));
+  }
 
   void planTeam(int threads) {
     goal_scratch_.assign(std::size_t(threads) * std::max<std::size_t>(max_cluster_, 1), pbd::GoalCorrection<T>{});

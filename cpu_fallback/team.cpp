@@ -19,8 +19,10 @@ using Clock = std::chrono::steady_clock;
 // a waiter sleeps so that it does not take the core from the thread it waits for.
 constexpr std::chrono::microseconds kSpin{50};
 // A wait past max(this, 2 x the waiter's own work since its previous barrier) is a stall, and so is a total
-// wait over the step past the waiter's total work plus this.
-constexpr std::chrono::microseconds kStallFloor{1000};
+// wait over the step past (team size - 1) x the waiter's total work plus this.
+// 10 ms: a member descheduled for a scheduler time slice or more. Shorter waits happen on an idle many-core
+// host too (15 sleepers woken through one mutex), and treating them as stalls sent 16-thread frames to one thread.
+constexpr std::chrono::microseconds kStallFloor{10000};
 
 inline void cpuRelax() {
 #if defined(__x86_64__) || defined(__i386__)
@@ -58,11 +60,17 @@ void Team::barrier() const {
     return;
   }
   // Latest release time before this wait counts as a stall (see Team): twice the work since the previous
-  // barrier (at least kStallFloor), and no more than the step's work so far plus kStallFloor minus its waits.
+  // barrier (at least kStallFloor), and no more than the step's allowance minus its waits so far. The allowance
+  // is (threads - 1) x the step's work plus kStallFloor: a thread of a balanced team of T waits up to (T - 1)
+  // times its own work before the team is no faster than one thread doing all T shares (on 16 cores a team
+  // whose waits merely exceed its work is still ~8x faster than one thread; counting that as a stall sent
+  // 16-thread frames to one thread).
   const Clock::duration phase_work = arrive - since_;
+  const int others = std::max(1, c.threads.load(std::memory_order_relaxed) - 1);
   const Clock::time_point limit =
       arrive + std::min<Clock::duration>(std::max<Clock::duration>(kStallFloor, 2 * phase_work),
-                                         std::max<Clock::duration>(worked_ + kStallFloor - waited_, Clock::duration(0)));
+                                         std::max<Clock::duration>(others * worked_ + kStallFloor - waited_,
+                                                                   Clock::duration(0)));
   bool released = false, timed = false;
   for (int k = 1;; ++k) {
     if (c.generation.load(std::memory_order_acquire) != gen) {

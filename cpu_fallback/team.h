@@ -32,9 +32,9 @@ int regionThreadCount();
 // phases where one thread reads what another wrote. Every thread must call the same sequence of barriers.
 //
 // A barrier spins briefly, then sleeps. The team has stalled when a waiter has waited longer than it worked:
-// in one wait (past twice its work since its previous barrier, and at least 1 ms: a team member was
-// descheduled) or over the step so far (more than its work plus 1 ms: many short waits, the team no faster
-// than one thread). That happens on a loaded machine (other processes, a second test process with its own
+// in one wait (past twice its work since its previous barrier, and at least 10 ms: a team member was
+// descheduled) or over the step so far (more than (team size - 1) x its work plus 10 ms: many short waits,
+// the team no faster than one thread). That happens on a loaded machine (other processes, a second test process with its own
 // team). From the barrier where a stall is noticed on, the team has size 1: the lead thread does every
 // remaining phase alone, the others get empty ranges and their barriers return at once. Phase results do not
 // depend on who computes which item, so the step's result is unchanged.

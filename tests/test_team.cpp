@@ -48,7 +48,7 @@ TEST(CpuTeam, MultiPhaseStepEqualsSerial) {
 TEST(CpuTeam, StalledBarrierHandsTheStepToTheLead) {
   cpu::TeamRunner serial, team;
   const std::vector<double> ref = smooth(serial, 1, 20);
-  // Thread 1 sleeps 250 ms in round 5 while thread 0 waits at the barrier (stall limit: 1 ms, or twice the
+  // Thread 1 sleeps 250 ms in round 5 while thread 0 waits at the barrier (stall limit: 10 ms, or twice the
   // waiter's own work): the team stalls, thread 0 finishes the step alone, and the result is unchanged.
   const std::vector<double> got = smooth(team, 2, 20, 5, 250);
   EXPECT_TRUE(team.lastStalled());
