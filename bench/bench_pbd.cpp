@@ -216,7 +216,7 @@ int main(int argc, char** argv) {
   app.add_option("--iterations", iterations, "iterations per substep in the scaling table");
   app.add_option("--substeps", substeps, "substeps per 1/60 s frame");
   app.add_option("--repeats", repeats, "timed frames per point (median)");
-  app.add_option("--fused-max", fused_max, "CUDA: largest sphere count run by the fused single-block kernel (0: never)");
+  app.add_option("--fused-max", fused_max, "CUDA: largest sphere count run by the fused single-block kernel (0: never; Jacobi: at most 256)");
   app.add_option("--cluster-max", cluster_max,
                  "CUDA, Jacobi: largest sphere count run by the thread-block cluster frame kernel (0: never)");
   app.add_option("--csv", csv, "write every row to this CSV file");

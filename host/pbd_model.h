@@ -95,7 +95,8 @@ struct PbdStepParams {
   bool use_graph = true;        // CUDA backend: capture the frame in a CUDA graph
   bool profile_stages = false;  // CUDA backend: time each stage with events (no graph, no fusion)
   int fused_max_particles = 4096; // CUDA backend: models up to this size run all substeps and iterations in one
-                                  // single-block kernel (no launch per colour/block); 0 disables
+                                  // single-block kernel (no launch per colour/block); 0 disables; Jacobi models
+                                  // use it only up to 256 particles (above, per-block launches measured faster)
   int cluster_max_particles = 256; // CUDA backend, Jacobi: models up to this size run the frame in one thread-block
                                    // cluster kernel (one launch, hardware barriers between phases) when it can
                                    // (sm_90+, the replica fits shared memory); 0 disables. Measured faster than
