@@ -32,32 +32,36 @@ TEST(BenchSuite, QuickCpuRunProducesMergedCsvTableAndPlots) {
   ASSERT_TRUE(csv) << ss.str();
   std::string line, all;
   std::getline(csv, line);
-  EXPECT_EQ(line, "suite,backend,precision,n,ms,items_per_s,gbytes_per_s,host_peak_mib,device_peak_mib");
+  EXPECT_EQ(line, "suite,backend,precision,n,ms,ms_min,ms_max,items_per_s,gbytes_per_s,host_peak_mib,device_peak_mib");
   int frame_rows = 0;
   while (std::getline(csv, line)) {
     all += line + "\n";
-    // Whole-frame rows carry the compulsory-traffic bandwidth and the row's peak host memory (positive; the
-    // process alone holds more than 1 MiB), and no device memory on the CPU.
+    // Whole-frame rows carry their spread (min <= median <= max), the compulsory-traffic bandwidth and the row's
+    // peak host memory (positive; the process alone holds more than 1 MiB), and no device memory on the CPU.
     if (line.rfind("frame_default_scene,", 0) == 0) {
       std::vector<std::string> f;
       std::stringstream ls(line);
       for (std::string c; std::getline(ls, c, ',');) f.push_back(c);
-      ASSERT_EQ(f.size(), 9u) << line;
-      EXPECT_GT(std::stod(f[6]), 0.0) << "GB/s: " << line;
-      EXPECT_GT(std::stod(f[7]), 1.0) << "host peak MiB: " << line;
-      EXPECT_EQ(std::stod(f[8]), 0.0) << "device peak MiB on the CPU: " << line;
+      ASSERT_EQ(f.size(), 11u) << line;
+      EXPECT_LE(std::stod(f[5]), std::stod(f[4])) << "min <= median: " << line;
+      EXPECT_GE(std::stod(f[6]), std::stod(f[4])) << "max >= median: " << line;
+      EXPECT_GT(std::stod(f[8]), 0.0) << "GB/s: " << line;
+      EXPECT_GT(std::stod(f[9]), 1.0) << "host peak MiB: " << line;
+      EXPECT_EQ(std::stod(f[10]), 0.0) << "device peak MiB on the CPU: " << line;
       ++frame_rows;
     }
   }
   EXPECT_GE(frame_rows, 2);
   for (const char* s : {"neighbor_search,cpu,float32", "neighbor_search,cpu,float64", "mls_step,cpu,float32",
-                        "mls_step,cpu,float64", "pbd_iteration,cpu,float32", "pbd_iteration,cpu,float64",
+                        "mls_step,cpu,float64", "pbd_iteration_jacobi,cpu,float32", "pbd_iteration_jacobi,cpu,float64",
+                        "pbd_iteration_gauss_seidel,cpu,float32", "pbd_iteration_gauss_seidel,cpu,float64",
                         "skinning,cpu,float32", "skinning,cpu,float64", "frame_default_scene,cpu,float32",
                         "frame_default_scene,cpu,float64"})
     EXPECT_NE(all.find(s), std::string::npos) << "missing rows " << s << "\n" << all;
   EXPECT_TRUE(fs::exists(out / "suite.md"));
   if (std::system("/usr/bin/python3 -c 'import matplotlib' > /dev/null 2>&1") == 0) {
-    for (const char* p : {"neighbor_search.png", "mls_step.png", "pbd_iteration.png", "skinning.png", "frame_default_scene.png"}) {
+    for (const char* p : {"neighbor_search.png", "mls_step.png", "pbd_iteration_jacobi.png", "pbd_iteration_gauss_seidel.png",
+                          "skinning.png", "frame_default_scene.png"}) {
       EXPECT_TRUE(fs::exists(out / p)) << p;
     }
   }
