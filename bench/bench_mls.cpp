@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_memory.h"
 #include "bench/mls_traffic.h"
 #include "cpu_fallback/mls_solver_cpu.h"
 #include "host/backend.h"
@@ -36,6 +37,8 @@ struct Row {
   double ms_wall = 0;  // wall time per substep seen by the host (GPU: includes launch gaps and event calls)
   double particles_per_s = 0;
   double mbytes_per_step = 0, gbytes_per_s = 0;
+  double ms_step_min = 0, ms_step_max = 0;        // spread of the timed repeats
+  double host_peak_mib = 0, device_peak_mib = 0;  // bench/bench_memory.h: the row's peaks
 };
 
 // A cube of about n lattice particles (spacing 5 mm, support 2 spacings: 32 neighbours inside), jittered,
@@ -84,6 +87,8 @@ Row timeSolver(MlsSolver& solver, int substeps, int repeats) {
                                                          : (wall - st.ms_reduce) / substeps);
   }
   r.ms_step = median(step);
+  r.ms_step_min = *std::min_element(step.begin(), step.end());
+  r.ms_step_max = *std::max_element(step.begin(), step.end());
   r.ms_wall = median(walls);
   r.ms_integrate = median(integ);
   r.ms_stress = median(stress);
@@ -191,16 +196,26 @@ int main(int argc, char** argv) {
       for (const Precision p : precs) {
         const MlsBuildInput in = cubeInput(n);
         auto runBoth = [&](auto model) {
-          if (run_cpu) {
-            auto solver = cpu::makeMlsSolverCpu(run_gpu ? decltype(model)(model) : std::move(model));
-            rows.push_back(timeSolver(*solver, substeps, repeats));
+          // The row's peak host memory (the model is already resident) and the device memory its solver holds.
+          auto timed = [&](MlsSolver& solver, bench::HostPeak& host, double dev0) {
+            rows.push_back(timeSolver(solver, substeps, repeats));
+            rows.back().host_peak_mib = host.mib();
+            rows.back().device_peak_mib = bench::deviceUsedMiB(solver.backend()) - dev0;
             printRow(rows.back());
+          };
+          if (run_cpu) {
+            bench::HostPeak host;
+            host.reset();
+            auto solver = cpu::makeMlsSolverCpu(run_gpu ? decltype(model)(model) : std::move(model));
+            timed(*solver, host, 0.0);
           }
 #if INCISION_HAVE_CUDA
           if (run_gpu) {
+            bench::HostPeak host;
+            host.reset();
+            const double dev0 = bench::deviceUsedMiB(BackendKind::Cuda);
             auto solver = cuda::makeMlsSolverCuda(std::move(model));
-            rows.push_back(timeSolver(*solver, substeps, repeats));
-            printRow(rows.back());
+            timed(*solver, host, dev0);
           }
 #endif
         };
@@ -224,13 +239,16 @@ int main(int argc, char** argv) {
       // kind "timing": one row per backend, precision and size; kind "accuracy": the float32 and float64 runs of
       // the same 1e4-particle motion (wall ms per step, float32's max |du| / max |u| against float64).
       f << "kind,backend,precision,particles,mean_neighbors,ms_per_step,wall_ms_per_step,ms_integrate,ms_stress,"
-           "ms_forces,particles_per_s,mbytes_per_step,gbytes_per_s,rel_error_vs_float64\n";
+           "ms_forces,particles_per_s,mbytes_per_step,gbytes_per_s,rel_error_vs_float64,ms_per_step_min,ms_per_step_max,"
+           "host_peak_mib,device_peak_mib\n";
       for (const Row& r : rows)
         f << "timing," << r.backend << ',' << r.precision << ',' << r.particles << ',' << r.mean_neighbors << ','
           << r.ms_step << ',' << r.ms_wall << ',' << r.ms_integrate << ',' << r.ms_stress << ',' << r.ms_forces << ','
-          << r.particles_per_s << ',' << r.mbytes_per_step << ',' << r.gbytes_per_s << ",\n";
-      f << "accuracy," << backendName(acc_backend) << ",float32,10000,," << ms32 << ',' << ms32 << ",,,,,,," << err << '\n';
-      f << "accuracy," << backendName(acc_backend) << ",float64,10000,," << ms64 << ',' << ms64 << ",,,,,,,0\n";
+          << r.particles_per_s << ',' << r.mbytes_per_step << ',' << r.gbytes_per_s << ",," << r.ms_step_min << ','
+          << r.ms_step_max << ',' << r.host_peak_mib << ',' << r.device_peak_mib << '\n';
+      f << "accuracy," << backendName(acc_backend) << ",float32,10000,," << ms32 << ',' << ms32 << ",,,,,,," << err
+        << ",,,,\n";
+      f << "accuracy," << backendName(acc_backend) << ",float64,10000,," << ms64 << ',' << ms64 << ",,,,,,,0,,,,\n";
     }
     // Summary line (last line of stdout): the largest float32 row of the fastest backend.
     const Row* best = nullptr;

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_memory.h"
 #include "cpu_fallback/neighbor_search_cpu.h"
 #include "cpu_fallback/parallel.h"
 #include "host/backend.h"
@@ -110,6 +111,8 @@ struct Row {
   std::size_t n = 0;
   double neighbours = 0, build_ms = 0, query_ms = 0, total_ms = 0, bytes = 0, gbs = 0, peak_fraction = 0,
          target_ms = 0;
+  double total_min_ms = 0, total_max_ms = 0;  // spread of the timed repeats
+  double host_peak_mib = 0, device_peak_mib = 0;  // bench/bench_memory.h: the row's peaks
   bool hashed = false;
   double cell_factor = 0;
 };
@@ -123,6 +126,8 @@ double targetMs(bool gpu, std::size_t n) {
 
 template <typename T>
 Row runCpu(std::size_t n, int repeats, bool morton, double cell_factor) {
+  bench::HostPeak host;
+  host.reset();
   const auto pts = jitteredLattice<T>(n, 1234);
   const T r = T(kRadius);
   cpu::GridNeighborSearch<T> s;
@@ -147,6 +152,9 @@ Row runCpu(std::size_t n, int repeats, bool morton, double cell_factor) {
   Row row;
   row.backend = "cpu";
   row.n = n;
+  row.total_min_ms = *std::min_element(tt.begin(), tt.end());
+  row.total_max_ms = *std::max_element(tt.begin(), tt.end());
+  row.host_peak_mib = host.mib();
   row.neighbours = double(l.indices.size()) / double(std::max<std::size_t>(n, 1));
   row.build_ms = median(tb);
   row.query_ms = median(tq);
@@ -165,6 +173,9 @@ Row runCpu(std::size_t n, int repeats, bool morton, double cell_factor) {
 #if INCISION_HAVE_CUDA
 template <typename T>
 Row runCuda(std::size_t n, int repeats, bool morton, double cell_factor, double peak_gbs, bool profile) {
+  bench::HostPeak host;
+  host.reset();
+  const double dev0 = bench::deviceUsedMiB(BackendKind::Cuda);
   const auto pts = jitteredLattice<T>(n, 1234);
   const T r = T(kRadius);
   cuda::DeviceBuffer<Vec3<T>> d_pts;
@@ -197,6 +208,8 @@ Row runCuda(std::size_t n, int repeats, bool morton, double cell_factor, double 
   INC_CUDA(cudaEventDestroy(e0));
   INC_CUDA(cudaEventDestroy(e1));
   INC_CUDA(cudaEventDestroy(e2));
+  // Every buffer of the search is allocated by the warm-ups and still held: the row's device memory.
+  const double dev_peak = bench::deviceUsedMiB(BackendKind::Cuda) - dev0;
   if (profile) {
     // Separate profiled runs (events between the stages add a little host work, so the table above is
     // timed without them): median milliseconds per stage.
@@ -223,6 +236,10 @@ Row runCuda(std::size_t n, int repeats, bool morton, double cell_factor, double 
   Row row;
   row.backend = "cuda";
   row.n = n;
+  row.total_min_ms = *std::min_element(tt.begin(), tt.end());
+  row.total_max_ms = *std::max_element(tt.begin(), tt.end());
+  row.host_peak_mib = host.mib();
+  row.device_peak_mib = dev_peak;
   row.neighbours = double(out.indices.size()) / double(std::max<std::size_t>(n, 1));
   row.build_ms = median(tb);
   row.query_ms = median(tq);
@@ -349,13 +366,15 @@ int main(int argc, char** argv) {
       std::ofstream f(csv);
       if (!f) throw InputError(csv, "--csv", "cannot write the file");
       f << "backend,precision,order,input,lists,cell_factor,n,neighbors_per_particle,build_ms,query_ms,total_ms,ns_per_particle,"
-           "bytes_per_particle,achieved_gbs,peak_gbs,peak_fraction,target_ms\n";
+           "bytes_per_particle,achieved_gbs,peak_gbs,peak_fraction,target_ms,total_min_ms,total_max_ms,host_peak_mib,"
+           "device_peak_mib\n";
       for (const Row& r : rows)
         f << r.backend << ',' << r.precision << ',' << (morton ? "morton" : "bucket") << ','
           << (g_shuffle ? "shuffled" : "lattice") << ',' << (g_storage ? "storage" : "original") << ',' << r.cell_factor << ',' << r.n << ','
           << r.neighbours << ',' << r.build_ms << ',' << r.query_ms << ',' << r.total_ms << ','
           << r.total_ms * 1e6 / double(r.n) << ',' << r.bytes << ',' << r.gbs << ',' << (r.backend == "cuda" ? peak : 0.0)
-          << ',' << r.peak_fraction << ',' << r.target_ms << '\n';
+          << ',' << r.peak_fraction << ',' << r.target_ms << ',' << r.total_min_ms << ',' << r.total_max_ms << ','
+          << r.host_peak_mib << ',' << r.device_peak_mib << '\n';
     }
     // one-line summary (last line): the largest run of each backend and the 1e6 row when present
     std::string summary = "bench_neighbors " + precision + (g_storage ? " storage-order" : "") + ":";

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_memory.h"
 #include "host/backend.h"
 #include "host/input_error.h"
 #include "host/pbd_builders.h"
@@ -28,6 +29,9 @@ struct Row {
   int iterations = 0, substeps = 0, colors = 0;
   std::string stages;  // "name=ms ..." of the last timed frame
   double ms_frame = 0, constraints_per_s = 0, residual_max = 0, residual_rms = 0, deflection_m = 0, deflection_err = 0;
+  double ms_min = 0, ms_max = 0;                  // spread of the timed frames
+  double mbytes_frame = 0, gbytes_per_s = 0;      // compulsory traffic of a frame (frameBytes) and its rate
+  double host_peak_mib = 0, device_peak_mib = 0;  // bench/bench_memory.h: the row's peaks
 };
 
 const double kSpacing = 0.005;  // m
@@ -75,6 +79,38 @@ std::int64_t solvedConstraints(const PbdModel<double>& m) {
   return c;
 }
 
+// Compulsory traffic of one frame (bytes), a lower bound that counts every array a phase streams once (neighbour
+// reads inside a phase assumed to hit the caches): per iteration and solved block, the projection reads the
+// constraint offsets, slot ids, rest data, compliances and Jacobi scales, reads and writes the multipliers and
+// reads the positions (plus inverse masses, and masses for shape matching) once; Jacobi writes the slot
+// corrections and its gather reads the particle -> slot CSR and the corrections and reads and writes the
+// positions; Gauss-Seidel writes the positions in place instead. Per iteration the contacts read and write the
+// positions (and read radii and inverse masses); per substep the prediction reads and writes positions and
+// velocities and writes the previous positions, the velocity update reads both position arrays and writes
+// velocities. The once-per-frame radius solve is left out.
+template <typename T>
+double frameBytes(const PbdModel<T>& m, int iterations, int substeps, bool jacobi) {
+  const double n = double(m.size()), v3 = double(sizeof(Vec3<T>)), t = double(sizeof(T)), i4 = 4.0;
+  double iter = 0;
+  for (const PbdConstraintBlock<T>& b : m.blocks) {
+    if (!b.solve || b.count() == 0) continue;
+    const double c = double(b.count()), sl = double(b.slotCount());
+    const double mult = double(b.multiplierCount()) * (b.vectorMultiplier() ? v3 : t);
+    double proj = i4 * (c + 1) + i4 * sl + double(b.rest.size()) * t + double(b.rest_vec.size()) * v3 +
+                  double(b.compliance.size()) * t + 2 * mult + n * (v3 + t);
+    if (b.kind == PbdConstraintKind::ShapeMatching) proj += n * t;  // masses (centre of mass)
+    if (jacobi)
+      proj += double(b.jacobi_scale.size()) * t + sl * v3 +                  // scales, slot corrections written
+              i4 * (n + 1) + i4 * sl + sl * v3 + 2 * n * v3;                  // gather
+    else
+      proj += n * v3;  // positions written in place
+    iter += proj;
+  }
+  iter += 2 * n * v3 + 2 * n * t;                       // contacts
+  const double sub = 4 * n * v3 + n * t + 3 * n * v3;  // predict (x, v read+write, x_prev written, w), velocities
+  return double(substeps) * (double(iterations) * iter + sub);
+}
+
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v.empty() ? 0.0 : v[v.size() / 2];
@@ -94,6 +130,9 @@ bool pastDeadline() { return std::chrono::steady_clock::now() > g_deadline; }
 template <typename T>
 Row timeFrames(BackendKind kind, PbdSolverKind solver, std::int64_t n, int iterations, int substeps, int repeats,
                int fused_max = 4096, int cluster_max = PbdStepParams<float>{}.cluster_max_particles) {
+  bench::HostPeak host;
+  host.reset();
+  const double dev0 = bench::deviceUsedMiB(kind);
   Vec3d size;
   const PbdModel<T> m = blockModel<T>(n, size);
   auto be = makePbdBackend<T>(kind);
@@ -136,6 +175,12 @@ Row timeFrames(BackendKind kind, PbdSolverKind solver, std::int64_t n, int itera
   r.substeps = substeps;
   r.colors = st.colors;
   r.ms_frame = median(ms);
+  r.ms_min = *std::min_element(ms.begin(), ms.end());
+  r.ms_max = *std::max_element(ms.begin(), ms.end());
+  r.mbytes_frame = frameBytes(m, iterations, substeps, solver == PbdSolverKind::Jacobi) / 1e6;
+  r.gbytes_per_s = r.mbytes_frame * 1e6 / (r.ms_frame * 1e-3) / 1e9;
+  r.host_peak_mib = host.mib();
+  r.device_peak_mib = bench::deviceUsedMiB(be->kind()) - dev0;
   r.constraints_per_s = double(r.constraints) * iterations * substeps / (r.ms_frame * 1e-3);
   r.residual_max = st.residual_max;
   r.residual_rms = st.residual_rms;
@@ -322,12 +367,14 @@ int main(int argc, char** argv) {
       std::ofstream out(csv);
       if (!out) throw InputError(csv, "--csv", "cannot write");
       out << "table,backend,precision,solver,path,spheres,constraints,iterations,substeps,colors,ms_frame,constraints_per_s,"
-             "residual_max_m,residual_rms_m,deflection_m,deflection_rel_err\n";
+             "residual_max_m,residual_rms_m,deflection_m,deflection_rel_err,ms_frame_min,ms_frame_max,mbytes_frame,"
+             "gbytes_per_s,host_peak_mib,device_peak_mib\n";
       for (const Row& r : rows)
         out << r.table << ',' << r.backend << ',' << r.precision << ',' << r.solver << ',' << r.path << ',' << r.spheres << ','
             << r.constraints << ',' << r.iterations << ',' << r.substeps << ',' << r.colors << ',' << r.ms_frame << ','
             << r.constraints_per_s << ',' << r.residual_max << ',' << r.residual_rms << ',' << r.deflection_m << ','
-            << r.deflection_err << '\n';
+            << r.deflection_err << ',' << r.ms_min << ',' << r.ms_max << ',' << r.mbytes_frame << ',' << r.gbytes_per_s
+            << ',' << r.host_peak_mib << ',' << r.device_peak_mib << '\n';
     }
     // Summary: the liver-sized case (accuracy_n spheres) at the scaling table's settings, fastest per backend.
     std::string summary = "bench_pbd: " + std::to_string(accuracy_n) + " spheres, " + std::to_string(iterations) + "x" +

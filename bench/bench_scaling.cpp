@@ -1,8 +1,5 @@
 // Scaling of skinning and of a whole frame of the default scene against particle count (CPU and CUDA, float32/64).
 #include <CLI/CLI.hpp>
-#include <malloc.h>
-#include <sys/resource.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -12,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_memory.h"
 #include "bench/mls_traffic.h"
 #include "cpu_fallback/parallel.h"
 #include "host/backend.h"
@@ -30,6 +28,8 @@
 #endif
 
 using namespace inc;
+using bench::deviceUsedMiB;
+using bench::HostPeak;
 
 namespace {
 
@@ -42,51 +42,6 @@ struct Row {
   double device_peak_mib = 0;  // device memory in use above the row's start, sampled after the build and each run
   int substeps = 0;            // frame: substeps per frame (median)
 };
-
-// Peak host memory per row: the kernel's high-water mark of the resident set (VmHWM) is reset before the row
-// (Linux >= 4.0: write 5 to /proc/self/clear_refs, after malloc_trim returns freed heap pages), then read after
-// it. The figure is the whole process (binary, OpenMP and CUDA runtimes included), not the model alone. Where
-// the reset is not allowed it falls back to ru_maxrss, the peak since the process started (then monotone).
-struct HostPeak {
-  bool per_row = false;
-  void reset() {
-    malloc_trim(0);
-    std::ofstream f("/proc/self/clear_refs");
-    f << "5";
-    f.flush();
-    per_row = bool(f);
-  }
-  double mib() const {
-    if (per_row) {
-      std::ifstream st("/proc/self/status");
-      std::string key;
-      while (st >> key) {
-        if (key == "VmHWM:") {
-          double kib = 0;
-          st >> kib;
-          return kib / 1024.0;
-        }
-        st.ignore(1 << 12, '\n');
-      }
-    }
-    rusage u{};
-    getrusage(RUSAGE_SELF, &u);
-    return double(u.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
-  }
-};
-
-// Device memory in use (MiB, all of the device: cudaMemGetInfo), 0 without CUDA.
-double deviceUsedMiB(BackendKind be) {
-#if INCISION_HAVE_CUDA
-  if (be == BackendKind::Cuda) {
-    size_t free_b = 0, total_b = 0;
-    INC_CUDA(cudaMemGetInfo(&free_b, &total_b));
-    return double(total_b - free_b) / 1048576.0;
-  }
-#endif
-  (void)be;
-  return 0.0;
-}
 
 void finish(Row& r, std::vector<double> ms, const HostPeak& host) {
   std::sort(ms.begin(), ms.end());

@@ -52,6 +52,23 @@ TEST(BenchSuite, QuickCpuRunProducesMergedCsvTableAndPlots) {
     }
   }
   EXPECT_GE(frame_rows, 2);
+  // Every row of every suite carries its spread and the row's peak host memory (issue 10: median and spread,
+  // peak memory per row), and on the CPU no device memory.
+  std::stringstream rows_in(all);
+  int checked = 0;
+  for (std::string row; std::getline(rows_in, row);) {
+    std::vector<std::string> f;
+    std::stringstream ls(row);
+    for (std::string c; std::getline(ls, c, ',');) f.push_back(c);
+    ASSERT_EQ(f.size(), 11u) << row;
+    ASSERT_FALSE(f[5].empty() || f[6].empty()) << "no spread: " << row;
+    EXPECT_LE(std::stod(f[5]), std::stod(f[4]) * (1 + 1e-9)) << row;
+    EXPECT_GE(std::stod(f[6]), std::stod(f[4]) * (1 - 1e-9)) << row;
+    ASSERT_FALSE(f[9].empty()) << "no host peak: " << row;
+    EXPECT_GT(std::stod(f[9]), 1.0) << row;
+    ++checked;
+  }
+  EXPECT_GT(checked, 10);
   for (const char* s : {"neighbor_search,cpu,float32", "neighbor_search,cpu,float64", "mls_step,cpu,float32",
                         "mls_step,cpu,float64", "pbd_iteration_jacobi,cpu,float32", "pbd_iteration_jacobi,cpu,float64",
                         "pbd_iteration_gauss_seidel,cpu,float32", "pbd_iteration_gauss_seidel,cpu,float64",
