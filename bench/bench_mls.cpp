@@ -20,7 +20,7 @@
 #include "host/mls_model.h"
 #include "host/mls_solver.h"
 #include "host/particle_sampling.h"
-#include "kernels/device_info.h"  // measureCopyBandwidthGbs: a stub returning 0 without CUDA (cuda_unavailable.cpp)
+#include "kernels/device_info.h"
 #if INCISION_HAVE_CUDA
 #include "kernels/mls_solver_cuda.h"
 #endif

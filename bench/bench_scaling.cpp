@@ -19,7 +19,7 @@
 #include "host/scene_loader.h"
 #include "host/skin_binding.h"
 #include "host/pbd_builders.h"
-#include "kernels/device_info.h"  // measureCopyBandwidthGbs: a stub returning 0 without CUDA (cuda_unavailable.cpp)
+#include "kernels/device_info.h"
 #if INCISION_HAVE_CUDA
 #include <cuda_runtime.h>
 

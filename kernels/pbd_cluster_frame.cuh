@@ -1,7 +1,8 @@
-// The Jacobi PBD frame of a small model (the liver-sized haptic case) in one thread-block cluster: every CTA keeps a replica of the particles in shared memory, phases are separated by hardware cluster barriers.
+// The Jacobi PBD frame of a small model in one thread-block cluster: every CTA keeps a replica of the particles in shared memory, phases are separated by hardware cluster barriers.
 #pragma once
 
 #include <cooperative_groups.h>
+#include <cuda_runtime.h>
 
 #include <cstdint>
 
@@ -11,11 +12,12 @@
 
 namespace inc::cuda {
 
-// Why a cluster: a liver-sized Jacobi frame (575 spheres, 10 iterations x 4 substeps, three blocks) is
-// 40 x 3 dependent project -> gather steps of a few microseconds of work each. One launch per step pays a
-// launch gap each time; one thread block runs out of lanes (575 clusters x 16 lanes). A cluster of up to 16
-// CTAs has the lanes and a barrier in hardware (barrier.cluster), and its CTAs read and write each other's
-// shared memory (distributed shared memory), so positions never leave the SMs during the frame.
+// Why a cluster: a small Jacobi frame (10 iterations x 4 substeps, three blocks) is 40 x 3 dependent
+// project -> gather steps of a few microseconds of work each. One launch per step pays a launch gap each time;
+// one thread block runs out of lanes (a cluster constraint takes 16). A cluster of up to 16 CTAs has the lanes
+// and a barrier in hardware (barrier.cluster), and its CTAs read and write each other's shared memory
+// (distributed shared memory), so positions never leave the SMs during the frame. Measured (docs/pbd.md) it
+// wins up to ~250 spheres; above, the per-iteration latency of its phases costs more than the launches save.
 //
 // Layout: CTA r projects the constraints [c_split[b][r], c_split[b][r+1]) of block b (their slots are the
 // contiguous range [s_split[b][r], s_split[b][r+1])) and writes their slot corrections into its own shared
@@ -50,6 +52,27 @@ inline std::size_t clusterStageBytes(int n, int max_share) {
   return std::size_t(n) * (sizeof(pbd::Quat<T>) + sizeof(Vec3<T>) + 3 * sizeof(T)) +
          std::size_t(max_share) * sizeof(Vec3<T>);
 }
+
+// Launch configuration of a cluster of `ctas` CTAs (the grid is one cluster), for the occupancy query and the
+// launch alike.
+struct ClusterLaunch {
+  cudaLaunchAttribute attr[1];
+  cudaLaunchConfig_t cfg = {};
+  ClusterLaunch(int ctas, std::size_t smem_bytes, cudaStream_t stream) {
+    attr[0].id = cudaLaunchAttributeClusterDimension;
+    attr[0].val.clusterDim.x = unsigned(ctas);
+    attr[0].val.clusterDim.y = 1;
+    attr[0].val.clusterDim.z = 1;
+    cfg.gridDim = dim3(unsigned(ctas));
+    cfg.blockDim = dim3(kClusterThreads);
+    cfg.dynamicSmemBytes = smem_bytes;
+    cfg.stream = stream;
+    cfg.attrs = attr;
+    cfg.numAttrs = 1;
+  }
+  ClusterLaunch(const ClusterLaunch&) = delete;  // cfg points into attr
+  ClusterLaunch& operator=(const ClusterLaunch&) = delete;
+};
 
 extern __shared__ __align__(16) unsigned char cluster_stage[];
 

@@ -66,13 +66,22 @@ __device__ void shapeMatchingGroup(const pbd::BlockView<T>& b, int c, bool valid
     if (lane == 0) ctx.rotation[centre] = q;
   }
   const Mat3<T> rot = pbd::quatToMatrix(q);
+  // Each lane keeps the goal of its first member from pass 1 for pass 2 (a member's goal depends only on its own
+  // position and the cluster frame, which pass 1 does not change); members beyond the first kGroup (clusters
+  // larger than the group) compute theirs again.
   Vec3<T> dmom;
   T mov_mass = T(0);
-  for (std::int32_t s = s0 + lane; s < s1; s += kGroup) pbd::shapeMatchMomentum(b, ctx, s, rot, x_cm, dmom, mov_mass);
+  pbd::GoalCorrection<T> first{};
+  for (std::int32_t s = s0 + lane; s < s1; s += kGroup) {
+    const pbd::GoalCorrection<T> g = pbd::shapeMatchGoal(b, ctx, s, rot, x_cm);
+    if (s == s0 + lane) first = g;
+    pbd::shapeMatchMomentumTerm(b, ctx, s, g, dmom, mov_mass);
+  }
   dmom = groupSum(dmom);
   mov_mass = groupSum(mov_mass);
   const Vec3<T> shift = pbd::shapeMatchShift(dmom, mov_mass);
-  for (std::int32_t s = s0 + lane; s < s1; s += kGroup) pbd::shapeMatchApply(b, ctx, s, rot, x_cm, shift);
+  for (std::int32_t s = s0 + lane; s < s1; s += kGroup)
+    pbd::shapeMatchApplyTerm(b, ctx, s, s == s0 + lane ? first : pbd::shapeMatchGoal(b, ctx, s, rot, x_cm), shift);
 }
 
 // Laplacian-coordinate constraint c: the neighbour sums by the group, the correction by pbd::laplacianFromSums.

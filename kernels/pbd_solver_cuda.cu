@@ -518,9 +518,12 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
       d.slot_corr.resize(s.slotCount());
       d.slot_corr.fillZero();
     }
+    // Host copies for the cluster frame's plan, kept only for models whose particle replica can fit a CTA's shared
+    // memory (the plan needs them; a large model, e.g. a tearing sheet re-set every tearing frame, skips the copy).
     cluster_meta_.clear();
-    for (const PbdConstraintBlock<T>& b : m.blocks)
-      cluster_meta_.push_back({b.offsets, b.particle_slots, b.solve, int(b.kind)});
+    if (clusterStageBytes<T>(n_, 0) <= std::size_t(sharedOptin()))
+      for (const PbdConstraintBlock<T>& b : m.blocks)
+        cluster_meta_.push_back({b.offsets, b.particle_slots, b.solve, int(b.kind)});
     cluster_planned_for_ = -1;  // planned at the first Jacobi frame (planCluster)
     int reduced_blocks = 0;
     for (const DeviceBlock<T>& d : blocks_)
@@ -918,6 +921,14 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     return d;
   }
 
+  // The device's per-block shared-memory limit (opt-in).
+  static int sharedOptin() {
+    int dev = 0, optin = 0;
+    INC_CUDA(cudaGetDevice(&dev));
+    INC_CUDA(cudaDeviceGetAttribute(&optin, cudaDevAttrMaxSharedMemoryPerBlockOptin, dev));
+    return optin;
+  }
+
   // The thread-block cluster frame (kernels/pbd_cluster_frame.cuh): how many CTAs, which constraints and slots
   // each projects, which particles each owns. Decided per model (host offsets at hand); usable when the device
   // launches clusters and every CTA's replica fits its shared memory. Attributes are set here, outside captures.
@@ -925,12 +936,16 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     if (cluster_planned_for_ == forced_ctas) return;
     cluster_planned_for_ = forced_ctas;
     cluster_ok_ = false;
-    if (n_ == 0 || cluster_meta_.size() > std::size_t(kMaxFusedBlocks) || forced_ctas > kMaxClusterCtas) return;
-    int dev = 0, major = 0, optin = 0;
+    if (n_ == 0 || cluster_meta_.empty() || cluster_meta_.size() > std::size_t(kMaxFusedBlocks) ||
+        forced_ctas > kMaxClusterCtas)
+      return;
+    int dev = 0, major = 0;
     INC_CUDA(cudaGetDevice(&dev));
     INC_CUDA(cudaDeviceGetAttribute(&major, cudaDevAttrComputeCapabilityMajor, dev));
-    INC_CUDA(cudaDeviceGetAttribute(&optin, cudaDevAttrMaxSharedMemoryPerBlockOptin, dev));
     if (major < 9) return;  // clusters and distributed shared memory: Hopper (sm_90) and newer
+    cudaFuncAttributes fa{};
+    INC_CUDA(cudaFuncGetAttributes(&fa, clusterFrameKernel<T>));
+    const int dyn_max = sharedOptin() - int(fa.sharedSizeBytes);  // static shared memory counts against the limit
     // Enough CTAs that every cluster constraint gets its lanes and every scalar constraint its thread in one
     // pass (fewer CTAs: cheaper barriers), capped at the largest cluster the hardware allows.
     const int groups_per_cta = kClusterThreads / pbdgroup::kGroup;
@@ -958,32 +973,18 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
           for (int r = 0; r < ctas; ++r) sp.max_share = std::max(sp.max_share, sp.s_split[bi][r + 1] - sp.s_split[bi][r]);
       }
       const std::size_t bytes = clusterStageBytes<T>(n_, sp.max_share);
-      // The kernel's static shared memory (the split table) comes out of the same per-block limit.
-      cudaFuncAttributes fa{};
-      INC_CUDA(cudaFuncGetAttributes(&fa, clusterFrameKernel<T>));
-      const int dyn_max = optin - int(fa.sharedSizeBytes);
       if (bytes > std::size_t(dyn_max)) break;  // fewer CTAs never shrink the replica
       INC_CUDA(cudaFuncSetAttribute(clusterFrameKernel<T>, cudaFuncAttributeMaxDynamicSharedMemorySize, dyn_max));
       INC_CUDA(cudaFuncSetAttribute(clusterFrameKernel<T>, cudaFuncAttributeNonPortableClusterSizeAllowed, 1));
-      cudaLaunchConfig_t cfg = {};
-      cudaLaunchAttribute attr[1];
-      attr[0].id = cudaLaunchAttributeClusterDimension;
-      attr[0].val.clusterDim.x = unsigned(ctas);
-      attr[0].val.clusterDim.y = 1;
-      attr[0].val.clusterDim.z = 1;
-      cfg.gridDim = dim3(unsigned(ctas));
-      cfg.blockDim = dim3(kClusterThreads);
-      cfg.dynamicSmemBytes = bytes;
-      cfg.attrs = attr;
-      cfg.numAttrs = 1;
+      ClusterLaunch launch(ctas, bytes, nullptr);
       int clusters = 0;
-      if (cudaOccupancyMaxActiveClusters(&clusters, clusterFrameKernel<T>, &cfg) != cudaSuccess) {
+      if (cudaOccupancyMaxActiveClusters(&clusters, clusterFrameKernel<T>, &launch.cfg) != cudaSuccess) {
         (void)cudaGetLastError();  // not sticky: this size cannot be launched
-        continue;
+        clusters = 0;
       }
-      if (clusters < 1 || forced_ctas > 0) {
-        if (clusters < 1 && forced_ctas == 0) continue;
-        if (clusters < 1) return;  // the forced size cannot run here: per-launch path
+      if (clusters < 1) {
+        if (forced_ctas > 0) return;  // the forced size cannot run here: per-launch path
+        continue;
       }
       // Each particle-slot entry's home: the CTA that projects its constraint and its place in that CTA's
       // slot buffer.
@@ -1037,9 +1038,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
   // Shared-memory staging of the fused kernel: used when the model fits this device's per-block opt-in limit
   // (float: up to ~6,000 particles on an H100); the attribute is set here, outside any graph capture.
   void updateStaging() {
-    int dev = 0, optin = 0;
-    INC_CUDA(cudaGetDevice(&dev));
-    INC_CUDA(cudaDeviceGetAttribute(&optin, cudaDevAttrMaxSharedMemoryPerBlockOptin, dev));
+    const int optin = sharedOptin();
     stage_bytes_ = fusedStageBytes<T>(n_);
     staged_ = n_ > 0 && stage_bytes_ <= std::size_t(optin);
     // The attribute belongs to the kernel, not to this backend: set it to the device limit so that a second
@@ -1161,19 +1160,8 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
       f.nt = n_tools_;
       f.staged = staged_;
       if (cluster) {
-        cudaLaunchConfig_t cfg = {};
-        cudaLaunchAttribute attr[1];
-        attr[0].id = cudaLaunchAttributeClusterDimension;
-        attr[0].val.clusterDim.x = unsigned(cluster_split_.ctas);
-        attr[0].val.clusterDim.y = 1;
-        attr[0].val.clusterDim.z = 1;
-        cfg.gridDim = dim3(unsigned(cluster_split_.ctas));
-        cfg.blockDim = dim3(kClusterThreads);
-        cfg.dynamicSmemBytes = cluster_bytes_;
-        cfg.stream = stream_;
-        cfg.attrs = attr;
-        cfg.numAttrs = 1;
-        INC_CUDA(cudaLaunchKernelEx(&cfg, clusterFrameKernel<T>, f, cluster_split_));
+        ClusterLaunch launch(cluster_split_.ctas, cluster_bytes_, stream_);
+        INC_CUDA(cudaLaunchKernelEx(&launch.cfg, clusterFrameKernel<T>, f, cluster_split_));
         INC_CUDA_LAUNCH("pbd cluster frame");
       } else {
         fusedFrameKernel<T><<<1, kFusedThreads, staged_ ? stage_bytes_ : 0, stream_>>>(f);
