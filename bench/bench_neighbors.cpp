@@ -245,12 +245,15 @@ Row runCuda(std::size_t n, int repeats, bool morton, double cell_factor, double 
   row.query_ms = median(tq);
   row.total_ms = median(tt);
   row.hashed = s.hashed();
-  const double used = double(s.bucketTableSize());
+  // The GPU build sizes its cell table and sort key width by the bucket count (not the occupied cells: it does
+  // not wait for the grid parameters), so the model counts that table.
+  const double used = double(neighborBucketCount(n)) + 1.0;
   const auto& p = s.params();
   const int max_dim = std::max(p.dims[0], std::max(p.dims[1], p.dims[2]));
   const int morton_bits = std::max(1, std::min(30, 3 * (keyBits(std::uint64_t(max_dim)) - p.morton_shift)));
-  const TrafficModel m = trafficModel(sizeof(Vec3<T>), row.neighbours, used / double(n), keyBits(std::uint64_t(used)),
-                                      morton_bits, morton, true, g_storage);
+  const TrafficModel m = trafficModel(sizeof(Vec3<T>), row.neighbours, used / double(n),
+                                      keyBits(std::uint64_t(neighborBucketCount(n))), morton_bits, morton, true,
+                                      g_storage);
   row.bytes = m.build + m.query;
   row.gbs = row.bytes * double(n) / (row.total_ms * 1e-3) / 1e9;
   row.peak_fraction = peak_gbs > 0 ? row.gbs / peak_gbs : 0.0;

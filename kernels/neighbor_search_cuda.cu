@@ -135,10 +135,12 @@ __global__ void boxPartialKernel(const Vec3<T>* pts, long long n, Vec3<T>* part_
   }
 }
 
-// One block: merges the partials and makes the grid parameters (the host never needs the box itself).
+// One block: merges the partials and makes the grid parameters (the host never needs the box itself), with
+// the first non-finite point's value for the host's error message.
 template <typename T>
 __global__ void gridParamsKernel(const Vec3<T>* part_lo, const Vec3<T>* part_hi, const long long* part_bad, int parts,
-                                 long long n, T cell_size, std::uint32_t bucket_count, NeighborGridParams<T>* out) {
+                                 long long n, T cell_size, std::uint32_t bucket_count, const Vec3<T>* pts,
+                                 GridParamsReadback<T>* out) {
   BoxAcc<T> a = boxEmpty<T>(n);
   for (int b = threadIdx.x; b < parts; b += blockDim.x) {
     BoxAcc<T> p;
@@ -154,7 +156,8 @@ __global__ void gridParamsKernel(const Vec3<T>* part_lo, const Vec3<T>* part_hi,
     const bool any_finite = r.lo[0] <= r.hi[0];
     const Vec3<T> lo = any_finite ? Vec3<T>(r.lo[0], r.lo[1], r.lo[2]) : Vec3<T>();
     const Vec3<T> hi = any_finite ? Vec3<T>(r.hi[0], r.hi[1], r.hi[2]) : Vec3<T>();
-    *out = makeNeighborGridParams(lo, hi, cell_size, bucket_count, std::int64_t(r.bad), any_finite);
+    out->p = makeNeighborGridParams(lo, hi, cell_size, bucket_count, std::int64_t(r.bad), any_finite);
+    out->bad = r.bad < n ? pts[r.bad] : Vec3<T>();
   }
 }
 
@@ -166,13 +169,17 @@ __device__ void cellOf(const NeighborGridParams<T>& p, const Vec3<T>& x, std::in
 }
 
 // keys[i] = bucket of pts[i] (counted into the histogram) or its Morton key; iota[i] = i (the sort's values).
+// The parameters come from device memory (the host has not read them). A non-finite point (the build is
+// rejected when the host reads the parameters) gets cell (0, 0, 0): every key stays inside the table.
 template <typename T>
-__global__ void cellKeysKernel(NeighborGridParams<T> p, const Vec3<T>* pts, int n, bool morton, std::uint32_t* keys,
-                               std::int32_t* iota, std::int32_t* histogram) {
+__global__ void cellKeysKernel(const GridParamsReadback<T>* params, const Vec3<T>* pts, int n, bool morton,
+                               std::uint32_t* keys, std::int32_t* iota, std::int32_t* histogram) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i >= n) return;
-  std::int32_t c[3];
-  cellOf(p, pts[i], c);
+  const NeighborGridParams<T> p = params->p;
+  const Vec3<T> x = pts[i];
+  std::int32_t c[3] = {0, 0, 0};
+  if (neighborPointFinite(x)) cellOf(p, x, c);
   if (morton) {
     keys[i] = neighborMortonKey(p, c[0], c[1], c[2]);
   } else {
@@ -630,6 +637,27 @@ template <typename T>
 void GridNeighborSearch<T>::build(const std::vector<Vec3<T>>& points, T cell_size, bool morton_order) {
   upload_.upload(points);
   build(upload_.data(), points.size(), cell_size, morton_order);
+  ensureParams();
+}
+
+template <typename T>
+void GridNeighborSearch<T>::ensureParams() const {
+  if (pending_n_ == 0) return;
+  INC_CUDA(cudaEventSynchronize(static_cast<cudaEvent_t>(params_event_.get())));
+  const GridParamsReadback<T> rb = *static_cast<const GridParamsReadback<T>*>(pinned_params_.get());
+  const std::size_t n = pending_n_;
+  pending_n_ = 0;
+  params_ = rb.p;
+  if (params_.first_bad < std::int64_t(n)) {  // the grid is empty from here on: nothing may use it
+    n_ = 0;
+    used_buckets_ = 0;
+    const std::string i = std::to_string(params_.first_bad);
+    throw InputError("", "points[" + i + "]", "position " + describe(rb.bad) + " is not finite");
+  }
+  std::uint64_t used = std::uint64_t(params_.bucket_mask) + 1;
+  if (params_.dense) used = std::uint64_t(params_.dims[0]) * std::uint64_t(params_.dims[1]) * std::uint64_t(params_.dims[2]);
+  used_buckets_ = std::size_t(used);
+  n_ = n;
 }
 
 template <typename T>
@@ -641,104 +669,171 @@ void GridNeighborSearch<T>::build(const Vec3<T>* d_points, std::size_t n, T cell
   cell_size_ = cell_size;
   morton_ = morton_order;
   n_ = 0;
+  pending_n_ = 0;
   const std::uint32_t buckets = neighborBucketCount(n);
   if (n == 0) {
     params_ = makeNeighborGridParams(Vec3<T>(), Vec3<T>(), cell_size, buckets, 0, false);
     used_buckets_ = 0;
     return;
   }
-  const int ni = int(n);
-  mark("build:start");
-
-  // 1. Bounding box and first non-finite point, reduced on the device into the grid parameters.
+  // Everything a build touches is sized from n alone (below), so the whole build is enqueued without reading
+  // anything back. Sized without the grid parameters: a dense grid has at most `buckets` cells
+  // (makeNeighborGridParams), a hashed one exactly `buckets` buckets, so a cell table and a key width for
+  // `buckets` hold either. Buckets past a dense grid's cells stay empty (their start is n); no query visits them.
   const int parts = int(std::min<std::size_t>(kReduceBlocks, blocksFor(n)));
   partial_lo_.resize(std::size_t(parts));
   partial_hi_.resize(std::size_t(parts));
   partial_bad_.resize(std::size_t(parts));
   d_params_.resize(1);
-  boxPartialKernel<T><<<parts, kThreads>>>(d_points, (long long)n, partial_lo_.data(), partial_hi_.data(),
-                                           reinterpret_cast<long long*>(partial_bad_.data()));
-  INC_CUDA_LAUNCH("boxPartialKernel");
-  gridParamsKernel<T><<<1, kThreads>>>(partial_lo_.data(), partial_hi_.data(),
-                                       reinterpret_cast<const long long*>(partial_bad_.data()), parts, (long long)n,
-                                       cell_size, buckets, d_params_.data());
-  INC_CUDA_LAUNCH("gridParamsKernel");
-  // Host sync 1 of 1 in a build: the parameters decide the cell-table size and the sort's key width, and
-  // a non-finite point must be reported before any list is built from it.
-  INC_CUDA(cudaMemcpy(&params_, d_params_.data(), sizeof(params_), cudaMemcpyDeviceToHost));
-  if (params_.first_bad < std::int64_t(n)) {
-    Vec3<T> bad;
-    INC_CUDA(cudaMemcpy(&bad, d_points + params_.first_bad, sizeof(bad), cudaMemcpyDeviceToHost));
-    const std::string i = std::to_string(params_.first_bad);
-    throw InputError("", "points[" + i + "]", "position " + describe(bad) + " is not finite");
-  }
-  std::uint64_t used = buckets;
-  if (params_.dense) used = std::uint64_t(params_.dims[0]) * std::uint64_t(params_.dims[1]) * std::uint64_t(params_.dims[2]);
-  used_buckets_ = std::size_t(used);
-  mark("build:box+params+sync");
-  const int bucket_bits = keyBits(used);
-
   sorted_.resize(n);
-  typename PackedPoint<T>::type* packed = nullptr;
-  if constexpr (std::is_same_v<T, float>) {
-    packed_.resize(n);
-    packed = reinterpret_cast<float4*>(packed_.data());
-  }
+  if constexpr (std::is_same_v<T, float>) packed_.resize(n);
   perm_.resize(n);
   inv_perm_.resize(n);
   keys_.resize(n);
   keys_sorted_.resize(n);
   iota_.resize(n);
-  cell_count_.resize(used_buckets_ + 1);
-  bucket_start_.resize(used_buckets_ + 1);
-  INC_CUDA(cudaMemsetAsync(cell_count_.data(), 0, cell_count_.bytes()));
+  if (morton_order) entries_.resize(n);
+  used_buckets_ = buckets;
+  cell_count_.resize(std::size_t(buckets) + 1);
+  bucket_start_.resize(std::size_t(buckets) + 1);
+  if (!pinned_params_) {
+    void* h = nullptr;
+    INC_CUDA(cudaMallocHost(&h, sizeof(GridParamsReadback<T>)));
+    pinned_params_ = std::shared_ptr<void>(h, [](void* q) { cudaFreeHost(q); });
+    cudaEvent_t e = nullptr;
+    INC_CUDA(cudaEventCreateWithFlags(&e, cudaEventDisableTiming));
+    params_event_ = std::shared_ptr<void>(e, [](void* q) { cudaEventDestroy(static_cast<cudaEvent_t>(q)); });
+    cudaStream_t st = nullptr;
+    // A blocking stream: ordered after the caller's work on the legacy default stream (the points' upload)
+    // and before later work there (the queries), as if everything ran on the default stream.
+    INC_CUDA(cudaStreamCreate(&st));
+    stream_ = std::shared_ptr<void>(st, [](void* q) { cudaStreamDestroy(static_cast<cudaStream_t>(q)); });
+  }
+  // CUB's scratch for the largest sort and the scan, allocated before anything is enqueued (no allocation may
+  // happen inside a graph capture).
+  {
+    std::size_t sort_bytes = 0, scan_bytes = 0;
+    INC_CUDA(cub::DeviceRadixSort::SortPairs(nullptr, sort_bytes, keys_.data(), keys_sorted_.data(), iota_.data(),
+                                             perm_.data(), int(n), 0, 30));
+    INC_CUDA(cub::DeviceScan::ExclusiveScan(nullptr, scan_bytes, cell_count_.data(), bucket_start_.data(),
+                                            ::cuda::std::plus<std::int32_t>{}, std::int32_t(0), std::size_t(buckets) + 1));
+    scratch(std::max(sort_bytes, scan_bytes));
+  }
+  cudaStream_t st = static_cast<cudaStream_t>(stream_.get());
+  if (morton_order || profiling_) {
+    // Morton order waits for the parameters inside the build (its key width depends on the grid's extent);
+    // profiling records events between the stages: both run the stages directly.
+    enqueueBuild(d_points, n, buckets, st);
+  } else {
+    // The same stages as one CUDA graph: launched in one call instead of a dozen launches and CUB calls,
+    // re-captured only when the inputs or a buffer change.
+    const BuildGraphKey key{d_points, n, cell_size, sorted_.data(), packed_.data(), perm_.data(), inv_perm_.data(),
+                            keys_.data(), keys_sorted_.data(), iota_.data(), cell_count_.data(), bucket_start_.data(),
+                            temp_.data(), d_params_.data(), partial_lo_.data()};
+    if (!build_graph_ || !(key == build_key_)) {
+      build_graph_.reset();
+      INC_CUDA(cudaStreamBeginCapture(st, cudaStreamCaptureModeThreadLocal));
+      cudaGraph_t graph = nullptr;
+      try {
+        enqueueBuild(d_points, n, buckets, st);
+      } catch (...) {
+        if (cudaStreamEndCapture(st, &graph) == cudaSuccess && graph) cudaGraphDestroy(graph);
+        throw;
+      }
+      INC_CUDA(cudaStreamEndCapture(st, &graph));
+      cudaGraphExec_t exec = nullptr;
+      const cudaError_t inst = cudaGraphInstantiate(&exec, graph, 0);
+      cudaGraphDestroy(graph);
+      INC_CUDA(inst);
+      build_graph_ = std::shared_ptr<void>(exec, [](void* q) { cudaGraphExecDestroy(static_cast<cudaGraphExec_t>(q)); });
+      build_key_ = key;
+    }
+    INC_CUDA(cudaGraphLaunch(static_cast<cudaGraphExec_t>(build_graph_.get()), st));
+  }
+  pending_n_ = n;
+}
+
+// The stages of a build on `st` (recorded into the build graph, or run directly): no host synchronisation
+// except Morton order's wait for the parameters.
+template <typename T>
+void GridNeighborSearch<T>::enqueueBuild(const Vec3<T>* d_points, std::size_t n, std::uint32_t buckets,
+                                         cudaStream_t st) {
+  const int ni = int(n);
+  const std::size_t table = std::size_t(buckets) + 1;
+  mark("build:start");
+  // 1. Bounding box and first non-finite point, reduced on the device into the grid parameters, which go
+  // back to the host asynchronously (page-locked buffer + event, an event node in the graph); the host reads
+  // them in ensureParams when it first needs them.
+  const int parts = int(partial_lo_.size());
+  boxPartialKernel<T><<<parts, kThreads, 0, st>>>(d_points, (long long)n, partial_lo_.data(), partial_hi_.data(),
+                                                  reinterpret_cast<long long*>(partial_bad_.data()));
+  INC_CUDA_LAUNCH("boxPartialKernel");
+  gridParamsKernel<T><<<1, kThreads, 0, st>>>(partial_lo_.data(), partial_hi_.data(),
+                                              reinterpret_cast<const long long*>(partial_bad_.data()), parts,
+                                              (long long)n, cell_size_, buckets, d_points, d_params_.data());
+  INC_CUDA_LAUNCH("gridParamsKernel");
+  INC_CUDA(cudaMemcpyAsync(pinned_params_.get(), d_params_.data(), sizeof(GridParamsReadback<T>),
+                           cudaMemcpyDeviceToHost, st));
+  // Inside a capture the record becomes an event node (recorded at every replay); outside, a plain record.
+  cudaStreamCaptureStatus capturing = cudaStreamCaptureStatusNone;
+  INC_CUDA(cudaStreamIsCapturing(st, &capturing));
+  if (capturing == cudaStreamCaptureStatusActive)
+    INC_CUDA(cudaEventRecordWithFlags(static_cast<cudaEvent_t>(params_event_.get()), st, cudaEventRecordExternal));
+  else
+    INC_CUDA(cudaEventRecord(static_cast<cudaEvent_t>(params_event_.get()), st));
+  mark("build:box+params");
+  const int bucket_bits = keyBits(buckets);
+  typename PackedPoint<T>::type* packed = nullptr;
+  if constexpr (std::is_same_v<T, float>) packed = reinterpret_cast<float4*>(packed_.data());
+  INC_CUDA(cudaMemsetAsync(cell_count_.data(), 0, table * sizeof(std::int32_t), st));
 
   auto radixSort = [&](const std::uint32_t* keys_in, std::uint32_t* keys_out, const std::int32_t* vals_in,
                        std::int32_t* vals_out, int bits) {
-    std::size_t bytes = 0;
-    INC_CUDA(cub::DeviceRadixSort::SortPairs(nullptr, bytes, keys_in, keys_out, vals_in, vals_out, ni, 0, bits));
-    void* tmp = scratch(bytes);
-    INC_CUDA(cub::DeviceRadixSort::SortPairs(tmp, bytes, keys_in, keys_out, vals_in, vals_out, ni, 0, bits));
+    std::size_t bytes = temp_.size();
+    INC_CUDA(cub::DeviceRadixSort::SortPairs(temp_.data(), bytes, keys_in, keys_out, vals_in, vals_out, ni, 0, bits, st));
   };
 
   // 2. Storage order. CUB's radix sort is stable, like the CPU's counting sort, so slots agree exactly.
   const Vec3<T>* keyed = d_points;
-  if (morton_order) {
-    cellKeysKernel<T><<<blocksFor(n), kThreads>>>(params_, d_points, ni, true, keys_.data(), iota_.data(), nullptr);
+  if (morton_) {
+    // The Z-order key width depends on the grid's extent: the one host wait of a Morton build (and the
+    // non-finite check, so a Morton build reports a bad point here).
+    pending_n_ = n;
+    ensureParams();
+    n_ = 0;  // the build is not finished: the grid stays unusable until its end
+    cellKeysKernel<T><<<blocksFor(n), kThreads, 0, st>>>(d_params_.data(), d_points, ni, true, keys_.data(),
+                                                         iota_.data(), nullptr);
     INC_CUDA_LAUNCH("cellKeysKernel(morton)");
     const int max_dim = std::max(params_.dims[0], std::max(params_.dims[1], params_.dims[2]));
     const int axis_bits = keyBits(std::uint64_t(max_dim)) - params_.morton_shift;
     radixSort(keys_.data(), keys_sorted_.data(), iota_.data(), perm_.data(), std::max(1, std::min(30, 3 * axis_bits)));
-    gatherKernel<T><<<blocksFor(n), kThreads>>>(d_points, perm_.data(), ni, sorted_.data(), packed, inv_perm_.data());
+    gatherKernel<T><<<blocksFor(n), kThreads, 0, st>>>(d_points, perm_.data(), ni, sorted_.data(), packed,
+                                                       inv_perm_.data());
     INC_CUDA_LAUNCH("gatherKernel(morton)");
     keyed = sorted_.data();
     mark("build:morton keys+sort+gather");
   }
-  cellKeysKernel<T><<<blocksFor(n), kThreads>>>(params_, keyed, ni, false, keys_.data(), iota_.data(),
-                                                cell_count_.data());
+  cellKeysKernel<T><<<blocksFor(n), kThreads, 0, st>>>(d_params_.data(), keyed, ni, false, keys_.data(),
+                                                       iota_.data(), cell_count_.data());
   INC_CUDA_LAUNCH("cellKeysKernel(bucket)");
   mark("build:bucket keys+histogram");
-  if (morton_order) {
+  if (morton_) {
     // entries: storage slots in bucket order (the lookup table into the Z-ordered points)
-    entries_.resize(n);
     radixSort(keys_.data(), keys_sorted_.data(), iota_.data(), entries_.data(), bucket_bits);
   } else {
     radixSort(keys_.data(), keys_sorted_.data(), iota_.data(), perm_.data(), bucket_bits);
-    gatherKernel<T><<<blocksFor(n), kThreads>>>(d_points, perm_.data(), ni, sorted_.data(), packed, inv_perm_.data());
+    gatherKernel<T><<<blocksFor(n), kThreads, 0, st>>>(d_points, perm_.data(), ni, sorted_.data(), packed,
+                                                       inv_perm_.data());
     INC_CUDA_LAUNCH("gatherKernel");
   }
   mark("build:sort+gather");
 
   // 3. Cell table: start[b] = number of points in buckets < b (exclusive scan of the histogram; its last
-  // entry, zeroed by the memset, makes start[used] = n).
-  std::size_t bytes = 0;
-  INC_CUDA(cub::DeviceScan::ExclusiveScan(nullptr, bytes, cell_count_.data(), bucket_start_.data(),
-                                          ::cuda::std::plus<std::int32_t>{}, std::int32_t(0), used_buckets_ + 1));
-  void* tmp = scratch(bytes);
-  INC_CUDA(cub::DeviceScan::ExclusiveScan(tmp, bytes, cell_count_.data(), bucket_start_.data(),
-                                          ::cuda::std::plus<std::int32_t>{}, std::int32_t(0), used_buckets_ + 1));
+  // entry, zeroed by the memset, makes start[buckets] = n).
+  std::size_t bytes = temp_.size();
+  INC_CUDA(cub::DeviceScan::ExclusiveScan(temp_.data(), bytes, cell_count_.data(), bucket_start_.data(),
+                                          ::cuda::std::plus<std::int32_t>{}, std::int32_t(0), table, st));
   mark("build:cell table scan");
-  n_ = n;
 }
 
 template <typename T>
@@ -750,12 +845,14 @@ DeviceNeighborLists GridNeighborSearch<T>::querySelf(T radius) const {
 
 template <typename T>
 void GridNeighborSearch<T>::querySelf(T radius, DeviceNeighborLists& out) const {
+  ensureParams();  // n_ is known (and the points checked) from here on
   run(nullptr, n_, radius, nullptr, 1, true, out);
 }
 
 template <typename T>
 void GridNeighborSearch<T>::querySelf(const T* d_radii, std::size_t radii_count, DeviceNeighborLists& out) const {
   if (!d_radii) throw InputError("", "radii", "null device pointer");
+  ensureParams();
   run(nullptr, n_, T(0), d_radii, radii_count, true, out);
 }
 
@@ -782,6 +879,7 @@ template <typename T>
 void GridNeighborSearch<T>::querySelfStorage(T radius, DeviceNeighborLists& out) const {
   if (!neighborRadiusValid(radius))
     throw InputError("", "radius", "must be finite and >= 0, got " + std::to_string(double(radius)));
+  ensureParams();
   const std::size_t nq = n_;
   out.offsets.resize(nq + 1);
   if (nq == 0) {
@@ -834,6 +932,7 @@ void GridNeighborSearch<T>::querySelfStorage(T radius, DeviceNeighborLists& out)
 template <typename T>
 void GridNeighborSearch<T>::run(const Vec3<T>* d_queries, std::size_t nq, T radius, const T* d_radii,
                                 std::size_t radii_count, bool self, DeviceNeighborLists& out) const {
+  ensureParams();  // (a no-op after querySelf's own call)
   if (radii_count != 1 && radii_count != nq)
     throw InputError("", "radii", "expected 1 radius or one per query (" + std::to_string(nq) + "), got " +
                                       std::to_string(radii_count));

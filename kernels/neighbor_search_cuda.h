@@ -30,11 +30,22 @@ struct DeviceNeighborLists {
   NeighborLists download() const;
 };
 
+// The grid parameters as the device writes them for the host: the parameters and the first non-finite point.
+template <typename T>
+struct GridParamsReadback {
+  NeighborGridParams<T> p;
+  Vec3<T> bad;  // points[p.first_bad] when p.first_bad < n
+};
+
 // Build once per point configuration, query many times. Everything runs on the default stream.
 // Host synchronisations (each one device-to-host copy of a few bytes, documented in docs/neighbor-search.md):
-//  - build: one, reading back the grid parameters (bounding box reduced on the device) together with the
-//    index of the first non-finite point: the host needs the number of occupied cells to size the cell
-//    table and the radix-sort key width, and must throw InputError before anything else uses the grid.
+//  - build(d_points): none (bucket order). The grid parameters (bounding box reduced on the device) are
+//    copied back asynchronously; the cell table and the radix-sort key width are sized for the largest grid
+//    the point count allows, so nothing waits for them. The host reads them when it first needs them: the
+//    next query (which waits anyway for its total), params(), hashed(), bucketTableSize() or check(), and
+//    that is where a non-finite point is reported (InputError naming points[i]). Morton order waits for
+//    them inside build (the Z-order key width depends on the grid's extent) and reports there.
+//  - build(host vector): uploads (synchronous) and checks before returning, as before.
 //  - each query: one, reading back the total neighbour count (to allocate the index array exactly, so no
 //    list is ever truncated) together with the first invalid query point / radius found on the device.
 // Not thread-safe: queries share scratch buffers of the object.
@@ -46,10 +57,14 @@ class GridNeighborSearch {
   // d_points: n positions in device memory (read during build only; the grid keeps its own sorted copy).
   // cell_size: edge of a grid cell, usually the (largest) query radius; any radius works with any cell size.
   // morton_order: store the points in Z order of their cells (sortedToOriginal() maps back).
-  // Throws InputError naming points[i] for the first non-finite point, or for a bad cell size.
+  // Throws InputError for a bad cell size or count at once, and names points[i], the first non-finite point,
+  // at the next call that reads the grid on the host (see above; at once with morton_order).
   void build(const Vec3<T>* d_points, std::size_t n, T cell_size, bool morton_order = false);
-  // Convenience: uploads host points, then builds.
+  // Convenience: uploads host points, then builds and checks (throws here for a non-finite point).
   void build(const std::vector<Vec3<T>>& points, T cell_size, bool morton_order = false);
+  // Waits for the last build's grid parameters; throws InputError naming the first non-finite point (the
+  // grid is then empty). Queries call it themselves.
+  void check() const { ensureParams(); }
 
   // Every built point against every other point; one radius, or d_radii[count] on the device (count 1 or n).
   DeviceNeighborLists querySelf(T radius) const;
@@ -68,18 +83,27 @@ class GridNeighborSearch {
   void query(const Vec3<T>* d_queries, std::size_t nq, const T* d_radii, std::size_t radii_count,
              DeviceNeighborLists& out) const;
 
-  std::size_t size() const { return n_; }
+  std::size_t size() const { return n_ + pending_n_; }
   T cellSize() const { return cell_size_; }
   bool mortonOrder() const { return morton_; }
-  bool hashed() const { return n_ > 0 && params_.dense == 0; }
-  // Host copy of the grid parameters (read back during build).
-  const NeighborGridParams<T>& params() const { return params_; }
+  bool hashed() const {
+    ensureParams();
+    return n_ > 0 && params_.dense == 0;
+  }
+  // Host copy of the grid parameters (waits for the build's read-back).
+  const NeighborGridParams<T>& params() const {
+    ensureParams();
+    return params_;
+  }
   // Device arrays of size(): storage slot -> original index, its inverse, and the points in storage order.
   const std::int32_t* sortedToOriginal() const { return perm_.data(); }
   const std::int32_t* originalToSorted() const { return inv_perm_.data(); }
   const Vec3<T>* sortedPoints() const { return sorted_.data(); }
   // Cell-table entries actually used (occupied-cell box for dense grids, bucket count for hashed ones).
-  std::size_t bucketTableSize() const { return used_buckets_; }
+  std::size_t bucketTableSize() const {
+    ensureParams();
+    return used_buckets_;
+  }
 
   // Per-stage device timing for benchmarks (CUDA events between the stages of build and query). Off by
   // default: nothing is recorded and no synchronisation is added. takeProfile() waits for the last event and
@@ -96,14 +120,40 @@ class GridNeighborSearch {
            bool self, DeviceNeighborLists& out) const;
   void* scratch(std::size_t bytes) const;
   void mark(const char* stage) const;  // records an event named after the stage that ends here (profiling only)
+  void ensureParams() const;  // host copy of the parameters from the pinned read-back; the non-finite check
+  void enqueueBuild(const Vec3<T>* d_points, std::size_t n, std::uint32_t buckets, struct CUstream_st* stream);
 
-  std::size_t n_ = 0;
+  // What a captured build graph depends on: its inputs and every buffer it touches.
+  struct BuildGraphKey {
+    const void* ptrs[14] = {};
+    std::size_t n = 0;
+    T cell = T(0);
+    BuildGraphKey() = default;
+    BuildGraphKey(const void* pts, std::size_t count, T cell_size, const void* a, const void* b, const void* c,
+                  const void* d, const void* e, const void* f, const void* g, const void* h, const void* i,
+                  const void* j, const void* k, const void* l)
+        : ptrs{pts, a, b, c, d, e, f, g, h, i, j, k, l, nullptr}, n(count), cell(cell_size) {}
+    bool operator==(const BuildGraphKey& o) const {
+      for (int q = 0; q < 14; ++q)
+        if (ptrs[q] != o.ptrs[q]) return false;
+      return n == o.n && cell == o.cell;
+    }
+  };
+
+  // A build whose parameters the host has not read yet holds its point count in pending_n_ (n_ is 0 until
+  // ensureParams has checked the points), so size() is right either way.
+  mutable std::size_t n_ = 0, pending_n_ = 0;
   T cell_size_ = T(0);
   bool morton_ = false;
-  std::size_t used_buckets_ = 0;
-  NeighborGridParams<T> params_{};
+  mutable std::size_t used_buckets_ = 0;
+  mutable NeighborGridParams<T> params_{};
   DeviceBuffer<Vec3<T>> upload_;                // host-vector build only
-  DeviceBuffer<NeighborGridParams<T>> d_params_;
+  DeviceBuffer<GridParamsReadback<T>> d_params_;
+  std::shared_ptr<void> pinned_params_;         // GridParamsReadback<T> in page-locked host memory
+  std::shared_ptr<void> params_event_;          // cudaEvent_t: the read-back has landed
+  std::shared_ptr<void> stream_;                // cudaStream_t of the builds (blocking: ordered with stream 0)
+  std::shared_ptr<void> build_graph_;           // cudaGraphExec_t of the last bucket-order build
+  BuildGraphKey build_key_;
   DeviceBuffer<Vec3<T>> sorted_;                // points in storage order
   DeviceBuffer<Packed4<T>> packed_;             // float only: the same points as 16-byte records (x, y, z, 0)
   DeviceBuffer<std::int32_t> perm_, inv_perm_;  // slot -> original, original -> slot

@@ -343,6 +343,37 @@ TYPED_TEST(NeighborSearchGpu, NonFiniteInputNamesTheEntry) {
   expectSameLists(s.querySelf(T(0.05)).download(), cpu::GridNeighborSearch<T>(pts, T(0.1)).querySelf(T(0.05)),
                   "after rejected builds");
 
+  // A build from device memory does not wait for the device: the bad point is named by the first call that
+  // reads the grid on the host (here each kind of query and check()), and the grid is empty afterwards.
+  auto bad_pts = pts;
+  bad_pts[1234].z = -std::numeric_limits<T>::infinity();
+  cuda::DeviceBuffer<Vec3<T>> d_bad;
+  d_bad.upload(bad_pts);
+  for (int how = 0; how < 3; ++how) {
+    cuda::GridNeighborSearch<T> g;
+    g.build(d_bad.data(), bad_pts.size(), T(0.1));
+    EXPECT_EQ(g.size(), bad_pts.size());
+    cuda::DeviceNeighborLists lists;
+    try {
+      if (how == 0) g.querySelf(T(0.05), lists);
+      if (how == 1) g.querySelfStorage(T(0.05), lists);
+      if (how == 2) g.check();
+      FAIL() << "infinite point accepted by a device build (" << how << ")";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.key(), "points[1234]");
+    }
+    EXPECT_EQ(g.size(), 0u);
+    g.querySelfStorage(T(0.05), lists);  // an empty grid: empty lists, no error
+    EXPECT_EQ(lists.queryCount(), 0u);
+  }
+  cuda::GridNeighborSearch<T> m;
+  try {
+    m.build(d_bad.data(), bad_pts.size(), T(0.1), true);  // Morton order checks inside build
+    FAIL() << "infinite point accepted by a Morton build";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.key(), "points[1234]");
+  }
+
   std::vector<Vec3<T>> q(4);
   q[2].x = std::numeric_limits<T>::infinity();
   cuda::DeviceBuffer<Vec3<T>> d_q;
