@@ -420,8 +420,8 @@ INC_FORCE_INLINE std::int64_t denseQuery(const QueryJob<T>& job, const Vec3<T>& 
   std::int32_t lo[3], hi[3];
   std::uint64_t cells = 1;
   for (int a = 0; a < 3; ++a) {
-    lo[a] = neighborCellCoord(x[a] - reach, p.origin[a], p.inv_cell);
-    const std::int32_t h = neighborCellCoord(x[a] + reach, p.origin[a], p.inv_cell);
+    lo[a] = neighborCellCoord(x[a] - reach, p.origin[a], neighborInvCell(p, a));
+    const std::int32_t h = neighborCellCoord(x[a] + reach, p.origin[a], neighborInvCell(p, a));
     hi[a] = h < p.dims[a] - 1 ? h : p.dims[a] - 1;
     if (lo[a] > hi[a]) return 0;
     cells *= std::uint64_t(hi[a] - lo[a] + 1);
@@ -542,7 +542,7 @@ void GridNeighborSearch<T>::build(const std::vector<Vec3<T>>& points, T cell_siz
   const std::uint32_t table =
       p.dense ? std::uint32_t(p.dims[0]) * std::uint32_t(p.dims[1]) * std::uint32_t(p.dims[2]) : buckets;
   auto cellOf = [&p](const Vec3<T>& x, std::int32_t c[3]) {
-    for (int a = 0; a < 3; ++a) c[a] = neighborCellCoord(x[a], p.origin[a], p.inv_cell);
+    for (int a = 0; a < 3; ++a) c[a] = neighborCellCoord(x[a], p.origin[a], neighborInvCell(p, a));
   };
 
   keys_.resize(n);

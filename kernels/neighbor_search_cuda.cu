@@ -165,15 +165,15 @@ __global__ void gridParamsKernel(const Vec3<T>* part_lo, const Vec3<T>* part_hi,
 
 template <typename T>
 __device__ void cellOf(const NeighborGridParams<T>& p, const Vec3<T>& x, std::int32_t c[3]) {
-  for (int a = 0; a < 3; ++a) c[a] = neighborCellCoord(x[a], p.origin[a], p.inv_cell);
+  for (int a = 0; a < 3; ++a) c[a] = neighborCellCoord(x[a], p.origin[a], neighborInvCell(p, a));
 }
 
-// keys[i] = bucket of pts[i] (counted into the histogram) or its Morton key; iota[i] = i (the sort's values).
+// keys[i] = bucket of pts[i] (counted into the histogram) or its Morton key.
 // The parameters come from device memory (the host has not read them). A non-finite point (the build is
 // rejected when the host reads the parameters) gets cell (0, 0, 0): every key stays inside the table.
 template <typename T>
 __global__ void cellKeysKernel(const GridParamsReadback<T>* params, const Vec3<T>* pts, int n, bool morton,
-                               std::uint32_t* keys, std::int32_t* iota, std::int32_t* histogram) {
+                               std::uint32_t* keys, std::int32_t* histogram) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i >= n) return;
   const NeighborGridParams<T> p = params->p;
@@ -187,7 +187,12 @@ __global__ void cellKeysKernel(const GridParamsReadback<T>* params, const Vec3<T
     keys[i] = b;
     atomicAdd(histogram + b, 1);  // integer counts: the result does not depend on the order
   }
-  iota[i] = i;
+}
+
+// values[i] = i: the sort's values (written once per size, not per build: the sorts only read them).
+__global__ void iotaKernel(int n, std::int32_t* values) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i < n) values[i] = i;
 }
 
 // The coordinates the query kernels read: float points as float4 (one 16-byte load per candidate instead of
@@ -215,17 +220,26 @@ struct DeviceGridView {
   __device__ Vec3<T> point(std::int32_t j) const { return unpackPoint(points, j); }
 };
 
-// sorted[s] = pts[perm[s]] (and its packed copy when there is one); inv[perm[s]] = s.
+// sorted[s] = pts[perm[s]] and/or its packed copy (whichever is not null).
 template <typename T>
 __global__ void gatherKernel(const Vec3<T>* pts, const std::int32_t* perm, int n, Vec3<T>* sorted,
-                             typename PackedPoint<T>::type* packed, std::int32_t* inv) {
+                             typename PackedPoint<T>::type* packed) {
   const int s = blockIdx.x * blockDim.x + threadIdx.x;
   if (s >= n) return;
-  const std::int32_t o = perm[s];
-  const Vec3<T> x = pts[o];
-  sorted[s] = x;
+  const Vec3<T> x = pts[perm[s]];
+  if (sorted) sorted[s] = x;
   if (packed) packPoint(packed, s, x);
-  inv[o] = s;
+}
+
+// inv[perm[s]] = s.
+__global__ void invertKernel(const std::int32_t* perm, int n, std::int32_t* inv) {
+  const int s = blockIdx.x * blockDim.x + threadIdx.x;
+  if (s < n) inv[perm[s]] = s;
+}
+
+__global__ void unpackKernel(const float4* packed, int n, Vec3<float>* out) {
+  const int s = blockIdx.x * blockDim.x + threadIdx.x;
+  if (s < n) out[s] = unpackPoint(packed, s);
 }
 
 // ---- queries ----
@@ -641,6 +655,32 @@ void GridNeighborSearch<T>::build(const std::vector<Vec3<T>>& points, T cell_siz
 }
 
 template <typename T>
+const std::int32_t* GridNeighborSearch<T>::originalToSorted() const {
+  ensureParams();
+  if (!inverse_ready_ && n_ > 0) {
+    inv_perm_.resize(n_);
+    invertKernel<<<blocksFor(n_), kThreads>>>(perm_.data(), int(n_), inv_perm_.data());
+    INC_CUDA_LAUNCH("invertKernel");
+  }
+  inverse_ready_ = true;
+  return inv_perm_.data();
+}
+
+template <typename T>
+const Vec3<T>* GridNeighborSearch<T>::sortedPoints() const {
+  ensureParams();
+  if constexpr (std::is_same_v<T, float>) {
+    if (!sorted_ready_ && n_ > 0) {
+      sorted_.resize(n_);
+      unpackKernel<<<blocksFor(n_), kThreads>>>(reinterpret_cast<const float4*>(packed_.data()), int(n_), sorted_.data());
+      INC_CUDA_LAUNCH("unpackKernel");
+    }
+  }
+  sorted_ready_ = true;
+  return sorted_.data();
+}
+
+template <typename T>
 void GridNeighborSearch<T>::ensureParams() const {
   if (pending_n_ == 0) return;
   INC_CUDA(cudaEventSynchronize(static_cast<cudaEvent_t>(params_event_.get())));
@@ -670,6 +710,10 @@ void GridNeighborSearch<T>::build(const Vec3<T>* d_points, std::size_t n, T cell
   morton_ = morton_order;
   n_ = 0;
   pending_n_ = 0;
+  // The Vec3 copy is written by the build for double (its queries read it) and by a Morton build (its bucket
+  // keys are computed from it); float bucket-order builds make it on request.
+  sorted_ready_ = !std::is_same_v<T, float> || morton_order;
+  inverse_ready_ = false;
   const std::uint32_t buckets = neighborBucketCount(n);
   if (n == 0) {
     params_ = makeNeighborGridParams(Vec3<T>(), Vec3<T>(), cell_size, buckets, 0, false);
@@ -688,10 +732,14 @@ void GridNeighborSearch<T>::build(const Vec3<T>* d_points, std::size_t n, T cell
   sorted_.resize(n);
   if constexpr (std::is_same_v<T, float>) packed_.resize(n);
   perm_.resize(n);
-  inv_perm_.resize(n);
   keys_.resize(n);
   keys_sorted_.resize(n);
-  iota_.resize(n);
+  if (iota_.size() < n || iota_.data() != iota_for_) {
+    iota_.resize(std::max(n, iota_.size()));
+    iotaKernel<<<blocksFor(iota_.size()), kThreads>>>(int(iota_.size()), iota_.data());
+    INC_CUDA_LAUNCH("iotaKernel");
+    iota_for_ = iota_.data();
+  }
   if (morton_order) entries_.resize(n);
   used_buckets_ = buckets;
   cell_count_.resize(std::size_t(buckets) + 1);
@@ -708,6 +756,14 @@ void GridNeighborSearch<T>::build(const Vec3<T>* d_points, std::size_t n, T cell
     // and before later work there (the queries), as if everything ran on the default stream.
     INC_CUDA(cudaStreamCreate(&st));
     stream_ = std::shared_ptr<void>(st, [](void* q) { cudaStreamDestroy(static_cast<cudaStream_t>(q)); });
+    // The read-back's own branch (fork after the parameters, join at the end of the build), so that the copy
+    // is not on the build's critical path.
+    INC_CUDA(cudaStreamCreateWithFlags(&st, cudaStreamNonBlocking));
+    side_stream_ = std::shared_ptr<void>(st, [](void* q) { cudaStreamDestroy(static_cast<cudaStream_t>(q)); });
+    for (std::shared_ptr<void>* ev : {&fork_event_, &join_event_}) {
+      INC_CUDA(cudaEventCreateWithFlags(&e, cudaEventDisableTiming));
+      *ev = std::shared_ptr<void>(e, [](void* q) { cudaEventDestroy(static_cast<cudaEvent_t>(q)); });
+    }
   }
   // CUB's scratch for the largest sort and the scan, allocated before anything is enqueued (no allocation may
   // happen inside a graph capture).
@@ -727,7 +783,7 @@ void GridNeighborSearch<T>::build(const Vec3<T>* d_points, std::size_t n, T cell
   } else {
     // The same stages as one CUDA graph: launched in one call instead of a dozen launches and CUB calls,
     // re-captured only when the inputs or a buffer change.
-    const BuildGraphKey key{d_points, n, cell_size, sorted_.data(), packed_.data(), perm_.data(), inv_perm_.data(),
+    const BuildGraphKey key{d_points, n, cell_size, sorted_.data(), packed_.data(), perm_.data(), partial_hi_.data(),
                             keys_.data(), keys_sorted_.data(), iota_.data(), cell_count_.data(), bucket_start_.data(),
                             temp_.data(), d_params_.data(), partial_lo_.data()};
     if (!build_graph_ || !(key == build_key_)) {
@@ -772,15 +828,20 @@ void GridNeighborSearch<T>::enqueueBuild(const Vec3<T>* d_points, std::size_t n,
                                               reinterpret_cast<const long long*>(partial_bad_.data()), parts,
                                               (long long)n, cell_size_, buckets, d_points, d_params_.data());
   INC_CUDA_LAUNCH("gridParamsKernel");
-  INC_CUDA(cudaMemcpyAsync(pinned_params_.get(), d_params_.data(), sizeof(GridParamsReadback<T>),
-                           cudaMemcpyDeviceToHost, st));
-  // Inside a capture the record becomes an event node (recorded at every replay); outside, a plain record.
+  cudaStream_t side = static_cast<cudaStream_t>(side_stream_.get());
+  cudaEvent_t fork = static_cast<cudaEvent_t>(fork_event_.get()), join = static_cast<cudaEvent_t>(join_event_.get());
   cudaStreamCaptureStatus capturing = cudaStreamCaptureStatusNone;
   INC_CUDA(cudaStreamIsCapturing(st, &capturing));
+  INC_CUDA(cudaEventRecord(fork, st));
+  INC_CUDA(cudaStreamWaitEvent(side, fork, 0));
+  INC_CUDA(cudaMemcpyAsync(pinned_params_.get(), d_params_.data(), sizeof(GridParamsReadback<T>),
+                           cudaMemcpyDeviceToHost, side));
+  // Inside a capture the record becomes an event node (recorded at every replay); outside, a plain record.
   if (capturing == cudaStreamCaptureStatusActive)
-    INC_CUDA(cudaEventRecordWithFlags(static_cast<cudaEvent_t>(params_event_.get()), st, cudaEventRecordExternal));
+    INC_CUDA(cudaEventRecordWithFlags(static_cast<cudaEvent_t>(params_event_.get()), side, cudaEventRecordExternal));
   else
-    INC_CUDA(cudaEventRecord(static_cast<cudaEvent_t>(params_event_.get()), st));
+    INC_CUDA(cudaEventRecord(static_cast<cudaEvent_t>(params_event_.get()), side));
+  INC_CUDA(cudaEventRecord(join, side));
   mark("build:box+params");
   const int bucket_bits = keyBits(buckets);
   typename PackedPoint<T>::type* packed = nullptr;
@@ -801,20 +862,18 @@ void GridNeighborSearch<T>::enqueueBuild(const Vec3<T>* d_points, std::size_t n,
     pending_n_ = n;
     ensureParams();
     n_ = 0;  // the build is not finished: the grid stays unusable until its end
-    cellKeysKernel<T><<<blocksFor(n), kThreads, 0, st>>>(d_params_.data(), d_points, ni, true, keys_.data(),
-                                                         iota_.data(), nullptr);
+    cellKeysKernel<T><<<blocksFor(n), kThreads, 0, st>>>(d_params_.data(), d_points, ni, true, keys_.data(), nullptr);
     INC_CUDA_LAUNCH("cellKeysKernel(morton)");
     const int max_dim = std::max(params_.dims[0], std::max(params_.dims[1], params_.dims[2]));
     const int axis_bits = keyBits(std::uint64_t(max_dim)) - params_.morton_shift;
     radixSort(keys_.data(), keys_sorted_.data(), iota_.data(), perm_.data(), std::max(1, std::min(30, 3 * axis_bits)));
-    gatherKernel<T><<<blocksFor(n), kThreads, 0, st>>>(d_points, perm_.data(), ni, sorted_.data(), packed,
-                                                       inv_perm_.data());
+    gatherKernel<T><<<blocksFor(n), kThreads, 0, st>>>(d_points, perm_.data(), ni, sorted_.data(), packed);
     INC_CUDA_LAUNCH("gatherKernel(morton)");
     keyed = sorted_.data();
     mark("build:morton keys+sort+gather");
   }
   cellKeysKernel<T><<<blocksFor(n), kThreads, 0, st>>>(d_params_.data(), keyed, ni, false, keys_.data(),
-                                                       iota_.data(), cell_count_.data());
+                                                       cell_count_.data());
   INC_CUDA_LAUNCH("cellKeysKernel(bucket)");
   mark("build:bucket keys+histogram");
   if (morton_) {
@@ -822,8 +881,9 @@ void GridNeighborSearch<T>::enqueueBuild(const Vec3<T>* d_points, std::size_t n,
     radixSort(keys_.data(), keys_sorted_.data(), iota_.data(), entries_.data(), bucket_bits);
   } else {
     radixSort(keys_.data(), keys_sorted_.data(), iota_.data(), perm_.data(), bucket_bits);
-    gatherKernel<T><<<blocksFor(n), kThreads, 0, st>>>(d_points, perm_.data(), ni, sorted_.data(), packed,
-                                                       inv_perm_.data());
+    // float queries read the packed copy only: the Vec3 copy is made on request (sortedPoints)
+    gatherKernel<T><<<blocksFor(n), kThreads, 0, st>>>(d_points, perm_.data(), ni, packed ? nullptr : sorted_.data(),
+                                                       packed);
     INC_CUDA_LAUNCH("gatherKernel");
   }
   mark("build:sort+gather");
@@ -833,6 +893,7 @@ void GridNeighborSearch<T>::enqueueBuild(const Vec3<T>* d_points, std::size_t n,
   std::size_t bytes = temp_.size();
   INC_CUDA(cub::DeviceScan::ExclusiveScan(temp_.data(), bytes, cell_count_.data(), bucket_start_.data(),
                                           ::cuda::std::plus<std::int32_t>{}, std::int32_t(0), table, st));
+  INC_CUDA(cudaStreamWaitEvent(st, join, 0));  // the read-back branch rejoins (a capture must end joined)
   mark("build:cell table scan");
 }
 

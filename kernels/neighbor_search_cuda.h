@@ -96,9 +96,12 @@ class GridNeighborSearch {
     return params_;
   }
   // Device arrays of size(): storage slot -> original index, its inverse, and the points in storage order.
+  // The build writes what the queries read (the permutation; the points as float4 records for float, as
+  // Vec3 for double); the inverse permutation and, for float, the Vec3 copy are made on the first request
+  // after a build (one kernel on the default stream), so a build + query pays for neither.
   const std::int32_t* sortedToOriginal() const { return perm_.data(); }
-  const std::int32_t* originalToSorted() const { return inv_perm_.data(); }
-  const Vec3<T>* sortedPoints() const { return sorted_.data(); }
+  const std::int32_t* originalToSorted() const;
+  const Vec3<T>* sortedPoints() const;
   // Cell-table entries actually used (occupied-cell box for dense grids, bucket count for hashed ones).
   std::size_t bucketTableSize() const {
     ensureParams();
@@ -152,11 +155,15 @@ class GridNeighborSearch {
   std::shared_ptr<void> pinned_params_;         // GridParamsReadback<T> in page-locked host memory
   std::shared_ptr<void> params_event_;          // cudaEvent_t: the read-back has landed
   std::shared_ptr<void> stream_;                // cudaStream_t of the builds (blocking: ordered with stream 0)
+  std::shared_ptr<void> side_stream_, fork_event_, join_event_;  // the read-back's branch of a build
+  const void* iota_for_ = nullptr;              // iota_ holds 0, 1, 2, ... (written once per allocation)
   std::shared_ptr<void> build_graph_;           // cudaGraphExec_t of the last bucket-order build
   BuildGraphKey build_key_;
-  DeviceBuffer<Vec3<T>> sorted_;                // points in storage order
+  mutable DeviceBuffer<Vec3<T>> sorted_;        // points in storage order (float: made on request)
+  mutable bool sorted_ready_ = false, inverse_ready_ = false;
   DeviceBuffer<Packed4<T>> packed_;             // float only: the same points as 16-byte records (x, y, z, 0)
-  DeviceBuffer<std::int32_t> perm_, inv_perm_;  // slot -> original, original -> slot
+  DeviceBuffer<std::int32_t> perm_;             // slot -> original
+  mutable DeviceBuffer<std::int32_t> inv_perm_; // original -> slot (made on request)
   DeviceBuffer<std::int32_t> bucket_start_;     // used_buckets_ + 1
   DeviceBuffer<std::int32_t> cell_count_;       // used_buckets_ + 1 (histogram before the scan)
   DeviceBuffer<std::int32_t> entries_;          // Morton mode: storage slot per bucket-ordered entry

@@ -91,7 +91,7 @@ TYPED_TEST(NeighborSearchCpu, RowTrimmingNeverDropsAPointWithinReach) {
     const T reach = neighborSearchReach(r);
     for (int q = 0; q < 4000; ++q) {
       const Vec3<T> x(T(1000.5 + 0.4 * u(rng)), T(-1000.0 + 0.4 * u(rng)), T(0.75 + 0.4 * u(rng)));
-      const std::int32_t qc[3] = {neighborCellCoord(x.x, p.origin.x, p.inv_cell),
+      const std::int32_t qc[3] = {neighborCellCoord(x.x, p.origin.x, p.inv_cell_x),
                                   neighborCellCoord(x.y, p.origin.y, p.inv_cell),
                                   neighborCellCoord(x.z, p.origin.z, p.inv_cell)};
       // a point at distance in [0.9 r, r] (plus exact ties along a diagonal) in a random direction
@@ -103,10 +103,10 @@ TYPED_TEST(NeighborSearchCpu, RowTrimmingNeverDropsAPointWithinReach) {
       if (distance2Exact(x, y) > r * r) continue;
       const std::int32_t cy = neighborCellCoord(y.y, p.origin.y, p.inv_cell);
       const std::int32_t cz = neighborCellCoord(y.z, p.origin.z, p.inv_cell);
-      std::int32_t xl = neighborCellCoord(x.x - reach, p.origin.x, p.inv_cell);
-      std::int32_t xh = neighborCellCoord(x.x + reach, p.origin.x, p.inv_cell);
+      std::int32_t xl = neighborCellCoord(x.x - reach, p.origin.x, p.inv_cell_x);
+      std::int32_t xh = neighborCellCoord(x.x + reach, p.origin.x, p.inv_cell_x);
       ASSERT_TRUE(neighborRowXRange(p, x, reach, qc, cy, cz, xl, xh)) << "factor " << factor << " query " << q;
-      const std::int32_t cx = neighborCellCoord(y.x, p.origin.x, p.inv_cell);
+      const std::int32_t cx = neighborCellCoord(y.x, p.origin.x, p.inv_cell_x);
       ASSERT_LE(xl, cx) << "factor " << factor << " query " << q;
       ASSERT_GE(xh, cx) << "factor " << factor << " query " << q;
       ++tested;
@@ -308,7 +308,7 @@ TYPED_TEST(NeighborSearchCpu, MortonOrderAndPermutations) {
     const Vec3<T>& x = s.sortedPoints()[slot];
     EXPECT_EQ(x.x, pts[std::size_t(perm[slot])].x);
     const auto& p = s.params();
-    const std::uint32_t key = neighborMortonKey(p, neighborCellCoord(x.x, p.origin.x, p.inv_cell),
+    const std::uint32_t key = neighborMortonKey(p, neighborCellCoord(x.x, p.origin.x, p.inv_cell_x),
                                                 neighborCellCoord(x.y, p.origin.y, p.inv_cell),
                                                 neighborCellCoord(x.z, p.origin.z, p.inv_cell));
     ASSERT_GE(key, prev) << "storage order is not Z order at slot " << slot;
