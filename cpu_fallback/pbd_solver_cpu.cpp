@@ -46,6 +46,29 @@ void balancedSplit(const std::vector<std::int64_t>& prefix, int parts, std::int3
   out[parts] = m;
 }
 
+// Shape-matching clusters projected together (at most pbd::kMaxRotationBatch): enough independent rotation
+// extractions to keep a core busy through their dependent chains.
+constexpr int kClusterBatch = 4;
+
+#if defined(__GNUC__)
+#define INC_FLATTEN __attribute__((flatten))
+#else
+#define INC_FLATTEN
+#endif
+
+// Jacobi distance constraints [q0, q1), two per step, inlined: a constraint is a short chain of a square root
+// and two divisions, and two independent chains side by side keep the core busy (the same results).
+template <typename T>
+INC_FLATTEN void projectDistanceRange(const pbd::BlockView<T>& v, std::int32_t q0, std::int32_t q1,
+                                      const pbd::SolveContext<T>& ctx) {
+  std::int32_t q = q0;
+  for (; q + 1 < q1; q += 2) {
+    pbd::projectDistanceConstraint(v, q, ctx);
+    pbd::projectDistanceConstraint(v, q + 1, ctx);
+  }
+  if (q < q1) pbd::projectDistanceConstraint(v, q, ctx);
+}
+
 // Projects constraints order[q] (or q when order is null) for q in [q0, q1) of one block: the kind's function
 // from physics/pbd_block.h called directly (the same one projectConstraint dispatches to), so the loop has no
 // per-constraint dispatch. `goals`: room for one cluster's members (shape matching keeps pass 1's goals for
@@ -55,13 +78,29 @@ void projectRange(const pbd::BlockView<T> v, const std::int32_t* order, std::int
                   const pbd::SolveContext<T> ctx, pbd::GoalCorrection<T>* goals) {
   switch (v.kind) {
     case pbd::kDistance:
-      for (std::int32_t q = q0; q < q1; ++q) pbd::projectDistanceConstraint(v, order ? order[q] : q, ctx);
+      if (!order) {
+        projectDistanceRange(v, q0, q1, ctx);
+        break;
+      }
+      for (std::int32_t q = q0; q < q1; ++q) pbd::projectDistanceConstraint(v, order[q], ctx);
       break;
     case pbd::kLaplacian:
       for (std::int32_t q = q0; q < q1; ++q) pbd::projectLaplacianConstraint(v, order ? order[q] : q, ctx);
       break;
     case pbd::kShapeMatching:
-      for (std::int32_t q = q0; q < q1; ++q) pbd::projectShapeMatchingCluster(v, order ? order[q] : q, ctx, goals);
+      // In batches of independent clusters (the phase's clusters are; a batch ends early only where a centre
+      // would repeat), whose rotation extractions the core then overlaps.
+      for (std::int32_t q = q0; q < q1;) {
+        std::int32_t cs[pbd::kMaxRotationBatch];
+        int k = 0;
+        for (; k < kClusterBatch && q < q1; ++k, ++q) {
+          cs[k] = order ? order[q] : q;
+          bool repeat = false;
+          for (int j = 0; j < k; ++j) repeat = repeat || v.ids[v.offsets[cs[j]]] == v.ids[v.offsets[cs[k]]];
+          if (repeat) break;
+        }
+        pbd::projectShapeMatchingClusters(v, cs, k, ctx, goals);
+      }
       break;
     default:
       for (std::int32_t q = q0; q < q1; ++q) pbd::projectConstraint(v, order ? order[q] : q, ctx);
@@ -88,6 +127,7 @@ class PbdCpuBackend final : public PbdBackend<T> {
     kinematic_of_.assign(n, -1);
     lambda_.resize(model_.blocks.size());
     slot_corr_.resize(model_.blocks.size());
+    alpha_tilde_.assign(model_.blocks.size(), {});
     std::int64_t slots = 0;
     std::size_t residuals = 0;
     max_cluster_ = 0;
@@ -159,6 +199,12 @@ class PbdCpuBackend final : public PbdBackend<T> {
     ctx.jacobi = p.solver == PbdSolverKind::Jacobi;
     ctx.omega = p.jacobi_omega;
     ctx.rotation_iterations = p.rotation_iterations;
+    // compliance / dt^2 of every multiplier, once per frame instead of once per projection (the same value).
+    for (std::size_t bi = 0; bi < model_.blocks.size(); ++bi) {
+      const auto& c = model_.blocks[bi].compliance;
+      alpha_tilde_[bi].resize(c.size());
+      for (std::size_t i = 0; i < c.size(); ++i) alpha_tilde_[bi][i] = c[i] / (dt * dt);
+    }
     if (!ctx.jacobi)
       for (const auto& b : model_.blocks)
         if (b.solve) st.colors += b.coloring.colorCount();
@@ -354,6 +400,7 @@ class PbdCpuBackend final : public PbdBackend<T> {
     v.particle_slots = b.particle_slots.data();
     v.lambda = lambda_[bi].data();
     v.slot_corr = slot_corr_[bi].data();
+    v.alpha_tilde = alpha_tilde_[bi].data();
     return v;
   }
 
@@ -443,6 +490,7 @@ class PbdCpuBackend final : public PbdBackend<T> {
   std::vector<std::int32_t> kinematic_of_;   // per particle: its index in this frame's kinematic list, or -1
   std::vector<std::vector<Vec3<T>>> lambda_;
   std::vector<std::vector<Vec3<T>>> slot_corr_;
+  std::vector<std::vector<T>> alpha_tilde_;  // per block and multiplier: compliance / dt^2 of this frame
   std::vector<Vec3<T>> attach_lambda_;
   std::vector<pbd::BlockView<T>> views_;
   std::vector<double> residual_;             // per solved distance constraint, this frame

@@ -30,6 +30,9 @@ struct BlockView {
   const std::int32_t* particle_slots = nullptr;
   Vec3<T>* lambda = nullptr;     // multipliers; scalar kinds use .x
   Vec3<T>* slot_corr = nullptr;  // Jacobi: correction of each slot's particle
+  // Optional, per multiplier (as compliance): compliance / dt^2 of this frame's substep, precomputed by a backend
+  // that projects a block many times with one dt (the CPU); null: computed from `compliance` at each projection.
+  const T* alpha_tilde = nullptr;
 };
 
 // What every projection reads besides its block.
@@ -45,6 +48,17 @@ struct SolveContext {
   T omega = T(1);                // Jacobi over-relaxation
   int rotation_iterations = 4;
 };
+
+// The XPBD term of multiplier i of a block: xpbdTerm of its compliance, or the same value precomputed.
+template <typename T>
+INC_HD XpbdTerm<T> blockTerm(const BlockView<T>& b, const SolveContext<T>& ctx, std::int32_t i) {
+  if (ctx.xpbd && b.alpha_tilde) {
+    XpbdTerm<T> t;
+    t.alpha_tilde = b.alpha_tilde[i];
+    return t;
+  }
+  return xpbdTerm(ctx.xpbd, b.compliance[i], b.stiffness, ctx.dt);
+}
 
 template <typename T>
 INC_HD void emitCorrection(const BlockView<T>& b, const SolveContext<T>& ctx, std::int32_t slot, const Vec3<T>& d,
@@ -76,7 +90,7 @@ template <typename T>
 INC_HD GoalCorrection<T> shapeMatchGoal(const BlockView<T>& b, const SolveContext<T>& ctx, std::int32_t s,
                                         const Mat3<T>& rot, const Vec3<T>& x_cm) {
   const std::int32_t p = b.ids[s];
-  const XpbdTerm<T> term = xpbdTerm(ctx.xpbd, b.compliance[s], b.stiffness, ctx.dt);
+  const XpbdTerm<T> term = blockTerm(b, ctx, s);
   return projectGoal(ctx.x[p], ctx.w[p], rot * b.rest_vec[s] + x_cm, term, b.lambda[s]);
 }
 
@@ -143,7 +157,7 @@ INC_HD void projectDistanceConstraint(const BlockView<T>& b, int c, const SolveC
   const std::int32_t s0 = b.offsets[c];
   const T scale = ctx.jacobi ? ctx.omega * b.jacobi_scale[s0] : T(1);
   const std::int32_t i = b.ids[s0], j = b.ids[s0 + 1];
-  const XpbdTerm<T> term = xpbdTerm(ctx.xpbd, b.compliance[c], b.stiffness, ctx.dt);
+  const XpbdTerm<T> term = blockTerm(b, ctx, c);
   const DistanceCorrection<T> r = projectDistance(ctx.x[i], ctx.x[j], ctx.w[i], ctx.w[j], b.rest[c], term, b.lambda[c].x);
   emitCorrection(b, ctx, s0, r.dp0, scale);
   emitCorrection(b, ctx, s0 + 1, r.dp1, scale);
@@ -158,7 +172,7 @@ INC_HD void projectFourParticleConstraint(const BlockView<T>& b, int c, const So
   const Vec3<T>* x = ctx.x;
   const T* w = ctx.w;
   const std::int32_t* id = b.ids + s0;
-  const XpbdTerm<T> term = xpbdTerm(ctx.xpbd, b.compliance[c], b.stiffness, ctx.dt);
+  const XpbdTerm<T> term = blockTerm(b, ctx, c);
   Vec3<T> dp[4];
   T dl;
   if (b.kind == kBending) {
@@ -181,34 +195,31 @@ INC_HD void projectLaplacianConstraint(const BlockView<T>& b, int c, const Solve
   const std::int32_t s0 = b.offsets[c], s1 = b.offsets[c + 1];
   const T scale = ctx.jacobi ? ctx.omega * b.jacobi_scale[s0] : T(1);
   const Vec3<T> rest = laplacianRest(b, c, ctx);
-  const XpbdTerm<T> term = xpbdTerm(ctx.xpbd, b.compliance[c], b.stiffness, ctx.dt);
+  const XpbdTerm<T> term = blockTerm(b, ctx, c);
   const LaplacianCorrection<T> r = projectLaplacian(ctx.x, ctx.w, b.ids + s0, s1 - s0, rest, term, b.lambda[c]);
   emitCorrection(b, ctx, s0, r.d_center, scale);
   for (std::int32_t s = s0 + 1; s < s1; ++s) emitCorrection(b, ctx, s, r.dlambda * (-ctx.w[b.ids[s]] * r.inv_n), scale);
   b.lambda[c] += r.dlambda * scale;
 }
 
-// One shape-matching cluster: frame, rotation, then the two member passes. `goals`, when given (room for the
-// cluster's members), keeps each member's goal correction from pass 1 for pass 2 instead of computing it twice
-// (the same values: a member's goal depends only on its own position, which pass 1 does not move, and the
+// The two member passes of shape-matching cluster c, given its frame and rotation. `goals`, when given (room for
+// the cluster's members), keeps each member's goal correction from pass 1 for pass 2 instead of computing it
+// twice (the same values: a member's goal depends only on its own position, which pass 1 does not move, and the
 // cluster frame).
 template <typename T>
-INC_HD void projectShapeMatchingCluster(const BlockView<T>& b, int c, const SolveContext<T>& ctx,
-                                        GoalCorrection<T>* goals = nullptr) {
+INC_HD void shapeMatchMembers(const BlockView<T>& b, int c, const SolveContext<T>& ctx, const Mat3<T>& rot,
+                              const Vec3<T>& x_cm, GoalCorrection<T>* goals) {
   const std::int32_t s0 = b.offsets[c], s1 = b.offsets[c + 1];
-  const std::int32_t centre = b.ids[s0];
-  const ClusterFrame<T> f = clusterFrame(ctx.x, ctx.mass, b.ids + s0, b.rest_vec + s0, s1 - s0);
-  const Mat3<T> rot = shapeMatchRotation(ctx, centre, f.a_pq);
   // Pass 1: the cluster's net momentum change (see shapeMatchMomentum), removed in pass 2 by a shift.
   Vec3<T> dmom;
   T mov_mass = T(0);
   if (goals) {
     for (std::int32_t s = s0; s < s1; ++s) {
-      goals[s - s0] = shapeMatchGoal(b, ctx, s, rot, f.x_cm);
+      goals[s - s0] = shapeMatchGoal(b, ctx, s, rot, x_cm);
       shapeMatchMomentumTerm(b, ctx, s, goals[s - s0], dmom, mov_mass);
     }
   } else {
-    for (std::int32_t s = s0; s < s1; ++s) shapeMatchMomentum(b, ctx, s, rot, f.x_cm, dmom, mov_mass);
+    for (std::int32_t s = s0; s < s1; ++s) shapeMatchMomentum(b, ctx, s, rot, x_cm, dmom, mov_mass);
   }
   const Vec3<T> shift = shapeMatchShift(dmom, mov_mass);
   // Pass 2: goals from the cluster frame computed above; a member's goal does not depend on its own
@@ -216,7 +227,41 @@ INC_HD void projectShapeMatchingCluster(const BlockView<T>& b, int c, const Solv
   if (goals) {
     for (std::int32_t s = s0; s < s1; ++s) shapeMatchApplyTerm(b, ctx, s, goals[s - s0], shift);
   } else {
-    for (std::int32_t s = s0; s < s1; ++s) shapeMatchApply(b, ctx, s, rot, f.x_cm, shift);
+    for (std::int32_t s = s0; s < s1; ++s) shapeMatchApply(b, ctx, s, rot, x_cm, shift);
+  }
+}
+
+// One shape-matching cluster: frame, rotation, then the two member passes (shapeMatchMembers).
+template <typename T>
+INC_HD void projectShapeMatchingCluster(const BlockView<T>& b, int c, const SolveContext<T>& ctx,
+                                        GoalCorrection<T>* goals = nullptr) {
+  const std::int32_t s0 = b.offsets[c], s1 = b.offsets[c + 1];
+  const std::int32_t centre = b.ids[s0];
+  const ClusterFrame<T> f = clusterFrame(ctx.x, ctx.mass, b.ids + s0, b.rest_vec + s0, s1 - s0);
+  const Mat3<T> rot = shapeMatchRotation(ctx, centre, f.a_pq);
+  shapeMatchMembers(b, c, ctx, rot, f.x_cm, goals);
+}
+
+// Shape-matching clusters cs[0..count) (count <= kMaxRotationBatch) projected as projectShapeMatchingCluster
+// projects each in turn, with the same result, when they are independent: no cluster moves a particle that
+// another one's frame reads (a Jacobi block, or one Gauss-Seidel colour) and no two share a centre. Their rotation
+// extractions run interleaved (extractRotations), which a CPU core overlaps.
+template <typename T>
+INC_HD void projectShapeMatchingClusters(const BlockView<T>& b, const std::int32_t* cs, int count,
+                                         const SolveContext<T>& ctx, GoalCorrection<T>* goals = nullptr) {
+  ClusterFrame<T> f[kMaxRotationBatch];
+  Mat3<T> a[kMaxRotationBatch];
+  Quat<T> q[kMaxRotationBatch];
+  for (int k = 0; k < count; ++k) {
+    const std::int32_t s0 = b.offsets[cs[k]], s1 = b.offsets[cs[k] + 1];
+    f[k] = clusterFrame(ctx.x, ctx.mass, b.ids + s0, b.rest_vec + s0, s1 - s0);
+    a[k] = f[k].a_pq;
+    q[k] = ctx.rotation[b.ids[s0]];
+  }
+  extractRotations(a, q, count, ctx.rotation_iterations);
+  for (int k = 0; k < count; ++k) {
+    ctx.rotation[b.ids[b.offsets[cs[k]]]] = q[k];
+    shapeMatchMembers(b, cs[k], ctx, quatToMatrix(q[k]), f[k].x_cm, goals);
   }
 }
 

@@ -45,6 +45,21 @@ INC_HD Mat3<T> quatToMatrix(const Quat<T>& q) {
   return r;
 }
 
+// One step of extractRotation below: rotates q towards A's rotational part; false (q unchanged) when the step
+// is below eps (converged, or a degenerate A). `scale` is |A|_F (> 0), the same for every step.
+template <typename T>
+INC_HD bool extractRotationStep(const Mat3<T>& a, T scale, Quat<T>& q) {
+  const T eps = sizeof(T) == 4 ? T(1e-6) : T(1e-12);
+  const Mat3<T> r = quatToMatrix(q);
+  Vec3<T> omega = cross(r.col(0), a.col(0)) + cross(r.col(1), a.col(1)) + cross(r.col(2), a.col(2));
+  const T denom = std::fabs(dot(r.col(0), a.col(0)) + dot(r.col(1), a.col(1)) + dot(r.col(2), a.col(2)));
+  omega *= T(1) / (denom + eps * scale);
+  const T angle = norm(omega);
+  if (!(angle > eps)) return false;
+  q = quatNormalized(quatMul(quatFromAxisAngle(omega * (T(1) / angle), angle), q));
+  return true;
+}
+
 // Rotational part R of A = R S (polar decomposition), by the iterative quaternion method of Mueller et al.
 // 2016 ("A robust method to extract the rotational part of deformations"): each step rotates the current
 // estimate about omega = sum_k r_k x a_k / |sum_k r_k . a_k| (r_k, a_k columns of R and A), which
@@ -53,19 +68,30 @@ INC_HD Mat3<T> quatToMatrix(const Quat<T>& q) {
 // in the directions A does not determine. Returns the updated quaternion.
 template <typename T>
 INC_HD Quat<T> extractRotation(const Mat3<T>& a, Quat<T> q, int max_iterations) {
-  const T eps = sizeof(T) == 4 ? T(1e-6) : T(1e-12);
-  for (int it = 0; it < max_iterations; ++it) {
-    const Mat3<T> r = quatToMatrix(q);
-    Vec3<T> omega = cross(r.col(0), a.col(0)) + cross(r.col(1), a.col(1)) + cross(r.col(2), a.col(2));
-    const T denom = std::fabs(dot(r.col(0), a.col(0)) + dot(r.col(1), a.col(1)) + dot(r.col(2), a.col(2)));
-    const T scale = frobeniusNorm(a);
-    if (!(scale > T(0))) break;  // A == 0: nothing determines a rotation
-    omega *= T(1) / (denom + eps * scale);
-    const T angle = norm(omega);
-    if (!(angle > eps)) break;
-    q = quatNormalized(quatMul(quatFromAxisAngle(omega * (T(1) / angle), angle), q));
-  }
+  const T scale = frobeniusNorm(a);
+  if (!(scale > T(0))) return q;  // A == 0: nothing determines a rotation
+  for (int it = 0; it < max_iterations; ++it)
+    if (!extractRotationStep(a, scale, q)) break;
   return q;
+}
+
+// extractRotation of count <= kMaxRotationBatch independent matrices, in lockstep: each gets exactly the steps
+// (and result) of its own call, but the steps of different matrices are interleaved, so that a CPU core overlaps
+// their dependent chains (each step waits on the previous one's square roots, divisions and sincos; one
+// matrix alone leaves the core mostly idle).
+constexpr int kMaxRotationBatch = 8;
+
+template <typename T>
+INC_HD void extractRotations(const Mat3<T>* a, Quat<T>* q, int count, int max_iterations) {
+  T scale[kMaxRotationBatch];
+  bool live[kMaxRotationBatch];
+  for (int k = 0; k < count; ++k) {
+    scale[k] = frobeniusNorm(a[k]);
+    live[k] = scale[k] > T(0);
+  }
+  for (int it = 0; it < max_iterations; ++it)
+    for (int k = 0; k < count; ++k)
+      if (live[k]) live[k] = extractRotationStep(a[k], scale[k], q[k]);
 }
 
 }  // namespace inc::pbd
