@@ -1,4 +1,4 @@
-// CPU MLS solver: drift, pass 1 (stress) and pass 2 (force gather + kick) as parallel loops, serial reductions.
+// CPU MLS solver: drift, coupling, pass 1 (stress) and pass 2 (force gather + kick) on one thread team per frame, serial reductions.
 #include "cpu_fallback/mls_solver_cpu.h"
 
 #include <algorithm>
@@ -18,9 +18,13 @@ double msSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// Below this many particles a pass runs serially: an OpenMP region costs more than the work (and far more
-// on a loaded machine). Gather passes give identical results either way.
+// Below this many particles a pass outside the substep loop runs serially: an OpenMP region costs more than the
+// work (and far more on a loaded machine). Gather passes give identical results either way.
 constexpr std::int64_t kSerialBelow = 2048;
+
+// The substep loop runs on a team (one parallel region per frame, a barrier between passes, cpu_fallback/team.h)
+// with one thread per this many particles: a pass costs ~0.1-0.2 us per particle, a barrier ~0.5 us.
+constexpr std::int64_t kParticlesPerThread = 256;
 
 template <typename Body>
 void forEachParticle(std::int64_t n, Body&& body) {
@@ -43,7 +47,40 @@ void checkSize(const std::vector<T>& v, std::size_t n, const char* what) {
 template <typename T>
 MlsCpuSolver<T>::MlsCpuSolver(MlsModel<T> model) : model_(std::move(model)) {
   state_.resize(model_.size());
+  stiffening_out_.assign(model_.size(), T(1));
+  elastic_force_.assign(model_.size(), Vec3<T>());
   safety_ = model_.safety;
+  buildPairTables();
+}
+
+// The rest configuration's share of every pair term, once per model (the model changes only on a rebuild): the
+// passes then gather 9 products per pair and evaluate no kernel weight. x_ij and w_ij are evaluated in precision
+// T exactly as the recomputing passes do (in double, a pair at the edge of the support could get a weight that
+// rounds to a float32 denormal, and every product with a denormal costs a microcode assist).
+template <typename T>
+void MlsCpuSolver<T>::buildPairTables() {
+  const std::int64_t n = std::int64_t(model_.size());
+  const NeighborLists& nb = model_.neighbors;
+  pair_gradient_.resize(nb.indices.size());
+  pair_force_.resize(nb.indices.size());
+  weighted_sum_.assign(std::size_t(n), Vec3<T>());
+  forEachParticle(n, [&](std::int64_t i) {
+    const Vec3<T> xi = model_.rest[std::size_t(i)];
+    const Mat3<T>& ainv = model_.moment_inverse[std::size_t(i)];
+    Vec3<T> sum;
+    for (std::int64_t p = nb.offsets[std::size_t(i)]; p < nb.offsets[std::size_t(i) + 1]; ++p) {
+      const Vec3<T> xij = model_.rest[std::size_t(nb.indices[std::size_t(p)])] - xi;
+      mlsPairTerms(ainv, xij, mlsKernelWeight(norm2(xij), model_.support), pair_gradient_[std::size_t(p)],
+                   pair_force_[std::size_t(p)]);
+      sum += pair_force_[std::size_t(p)];
+    }
+    weighted_sum_[std::size_t(i)] = sum;
+  });
+}
+
+template <typename T>
+int MlsCpuSolver<T>::teamThreads() const {
+  return int(std::max<std::int64_t>(1, std::min<std::int64_t>(threadCount(), std::int64_t(size()) / kParticlesPerThread)));
 }
 
 template <typename T>
@@ -56,6 +93,10 @@ std::vector<Vec3d> MlsCpuSolver<T>::restPositions() const {
 template <typename T>
 MlsView<T> MlsCpuSolver<T>::view() {
   MlsView<T> s = makeMlsView(model_, state_);
+  s.pair_gradient = pair_gradient_.data();
+  s.pair_force = pair_force_.data();
+  s.weighted_sum = weighted_sum_.data();
+  s.elastic_force = elastic_force_.data();
   if (!cg_rest_centre_.empty()) {
     s.coupling_group = particle_group_.data();
     s.coupling_force = cg_force_.data();
@@ -118,7 +159,7 @@ template <typename T>
 void MlsCpuSolver<T>::setCouplingAnchors(const std::vector<Vec3d>& anchors) {
   checkSize(anchors, cg_rest_length_.size(), "coupling anchors");
   for (std::size_t s = 0; s < anchors.size(); ++s) cg_anchor_[s] = Vec3<T>(anchors[s] - model_.origin);
-  forces_valid_ = false;
+  coupling_stale_ = true;  // the elastic part of the forces stays valid (substeps refreshes only the coupling)
 }
 
 template <typename T>
@@ -131,31 +172,71 @@ void MlsCpuSolver<T>::couplingDisplacements(std::vector<Vec3d>& out) {
 template <typename T>
 void MlsCpuSolver<T>::computeForces() {
   couplingPass();
-  const MlsView<T> s = view();
+  MlsView<T> s = view();
+  s.stiffening = stiffening_out_.data();
   forEachParticle(s.n, [&](std::int64_t i) { mlsStressPass(s, i); });
   forEachParticle(s.n, [&](std::int64_t k) { mlsForcePass(s, k, T(0), false); });
   forces_valid_ = true;
+  coupling_stale_ = false;
 }
 
+// n leapfrog substeps on one team: drift | coupling | stress | force + kick, a barrier where a pass reads what
+// another thread wrote. Every pass is a gather over its own items, so the result does not depend on the split.
+// The force pass needs no barrier after it: the next drift touches only its own particles, and the next stress
+// pass (which overwrites the stress moments the force pass reads) starts after the drift's barrier, which every
+// thread reaches only once its force share is done.
 template <typename T>
 void MlsCpuSolver<T>::substeps(T dt, int n, MlsFrameStats* stats) {
-  if (!forces_valid_) computeForces();
+  if (!forces_valid_) {
+    computeForces();
+  } else if (coupling_stale_) {
+    // New anchors at the same displacement: the springs' share changes, the elastic part does not (eqs. 11-12).
+    couplingPass();
+    const MlsView<T> s = view();
+    forEachParticle(s.n, [&](std::int64_t k) { mlsCouplingRefresh(s, k); });
+    coupling_stale_ = false;
+  }
+  if (n <= 0) return;
   const MlsView<T> s = view();
+  MlsView<T> last = s;  // the last stress pass also leaves each particle's stiffening for reduce()
+  last.stiffening = stiffening_out_.data();
+  const bool coupled = !cg_rest_centre_.empty();
+  const CouplingView<T> c = couplingView();
+  const std::int64_t groups = c.groups;
   const T half = T(0.5) * dt;
-  for (int step = 0; step < n; ++step) {
+  double ms[4] = {0.0, 0.0, 0.0, 0.0};  // integrate, coupling, stress, forces (the lead thread's clock)
+  team_.run(teamThreads(), [&](const Team& t) {
     auto t0 = std::chrono::steady_clock::now();
-    const int remaining = n - step;
-    forEachParticle(s.n, [&](std::int64_t k) { mlsDriftPass(s, k, dt, remaining); });
-    if (stats) stats->ms_integrate += msSince(t0);
-    t0 = std::chrono::steady_clock::now();
-    couplingPass();  // the groups' spring forces at the drifted displacement, before the force gather
-    if (stats) stats->ms_coupling += msSince(t0);
-    t0 = std::chrono::steady_clock::now();
-    forEachParticle(s.n, [&](std::int64_t i) { mlsStressPass(s, i); });
-    if (stats) stats->ms_stress += msSince(t0);
-    t0 = std::chrono::steady_clock::now();
-    forEachParticle(s.n, [&](std::int64_t k) { mlsForcePass(s, k, half, true); });
-    if (stats) stats->ms_forces += msSince(t0);
+    const auto lap = [&](int stage) {
+      if (!t.lead() || !stats) return;
+      const auto t1 = std::chrono::steady_clock::now();
+      ms[stage] += std::chrono::duration<double, std::milli>(t1 - t0).count();
+      t0 = t1;
+    };
+    for (int step = 0; step < n; ++step) {
+      const int remaining = n - step;
+      for (std::int64_t k = t.begin(s.n), e = t.end(s.n); k < e; ++k) mlsDriftPass(s, k, dt, remaining);
+      t.barrier();
+      lap(0);
+      if (coupled) {  // the groups' spring forces at the drifted displacement, before the force gather
+        for (std::int64_t g = t.begin(groups), e = t.end(groups); g < e; ++g)
+          couplingGroupPass(c, s.displacement, std::int32_t(g));
+        t.barrier();
+      }
+      lap(1);
+      const MlsView<T>& sp = step == n - 1 ? last : s;
+      for (std::int64_t i = t.begin(s.n), e = t.end(s.n); i < e; ++i) mlsStressPass(sp, i);
+      t.barrier();
+      lap(2);
+      for (std::int64_t k = t.begin(s.n), e = t.end(s.n); k < e; ++k) mlsForcePass(s, k, half, true);
+      lap(3);
+    }
+  });
+  if (stats) {
+    stats->ms_integrate += ms[0];
+    stats->ms_coupling += ms[1];
+    stats->ms_stress += ms[2];
+    stats->ms_forces += ms[3];
   }
 }
 
@@ -207,10 +288,8 @@ MlsReduction MlsCpuSolver<T>::reduce() {
     max_u2 = std::max(max_u2, double(norm2(st.displacement[std::size_t(k)])));
   }
   r.max_displacement = std::sqrt(max_u2);
-  // Stiffening: one more gradient per particle, once per frame (max is order independent).
-  std::vector<T> stiff(std::size_t(s.n));
-  forEachParticle(s.n, [&](std::int64_t k) { stiff[std::size_t(k)] = mlsStiffening(s, k); });
-  for (const T k : stiff) r.stiffening = std::max(r.stiffening, double(k));
+  // Stiffening: left by the last stress pass at this displacement (max is order independent).
+  for (const T k : stiffening_out_) r.stiffening = std::max(r.stiffening, double(k));
   noteReduction(r);
   return r;
 }
@@ -291,7 +370,9 @@ void MlsCpuSolver<T>::restoreCheckpoint() {
 template <typename T>
 MemoryReport MlsCpuSolver<T>::memory() const {
   MemoryReport m;
-  m.host_bytes = model_.bytes() + state_.bytes() + (saved_u_.size() + saved_v_.size()) * sizeof(Vec3<T>) +
+  m.host_bytes = model_.bytes() + state_.bytes() +
+                 (saved_u_.size() + saved_v_.size() + pair_gradient_.size() + pair_force_.size() + weighted_sum_.size() +
+                  elastic_force_.size()) * sizeof(Vec3<T>) + stiffening_out_.size() * sizeof(T) +
                  (cg_members_.size() + particle_group_.size() + 2 * cg_member_offsets_.size()) * sizeof(std::int32_t) +
                  (cg_rest_centre_.size() * 3 + cg_anchor_.size()) * sizeof(Vec3<T>) + cg_rest_length_.size() * 2 * sizeof(T);
   return m;

@@ -1,9 +1,10 @@
-// The MLS solver on the CPU: the passes of physics/mls_passes.h looped with parallelFor.
+// The MLS solver on the CPU: the passes of physics/mls_passes.h looped over a thread team, with rest pair tables.
 #pragma once
 
 #include <memory>
 
 #include "host/mls_model.h"
+#include "cpu_fallback/team.h"
 #include "host/mls_solver.h"
 #include "physics/cut_coupling.h"
 
@@ -50,14 +51,25 @@ class MlsCpuSolver final : public MlsSolver {
   MlsView<T> view();              // the passes' view, with the coupling arrays when groups are set
   CouplingView<T> couplingView();
   void couplingPass();            // eqs. 11-13 for every group at the current displacement
+  void buildPairTables();         // pair_gradient_, pair_force_, weighted_sum_ from the model (once)
+  int teamThreads() const;        // threads worth a team for this many particles
   MlsModel<T> model_;
   MlsState<T> state_;
+  // Rest pair tables (MlsView::pair_gradient, pair_force per CSR slot, weighted_sum per particle).
+  std::vector<Vec3<T>> pair_gradient_, pair_force_, weighted_sum_;
+  // Outputs of the last stress / force passes: each particle's stiffening factor and elastic force.
+  std::vector<T> stiffening_out_;
+  std::vector<Vec3<T>> elastic_force_;
+  TeamRunner team_;
   // Coupling groups in precision T, positions relative to the model origin (empty: no coupling).
   std::vector<std::int32_t> cg_member_offsets_{0}, cg_members_, cg_spring_offsets_{0}, particle_group_;
   std::vector<Vec3<T>> cg_rest_centre_, cg_anchor_, cg_displacement_, cg_force_;
   std::vector<T> cg_rest_length_, cg_stiffness_;
   std::vector<Vec3<T>> saved_u_, saved_v_;
+  // forces_valid_: force, elastic_force_, stress moments, energies and stiffening_out_ belong to the current
+  // displacement and anchors. coupling_stale_: only the anchors changed since (the elastic part is still valid).
   bool forces_valid_ = false;
+  bool coupling_stale_ = false;
 };
 
 std::unique_ptr<MlsSolver> makeMlsSolverCpu(MlsModel<float> model);

@@ -41,12 +41,16 @@ void validateMlsBuildInput(const MlsBuildInput& in) {
           "must be finite");
   require(in.masses.empty() || in.masses.size() == n, in, "masses", "one mass per particle");
   require(in.kinds.empty() || in.kinds.size() == n, in, "kinds", "one kind per particle");
+  // Per-particle checks test first and build the message only on failure (a message per particle cost more
+  // than the whole model build).
   for (std::size_t i = 0; i < in.masses.size(); ++i)
-    require(finite(in.masses[i]) && in.masses[i] > 0, in, "masses", "particle " + std::to_string(i) + ": mass must be > 0");
+    if (!(finite(in.masses[i]) && in.masses[i] > 0))
+      require(false, in, "masses", "particle " + std::to_string(i) + ": mass must be > 0");
   for (std::size_t i = 0; i < in.kinds.size(); ++i)
-    require(in.kinds[i] <= kMlsPrescribed, in, "kinds", "particle " + std::to_string(i) + ": unknown kind");
+    if (!(in.kinds[i] <= kMlsPrescribed)) require(false, in, "kinds", "particle " + std::to_string(i) + ": unknown kind");
   for (std::size_t i = 0; i < n; ++i)
-    require(isFinite(in.rest_positions[i]), in, "geometry", "particle " + std::to_string(i) + ": non-finite position");
+    if (!isFinite(in.rest_positions[i]))
+      require(false, in, "geometry", "particle " + std::to_string(i) + ": non-finite position");
 }
 
 MlsCoefficients<double> mlsCoefficients(const MlsMaterial& m) {
@@ -91,8 +95,8 @@ MlsModel<T> buildMlsModel(const MlsBuildInput& in) {
     for (std::size_t i = 0; i < n; ++i)
       for (std::int64_t p = l.offsets[i]; p < l.offsets[i + 1]; ++p) {
         const std::int32_t j = l.indices[std::size_t(p)];
-        require(j >= 0 && std::size_t(j) < n && std::size_t(j) != i, in, "neighbors",
-                "particle " + std::to_string(i) + ": neighbour index out of range or itself");
+        if (!(j >= 0 && std::size_t(j) < n && std::size_t(j) != i))
+          require(false, in, "neighbors", "particle " + std::to_string(i) + ": neighbour index out of range or itself");
       }
     md.neighbors = l;
   }

@@ -40,13 +40,40 @@ struct MlsView {
   // force per member (N), recomputed from the displacement before every force pass. Null: no coupling.
   const std::int32_t* coupling_group = nullptr;
   const Vec3<T>* coupling_force = nullptr;
+  // Optional pair tables of the rest configuration (mlsPairTerms; the CPU fallback builds them, the CUDA kernels
+  // pass null and recompute from the rest positions, which costs them less than the traffic). Per CSR slot p of
+  // particle i with neighbour j: pair_gradient[p] = w_ij A_i^{-T} x_ij, pair_force[p] = w_ij x_ij; weighted_sum[i]
+  // = sum_j w_ij x_ij. With them a pass reads no rest position and evaluates no kernel weight.
+  const Vec3<T>* pair_gradient = nullptr;
+  const Vec3<T>* pair_force = nullptr;
+  const Vec3<T>* weighted_sum = nullptr;
+  // Optional outputs: the stress pass's mlsStiffening of the gradient it computed, the force pass's elastic part
+  // of the force (without the coupling share; mlsCouplingRefresh adds a new share to it). Null: not written.
+  T* stiffening = nullptr;
+  Vec3<T>* elastic_force = nullptr;
 };
 
+// The rest-configuration terms of one pair (i, j) that the passes use (x_ij = X_j - X_i, w_ij its eq. 4 weight):
+// d = w_ij A_i^{-T} x_ij, so that eq. 5 reads G_i = sum_j (u_j - u_i) d^T, and wx = w_ij x_ij for eq. 9.
+template <typename T>
+INC_HD void mlsPairTerms(const Mat3<T>& moment_inverse, const Vec3<T>& xij, T w, Vec3<T>& d, Vec3<T>& wx) {
+  wx = xij * w;
+  for (int c = 0; c < 3; ++c)
+    d[c] = wx[0] * moment_inverse.m[0][c] + wx[1] * moment_inverse.m[1][c] + wx[2] * moment_inverse.m[2][c];
+}
+
 // eq. 5: G_i = [sum_j w_ij (u_j - u_i) x_ij^T] A_i^{-1}, x_ij = X_j - X_i.
+// With the pair tables: the same sum as sum_j (u_j - u_i) (w_ij x_ij^T A_i^{-1}), one product less per pair.
 template <typename T>
 INC_HD Mat3<T> mlsDisplacementGradient(const MlsView<T>& s, std::int64_t i) {
-  const Vec3<T> xi = s.rest[i];
   const Vec3<T> ui = s.displacement[i];
+  if (s.pair_gradient) {
+    Mat3<T> g;
+    for (std::int64_t p = s.offsets[i]; p < s.offsets[i + 1]; ++p)
+      accumulateGradient(g, s.displacement[s.indices[p]] - ui, s.pair_gradient[p], T(1));
+    return g;
+  }
+  const Vec3<T> xi = s.rest[i];
   Mat3<T> b;
   for (std::int64_t p = s.offsets[i]; p < s.offsets[i + 1]; ++p) {
     const std::int32_t j = s.indices[p];
@@ -57,6 +84,32 @@ INC_HD Mat3<T> mlsDisplacementGradient(const MlsView<T>& s, std::int64_t i) {
   return b * s.moment_inverse[i];
 }
 
+// How much stiffer than at rest the material is at gradient G: SVK's tangent modulus along the most
+// stretched direction grows like (3 c - 1) / 2 with c the largest eigenvalue of C = F^T F (uniaxial SVK:
+// dP/dlambda = E (3 lambda^2 - 1) / 2), the volume penalty's like c^2. c is the eigenvalue itself (closed
+// form, symmetricEigenvalues), capped by its Gershgorin bound, the largest absolute row sum of C. Until
+// 2026-11-26 the bound alone was used: it over-estimates sheared states (~10 % more substeps in the cutting
+// benchmark for nothing). The cap keeps a rigid rotation at exactly 1 (C = I to rounding, where the closed
+// form's near-triple root is only sqrt(eps) accurate). The stable step shrinks by sqrt of the largest factor
+// (the rest-state limit assumes 1). Returns >= 1.
+template <typename T>
+INC_HD T mlsStiffeningOf(const Mat3<T>& g, const MlsCoefficients<T>& coeffs) {
+  const Mat3<T> f = Mat3<T>::identity() + g;
+  const Mat3<T> c = transpose(f) * f;
+  T cmax = T(0);
+  for (int r = 0; r < 3; ++r) {
+    const T row = std::fabs(c.m[r][0]) + std::fabs(c.m[r][1]) + std::fabs(c.m[r][2]);
+    cmax = row > cmax ? row : cmax;
+  }
+  T e0, e1, e2;
+  symmetricEigenvalues(c, e0, e1, e2);
+  cmax = e2 < cmax ? e2 : cmax;
+  const T svk = T(0.5) * (T(3) * cmax - T(1));
+  const T vol = coeffs.k_volume > T(0) ? cmax * cmax : T(1);
+  const T k = svk > vol ? svk : vol;
+  return k > T(1) ? k : T(1);
+}
+
 // Pass 1 at particle i: gradient, strain, stress, energy; stores M_i = v_i P_i A_i^{-1} for pass 2.
 template <typename T>
 INC_HD void mlsStressPass(const MlsView<T>& s, std::int64_t i) {
@@ -65,15 +118,22 @@ INC_HD void mlsStressPass(const MlsView<T>& s, std::int64_t i) {
   const T v = s.volume[i];
   s.stress_moment[i] = (sp.piola * v) * s.moment_inverse[i];
   s.energy[i] = v * sp.energy_density;
+  if (s.stiffening) s.stiffening[i] = mlsStiffeningOf(g, s.coeffs);
 }
 
 // eq. 9, exact negative gradient of U = sum_i v_i psi_i with d_ij = w_ij A_i^{-1} x_ij:
 //   f_k = v_k P_k sum_j d_kj - sum_{i in N(k)} v_i P_i d_ik = sum_{i in N(k)} w_ki (M_k + M_i)(X_i - X_k).
 // Each pair term is antisymmetric in (k, i), so momentum is conserved pair by pair.
+// With the pair tables: f_k = M_k sum_i w_ki x_ki + sum_i M_i w_ki x_ki (the same sum, split).
 template <typename T>
 INC_HD Vec3<T> mlsElasticForce(const MlsView<T>& s, std::int64_t k) {
-  const Vec3<T> xk = s.rest[k];
   const Mat3<T> mk = s.stress_moment[k];
+  if (s.pair_force) {
+    Vec3<T> f = mk * s.weighted_sum[k];
+    for (std::int64_t p = s.offsets[k]; p < s.offsets[k + 1]; ++p) f += s.stress_moment[s.indices[p]] * s.pair_force[p];
+    return f;
+  }
+  const Vec3<T> xk = s.rest[k];
   Vec3<T> f;
   for (std::int64_t p = s.offsets[k]; p < s.offsets[k + 1]; ++p) {
     const std::int32_t i = s.indices[p];
@@ -89,10 +149,20 @@ INC_HD Vec3<T> mlsElasticForce(const MlsView<T>& s, std::int64_t k) {
 template <typename T>
 INC_HD void mlsForcePass(const MlsView<T>& s, std::int64_t k, T half_dt, bool kick) {
   Vec3<T> f = mlsElasticForce(s, k);
+  if (s.elastic_force) s.elastic_force[k] = f;
   if (s.coupling_group && s.coupling_group[k] >= 0) f += s.coupling_force[s.coupling_group[k]];
   s.force[k] = f;
   if (kick && s.kind[k] == kMlsFree)
     s.velocity[k] = mlsHalfKick(s.velocity[k], f, s.mass[k], s.gravity, half_dt, s.coeffs.damping);
+}
+
+// The force at particle k after the coupling forces changed (new anchors) at an unchanged displacement: the
+// elastic part the last force pass stored plus the new share, the same sum mlsForcePass forms (no kick).
+template <typename T>
+INC_HD void mlsCouplingRefresh(const MlsView<T>& s, std::int64_t k) {
+  Vec3<T> f = s.elastic_force[k];
+  if (s.coupling_group && s.coupling_group[k] >= 0) f += s.coupling_force[s.coupling_group[k]];
+  s.force[k] = f;
 }
 
 // First half kick and drift at particle k, using the force of the current displacement. Fixed particles
@@ -111,24 +181,10 @@ INC_HD void mlsDriftPass(const MlsView<T>& s, std::int64_t k, T dt, int remainin
   }
 }
 
-// How much stiffer than at rest the material is at particle i: SVK's tangent modulus along the most
-// stretched direction grows like (3 c - 1) / 2 with c the largest eigenvalue of C = F^T F (uniaxial SVK:
-// dP/dlambda = E (3 lambda^2 - 1) / 2), the volume penalty's like c^2. c is bounded by the largest absolute
-// row sum of C (Gershgorin), so this over-estimates; a rigid rotation gives exactly 1. The stable step
-// shrinks by sqrt of the largest factor (the rest-state limit assumes 1). Returns >= 1.
+// The stiffening factor at particle i at the current displacement (mlsStiffeningOf of its gradient).
 template <typename T>
 INC_HD T mlsStiffening(const MlsView<T>& s, std::int64_t i) {
-  const Mat3<T> f = Mat3<T>::identity() + mlsDisplacementGradient(s, i);
-  const Mat3<T> c = transpose(f) * f;
-  T cmax = T(0);
-  for (int r = 0; r < 3; ++r) {
-    const T row = std::fabs(c.m[r][0]) + std::fabs(c.m[r][1]) + std::fabs(c.m[r][2]);
-    cmax = row > cmax ? row : cmax;
-  }
-  const T svk = T(0.5) * (T(3) * cmax - T(1));
-  const T vol = s.coeffs.k_volume > T(0) ? cmax * cmax : T(1);
-  const T k = svk > vol ? svk : vol;
-  return k > T(1) ? k : T(1);
+  return mlsStiffeningOf(mlsDisplacementGradient(s, i), s.coeffs);
 }
 
 // Per-particle terms of the frame reductions (energies in J, squared displacement in m^2).

@@ -440,8 +440,23 @@ TEST(MlsValidation, DISABLED_CantileverStudy) {
     }
 }
 
+TEST(MlsValidation, StiffeningUsesTheLargestEigenvalueNotItsBound) {
+  // Simple shear F = I + gamma e_x e_y^T: C = F^T F has largest eigenvalue 1 + gamma^2/2 + gamma sqrt(1 + gamma^2/4)
+  // (1.6404 for gamma = 0.5), below its Gershgorin bound 1 + gamma + gamma^2 (1.75) that the stiffening used to take.
+  MlsCoefficients<double> coeffs;
+  coeffs.k_volume = 1.0;  // the volume penalty's c^2 term is the larger one
+  const double gamma = 0.5;
+  Mat3d g;
+  g.m[0][1] = gamma;
+  const double c = 1 + 0.5 * gamma * gamma + gamma * std::sqrt(1 + 0.25 * gamma * gamma);
+  EXPECT_NEAR(mlsStiffeningOf(g, coeffs), c * c, 1e-9 * c * c);
+  EXPECT_LT(mlsStiffeningOf(g, coeffs), std::pow(1 + gamma + gamma * gamma, 2) * 0.9);
+  const Mat3f gf(g);
+  EXPECT_NEAR(mlsStiffeningOf(gf, MlsCoefficients<float>{0.f, 0.f, 1.f, 0.f}), c * c, 1e-5 * c * c);
+}
+
 TEST(MlsValidation, StretchedBodiesTakeSmallerSteps) {
-  // A homogeneous stretch F: mlsStiffening = max((3 c - 1)/2, c^2) with c the largest row sum of F^T F
+  // A homogeneous stretch F: mlsStiffening = max((3 c - 1)/2, c^2) with c the largest eigenvalue of F^T F
   // (exact for a diagonal F), 1 for a rigid rotation; advance() divides the rest-state limit by its sqrt.
   MlsBuildInput in = blockInput(6, 5, 5, 0.01, 0.2);
   in.material.volume_preservation = true;
