@@ -553,8 +553,10 @@ class TearResident {
       cornerScatterKernel<<<gridFor(nhz), kBlock>>>(tris_.data(), nh, pt_off_.data(), pt_count_.data(), pt_tris_.data());
       INC_CUDA_LAUNCH("tear corner scatter");
     }
-    sortRowsKernel<<<gridFor(nz), kBlock>>>(n, pt_off_.data(), pt_tris_.data());
-    INC_CUDA_LAUNCH("tear particle triangles");
+    if (n > 0) {
+      sortRowsKernel<<<gridFor(nz), kBlock>>>(n, pt_off_.data(), pt_tris_.data());
+      INC_CUDA_LAUNCH("tear particle triangles");
+    }
     // 2: per-particle counts and their exclusive scan (entry n: the totals).
     tear::Fan fan;
     fan.tris = tris_.data();
