@@ -120,7 +120,7 @@ TearSortedRebuild<T> rebuildTearSorted(const TearSheet<T>& s, const TearModelOpt
 }
 
 template <typename T>
-TearSortedRebuild<T> rebuildTearFans(const TearSheet<T>& s, const TearModelOptions& opt) {
+TearSortedRebuild<T> rebuildTearFans(const TearSheet<T>& s, const TearModelOptions& opt, int fan_cache) {
   TearSortedRebuild<T> r;
   const std::size_t n = s.size(), nt = s.tris.size(), nh = 3 * nt;
   const std::int32_t* tris = nt ? s.tris.front().data() : nullptr;
@@ -142,7 +142,7 @@ TearSortedRebuild<T> rebuildTearFans(const TearSheet<T>& s, const TearModelOptio
   fan.pt_tris = r.pt_tris.data();
   // 2: counts and their exclusive scan.
   std::vector<tear::FanCounts> off(n + 1);
-  for (std::size_t p = 0; p < n; ++p) off[p + 1] = tear::AddFanCounts()(off[p], tear::fanCounts(fan, std::int32_t(p)));
+  for (std::size_t p = 0; p < n; ++p) off[p + 1] = tear::AddFanCounts()(off[p], tear::fanCounts(fan, std::int32_t(p), fan_cache));
   const tear::FanCounts total = off[n];
   const std::size_t ne = std::size_t(total.upper), nb = std::size_t(total.bend_upper);
   if (std::size_t(total.partners) != 2 * ne || std::size_t(total.bend_slots) != 4 * nb)
@@ -189,7 +189,7 @@ TearSortedRebuild<T> rebuildTearFans(const TearSheet<T>& s, const TearModelOptio
   o.bend_particle_offsets = b.particle_offsets.data();
   o.bend_particle_slots = b.particle_slots.data();
   for (std::size_t p = 0; p <= n; ++p) tear::writeFanOffsets(o, std::int32_t(p));
-  for (std::size_t p = 0; p < n; ++p) tear::writeFanEdges(fan, o, std::int32_t(p));
+  for (std::size_t p = 0; p < n; ++p) tear::writeFanEdges(fan, o, std::int32_t(p), fan_cache);
   for (std::size_t p = 0; p < n; ++p) tear::writeFanIncidence(fan, o, std::int32_t(p));
   // 5: offsets and Jacobi scales, as commitBlockIncidence.
   std::vector<T> inv_mass(n);
@@ -211,7 +211,7 @@ TearSortedRebuild<T> rebuildTearFans(const TearSheet<T>& s, const TearModelOptio
 
 template TearSortedRebuild<float> rebuildTearSorted<float>(const TearSheet<float>&, const TearModelOptions&);
 template TearSortedRebuild<double> rebuildTearSorted<double>(const TearSheet<double>&, const TearModelOptions&);
-template TearSortedRebuild<float> rebuildTearFans<float>(const TearSheet<float>&, const TearModelOptions&);
-template TearSortedRebuild<double> rebuildTearFans<double>(const TearSheet<double>&, const TearModelOptions&);
+template TearSortedRebuild<float> rebuildTearFans<float>(const TearSheet<float>&, const TearModelOptions&, int);
+template TearSortedRebuild<double> rebuildTearFans<double>(const TearSheet<double>&, const TearModelOptions&, int);
 
 }  // namespace inc

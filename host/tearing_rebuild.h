@@ -6,6 +6,7 @@
 
 #include "host/pbd_model.h"
 #include "host/tearing_sheet.h"
+#include "physics/tearing_rebuild.h"
 
 namespace inc {
 
@@ -35,8 +36,10 @@ TearSortedRebuild<T> rebuildTearSorted(const TearSheet<T>& s, const TearModelOpt
 //  3 writeFanOffsets and writeFanEdges per particle: partner rows, edges, constraints, own distance slots;
 //  4 writeFanIncidence per particle: the rest of the distance rows and the bending rows;
 //  5 Jacobi scales per constraint (what PbdDevicePatch::commitBlockIncidence computes on the device).
-// Precondition: no degenerate or duplicated triangle (checkTearMesh).
+// Precondition: no degenerate or duplicated triangle (checkTearMesh). fan_cache: the per-thread fan copy's
+// capacity in triangles (tear::FanRow; tests pass 0 to force the uncached reads); the result never depends on it.
 template <typename T>
-TearSortedRebuild<T> rebuildTearFans(const TearSheet<T>& s, const TearModelOptions& opt);
+TearSortedRebuild<T> rebuildTearFans(const TearSheet<T>& s, const TearModelOptions& opt,
+                                     int fan_cache = tear::FanRow::kCache);
 
 }  // namespace inc

@@ -139,33 +139,61 @@ struct Fan {
   const std::int32_t* tris = nullptr;        // 3 per triangle
   const std::int32_t* pt_offsets = nullptr;  // n + 1
   const std::int32_t* pt_tris = nullptr;
-  INC_HD int corners(std::int32_t p) const { return 3 * (pt_offsets[p + 1] - pt_offsets[p]); }
-  // Corner k of p's fan: vertex k % 3 of p's (k / 3)-th triangle (p itself is one of each triangle's three).
-  INC_HD std::int32_t corner(std::int32_t p, int k) const { return tris[3 * pt_tris[pt_offsets[p] + k / 3] + k % 3]; }
-  // The two vertices of p's q-th triangle other than p, in the triangle's cyclic order after p.
-  INC_HD void opposite(std::int32_t p, int q, std::int32_t& u, std::int32_t& v) const {
-    const std::int32_t* t = tris + 3 * pt_tris[pt_offsets[p] + q];
+};
+
+// Particle p's fan as the per-particle passes read it: a fan of up to kCache triangles is copied once into a
+// per-thread array (registers / local memory: the passes read each corner many times, and gathered global
+// loads are what they cost on the device); a larger fan is read from the global arrays every time. Both give
+// the same values, so the results never depend on the capacity (TearingRebuild.* check both).
+struct FanRow {
+  static constexpr int kCache = 12;  // triangles; a lattice vertex has 6, a split one fewer
+  const Fan* fan;
+  std::int32_t p;
+  int count;    // triangles
+  bool cached;
+  std::int32_t v[3 * kCache];
+  INC_HD FanRow(const Fan& f, std::int32_t p_, int cache = kCache)
+      : fan(&f), p(p_), count(f.pt_offsets[p_ + 1] - f.pt_offsets[p_]) {
+    cached = count <= cache && count <= kCache;
+    if (!cached) return;
+    for (int q = 0; q < count; ++q) {
+      const std::int32_t* t = f.tris + 3 * f.pt_tris[f.pt_offsets[p] + q];
+      v[3 * q] = t[0];
+      v[3 * q + 1] = t[1];
+      v[3 * q + 2] = t[2];
+    }
+  }
+  INC_HD const std::int32_t* triangle(int q) const {
+    return cached ? v + 3 * q : fan->tris + 3 * fan->pt_tris[fan->pt_offsets[p] + q];
+  }
+  // Corner k: vertex k % 3 of the (k / 3)-th triangle (p itself is one of each triangle's three).
+  INC_HD std::int32_t corner(int k) const { return triangle(k / 3)[k % 3]; }
+  INC_HD int corners() const { return 3 * count; }
+  // The two vertices of the q-th triangle other than p, in the triangle's cyclic order after p.
+  INC_HD void opposite(int q, std::int32_t& u, std::int32_t& w) const {
+    const std::int32_t* t = triangle(q);
     const int c = t[0] == p ? 0 : (t[1] == p ? 1 : 2);
     u = t[(c + 1) % 3];
-    v = t[(c + 2) % 3];
+    w = t[(c + 2) % 3];
   }
 };
 
-// Whether corner k's vertex v already occurred among corners [0, k) of p's fan (the first occurrence counts).
-INC_HD bool seenInFan(const Fan& f, std::int32_t p, int k, std::int32_t v) {
+// Whether corner k's vertex v already occurred among corners [0, k) of the fan (the first occurrence counts).
+INC_HD bool seenInFan(const FanRow& r, int k, std::int32_t v) {
   for (int j = 0; j < k; ++j)
-    if (f.corner(p, j) == v) return true;
+    if (r.corner(j) == v) return true;
   return false;
 }
 
-// Edge a-b (a < b) gets a bending constraint: exactly two of a's triangles contain b, and each has a vertex
-// that is neither a nor b (the wings, returned ascending). buildTearPbdModel's merge of the two particles'
-// triangle lists visits the same triangles in the same (ascending) order.
-INC_HD bool bendingWings(const Fan& f, std::int32_t a, std::int32_t b, std::int32_t& p2, std::int32_t& p3) {
+// Edge a-b (a < b, a = r.p) gets a bending constraint: exactly two of a's triangles contain b, and each has a
+// vertex that is neither a nor b (the wings, returned ascending). buildTearPbdModel's merge of the two
+// particles' triangle lists visits the same triangles in the same (ascending) order.
+INC_HD bool bendingWings(const FanRow& r, std::int32_t b, std::int32_t& p2, std::int32_t& p3) {
+  const std::int32_t a = r.p;
   int found = 0;
   std::int32_t w[2] = {-1, -1};
-  for (std::int32_t q = f.pt_offsets[a]; q < f.pt_offsets[a + 1]; ++q) {
-    const std::int32_t* t = f.tris + 3 * f.pt_tris[q];
+  for (int q = 0; q < r.count; ++q) {
+    const std::int32_t* t = r.triangle(q);
     if (t[0] != b && t[1] != b && t[2] != b) continue;
     std::int32_t o = -1;
     for (int c = 0; c < 3; ++c)
@@ -177,6 +205,10 @@ INC_HD bool bendingWings(const Fan& f, std::int32_t a, std::int32_t b, std::int3
   p2 = w[0] < w[1] ? w[0] : w[1];
   p3 = w[0] < w[1] ? w[1] : w[0];
   return true;
+}
+// The same over a's fan in global memory (an edge seen from its upper particle or from a wing).
+INC_HD bool bendingWings(const Fan& f, std::int32_t a, std::int32_t b, std::int32_t& p2, std::int32_t& p3) {
+  return bendingWings(FanRow(f, a, 0), b, p2, p3);
 }
 
 // Per-particle counts; their exclusive scan numbers everything: partners (pe_offsets, and the distance block's
@@ -201,24 +233,26 @@ struct AddFanCounts {
 // triangle, so this is rebuildTopology's pe row: partners below p, then above, both ascending). p takes a
 // bending slot in every bending constraint of an edge at p (slot 0 or 1) and of the edge opposite p in each
 // of its triangles (a wing: slot 2 or 3).
-INC_HD FanCounts fanCounts(const Fan& f, std::int32_t p) {
+// fan_cache: FanRow's capacity (tests pass 0 to force the uncached reads).
+INC_HD FanCounts fanCounts(const Fan& f, std::int32_t p, int fan_cache = FanRow::kCache) {
   FanCounts r;
-  const int m = f.corners(p);
+  const FanRow row(f, p, fan_cache);
+  const int m = row.corners();
   std::int32_t p2 = 0, p3 = 0;
   for (int k = 0; k < m; ++k) {
-    const std::int32_t v = f.corner(p, k);
-    if (v == p || seenInFan(f, p, k, v)) continue;
+    const std::int32_t v = row.corner(k);
+    if (v == p || seenInFan(row, k, v)) continue;
     ++r.partners;
-    const bool bend = v > p ? bendingWings(f, p, v, p2, p3) : bendingWings(f, v, p, p2, p3);
+    const bool bend = v > p ? bendingWings(row, v, p2, p3) : bendingWings(f, v, p, p2, p3);
     if (v > p) {
       ++r.upper;
       r.bend_upper += bend ? 1 : 0;
     }
     r.bend_slots += bend ? 1 : 0;
   }
-  for (int q = 0; q < m / 3; ++q) {
+  for (int q = 0; q < row.count; ++q) {
     std::int32_t u = 0, v = 0;
-    f.opposite(p, q, u, v);
+    row.opposite(q, u, v);
     if (u == v || u == p || v == p) continue;  // degenerate triangle: no edge opposite p
     r.bend_slots += bendingWings(f, u < v ? u : v, u < v ? v : u, p2, p3) ? 1 : 0;
   }
@@ -263,13 +297,14 @@ INC_HD void writeFanOffsets(const FanOutputs<T>& o, std::int32_t p) {
 // distance slots 2 e of those edges (the upper part of its distance row; the lower part needs the partners'
 // rows: writeFanIncidence).
 template <typename T>
-INC_HD void writeFanEdges(const Fan& f, const FanOutputs<T>& o, std::int32_t p) {
+INC_HD void writeFanEdges(const Fan& f, const FanOutputs<T>& o, std::int32_t p, int fan_cache = FanRow::kCache) {
   const FanCounts &b = o.off[p], &e = o.off[p + 1];
+  const FanRow fr(f, p, fan_cache);
   std::int32_t* row = o.pe_partner + b.partners;
-  const int np = e.partners - b.partners, m = f.corners(p);
+  const int np = e.partners - b.partners, m = fr.corners();
   int w = 0;
   for (int k = 0; k < m && w < np; ++k) {  // w < np: fanCounts counted exactly these, so this never cuts
-    const std::int32_t v = f.corner(p, k);
+    const std::int32_t v = fr.corner(k);
     if (v == p) continue;
     bool dup = false;
     for (int j = 0; j < w && !dup; ++j) dup = row[j] == v;
@@ -281,7 +316,7 @@ INC_HD void writeFanEdges(const Fan& f, const FanOutputs<T>& o, std::int32_t p) 
   for (int k = 0; k < nup; ++k) {
     const std::int32_t q = row[nlow + k], edge = b.upper + k;
     std::int32_t p2 = -1, p3 = -1;
-    const bool bend = bendingWings(f, p, q, p2, p3);
+    const bool bend = bendingWings(fr, q, p2, p3);
     writeEdgeConstraint<T>(p, q, p2, p3, edge, bend ? c : -1, o.rest, o.stretch_compliance, o.bending_compliance,
                            o.edge_a, o.edge_b, o.dist_ids, o.dist_rest, o.dist_compliance, o.bend_ids, o.bend_rest,
                            o.bend_compliance);
@@ -317,10 +352,10 @@ INC_HD void writeFanIncidence(const Fan& f, const FanOutputs<T>& o, std::int32_t
     const std::int32_t c = o.edge_bend[edge];
     if (c >= 0) out[w++] = 4 * c + (i < nlow ? 1 : 0);
   }
-  const int m = f.corners(p);
-  for (int q = 0; q < m / 3 && w < cap; ++q) {
+  const FanRow fr(f, p, 0);  // one pass over the fan: nothing to gain from a copy
+  for (int q = 0; q < fr.count && w < cap; ++q) {
     std::int32_t u = 0, v = 0;
-    f.opposite(p, q, u, v);
+    fr.opposite(q, u, v);
     if (u == v || u == p || v == p) continue;
     const std::int32_t c = o.edge_bend[edgeNumber(o, u < v ? u : v, u < v ? v : u)];
     if (c >= 0) out[w++] = 4 * c + (o.bend_ids[4 * c + 2] == p ? 2 : 3);

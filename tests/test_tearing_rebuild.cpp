@@ -58,9 +58,11 @@ void expectSortedEqualsHost(const TearSheet<T>& torn) {
   opt.coloring = false;
   const PbdModel<T> m = buildTearPbdModel(s, opt);
   ASSERT_EQ(m.blocks.size(), 2u);
-  for (const bool fans : {true, false}) {
-    SCOPED_TRACE(fans ? "per-particle fans" : "radix sorts");
-    const TearSortedRebuild<T> r = fans ? rebuildTearFans(torn, opt) : rebuildTearSorted(torn, opt);
+  for (const int algo : {0, 1, 2}) {  // per-particle fans (fan copies as on the device, none), radix sorts
+    SCOPED_TRACE(algo == 0 ? "per-particle fans" : (algo == 1 ? "per-particle fans, uncached" : "radix sorts"));
+    const TearSortedRebuild<T> r = algo == 0   ? rebuildTearFans(torn, opt)
+                                   : algo == 1 ? rebuildTearFans(torn, opt, 0)
+                                               : rebuildTearSorted(torn, opt);
     EXPECT_EQ(r.pt_offsets, s.pt_offsets);
     EXPECT_EQ(r.pt_tris, s.pt_tris);
     EXPECT_EQ(r.edge_a, s.edge_a);
@@ -131,6 +133,22 @@ TEST(TearingRebuild, RowSortAndFanCounts) {
   EXPECT_EQ(c.bend_slots, 40);
   const tear::FanCounts unused = tear::fanCounts(f, 41);
   EXPECT_EQ(unused.partners + unused.upper + unused.bend_upper + unused.bend_slots, 0);
+  // The fan copy (up to FanRow::kCache triangles) and the global reads count the same on a torn sheet.
+  TearSheet<double> torn = tornSheet<double>(false, 8, 5);
+  torn.rebuildTopology();
+  f.tris = torn.tris.front().data();
+  f.pt_offsets = torn.pt_offsets.data();
+  f.pt_tris = torn.pt_tris.data();
+  int cached = 0;
+  for (std::size_t p = 0; p < torn.size(); ++p) {
+    const tear::FanCounts a = tear::fanCounts(f, std::int32_t(p)), b = tear::fanCounts(f, std::int32_t(p), 0);
+    ASSERT_EQ(a.partners, b.partners) << p;
+    ASSERT_EQ(a.upper, b.upper) << p;
+    ASSERT_EQ(a.bend_upper, b.bend_upper) << p;
+    ASSERT_EQ(a.bend_slots, b.bend_slots) << p;
+    cached += torn.pt_offsets[p + 1] - torn.pt_offsets[p] <= tear::FanRow::kCache ? 1 : 0;
+  }
+  EXPECT_EQ(cached, int(torn.size())) << "a torn lattice's fans fit the copy";
 }
 
 // Fans far larger than a lattice's, an unused particle and a non-manifold edge: the per-particle rebuild has no
