@@ -29,7 +29,8 @@ struct Row {
   double ms_before = 0, ms_during = 0, ms_after = 0, ms_during_max = 0;
   double ms_tear_during = 0, ms_rebuild_during = 0;  // medians of the tearing step and the model rebuild
   double drop = 0;                                   // 1 - fps_during / fps_before
-  std::string path;                                  // "device" (resident sheet, patched model) or "host"
+  std::string path;  // "device" (resident sheet, patched model, per-particle rebuild), "sorted" (the same with
+                     // the radix-sort rebuild) or "host"
   // --profile: mean ms per frame of each stage in the before / during / after phases (first-seen order).
   std::vector<std::string> stage_order;
   std::map<std::string, double> stage_sum[3];
@@ -37,7 +38,7 @@ struct Row {
 };
 
 struct Options {
-  bool profile = false, host_path = false;
+  bool profile = false, host_path = false, sorted_rebuild = false;
   int summary_every = 1;
 };
 
@@ -98,6 +99,7 @@ Row runCase(BackendKind backend, TearCriterion crit, std::int64_t particles, std
   TearModelOptions mo;
   mo.stretch_compliance = 1e-4;
   mo.bending_compliance = 10.0;
+  mo.device_sorted_rebuild = opt.sorted_rebuild;
   PbdStepParams<float> sp;
   sp.gravity = Vec3f(0, 0, 0);
   sp.substeps = 4;
@@ -112,7 +114,7 @@ Row runCase(BackendKind backend, TearCriterion crit, std::int64_t particles, std
   d.setSummaryEvery(opt.summary_every);
   d.profile = opt.profile;
   Row row;
-  row.path = d.deviceResident() ? "device" : "host";
+  row.path = d.deviceResident() ? (opt.sorted_rebuild ? "sorted" : "device") : "host";
   row.backend = backendName(d.kind());
   row.method = tearCriterionName(crit);
   row.particles = std::int64_t(d.sheet().size());
@@ -212,6 +214,8 @@ int main(int argc, char** argv) {
   app.add_flag("--profile", opt.profile,
                "per-stage breakdown (device work synchronised around each stage, PBD stages by CUDA events; slower)");
   app.add_flag("--host-path", opt.host_path, "CUDA: host sheet + host model rebuild every tearing frame (the old path)");
+  app.add_flag("--sorted-rebuild", opt.sorted_rebuild,
+               "CUDA device path: re-derive the topology by the older radix sorts instead of per particle");
   app.add_option("--summary-every", opt.summary_every, "CUDA: PBD residual/finiteness summary every N frames");
   try {
     app.parse(argc, argv);

@@ -1,8 +1,9 @@
-// Sort-based rebuild of a torn sheet's adjacency and PBD constraints on the CPU: the reference of the device rebuild.
+// Rebuild of a torn sheet's adjacency and PBD constraints on the CPU by the device's algorithms (per-particle fans; radix sorts): their reference.
 #include "host/tearing_rebuild.h"
 
 #include <algorithm>
 #include <numeric>
+#include <stdexcept>
 
 #include "physics/tearing_rebuild.h"
 
@@ -118,7 +119,99 @@ TearSortedRebuild<T> rebuildTearSorted(const TearSheet<T>& s, const TearModelOpt
   return r;
 }
 
+template <typename T>
+TearSortedRebuild<T> rebuildTearFans(const TearSheet<T>& s, const TearModelOptions& opt, int fan_cache) {
+  TearSortedRebuild<T> r;
+  const std::size_t n = s.size(), nt = s.tris.size(), nh = 3 * nt;
+  const std::int32_t* tris = nt ? s.tris.front().data() : nullptr;
+  // 1: particle -> triangles.
+  std::vector<std::int32_t> count(n + 1, 0);
+  for (std::size_t h = 0; h < nh; ++h) ++count[std::size_t(tris[h])];
+  r.pt_offsets.assign(n + 1, 0);
+  for (std::size_t p = 0; p < n; ++p) r.pt_offsets[p + 1] = r.pt_offsets[p] + count[p];
+  r.pt_tris.resize(nh);
+  for (std::size_t h = 0; h < nh; ++h) {
+    const std::size_t p = std::size_t(tris[h]);
+    r.pt_tris[std::size_t(r.pt_offsets[p] + --count[p])] = std::int32_t(h / 3);
+  }
+  for (std::size_t p = 0; p < n; ++p)
+    tear::sortRow(r.pt_tris.data() + r.pt_offsets[p], r.pt_offsets[p + 1] - r.pt_offsets[p]);
+  tear::Fan fan;
+  fan.tris = tris;
+  fan.pt_offsets = r.pt_offsets.data();
+  fan.pt_tris = r.pt_tris.data();
+  // 2: counts and their exclusive scan.
+  std::vector<tear::FanCounts> off(n + 1);
+  for (std::size_t p = 0; p < n; ++p) off[p + 1] = tear::AddFanCounts()(off[p], tear::fanCounts(fan, std::int32_t(p), fan_cache));
+  const tear::FanCounts total = off[n];
+  const std::size_t ne = std::size_t(total.upper), nb = std::size_t(total.bend_upper);
+  if (std::size_t(total.partners) != 2 * ne || std::size_t(total.bend_slots) != 4 * nb)
+    throw std::logic_error("rebuildTearFans: inconsistent counts (a degenerate or duplicated triangle?)");
+  // 3, 4: rows, edges, constraints, incidence.
+  PbdConstraintBlock<T>& d = r.distance;
+  PbdConstraintBlock<T>& b = r.bending;
+  d.kind = PbdConstraintKind::Distance;
+  b.kind = PbdConstraintKind::Bending;
+  d.stiffness = b.stiffness = T(opt.pbd_stiffness);
+  r.pe_offsets.resize(n + 1);
+  r.pe_partner.resize(2 * ne);
+  r.edge_a.resize(ne);
+  r.edge_b.resize(ne);
+  std::vector<std::int32_t> edge_bend(ne);
+  d.ids.resize(2 * ne);
+  d.rest.resize(ne);
+  d.compliance.resize(ne);
+  d.particle_offsets.resize(n + 1);
+  d.particle_slots.resize(2 * ne);
+  b.ids.resize(4 * nb);
+  b.rest.resize(nb);
+  b.compliance.resize(nb);
+  b.particle_offsets.resize(n + 1);
+  b.particle_slots.resize(4 * nb);
+  tear::FanOutputs<T> o;
+  o.off = off.data();
+  o.rest = s.rest.data();
+  o.stretch_compliance = T(opt.stretch_compliance);
+  o.bending_compliance = T(opt.bending_compliance);
+  o.pe_offsets = r.pe_offsets.data();
+  o.pe_partner = r.pe_partner.data();
+  o.edge_a = r.edge_a.data();
+  o.edge_b = r.edge_b.data();
+  o.edge_bend = edge_bend.data();
+  o.dist_ids = d.ids.data();
+  o.dist_rest = d.rest.data();
+  o.dist_compliance = d.compliance.data();
+  o.dist_particle_offsets = d.particle_offsets.data();
+  o.dist_particle_slots = d.particle_slots.data();
+  o.bend_ids = b.ids.data();
+  o.bend_rest = b.rest.data();
+  o.bend_compliance = b.compliance.data();
+  o.bend_particle_offsets = b.particle_offsets.data();
+  o.bend_particle_slots = b.particle_slots.data();
+  for (std::size_t p = 0; p <= n; ++p) tear::writeFanOffsets(o, std::int32_t(p));
+  for (std::size_t p = 0; p < n; ++p) tear::writeFanEdges(fan, o, std::int32_t(p), fan_cache);
+  for (std::size_t p = 0; p < n; ++p) tear::writeFanIncidence(fan, o, std::int32_t(p));
+  // 5: offsets and Jacobi scales, as commitBlockIncidence.
+  std::vector<T> inv_mass(n);
+  for (std::size_t i = 0; i < n; ++i) inv_mass[i] = s.fixed[i] ? T(0) : T(1) / s.mass[i];
+  for (PbdConstraintBlock<T>* blk : {&d, &b}) {
+    const int arity = blk == &d ? 2 : 4;
+    blk->offsets.resize(blk->rest.size() + 1);
+    for (std::size_t c = 0; c < blk->offsets.size(); ++c) blk->offsets[c] = std::int32_t(arity * c);
+    blk->jacobi_scale.resize(blk->ids.size());
+    for (std::size_t c = 0; c < blk->rest.size(); ++c) {
+      const T sc = tear::jacobiScaleOf(blk->ids.data(), arity, std::int64_t(c), blk->particle_offsets.data(),
+                                       inv_mass.data());
+      for (int k = 0; k < arity; ++k) blk->jacobi_scale[std::size_t(arity) * c + std::size_t(k)] = sc;
+    }
+    blk->coloring = ConstraintColoring{};
+  }
+  return r;
+}
+
 template TearSortedRebuild<float> rebuildTearSorted<float>(const TearSheet<float>&, const TearModelOptions&);
 template TearSortedRebuild<double> rebuildTearSorted<double>(const TearSheet<double>&, const TearModelOptions&);
+template TearSortedRebuild<float> rebuildTearFans<float>(const TearSheet<float>&, const TearModelOptions&, int);
+template TearSortedRebuild<double> rebuildTearFans<double>(const TearSheet<double>&, const TearModelOptions&, int);
 
 }  // namespace inc

@@ -1,4 +1,4 @@
-// Sort-based rebuild of a torn sheet's adjacency and PBD constraints (the device algorithm, run on the CPU as its reference).
+// Rebuild of a torn sheet's adjacency and PBD constraints by the device algorithms (per-particle fans; the older radix-sort path), run on the CPU as their reference.
 #pragma once
 
 #include <cstdint>
@@ -6,10 +6,11 @@
 
 #include "host/pbd_model.h"
 #include "host/tearing_sheet.h"
+#include "physics/tearing_rebuild.h"
 
 namespace inc {
 
-// What the device rebuild (kernels/tearing_cuda.cu) derives from the triangles after a tearing step. Equal,
+// What the device rebuild (kernels/tearing_cuda.cu, either algorithm) derives from the triangles after a tearing step. Equal,
 // array for array, to TearSheet::rebuildTopology() followed by buildTearPbdModel(coloring = false): the
 // blocks' ids, offsets, rest values, particle -> slot CSR and Jacobi scales (colouring left empty).
 template <typename T>
@@ -26,5 +27,19 @@ struct TearSortedRebuild {
 //  4 each block's slots sorted by particle (stable) -> particle -> slot CSR, then Jacobi scales.
 template <typename T>
 TearSortedRebuild<T> rebuildTearSorted(const TearSheet<T>& s, const TearModelOptions& opt);
+
+// The per-particle algorithm (the device's default; physics/tearing_rebuild.h, "Per-particle rebuild"), no
+// global sort:
+//  1 corners counted per particle, exclusive scan -> offsets, corners scattered into their rows (in reverse
+//    order here; the device's atomic cursors give any order), each row sorted -> particle -> triangles;
+//  2 fanCounts per particle, exclusive scan over n + 1 entries (the totals last: the device's one read);
+//  3 writeFanOffsets and writeFanEdges per particle: partner rows, edges, constraints, own distance slots;
+//  4 writeFanIncidence per particle: the rest of the distance rows and the bending rows;
+//  5 Jacobi scales per constraint (what PbdDevicePatch::commitBlockIncidence computes on the device).
+// Precondition: no degenerate or duplicated triangle (checkTearMesh). fan_cache: the per-thread fan copy's
+// capacity in triangles (tear::FanRow; tests pass 0 to force the uncached reads); the result never depends on it.
+template <typename T>
+TearSortedRebuild<T> rebuildTearFans(const TearSheet<T>& s, const TearModelOptions& opt,
+                                     int fan_cache = tear::FanRow::kCache);
 
 }  // namespace inc

@@ -95,6 +95,9 @@ struct TearModelOptions {
   // false: skip the Gauss-Seidel colouring (the Jacobi solver does not read it) and derive the particle ->
   // slot lists and Jacobi scales here exactly as finalizePbdModel does; a tearing frame rebuilds the model.
   bool coloring = true;
+  // CUDA device-resident path (docs/tearing.md): re-derive the adjacency and the constraint blocks after a
+  // tearing step by the older radix-sort rebuild instead of the per-particle one (same arrays; to compare).
+  bool device_sorted_rebuild = false;
 };
 // Distance block on every bond, Bending block on every edge shared by exactly two triangles, rest values
 // from the rest positions; fixed particles get inverse mass 0. Finalised.

@@ -1,4 +1,4 @@
-// In-place device patching of the CUDA PBD backend's model: appended particles, constraint blocks rewritten on the device, incidence by radix sort.
+// In-place device patching of the CUDA PBD backend's model: appended particles, constraint blocks rewritten on the device, incidence by radix sort or from the caller.
 #pragma once
 
 #include <cstddef>
@@ -33,6 +33,14 @@ struct PbdDeviceBlock {
   T* compliance = nullptr;       // one per constraint
 };
 
+// Device pointers of one block's particle -> slot CSR, for a caller that derives it itself
+// (commitBlockIncidence). particle_offsets has n + 1 entries (n: the particle count when reserved).
+struct PbdDeviceIncidence {
+  std::size_t slot_capacity = 0;
+  std::int32_t* particle_offsets = nullptr;
+  std::int32_t* particle_slots = nullptr;
+};
+
 // The patch API of the CUDA PBD backend (obtain it with pbdDevicePatch). All work is enqueued on the backend's
 // stream (ordered with the legacy default stream, which other kernels of this library use) without a host
 // synchronisation, except where a buffer must grow: reserveParticles and reserveBlock reallocate (the live
@@ -57,6 +65,14 @@ class PbdDevicePatch {
   // rebuilt on the device. The block's colouring is dropped: Jacobi only (advanceFrame throws for
   // Gauss-Seidel on a patched model).
   virtual void commitBlock(int block, int count) = 0;
+  // Room for the particle -> slot CSR of `constraints` constraints of block b over the current particles
+  // (call after appendParticles; reallocates only beyond the capacity, like reserveBlock).
+  virtual PbdDeviceIncidence reserveIncidence(int block, std::size_t constraints) = 0;
+  // commitBlock for a caller that has also written the block's particle -> slot CSR into the reserveIncidence
+  // buffers (slots ascending per particle, particle_offsets[n] = arity * count): everything commitBlock does
+  // (offsets, Jacobi scales from that CSR and the current inverse masses, multipliers reset, colouring dropped)
+  // except the sort. Throws when the CSR's buffers were not reserved for this count and particle count.
+  virtual void commitBlockIncidence(int block, int count) = 0;
   // The residual/finiteness summary (one small download and a synchronisation) every k-th frame only
   // (k >= 1; default 1). Frames without it report finite = true and residual 0.
   virtual void setSummaryEvery(int k) = 0;

@@ -755,67 +755,23 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     return r;
   }
 
-  void commitBlock(int block, int count) override {
+  void commitBlock(int block, int count) override { commit(block, count, false); }
+
+  PbdDeviceIncidence reserveIncidence(int block, std::size_t constraints) override {
     DeviceBlock<T>& d = patchBlock(block);
-    const int a = blockArity(d.kind);
-    if (count < 0 || std::size_t(count) > std::min(capacityOf(d.ids) / std::size_t(a), capacityOf(d.rest)) ||
-        std::size_t(count) > capacityOf(d.compliance))
-      throw InputError("pbd patch", "count", "call reserveBlock first (" + std::to_string(count) + " constraints)");
-    const std::size_t cnt = std::size_t(count), slots = std::size_t(a) * cnt;
-    d.ids.resize(slots);
-    d.rest.resize(cnt);
-    d.compliance.resize(cnt);
-    // Derived arrays: no content to keep, so growing them needs no copy (and no synchronisation beyond the
-    // one inside the allocation of a larger buffer, which happens only when the block outgrows its capacity).
-    if (growKeep(d.offsets, cnt + 1, 0) | growKeep(d.jacobi_scale, slots, 0) | growKeep(d.particle_slots, slots, 0) |
-        growKeep(d.lambda, cnt, 0) | growKeep(d.slot_corr, slots, 0) |
+    const std::size_t slots = std::size_t(blockArity(d.kind)) * constraints;
+    // No content to keep: the caller rewrites both arrays before commitBlockIncidence.
+    if (growKeep(d.particle_slots, std::max<std::size_t>(slots, 1), 0) |
         growKeep(d.particle_offsets, std::size_t(n_) + 1, 0))
       ++topo_version_;
-    d.offsets.resize(cnt + 1);
-    d.jacobi_scale.resize(slots);
-    d.particle_slots.resize(slots);
-    d.lambda.resize(cnt);
-    d.slot_corr.resize(slots);
-    d.particle_offsets.resize(std::size_t(n_) + 1);
-    d.count = count;
-    blockOffsetsKernel<<<blocksFor(count + 1), kThreads, 0, stream_>>>(count, a, d.offsets.data());
-    INC_CUDA_LAUNCH("pbd patch offsets");
-    // particle -> slot CSR: slots sorted by particle with a stable radix sort over the index bits (slots stay
-    // ascending per particle: the order finalizePbdModel's counting sort gives), offsets by binary search.
-    sort_keys_.resize(std::max<std::size_t>(slots, 1));
-    sort_keys_out_.resize(std::max<std::size_t>(slots, 1));
-    sort_vals_.resize(std::max<std::size_t>(slots, 1));
-    if (slots > 0) {
-      slotIotaKernel<<<blocksFor(std::int64_t(slots)), kThreads, 0, stream_>>>(int(slots), d.ids.data(), sort_keys_.data(),
-                                                                               sort_vals_.data());
-      INC_CUDA_LAUNCH("pbd patch slot keys");
-      const int end_bit = tear::indexBits(n_);
-      std::size_t bytes = 0;
-      INC_CUDA(cub::DeviceRadixSort::SortPairs(nullptr, bytes, sort_keys_.data(), sort_keys_out_.data(), sort_vals_.data(),
-                                               d.particle_slots.data(), int(slots), 0, end_bit, stream_));
-      cub_temp_.resize(std::max<std::size_t>(bytes, 1));
-      INC_CUDA(cub::DeviceRadixSort::SortPairs(cub_temp_.data(), bytes, sort_keys_.data(), sort_keys_out_.data(),
-                                               sort_vals_.data(), d.particle_slots.data(), int(slots), 0, end_bit,
-                                               stream_));
-    }
-    csrOffsetsKernel<<<blocksFor(n_ + 1), kThreads, 0, stream_>>>(n_, sort_keys_out_.data(), int(slots),
-                                                                  d.particle_offsets.data());
-    INC_CUDA_LAUNCH("pbd patch particle offsets");
-    if (count > 0) {
-      jacobiScaleKernel<T><<<blocksFor(count), kThreads, 0, stream_>>>(count, a, d.ids.data(), d.particle_offsets.data(),
-                                                                       inv_mass_.data(), d.jacobi_scale.data());
-      INC_CUDA_LAUNCH("pbd patch jacobi scales");
-      INC_CUDA(cudaMemsetAsync(d.lambda.data(), 0, d.lambda.bytes(), stream_));
-      INC_CUDA(cudaMemsetAsync(d.slot_corr.data(), 0, d.slot_corr.bytes(), stream_));
-    }
-    d.order.resize(0);
-    d.color_offsets.assign(1, 0);
-    // The summary's reduction partials: room for every block (a block that was empty at setModel may not be).
-    const std::size_t need = std::size_t(2 * blocks_.size() + 3) * kReduceBlocks;
-    if (partials_.size() < need) partials_.resize(need);
-    patched_ = true;
-    ++topo_version_;
+    PbdDeviceIncidence r;
+    r.slot_capacity = capacityOf(d.particle_slots);
+    r.particle_offsets = d.particle_offsets.data();
+    r.particle_slots = d.particle_slots.data();
+    return r;
   }
+
+  void commitBlockIncidence(int block, int count) override { commit(block, count, true); }
 
   void setSummaryEvery(int k) override {
     if (k < 1) throw InputError("pbd patch", "summary_every", "must be >= 1");
@@ -885,6 +841,78 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
   }
 
  private:
+  // commitBlock (caller_csr false: the particle -> slot CSR by a device radix sort) and commitBlockIncidence
+  // (caller_csr true: the caller wrote it into the reserveIncidence buffers).
+  void commit(int block, int count, bool caller_csr) {
+    DeviceBlock<T>& d = patchBlock(block);
+    const int a = blockArity(d.kind);
+    if (count < 0 || std::size_t(count) > std::min(capacityOf(d.ids) / std::size_t(a), capacityOf(d.rest)) ||
+        std::size_t(count) > capacityOf(d.compliance))
+      throw InputError("pbd patch", "count", "call reserveBlock first (" + std::to_string(count) + " constraints)");
+    const std::size_t cnt = std::size_t(count), slots = std::size_t(a) * cnt;
+    // The caller's CSR must not be reallocated here (growKeep with nothing kept would drop it).
+    if (caller_csr && (slots > capacityOf(d.particle_slots) || std::size_t(n_) + 1 > capacityOf(d.particle_offsets)))
+      throw InputError("pbd patch", "incidence", "call reserveIncidence after appendParticles (" +
+                                                     std::to_string(count) + " constraints)");
+    d.ids.resize(slots);
+    d.rest.resize(cnt);
+    d.compliance.resize(cnt);
+    // Derived arrays: no content to keep, so growing them needs no copy (and no synchronisation beyond the
+    // one inside the allocation of a larger buffer, which happens only when the block outgrows its capacity).
+    if (growKeep(d.offsets, cnt + 1, 0) | growKeep(d.jacobi_scale, slots, 0) | growKeep(d.particle_slots, slots, 0) |
+        growKeep(d.lambda, cnt, 0) | growKeep(d.slot_corr, slots, 0) |
+        growKeep(d.particle_offsets, std::size_t(n_) + 1, 0))
+      ++topo_version_;
+    d.offsets.resize(cnt + 1);
+    d.jacobi_scale.resize(slots);
+    d.particle_slots.resize(slots);
+    d.lambda.resize(cnt);
+    d.slot_corr.resize(slots);
+    d.particle_offsets.resize(std::size_t(n_) + 1);
+    d.count = count;
+    blockOffsetsKernel<<<blocksFor(count + 1), kThreads, 0, stream_>>>(count, a, d.offsets.data());
+    INC_CUDA_LAUNCH("pbd patch offsets");
+    if (!caller_csr) sortIncidence(d, slots);
+    if (count > 0) {
+      jacobiScaleKernel<T><<<blocksFor(count), kThreads, 0, stream_>>>(count, a, d.ids.data(), d.particle_offsets.data(),
+                                                                       inv_mass_.data(), d.jacobi_scale.data());
+      INC_CUDA_LAUNCH("pbd patch jacobi scales");
+      INC_CUDA(cudaMemsetAsync(d.lambda.data(), 0, d.lambda.bytes(), stream_));
+      INC_CUDA(cudaMemsetAsync(d.slot_corr.data(), 0, d.slot_corr.bytes(), stream_));
+    }
+    d.order.resize(0);
+    d.color_offsets.assign(1, 0);
+    // The summary's reduction partials: room for every block (a block that was empty at setModel may not be).
+    const std::size_t need = std::size_t(2 * blocks_.size() + 3) * kReduceBlocks;
+    if (partials_.size() < need) partials_.resize(need);
+    patched_ = true;
+    ++topo_version_;
+  }
+
+  // particle -> slot CSR: slots sorted by particle with a stable radix sort over the index bits (slots stay
+  // ascending per particle: the order finalizePbdModel's counting sort gives), offsets by binary search.
+  void sortIncidence(DeviceBlock<T>& d, std::size_t slots) {
+    sort_keys_.resize(std::max<std::size_t>(slots, 1));
+    sort_keys_out_.resize(std::max<std::size_t>(slots, 1));
+    sort_vals_.resize(std::max<std::size_t>(slots, 1));
+    if (slots > 0) {
+      slotIotaKernel<<<blocksFor(std::int64_t(slots)), kThreads, 0, stream_>>>(int(slots), d.ids.data(), sort_keys_.data(),
+                                                                               sort_vals_.data());
+      INC_CUDA_LAUNCH("pbd patch slot keys");
+      const int end_bit = tear::indexBits(n_);
+      std::size_t bytes = 0;
+      INC_CUDA(cub::DeviceRadixSort::SortPairs(nullptr, bytes, sort_keys_.data(), sort_keys_out_.data(), sort_vals_.data(),
+                                               d.particle_slots.data(), int(slots), 0, end_bit, stream_));
+      cub_temp_.resize(std::max<std::size_t>(bytes, 1));
+      INC_CUDA(cub::DeviceRadixSort::SortPairs(cub_temp_.data(), bytes, sort_keys_.data(), sort_keys_out_.data(),
+                                               sort_vals_.data(), d.particle_slots.data(), int(slots), 0, end_bit,
+                                               stream_));
+    }
+    csrOffsetsKernel<<<blocksFor(n_ + 1), kThreads, 0, stream_>>>(n_, sort_keys_out_.data(), int(slots),
+                                                                  d.particle_offsets.data());
+    INC_CUDA_LAUNCH("pbd patch particle offsets");
+  }
+
   struct ProfRecord {
     int stage;
     std::size_t start, stop;

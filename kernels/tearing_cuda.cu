@@ -1,4 +1,4 @@
-// CUDA tearing step: the physics/tearing_phases.h bodies as kernels, CUB exclusive sum and DeviceSelect for the split list; device-resident sheet with the adjacency and PBD model rebuilt by radix sorts.
+// CUDA tearing step: the physics/tearing_phases.h bodies as kernels, CUB exclusive sum and DeviceSelect for the split list; device-resident sheet with the adjacency and PBD model rebuilt per particle (or by the older radix sorts).
 #include "kernels/tearing_cuda.h"
 
 #include <cub/cub.cuh>
@@ -158,6 +158,51 @@ __global__ void csrFromSorted64Kernel(int n, const std::uint64_t* sorted, int co
   offsets[p] = std::int32_t(tear::lowerBound<std::uint64_t>(sorted, count, std::uint64_t(p) << bits));
 }
 
+// Per-particle rebuild (physics/tearing_rebuild.h; rebuildTearFans in host/tearing_rebuild.h is its CPU
+// reference). Corner counts by integer atomics (exact, so deterministic); the scatter's atomic cursors give
+// each particle's row in any order, and sortRowsKernel puts it in the one ascending order.
+__global__ void cornerCountKernel(const std::int32_t* tris, int nh, std::int32_t* count) {
+  const int h = blockIdx.x * blockDim.x + threadIdx.x;
+  if (h >= nh) return;
+  atomicAdd(count + tris[h], 1);
+}
+
+__global__ void cornerScatterKernel(const std::int32_t* tris, int nh, const std::int32_t* pt_off, std::int32_t* count,
+                                    std::int32_t* pt_tris) {
+  const int h = blockIdx.x * blockDim.x + threadIdx.x;
+  if (h >= nh) return;
+  const std::int32_t p = tris[h];
+  pt_tris[pt_off[p] + atomicSub(count + p, 1) - 1] = h / 3;
+}
+
+__global__ void sortRowsKernel(int n, const std::int32_t* off, std::int32_t* rows) {
+  const int p = blockIdx.x * blockDim.x + threadIdx.x;
+  if (p >= n) return;
+  tear::sortRow(rows + off[p], off[p + 1] - off[p]);
+}
+
+// n + 1 entries (entry n zero) so that the exclusive scan's entry n is the totals.
+__global__ void fanCountsKernel(tear::Fan f, int n, tear::FanCounts* counts) {
+  const int p = blockIdx.x * blockDim.x + threadIdx.x;
+  if (p > n) return;
+  counts[p] = p < n ? tear::fanCounts(f, p) : tear::FanCounts();
+}
+
+template <typename T>
+__global__ void fanEdgesKernel(tear::Fan f, tear::FanOutputs<T> o, int n) {
+  const int p = blockIdx.x * blockDim.x + threadIdx.x;
+  if (p > n) return;
+  tear::writeFanOffsets(o, p);
+  if (p < n) tear::writeFanEdges(f, o, p);
+}
+
+template <typename T>
+__global__ void fanIncidenceKernel(tear::Fan f, tear::FanOutputs<T> o, int n) {
+  const int p = blockIdx.x * blockDim.x + threadIdx.x;
+  if (p >= n) return;
+  tear::writeFanIncidence(f, o, p);
+}
+
 template <typename T>
 __global__ void gatherPositionsKernel(const Vec3<T>* x, const std::int32_t* ids, int k, Vec3<T>* out) {
   const int q = blockIdx.x * blockDim.x + threadIdx.x;
@@ -296,7 +341,8 @@ class TearCudaWorkspace {
 // The sheet kept on the device between frames (docs/tearing.md, "GPU pipeline"): positions, velocities,
 // rest positions and masses are the PBD backend's arrays; this owns the rest (fixed, k, tau_f, triangles,
 // adjacency) and, after a step with splits, appends the new particles to the PBD model and rewrites its
-// distance and bending blocks on the device. All kernels run on the legacy default stream, which orders
+// distance and bending blocks on the device (per particle by default, by radix sorts with
+// TearModelOptions::device_sorted_rebuild). All kernels run on the legacy default stream, which orders
 // itself with the PBD backend's (blocking) stream. Host synchronisations per tearing step: the split and
 // yield counts (sizes the split launch and the particle append), the constraint counts after the rebuild
 // (size the PBD blocks' launches), and a reallocation when the particle capacity is exceeded.
@@ -307,6 +353,7 @@ class TearResident {
     patch_ = pbdDevicePatch<T>(pbd);
     if (!patch_ || model_blocks < 1 || model_blocks > 2) return false;
     opt_ = opt;
+    sorted_ = opt.device_sorted_rebuild;
     bending_ = model_blocks == 2;
     n_ = int(s.size());
     nt_ = int(s.tris.size());
@@ -471,9 +518,110 @@ class TearResident {
     return v;
   }
 
-  // The adjacency and the PBD blocks from the device triangles (host/tearing_rebuild.h, steps 1-4).
   template <typename Stage>
   void rebuild(Stage& stage) {
+    if (sorted_)
+      rebuildSorted(stage);
+    else
+      rebuildFans(stage);
+  }
+
+  // The adjacency and the PBD blocks from the device triangles, per particle (rebuildTearFans in
+  // host/tearing_rebuild.h, steps 1-5; step 5 is commitBlockIncidence).
+  template <typename Stage>
+  void rebuildFans(Stage& stage) {
+    const int n = n_, nh = 3 * nt_;
+    const std::size_t nz = std::size_t(n), nhz = std::size_t(std::max(nh, 1));
+    // 1: particle -> triangles: counts, exclusive scan over n + 1 (entry n = nh), scatter, rows sorted.
+    pt_count_.resize(nz + 1);
+    pt_off_.resize(nz + 1);
+    pt_tris_.resize(std::size_t(nh));
+    INC_CUDA(cudaMemsetAsync(pt_count_.data(), 0, pt_count_.bytes()));
+    if (nh > 0) {
+      cornerCountKernel<<<gridFor(nhz), kBlock>>>(tris_.data(), nh, pt_count_.data());
+      INC_CUDA_LAUNCH("tear corner counts");
+    }
+    std::size_t b1 = 0, b2 = 0;
+    INC_CUDA(cub::DeviceScan::ExclusiveSum(nullptr, b1, pt_count_.data(), pt_off_.data(), n + 1));
+    fan_counts_.resize(nz + 1);
+    fan_off_.resize(nz + 1);
+    INC_CUDA(cub::DeviceScan::ExclusiveScan(nullptr, b2, fan_counts_.data(), fan_off_.data(), tear::AddFanCounts(),
+                                            tear::FanCounts(), n + 1));
+    temp_.resize(std::max({b1, b2, std::size_t(1)}));
+    INC_CUDA(cub::DeviceScan::ExclusiveSum(temp_.data(), b1, pt_count_.data(), pt_off_.data(), n + 1));
+    if (nh > 0) {
+      cornerScatterKernel<<<gridFor(nhz), kBlock>>>(tris_.data(), nh, pt_off_.data(), pt_count_.data(), pt_tris_.data());
+      INC_CUDA_LAUNCH("tear corner scatter");
+    }
+    if (n > 0) {
+      sortRowsKernel<<<gridFor(nz), kBlock>>>(n, pt_off_.data(), pt_tris_.data());
+      INC_CUDA_LAUNCH("tear particle triangles");
+    }
+    // 2: per-particle counts and their exclusive scan (entry n: the totals).
+    tear::Fan fan;
+    fan.tris = tris_.data();
+    fan.pt_offsets = pt_off_.data();
+    fan.pt_tris = pt_tris_.data();
+    fanCountsKernel<<<gridFor(nz + 1), kBlock>>>(fan, n, fan_counts_.data());
+    INC_CUDA_LAUNCH("tear fan counts");
+    INC_CUDA(cub::DeviceScan::ExclusiveScan(temp_.data(), b2, fan_counts_.data(), fan_off_.data(), tear::AddFanCounts(),
+                                            tear::FanCounts(), n + 1));
+    // Room for the constraints before the counts are known: unique edges <= nh, interior edges <= nh / 2.
+    const PbdDeviceBlock<T> dist = patch_->reserveBlock(0, nhz);
+    PbdDeviceBlock<T> bend;
+    if (bending_) bend = patch_->reserveBlock(1, std::max<std::size_t>(nhz / 2, 1));
+    // Synchronisation 2: the totals size the partner list and the PBD blocks' launches.
+    tear::FanCounts total;
+    INC_CUDA(cudaMemcpy(&total, fan_off_.data() + n, sizeof(total), cudaMemcpyDeviceToHost));
+    const int ne = total.upper, nb = total.bend_upper;
+    if (total.partners != 2 * ne || total.bend_slots != 4 * nb)
+      throw InputError("tearing", "topology", "device rebuild: inconsistent counts (a degenerate or duplicated triangle)");
+    stage("rebuild_edges");
+    // 3: partner rows, edges as constraints, the distance rows' upper parts, CSR offsets.
+    pe_off_.resize(nz + 1);
+    pe_partner_.resize(std::size_t(2 * ne));
+    edge_bend_.resize(std::max<std::size_t>(std::size_t(ne), 1));
+    const PbdDeviceIncidence inc_d = patch_->reserveIncidence(0, std::size_t(ne));
+    PbdDeviceIncidence inc_b;
+    if (bending_) inc_b = patch_->reserveIncidence(1, std::size_t(nb));
+    const PbdDeviceParticles<T> d = patch_->deviceParticles();
+    tear::FanOutputs<T> o;
+    o.off = fan_off_.data();
+    o.rest = d.rest;
+    o.stretch_compliance = T(opt_.stretch_compliance);
+    o.bending_compliance = T(opt_.bending_compliance);
+    o.pe_offsets = pe_off_.data();
+    o.pe_partner = pe_partner_.data();
+    o.edge_bend = edge_bend_.data();
+    o.dist_ids = dist.ids;
+    o.dist_rest = dist.rest;
+    o.dist_compliance = dist.compliance;
+    o.dist_particle_offsets = inc_d.particle_offsets;
+    o.dist_particle_slots = inc_d.particle_slots;
+    if (bending_) {
+      o.bend_ids = bend.ids;
+      o.bend_rest = bend.rest;
+      o.bend_compliance = bend.compliance;
+      o.bend_particle_offsets = inc_b.particle_offsets;
+      o.bend_particle_slots = inc_b.particle_slots;
+    }
+    fanEdgesKernel<T><<<gridFor(nz + 1), kBlock>>>(fan, o, n);
+    INC_CUDA_LAUNCH("tear fan edges");
+    stage("rebuild_adjacency");
+    // 4: the rest of the distance rows and the bending rows; 5: offsets, Jacobi scales, multipliers.
+    if (n > 0) {
+      fanIncidenceKernel<T><<<gridFor(nz), kBlock>>>(fan, o, n);
+      INC_CUDA_LAUNCH("tear fan incidence");
+    }
+    patch_->commitBlockIncidence(0, ne);
+    if (bending_) patch_->commitBlockIncidence(1, nb);
+    stage("rebuild_constraints");
+  }
+
+  // The older path (TearModelOptions::device_sorted_rebuild): the adjacency and the PBD blocks from the device
+  // triangles by radix sorts (rebuildTearSorted in host/tearing_rebuild.h, steps 1-4).
+  template <typename Stage>
+  void rebuildSorted(Stage& stage) {
     const int n = n_, nh = 3 * nt_;
     const int bits = tear::indexBits(n);
     const std::size_t nhz = std::size_t(std::max(nh, 1));
@@ -568,12 +716,15 @@ class TearResident {
   PbdDevicePatch<T>* patch_ = nullptr;
   TearModelOptions opt_;
   bool bending_ = false;
+  bool sorted_ = false;  // the radix-sort rebuild instead of the per-particle one
   int n_ = 0, nt_ = 0;
   DeviceBuffer<std::uint8_t> fixed_, yield_, accept_;
   DeviceBuffer<T> k_, tau_, t_pred_;
   DeviceBuffer<Vec3<T>> dir_, gather_out_;
   DeviceBuffer<std::int32_t> tris_, pe_off_, pe_partner_, pt_off_, pt_tris_, yield_i32_, accept_i32_, rank_, partner_,
-      ids_, list_, c_tri_, h_opp_, h_opp_out_, head_, bend_, e_idx_, b_idx_, edge_a_, edge_b_, gather_ids_;
+      ids_, list_, c_tri_, h_opp_, h_opp_out_, head_, bend_, e_idx_, b_idx_, edge_a_, edge_b_, gather_ids_, pt_count_,
+      edge_bend_;
+  DeviceBuffer<tear::FanCounts> fan_counts_, fan_off_;
   DeviceBuffer<std::uint32_t> c_key_, c_key_out_;
   DeviceBuffer<std::uint64_t> h_key_, h_key_out_, p_key_, p_key_out_;
   DeviceBuffer<int> counts_, moved_, backed_;

@@ -1,4 +1,4 @@
-// Per-element bodies of the sort-based adjacency and PBD constraint rebuild of a torn sheet, shared by the CPU reference and the CUDA kernels.
+// Per-element bodies of the adjacency and PBD constraint rebuild of a torn sheet (per-particle fans, and the older sort-based path), shared by the CPU reference and the CUDA kernels.
 #pragma once
 
 #include <cstdint>
@@ -62,21 +62,20 @@ INC_HD std::int64_t lowerBound(const K* keys, std::int64_t n, K v) {
 // Writes unique edge e (the run starting at sorted half-edge h) as distance constraint e, and, when the edge
 // has exactly two triangles, bending constraint c (wings ascending). Rest values from rest positions, exactly
 // as buildTearPbdModel computes them.
+// Distance constraint e on edge a-b (a < b) and, when c >= 0 and bend_ids is set, bending constraint c with
+// wings w0, w1 (written ascending). Rest values from rest positions, exactly as buildTearPbdModel computes them.
 template <typename T>
-INC_HD void writeEdgeConstraints(const std::uint64_t* keys, const std::int32_t* opp, std::int64_t h, int run,
-                                 int bits, std::int64_t e, std::int64_t c, const Vec3<T>* rest, T stretch_compliance,
-                                 T bending_compliance, std::int32_t* edge_a, std::int32_t* edge_b,
-                                 std::int32_t* dist_ids, T* dist_rest, T* dist_compliance, std::int32_t* bend_ids,
-                                 T* bend_rest, T* bend_compliance) {
-  const std::int32_t a = edgeHigh(keys[h], bits), b = edgeLow(keys[h], bits);
+INC_HD void writeEdgeConstraint(std::int32_t a, std::int32_t b, std::int32_t w0, std::int32_t w1, std::int64_t e,
+                                std::int64_t c, const Vec3<T>* rest, T stretch_compliance, T bending_compliance,
+                                std::int32_t* edge_a, std::int32_t* edge_b, std::int32_t* dist_ids, T* dist_rest,
+                                T* dist_compliance, std::int32_t* bend_ids, T* bend_rest, T* bend_compliance) {
   if (edge_a) edge_a[e] = a;
   if (edge_b) edge_b[e] = b;
   dist_ids[2 * e] = a;
   dist_ids[2 * e + 1] = b;
   dist_rest[e] = norm(rest[a] - rest[b]);
   dist_compliance[e] = stretch_compliance;
-  if (run != 2 || !bend_ids) return;
-  const std::int32_t w0 = opp[h], w1 = opp[h + 1];
+  if (c < 0 || !bend_ids) return;
   const std::int32_t p2 = w0 < w1 ? w0 : w1, p3 = w0 < w1 ? w1 : w0;
   bend_ids[4 * c] = a;
   bend_ids[4 * c + 1] = b;
@@ -84,6 +83,18 @@ INC_HD void writeEdgeConstraints(const std::uint64_t* keys, const std::int32_t* 
   bend_ids[4 * c + 3] = p3;
   bend_rest[c] = pbd::dihedralAngle(rest[a], rest[b], rest[p2], rest[p3]);
   bend_compliance[c] = bending_compliance;
+}
+
+template <typename T>
+INC_HD void writeEdgeConstraints(const std::uint64_t* keys, const std::int32_t* opp, std::int64_t h, int run,
+                                 int bits, std::int64_t e, std::int64_t c, const Vec3<T>* rest, T stretch_compliance,
+                                 T bending_compliance, std::int32_t* edge_a, std::int32_t* edge_b,
+                                 std::int32_t* dist_ids, T* dist_rest, T* dist_compliance, std::int32_t* bend_ids,
+                                 T* bend_rest, T* bend_compliance) {
+  const std::int32_t a = edgeHigh(keys[h], bits), b = edgeLow(keys[h], bits);
+  writeEdgeConstraint<T>(a, b, run == 2 ? opp[h] : -1, run == 2 ? opp[h + 1] : -1, e, run == 2 ? c : -1, rest,
+                         stretch_compliance, bending_compliance, edge_a, edge_b, dist_ids, dist_rest, dist_compliance,
+                         bend_ids, bend_rest, bend_compliance);
 }
 
 // Jacobi scale of constraint c of a fixed-arity block: 1 / (this block's constraints on its busiest movable
@@ -99,6 +110,257 @@ INC_HD T jacobiScaleOf(const std::int32_t* ids, int arity, std::int64_t c, const
     busiest = deg > busiest ? deg : busiest;
   }
   return T(1) / T(busiest);
+}
+
+// ----------------------------------------------------------------------------------------------
+// Per-particle rebuild (no global sort; docs/tearing.md, "Device-resident path"). Every quantity of particle p
+// is derived from p's fan (its triangles) and, for edges, from the fan of the edge's lower particle; rows are
+// written unsorted into their exact-sized final segments and then sorted in place, so no step needs a local
+// buffer of bounded capacity (a large fan costs O(fan^2) work, never a truncation). Preconditions: every
+// triangle has three distinct vertices and no two triangles have the same vertex set (checkTearMesh's
+// degenerate == 0 and duplicates == 0, which the tearing step keeps); the arrays then equal, one for one,
+// TearSheet::rebuildTopology() + buildTearPbdModel(coloring = false).
+
+// Ascending insertion sort of a short row in place (a particle's triangles, partners or slots).
+INC_HD void sortRow(std::int32_t* a, int n) {
+  for (int i = 1; i < n; ++i) {
+    const std::int32_t v = a[i];
+    int j = i - 1;
+    while (j >= 0 && a[j] > v) {
+      a[j + 1] = a[j];
+      --j;
+    }
+    a[j + 1] = v;
+  }
+}
+
+// The particle -> triangles CSR (rows ascending once sorted) over the triangle list.
+struct Fan {
+  const std::int32_t* tris = nullptr;        // 3 per triangle
+  const std::int32_t* pt_offsets = nullptr;  // n + 1
+  const std::int32_t* pt_tris = nullptr;
+};
+
+// Particle p's fan as the per-particle passes read it: a fan of up to kCache triangles is copied once into a
+// per-thread array (registers / local memory: the passes read each corner many times, and gathered global
+// loads are what they cost on the device); a larger fan is read from the global arrays every time. Both give
+// the same values, so the results never depend on the capacity (TearingRebuild.* check both).
+struct FanRow {
+  static constexpr int kCache = 12;  // triangles; a lattice vertex has 6, a split one fewer
+  const Fan* fan;
+  std::int32_t p;
+  int count;    // triangles
+  bool cached;
+  std::int32_t v[3 * kCache];
+  INC_HD FanRow(const Fan& f, std::int32_t p_, int cache = kCache)
+      : fan(&f), p(p_), count(f.pt_offsets[p_ + 1] - f.pt_offsets[p_]) {
+    cached = count <= cache && count <= kCache;
+    if (!cached) return;
+    for (int q = 0; q < count; ++q) {
+      const std::int32_t* t = f.tris + 3 * f.pt_tris[f.pt_offsets[p] + q];
+      v[3 * q] = t[0];
+      v[3 * q + 1] = t[1];
+      v[3 * q + 2] = t[2];
+    }
+  }
+  INC_HD const std::int32_t* triangle(int q) const {
+    return cached ? v + 3 * q : fan->tris + 3 * fan->pt_tris[fan->pt_offsets[p] + q];
+  }
+  // Corner k: vertex k % 3 of the (k / 3)-th triangle (p itself is one of each triangle's three).
+  INC_HD std::int32_t corner(int k) const { return triangle(k / 3)[k % 3]; }
+  INC_HD int corners() const { return 3 * count; }
+  // The two vertices of the q-th triangle other than p, in the triangle's cyclic order after p.
+  INC_HD void opposite(int q, std::int32_t& u, std::int32_t& w) const {
+    const std::int32_t* t = triangle(q);
+    const int c = t[0] == p ? 0 : (t[1] == p ? 1 : 2);
+    u = t[(c + 1) % 3];
+    w = t[(c + 2) % 3];
+  }
+};
+
+// Whether corner k's vertex v already occurred among corners [0, k) of the fan (the first occurrence counts).
+INC_HD bool seenInFan(const FanRow& r, int k, std::int32_t v) {
+  for (int j = 0; j < k; ++j)
+    if (r.corner(j) == v) return true;
+  return false;
+}
+
+// Edge a-b (a < b, a = r.p) gets a bending constraint: exactly two of a's triangles contain b, and each has a
+// vertex that is neither a nor b (the wings, returned ascending). buildTearPbdModel's merge of the two
+// particles' triangle lists visits the same triangles in the same (ascending) order.
+INC_HD bool bendingWings(const FanRow& r, std::int32_t b, std::int32_t& p2, std::int32_t& p3) {
+  const std::int32_t a = r.p;
+  int found = 0;
+  std::int32_t w[2] = {-1, -1};
+  for (int q = 0; q < r.count; ++q) {
+    const std::int32_t* t = r.triangle(q);
+    if (t[0] != b && t[1] != b && t[2] != b) continue;
+    std::int32_t o = -1;
+    for (int c = 0; c < 3; ++c)
+      if (t[c] != a && t[c] != b) o = t[c];
+    if (found < 2) w[found] = o;
+    ++found;
+  }
+  if (found != 2 || w[0] < 0 || w[1] < 0) return false;
+  p2 = w[0] < w[1] ? w[0] : w[1];
+  p3 = w[0] < w[1] ? w[1] : w[0];
+  return true;
+}
+// The same over a's fan in global memory (an edge seen from its upper particle or from a wing).
+INC_HD bool bendingWings(const Fan& f, std::int32_t a, std::int32_t b, std::int32_t& p2, std::int32_t& p3) {
+  return bendingWings(FanRow(f, a, 0), b, p2, p3);
+}
+
+// Per-particle counts; their exclusive scan numbers everything: partners (pe_offsets, and the distance block's
+// particle -> slot offsets, since a particle's distance slots are its bonds), upper partners (edges (p, b),
+// b > p: the edge numbers in (a, b) order), bending constraints on those edges (bending numbers in edge order)
+// and bending slots of p (the bending block's particle -> slot offsets).
+struct FanCounts {
+  std::int32_t partners = 0, upper = 0, bend_upper = 0, bend_slots = 0;
+};
+struct AddFanCounts {
+  INC_HD FanCounts operator()(const FanCounts& x, const FanCounts& y) const {
+    FanCounts r;
+    r.partners = x.partners + y.partners;
+    r.upper = x.upper + y.upper;
+    r.bend_upper = x.bend_upper + y.bend_upper;
+    r.bend_slots = x.bend_slots + y.bend_slots;
+    return r;
+  }
+};
+
+// p's partners are the distinct other vertices of its triangles (an edge joins every two vertices of a
+// triangle, so this is rebuildTopology's pe row: partners below p, then above, both ascending). p takes a
+// bending slot in every bending constraint of an edge at p (slot 0 or 1) and of the edge opposite p in each
+// of its triangles (a wing: slot 2 or 3).
+// fan_cache: FanRow's capacity (tests pass 0 to force the uncached reads).
+INC_HD FanCounts fanCounts(const Fan& f, std::int32_t p, int fan_cache = FanRow::kCache) {
+  FanCounts r;
+  const FanRow row(f, p, fan_cache);
+  const int m = row.corners();
+  std::int32_t p2 = 0, p3 = 0;
+  for (int k = 0; k < m; ++k) {
+    const std::int32_t v = row.corner(k);
+    if (v == p || seenInFan(row, k, v)) continue;
+    ++r.partners;
+    const bool bend = v > p ? bendingWings(row, v, p2, p3) : bendingWings(f, v, p, p2, p3);
+    if (v > p) {
+      ++r.upper;
+      r.bend_upper += bend ? 1 : 0;
+    }
+    r.bend_slots += bend ? 1 : 0;
+  }
+  for (int q = 0; q < row.count; ++q) {
+    std::int32_t u = 0, v = 0;
+    row.opposite(q, u, v);
+    if (u == v || u == p || v == p) continue;  // degenerate triangle: no edge opposite p
+    r.bend_slots += bendingWings(f, u < v ? u : v, u < v ? v : u, p2, p3) ? 1 : 0;
+  }
+  return r;
+}
+
+// Where the per-particle rebuild writes (device or host pointers). off: the exclusive scan of fanCounts over
+// n + 1 entries (entry n the totals). bend_ids == nullptr: no bending block (bending outputs unused).
+template <typename T>
+struct FanOutputs {
+  const FanCounts* off = nullptr;
+  const Vec3<T>* rest = nullptr;  // m
+  T stretch_compliance = T(0), bending_compliance = T(0);
+  std::int32_t* pe_offsets = nullptr;  // n + 1
+  std::int32_t* pe_partner = nullptr;  // off[n].partners
+  std::int32_t* edge_a = nullptr;      // optional: off[n].upper each
+  std::int32_t* edge_b = nullptr;
+  std::int32_t* edge_bend = nullptr;   // off[n].upper: the edge's bending constraint, -1 for none
+  std::int32_t* dist_ids = nullptr;
+  T* dist_rest = nullptr;
+  T* dist_compliance = nullptr;
+  std::int32_t* dist_particle_offsets = nullptr;  // n + 1
+  std::int32_t* dist_particle_slots = nullptr;    // 2 per edge
+  std::int32_t* bend_ids = nullptr;
+  T* bend_rest = nullptr;
+  T* bend_compliance = nullptr;
+  std::int32_t* bend_particle_offsets = nullptr;  // n + 1
+  std::int32_t* bend_particle_slots = nullptr;    // 4 per bending constraint
+};
+
+// Offsets of particle p = 0 .. n (p == n: the totals) into the CSR arrays.
+template <typename T>
+INC_HD void writeFanOffsets(const FanOutputs<T>& o, std::int32_t p) {
+  const FanCounts& b = o.off[p];
+  if (o.pe_offsets) o.pe_offsets[p] = b.partners;
+  if (o.dist_particle_offsets) o.dist_particle_offsets[p] = b.partners;
+  if (o.bend_ids && o.bend_particle_offsets) o.bend_particle_offsets[p] = b.bend_slots;
+}
+
+// Pass 2 for particle p < n: its partner row (ascending), its upper edges (p, b) as distance constraints (and
+// bending constraints where the edge has two triangles), their number of bending constraint, and p's own
+// distance slots 2 e of those edges (the upper part of its distance row; the lower part needs the partners'
+// rows: writeFanIncidence).
+template <typename T>
+INC_HD void writeFanEdges(const Fan& f, const FanOutputs<T>& o, std::int32_t p, int fan_cache = FanRow::kCache) {
+  const FanCounts &b = o.off[p], &e = o.off[p + 1];
+  const FanRow fr(f, p, fan_cache);
+  std::int32_t* row = o.pe_partner + b.partners;
+  const int np = e.partners - b.partners, m = fr.corners();
+  int w = 0;
+  for (int k = 0; k < m && w < np; ++k) {  // w < np: fanCounts counted exactly these, so this never cuts
+    const std::int32_t v = fr.corner(k);
+    if (v == p) continue;
+    bool dup = false;
+    for (int j = 0; j < w && !dup; ++j) dup = row[j] == v;
+    if (!dup) row[w++] = v;
+  }
+  sortRow(row, w);
+  const int nup = e.upper - b.upper, nlow = np - nup;
+  std::int32_t c = b.bend_upper;
+  for (int k = 0; k < nup; ++k) {
+    const std::int32_t q = row[nlow + k], edge = b.upper + k;
+    std::int32_t p2 = -1, p3 = -1;
+    const bool bend = bendingWings(fr, q, p2, p3);
+    writeEdgeConstraint<T>(p, q, p2, p3, edge, bend ? c : -1, o.rest, o.stretch_compliance, o.bending_compliance,
+                           o.edge_a, o.edge_b, o.dist_ids, o.dist_rest, o.dist_compliance, o.bend_ids, o.bend_rest,
+                           o.bend_compliance);
+    o.edge_bend[edge] = bend ? c : -1;
+    c += bend ? 1 : 0;
+    o.dist_particle_slots[b.partners + nlow + k] = 2 * edge;
+  }
+}
+
+// Number of edge a-b (a < b, an edge of the mesh): a's first edge plus b's rank among a's upper partners.
+template <typename T>
+INC_HD std::int32_t edgeNumber(const FanOutputs<T>& o, std::int32_t a, std::int32_t b) {
+  const FanCounts &s = o.off[a], &e = o.off[a + 1];
+  const std::int32_t lo = e.partners - (e.upper - s.upper);  // a's upper partners: [lo, e.partners)
+  return s.upper + std::int32_t(lowerBound<std::int32_t>(o.pe_partner + lo, e.partners - lo, b));
+}
+
+// Pass 3 for particle p < n (after writeFanEdges of every particle): the lower part of p's distance row (slot
+// 2 e + 1 of edge (q, p) for each partner q < p, ascending q = ascending e, all below p's upper edges) and p's
+// bending row, ascending slots: 4 c + 0 / 1 on bending edges at p, 4 c + 2 / 3 where p is a wing.
+template <typename T>
+INC_HD void writeFanIncidence(const Fan& f, const FanOutputs<T>& o, std::int32_t p) {
+  const FanCounts &b = o.off[p], &e = o.off[p + 1];
+  const std::int32_t* row = o.pe_partner + b.partners;
+  const int np = e.partners - b.partners, nlow = np - (e.upper - b.upper);
+  for (int i = 0; i < nlow; ++i) o.dist_particle_slots[b.partners + i] = 2 * edgeNumber(o, row[i], p) + 1;
+  if (!o.bend_ids) return;
+  std::int32_t* out = o.bend_particle_slots + b.bend_slots;
+  const int cap = e.bend_slots - b.bend_slots;
+  int w = 0;
+  for (int i = 0; i < np && w < cap; ++i) {  // w < cap: fanCounts counted exactly these
+    const std::int32_t edge = i < nlow ? (o.dist_particle_slots[b.partners + i] - 1) / 2 : b.upper + (i - nlow);
+    const std::int32_t c = o.edge_bend[edge];
+    if (c >= 0) out[w++] = 4 * c + (i < nlow ? 1 : 0);
+  }
+  const FanRow fr(f, p, 0);  // one pass over the fan: nothing to gain from a copy
+  for (int q = 0; q < fr.count && w < cap; ++q) {
+    std::int32_t u = 0, v = 0;
+    fr.opposite(q, u, v);
+    if (u == v || u == p || v == p) continue;
+    const std::int32_t c = o.edge_bend[edgeNumber(o, u < v ? u : v, u < v ? v : u)];
+    if (c >= 0) out[w++] = 4 * c + (o.bend_ids[4 * c + 2] == p ? 2 : 3);
+  }
+  sortRow(out, w);
 }
 
 }  // namespace inc::tear

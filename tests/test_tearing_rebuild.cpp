@@ -1,7 +1,8 @@
-// Sort-based rebuild (the device algorithm, CPU reference) equals the host adjacency + PBD model rebuild after many tearing steps.
+// The device rebuild algorithms (per-particle fans and radix sorts, CPU references) equal the host adjacency + PBD model rebuild after many tearing steps.
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <random>
 #include <string>
 
@@ -56,19 +57,108 @@ void expectSortedEqualsHost(const TearSheet<T>& torn) {
   opt.pbd_stiffness = 0.9;
   opt.coloring = false;
   const PbdModel<T> m = buildTearPbdModel(s, opt);
-  const TearSortedRebuild<T> r = rebuildTearSorted(torn, opt);
-  EXPECT_EQ(r.pt_offsets, s.pt_offsets);
-  EXPECT_EQ(r.pt_tris, s.pt_tris);
-  EXPECT_EQ(r.edge_a, s.edge_a);
-  EXPECT_EQ(r.edge_b, s.edge_b);
-  EXPECT_EQ(r.pe_offsets, s.pe_offsets);
-  EXPECT_EQ(r.pe_partner, s.pe_partner);
   ASSERT_EQ(m.blocks.size(), 2u);
-  expectSameBlock(r.distance, m.blocks[0], "distance");
-  expectSameBlock(r.bending, m.blocks[1], "bending");
+  for (const int algo : {0, 1, 2}) {  // per-particle fans (fan copies as on the device, none), radix sorts
+    SCOPED_TRACE(algo == 0 ? "per-particle fans" : (algo == 1 ? "per-particle fans, uncached" : "radix sorts"));
+    const TearSortedRebuild<T> r = algo == 0   ? rebuildTearFans(torn, opt)
+                                   : algo == 1 ? rebuildTearFans(torn, opt, 0)
+                                               : rebuildTearSorted(torn, opt);
+    EXPECT_EQ(r.pt_offsets, s.pt_offsets);
+    EXPECT_EQ(r.pt_tris, s.pt_tris);
+    EXPECT_EQ(r.edge_a, s.edge_a);
+    EXPECT_EQ(r.edge_b, s.edge_b);
+    EXPECT_EQ(r.pe_offsets, s.pe_offsets);
+    EXPECT_EQ(r.pe_partner, s.pe_partner);
+    expectSameBlock(r.distance, m.blocks[0], "distance");
+    expectSameBlock(r.bending, m.blocks[1], "bending");
+  }
+}
+
+// A hand-made sheet: particle 0 at the centre of a fan of `spokes` triangles (far more than a lattice's six),
+// an unused particle, a three-triangle "book" on one edge (non-manifold: a distance constraint, no bending)
+// and fixed particles.
+TearSheet<double> fanSheet(int spokes) {
+  TearSheet<double> s;
+  s.rest.push_back(Vec3d(0, 0, 0));
+  for (int i = 0; i < spokes; ++i) {
+    const double a = 6.283185307179586 * i / spokes;
+    s.rest.push_back(Vec3d(0.01 * std::cos(a), 0.01 * std::sin(a), 0.001 * (i % 3)));
+  }
+  for (int i = 0; i < spokes; ++i) s.tris.push_back({0, 1 + i, 1 + (i + 1) % spokes});
+  s.rest.push_back(Vec3d(1, 1, 1));  // unused: no triangle
+  // Book: edge u-v with three leaves.
+  const std::int32_t u = std::int32_t(s.rest.size());
+  s.rest.push_back(Vec3d(0.1, 0, 0));
+  s.rest.push_back(Vec3d(0.1, 0.01, 0));
+  s.rest.push_back(Vec3d(0.11, 0.005, 0));
+  s.rest.push_back(Vec3d(0.09, 0.005, 0.001));
+  s.rest.push_back(Vec3d(0.1, 0.005, 0.01));
+  s.tris.push_back({u, u + 1, u + 2});
+  s.tris.push_back({u + 1, u, u + 3});
+  s.tris.push_back({u, u + 1, u + 4});
+  s.tris.push_back({u + 2, u + 1, 2});  // joins the book to the fan's rim
+  const std::size_t n = s.rest.size();
+  s.x = s.rest;
+  s.v.assign(n, Vec3d());
+  s.mass.assign(n, 1e-3);
+  s.fixed.assign(n, 0);
+  s.fixed[3] = s.fixed[std::size_t(u) + 4] = 1;
+  s.k.assign(n, 1e4);
+  s.tau_f.assign(n, 1e3);
+  s.ref_normal.assign(s.tris.size(), Vec3d(0, 0, 1));
+  return s;
 }
 
 }  // namespace
+
+TEST(TearingRebuild, RowSortAndFanCounts) {
+  std::int32_t a[] = {9, 3, 7, 3, -1, 12, 0};
+  tear::sortRow(a, 7);
+  EXPECT_TRUE(std::is_sorted(a, a + 7));
+  EXPECT_EQ(a[0], -1);
+  EXPECT_EQ(a[6], 12);
+  tear::sortRow(a, 0);  // empty rows are fine
+  // A 40-spoke fan: the centre has 40 partners (all above it: 40 edges), each spoke has two triangles (40
+  // bending constraints at the centre), and the rim edges opposite it have one triangle each (no wing slots).
+  TearSheet<double> s = fanSheet(40);
+  s.rebuildTopology();
+  tear::Fan f;
+  f.tris = s.tris.front().data();
+  f.pt_offsets = s.pt_offsets.data();
+  f.pt_tris = s.pt_tris.data();
+  const tear::FanCounts c = tear::fanCounts(f, 0);
+  EXPECT_EQ(c.partners, 40);
+  EXPECT_EQ(c.upper, 40);
+  EXPECT_EQ(c.bend_upper, 40);
+  EXPECT_EQ(c.bend_slots, 40);
+  const tear::FanCounts unused = tear::fanCounts(f, 41);
+  EXPECT_EQ(unused.partners + unused.upper + unused.bend_upper + unused.bend_slots, 0);
+  // The fan copy (up to FanRow::kCache triangles) and the global reads count the same on a torn sheet.
+  TearSheet<double> torn = tornSheet<double>(false, 8, 5);
+  torn.rebuildTopology();
+  f.tris = torn.tris.front().data();
+  f.pt_offsets = torn.pt_offsets.data();
+  f.pt_tris = torn.pt_tris.data();
+  int cached = 0;
+  for (std::size_t p = 0; p < torn.size(); ++p) {
+    const tear::FanCounts a = tear::fanCounts(f, std::int32_t(p)), b = tear::fanCounts(f, std::int32_t(p), 0);
+    ASSERT_EQ(a.partners, b.partners) << p;
+    ASSERT_EQ(a.upper, b.upper) << p;
+    ASSERT_EQ(a.bend_upper, b.bend_upper) << p;
+    ASSERT_EQ(a.bend_slots, b.bend_slots) << p;
+    cached += torn.pt_offsets[p + 1] - torn.pt_offsets[p] <= tear::FanRow::kCache ? 1 : 0;
+  }
+  EXPECT_EQ(cached, int(torn.size())) << "a torn lattice's fans fit the copy";
+}
+
+// Fans far larger than a lattice's, an unused particle and a non-manifold edge: the per-particle rebuild has no
+// local capacity to overflow and equals the host rebuild.
+TEST(TearingRebuild, LargeFansAndNonManifoldEdgesEqualHostRebuild) {
+  for (int spokes : {3, 7, 64, 300}) {
+    SCOPED_TRACE(spokes);
+    expectSortedEqualsHost(fanSheet(spokes));
+  }
+}
 
 TEST(TearingRebuild, IndexBitsAndKeys) {
   EXPECT_EQ(tear::indexBits(0), 1);

@@ -12,6 +12,7 @@
 #include "host/tearing_driver.h"
 #include "host/tearing_sheet.h"
 #include "host/tearing_simulation.h"
+#include "kernels/cuda_check.h"
 #include "kernels/device_info.h"
 #include "kernels/pbd_device_cuda.h"
 #include "kernels/pbd_solver_cuda.h"
@@ -149,6 +150,39 @@ TEST(PbdPatchGpu, AppendAndCommitEqualHostModel) {
   PbdStepParams<double> gs = sp;
   gs.solver = PbdSolverKind::GaussSeidel;
   EXPECT_THROW(patched->advanceFrame(gs, PbdFrameInput<double>()), InputError);
+}
+
+// commitBlockIncidence: the caller's particle -> slot CSR (here the host model's, uploaded) is taken as given
+// and the rest (offsets, Jacobi scales, multipliers) is what commitBlock computes: the same device block.
+TEST(PbdPatchGpu, CommitWithCallerIncidenceEqualsHostModel) {
+  if (!haveDevice()) GTEST_SKIP() << "no CUDA device";
+  TearSheet<double> a, b;
+  sheetPair(a, b);
+  const PbdModel<double> ma = buildTearPbdModel(a, jacobiOptions()), mb = buildTearPbdModel(b, jacobiOptions());
+  ASSERT_EQ(mb.blocks.size(), 2u);
+  auto backend = cuda::makePbdCudaBackend<double>();
+  backend->setModel(ma);
+  cuda::PbdDevicePatch<double>* patch = cuda::pbdDevicePatch<double>(*backend);
+  ASSERT_NE(patch, nullptr);
+  patch->appendParticlesFromHost(b.rest, b.x, b.v, b.mass, b.fixed);
+  for (int k = 0; k < 2; ++k) {
+    const PbdConstraintBlock<double>& h = mb.blocks[std::size_t(k)];
+    const cuda::PbdDeviceBlock<double> r = patch->reserveBlock(k, h.count());
+    const cuda::PbdDeviceIncidence inc = patch->reserveIncidence(k, h.count());
+    ASSERT_GE(inc.slot_capacity, h.particle_slots.size());
+    ASSERT_EQ(cudaDeviceSynchronize(), cudaSuccess);
+    auto up = [](void* dst, const auto& v) {
+      ASSERT_EQ(cudaMemcpy(dst, v.data(), v.size() * sizeof(v[0]), cudaMemcpyHostToDevice), cudaSuccess);
+    };
+    up(r.ids, h.ids);
+    up(r.rest, h.rest);
+    up(r.compliance, h.compliance);
+    up(inc.particle_offsets, h.particle_offsets);
+    up(inc.particle_slots, h.particle_slots);
+    patch->commitBlockIncidence(k, int(h.count()));
+    expectBlockEqual(patch->downloadBlock(k), h, 0.0, "caller incidence");
+  }
+  EXPECT_THROW(patch->commitBlockIncidence(0, 1 << 30), InputError);  // beyond the reserved constraints
 }
 
 TEST(PbdPatchGpu, GrowsBeyondCapacityAndRefusesBadInput) {
@@ -291,60 +325,65 @@ TEST(TearingPatchGpu, GaussSeidelKeepsTheHostPath) {
 }
 
 // CPU tearing step vs the device-resident step fed the same jiggled positions for 10 steps (> 1000 splits):
-// the same topology for the same seed, and the patched device model equal to a host rebuild of it.
+// the same topology for the same seed, and the patched device model equal to a host rebuild of it, with the
+// per-particle device rebuild (the default) and with the radix-sort one.
 TEST(TearingPatchGpu, ResidentStepsMatchCpuStepsForTheSameSeed) {
   if (!haveDevice()) GTEST_SKIP() << "no CUDA device";
-  TearSheet<double> a = makeTearGrid<double>(50, 50, 0.01, 2.2, Vec3d(0, 0, 0), 1.0e4, 120.0);
-  fixTearParticles(a, Vec3d(-1, -1, -1), Vec3d(1, 0.005, 1));
-  const TearModelOptions mo = jacobiOptions();
-  auto pbd = cuda::makePbdCudaBackend<double>();
-  pbd->setModel(buildTearPbdModel(a, mo));
-  auto tb = cuda::makeTearStepCuda<double>();
-  ASSERT_TRUE(tb->attach(*pbd, a, mo, 2));
-  TearParams<double> p;
-  p.seed = 21;
-  std::mt19937 rng(4);
-  std::uniform_real_distribution<double> u(-1, 1);
-  int total = 0;
-  for (int step = 0; step < 10; ++step) {
-    for (std::size_t i = 0; i < a.size(); ++i) {
-      a.x[i] = a.rest[i] + Vec3d(u(rng), u(rng), u(rng)) * 0.0012;
-      a.v[i] = Vec3d(u(rng), u(rng), u(rng)) * 0.01;
+  for (const bool sorted : {false, true}) {
+    SCOPED_TRACE(sorted ? "radix-sort rebuild" : "per-particle rebuild");
+    TearSheet<double> a = makeTearGrid<double>(50, 50, 0.01, 2.2, Vec3d(0, 0, 0), 1.0e4, 120.0);
+    fixTearParticles(a, Vec3d(-1, -1, -1), Vec3d(1, 0.005, 1));
+    TearModelOptions mo = jacobiOptions();
+    mo.device_sorted_rebuild = sorted;
+    auto pbd = cuda::makePbdCudaBackend<double>();
+    pbd->setModel(buildTearPbdModel(a, mo));
+    auto tb = cuda::makeTearStepCuda<double>();
+    ASSERT_TRUE(tb->attach(*pbd, a, mo, 2));
+    TearParams<double> p;
+    p.seed = 21;
+    std::mt19937 rng(4);
+    std::uniform_real_distribution<double> u(-1, 1);
+    int total = 0;
+    for (int step = 0; step < 10; ++step) {
+      for (std::size_t i = 0; i < a.size(); ++i) {
+        a.x[i] = a.rest[i] + Vec3d(u(rng), u(rng), u(rng)) * 0.0012;
+        a.v[i] = Vec3d(u(rng), u(rng), u(rng)) * 0.01;
+      }
+      PbdState<double> st;
+      st.positions = a.x;
+      st.velocities = a.v;
+      st.radii.assign(a.size(), 0.0);
+      st.rotations.assign(a.size(), pbd::Quat<double>{});
+      pbd->setState(st);  // the device sheet's positions are the PBD backend's
+      const std::uint32_t counter = a.step;
+      const cpu::TearStepStats sc = cpu::tearStepCpu(a, p);
+      TearFrameStats sg;
+      const int made = tb->stepResident(p, counter, sg, step % 2 == 1);
+      ASSERT_EQ(made, sc.splits) << "step " << step;
+      EXPECT_EQ(sg.yielding, sc.yielding) << "step " << step;
+      ASSERT_EQ(tb->residentSize(), a.size());
+      total += made;
     }
-    PbdState<double> st;
-    st.positions = a.x;
-    st.velocities = a.v;
-    st.radii.assign(a.size(), 0.0);
-    st.rotations.assign(a.size(), pbd::Quat<double>{});
-    pbd->setState(st);  // the device sheet's positions are the PBD backend's
-    const std::uint32_t counter = a.step;
-    const cpu::TearStepStats sc = cpu::tearStepCpu(a, p);
-    TearFrameStats sg;
-    const int made = tb->stepResident(p, counter, sg, step % 2 == 1);
-    ASSERT_EQ(made, sc.splits) << "step " << step;
-    EXPECT_EQ(sg.yielding, sc.yielding) << "step " << step;
-    ASSERT_EQ(tb->residentSize(), a.size());
-    total += made;
+    EXPECT_GT(total, 1000);
+    TearSheet<double> b = a;
+    tb->download(b, true);
+    b.rebuildTopology();
+    EXPECT_EQ(b.tris, a.tris) << "same seed, same topology";
+    double err = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      err = std::max(err, norm(a.x[i] - b.x[i]) + norm(a.rest[i] - b.rest[i]) + std::abs(a.mass[i] - b.mass[i]));
+      ASSERT_EQ(a.fixed[i], b.fixed[i]);
+    }
+    EXPECT_LT(err, 1e-12);
+    EXPECT_TRUE(checkTearMesh(b).valid());
+    const PbdModel<double> host = buildTearPbdModel(a, mo);
+    cuda::PbdDevicePatch<double>* patch = cuda::pbdDevicePatch<double>(*pbd);
+    ASSERT_NE(patch, nullptr);
+    // Rest lengths from rest positions that agree to 1e-12 (checked above; measured ~1e-15 on a 0.5 m sheet,
+    // a few ulps of the coordinates): the lengths agree to twice that.
+    expectBlockEqual(patch->downloadBlock(0), host.blocks[0], 1e-13, "distance");
+    expectBlockEqual(patch->downloadBlock(1), host.blocks[1], 1e-12, "bending");
   }
-  EXPECT_GT(total, 1000);
-  TearSheet<double> b = a;
-  tb->download(b, true);
-  b.rebuildTopology();
-  EXPECT_EQ(b.tris, a.tris) << "same seed, same topology";
-  double err = 0;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    err = std::max(err, norm(a.x[i] - b.x[i]) + norm(a.rest[i] - b.rest[i]) + std::abs(a.mass[i] - b.mass[i]));
-    ASSERT_EQ(a.fixed[i], b.fixed[i]);
-  }
-  EXPECT_LT(err, 1e-12);
-  EXPECT_TRUE(checkTearMesh(b).valid());
-  const PbdModel<double> host = buildTearPbdModel(a, mo);
-  cuda::PbdDevicePatch<double>* patch = cuda::pbdDevicePatch<double>(*pbd);
-  ASSERT_NE(patch, nullptr);
-  // Rest lengths from rest positions that agree to 1e-12 (checked above; measured ~1e-15 on a 0.5 m sheet,
-  // a few ulps of the coordinates): the lengths agree to twice that.
-  expectBlockEqual(patch->downloadBlock(0), host.blocks[0], 1e-13, "distance");
-  expectBlockEqual(patch->downloadBlock(1), host.blocks[1], 1e-12, "bending");
 }
 
 // The runner's model on CUDA (device-resident path, Jacobi): counters, surface and checkpoints stay right
