@@ -63,14 +63,22 @@ INC_HD void mlsPairTerms(const Mat3<T>& moment_inverse, const Vec3<T>& xij, T w,
 }
 
 // eq. 5: G_i = [sum_j w_ij (u_j - u_i) x_ij^T] A_i^{-1}, x_ij = X_j - X_i.
-// With the pair tables: the same sum as sum_j (u_j - u_i) (w_ij x_ij^T A_i^{-1}), one product less per pair.
+// With the pair tables: the same sum as sum_j (u_j - u_i) (w_ij x_ij^T A_i^{-1}), one product less per pair,
+// in two running sums (the even and the odd slots of the list, added at the end: two independent addition
+// chains for the CPU's vector loop, cpu_fallback/mls_pair_sums_cpu.cpp, which reproduces this order).
 template <typename T>
 INC_HD Mat3<T> mlsDisplacementGradient(const MlsView<T>& s, std::int64_t i) {
   const Vec3<T> ui = s.displacement[i];
   if (s.pair_gradient) {
-    Mat3<T> g;
-    for (std::int64_t p = s.offsets[i]; p < s.offsets[i + 1]; ++p)
+    Mat3<T> g, g_odd;
+    const std::int64_t e = s.offsets[i + 1];
+    std::int64_t p = s.offsets[i];
+    for (; p + 1 < e; p += 2) {
       accumulateGradient(g, s.displacement[s.indices[p]] - ui, s.pair_gradient[p], T(1));
+      accumulateGradient(g_odd, s.displacement[s.indices[p + 1]] - ui, s.pair_gradient[p + 1], T(1));
+    }
+    if (p < e) accumulateGradient(g, s.displacement[s.indices[p]] - ui, s.pair_gradient[p], T(1));
+    g += g_odd;
     return g;
   }
   const Vec3<T> xi = s.rest[i];
@@ -131,8 +139,9 @@ INC_HD void mlsStressPass(const MlsView<T>& s, std::int64_t i) {
 //   f_k = v_k P_k sum_j d_kj - sum_{i in N(k)} v_i P_i d_ik = sum_{i in N(k)} w_ki (M_k + M_i)(X_i - X_k).
 // Each pair term is antisymmetric in (k, i), so momentum is conserved pair by pair.
 // With the pair tables: f_k = M_k sum_i w_ki x_ki + sum_i M_i w_ki x_ki (the same sum, split). The second sum
-// is kept entry by entry, a_rc = sum_i (M_i)_rc (w_ki x_ki)_c, and each row summed at the end: nine independent
-// running sums, the order the CPU's vector loop reproduces lane for lane (cpu_fallback/mls_pair_sums_cpu.cpp).
+// is kept entry by entry, a_rc = sum_i (M_i)_rc (w_ki x_ki)_c, over the even and the odd slots apart (added at
+// the end), and each row summed last: nine running sums twice, the order the CPU's vector loop reproduces lane
+// for lane (cpu_fallback/mls_pair_sums_cpu.cpp).
 template <typename T>
 INC_HD Vec3<T> mlsForceFromPairSum(const Mat3<T>& mk, const Vec3<T>& weighted_sum, const Mat3<T>& a) {
   Vec3<T> f = mk * weighted_sum;
@@ -144,14 +153,15 @@ template <typename T>
 INC_HD Vec3<T> mlsElasticForce(const MlsView<T>& s, std::int64_t k) {
   const Mat3<T> mk = s.stress_moment[k];
   if (s.pair_force) {
-    Mat3<T> a;
-    for (std::int64_t p = s.offsets[k]; p < s.offsets[k + 1]; ++p) {
+    Mat3<T> a[2];
+    for (std::int64_t p = s.offsets[k], q = 0; p < s.offsets[k + 1]; ++p, q ^= 1) {
       const Mat3<T>& mi = s.stress_moment[s.indices[p]];
       const Vec3<T> wx = s.pair_force[p];
       for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) a.m[r][c] += mi.m[r][c] * wx[c];
+        for (int c = 0; c < 3; ++c) a[q].m[r][c] += mi.m[r][c] * wx[c];
     }
-    return mlsForceFromPairSum(mk, s.weighted_sum[k], a);
+    a[0] += a[1];
+    return mlsForceFromPairSum(mk, s.weighted_sum[k], a[0]);
   }
   const Vec3<T> xk = s.rest[k];
   Vec3<T> f;
