@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "cpu_fallback/mls_pair_sums_cpu.h"
 #include "host/backend.h"
 #include "host/dissection_simulation.h"
 #include "host/input_error.h"
@@ -148,7 +149,7 @@ int main(int argc, char** argv) {
   CLI::App app{"Cutting: frame time with the MLS nodal points coupled, the re-packing, frame time vs cut length"};
   std::string backend_text = "auto", csv, sizes_text = "500,2000,8000", lengths_text = "0.06,0.12,0.18,0.24";
   int max_spheres = 32000, cpu_max = 8000, samples = 3, long_target = 500, after_frames = 6;
-  bool quick = false;
+  bool quick = false, portable = false;
   app.add_option("--backend", backend_text, "cpu | cuda | auto | both");
   app.add_option("--sizes", sizes_text, "target sphere counts of the full-length cut, comma separated");
   app.add_option("--lengths", lengths_text, "cut lengths (m) of the long-cut series, comma separated");
@@ -158,12 +159,14 @@ int main(int argc, char** argv) {
   app.add_option("--cpu-max", cpu_max, "skip CPU rows above this many spheres");
   app.add_option("--csv", csv, "write the rows as CSV here");
   app.add_flag("--quick", quick, "a short run: size 500, lengths 0.06,0.24");
+  app.add_flag("--portable-pair-sums", portable, "CPU MLS: the portable pair loops even where the CPU has AVX2 (same bits)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   }
   try {
+    inc::cpu::setMlsPairSumsPortable(portable);
     if (quick) {
       sizes_text = "500";
       lengths_text = "0.06,0.24";

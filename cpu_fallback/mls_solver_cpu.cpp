@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "cpu_fallback/mls_pair_sums_cpu.h"
 #include "cpu_fallback/parallel.h"
 #include "physics/mls_passes.h"
 
@@ -61,8 +62,9 @@ template <typename T>
 void MlsCpuSolver<T>::buildPairTables() {
   const std::int64_t n = std::int64_t(model_.size());
   const NeighborLists& nb = model_.neighbors;
-  pair_gradient_.resize(nb.indices.size());
-  pair_force_.resize(nb.indices.size());
+  // One spare entry: the vector loops read a 3-vector as 4 floats (cpu_fallback/mls_pair_sums_cpu.cpp).
+  pair_gradient_.assign(nb.indices.size() + 1, Vec3<T>());
+  pair_force_.assign(nb.indices.size() + 1, Vec3<T>());
   weighted_sum_.assign(std::size_t(n), Vec3<T>());
   forEachParticle(n, [&](std::int64_t i) {
     const Vec3<T> xi = model_.rest[std::size_t(i)];
@@ -174,8 +176,9 @@ void MlsCpuSolver<T>::computeForces() {
   couplingPass();
   MlsView<T> s = view();
   s.stiffening = stiffening_out_.data();
-  forEachParticle(s.n, [&](std::int64_t i) { mlsStressPass(s, i); });
-  forEachParticle(s.n, [&](std::int64_t k) { mlsForcePass(s, k, T(0), false); });
+  const bool avx2 = mlsPairSumsUseAvx2();
+  forEachParticle(s.n, [&](std::int64_t i) { mlsStressRange(s, i, i + 1, avx2); });
+  forEachParticle(s.n, [&](std::int64_t k) { mlsForceRange(s, k, k + 1, T(0), false, avx2); });
   forces_valid_ = true;
   coupling_stale_ = false;
 }
@@ -204,6 +207,7 @@ void MlsCpuSolver<T>::substeps(T dt, int n, MlsFrameStats* stats) {
   const CouplingView<T> c = couplingView();
   const std::int64_t groups = c.groups;
   const T half = T(0.5) * dt;
+  const bool avx2 = mlsPairSumsUseAvx2();
   double ms[4] = {0.0, 0.0, 0.0, 0.0};  // integrate, coupling, stress, forces (the lead thread's clock)
   team_.run(teamThreads(), [&](const Team& t) {
     auto t0 = std::chrono::steady_clock::now();
@@ -225,10 +229,10 @@ void MlsCpuSolver<T>::substeps(T dt, int n, MlsFrameStats* stats) {
       }
       lap(1);
       const MlsView<T>& sp = step == n - 1 ? last : s;
-      for (std::int64_t i = t.begin(s.n), e = t.end(s.n); i < e; ++i) mlsStressPass(sp, i);
+      mlsStressRange(sp, t.begin(s.n), t.end(s.n), avx2);
       t.barrier();
       lap(2);
-      for (std::int64_t k = t.begin(s.n), e = t.end(s.n); k < e; ++k) mlsForcePass(s, k, half, true);
+      mlsForceRange(s, t.begin(s.n), t.end(s.n), half, true, avx2);
       lap(3);
     }
   });

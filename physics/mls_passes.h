@@ -63,14 +63,22 @@ INC_HD void mlsPairTerms(const Mat3<T>& moment_inverse, const Vec3<T>& xij, T w,
 }
 
 // eq. 5: G_i = [sum_j w_ij (u_j - u_i) x_ij^T] A_i^{-1}, x_ij = X_j - X_i.
-// With the pair tables: the same sum as sum_j (u_j - u_i) (w_ij x_ij^T A_i^{-1}), one product less per pair.
+// With the pair tables: the same sum as sum_j (u_j - u_i) (w_ij x_ij^T A_i^{-1}), one product less per pair,
+// in two running sums (the even and the odd slots of the list, added at the end: two independent addition
+// chains for the CPU's vector loop, cpu_fallback/mls_pair_sums_cpu.cpp, which reproduces this order).
 template <typename T>
 INC_HD Mat3<T> mlsDisplacementGradient(const MlsView<T>& s, std::int64_t i) {
   const Vec3<T> ui = s.displacement[i];
   if (s.pair_gradient) {
-    Mat3<T> g;
-    for (std::int64_t p = s.offsets[i]; p < s.offsets[i + 1]; ++p)
+    Mat3<T> g, g_odd;
+    const std::int64_t e = s.offsets[i + 1];
+    std::int64_t p = s.offsets[i];
+    for (; p + 1 < e; p += 2) {
       accumulateGradient(g, s.displacement[s.indices[p]] - ui, s.pair_gradient[p], T(1));
+      accumulateGradient(g_odd, s.displacement[s.indices[p + 1]] - ui, s.pair_gradient[p + 1], T(1));
+    }
+    if (p < e) accumulateGradient(g, s.displacement[s.indices[p]] - ui, s.pair_gradient[p], T(1));
+    g += g_odd;
     return g;
   }
   const Vec3<T> xi = s.rest[i];
@@ -111,9 +119,10 @@ INC_HD T mlsStiffeningOf(const Mat3<T>& g, const MlsCoefficients<T>& coeffs) {
 }
 
 // Pass 1 at particle i: gradient, strain, stress, energy; stores M_i = v_i P_i A_i^{-1} for pass 2.
+// Split in two so that a CPU loop may form the gradient's pair sum its own way (the same sums, in the same
+// order: cpu_fallback/mls_pair_sums_cpu.cpp) and call the rest from here.
 template <typename T>
-INC_HD void mlsStressPass(const MlsView<T>& s, std::int64_t i) {
-  const Mat3<T> g = mlsDisplacementGradient(s, i);
+INC_HD void mlsStressAt(const MlsView<T>& s, std::int64_t i, const Mat3<T>& g) {
   const MlsStressPoint<T> sp = mlsStressPoint(g, s.coeffs);
   const T v = s.volume[i];
   s.stress_moment[i] = (sp.piola * v) * s.moment_inverse[i];
@@ -121,17 +130,38 @@ INC_HD void mlsStressPass(const MlsView<T>& s, std::int64_t i) {
   if (s.stiffening) s.stiffening[i] = mlsStiffeningOf(g, s.coeffs);
 }
 
+template <typename T>
+INC_HD void mlsStressPass(const MlsView<T>& s, std::int64_t i) {
+  mlsStressAt(s, i, mlsDisplacementGradient(s, i));
+}
+
 // eq. 9, exact negative gradient of U = sum_i v_i psi_i with d_ij = w_ij A_i^{-1} x_ij:
 //   f_k = v_k P_k sum_j d_kj - sum_{i in N(k)} v_i P_i d_ik = sum_{i in N(k)} w_ki (M_k + M_i)(X_i - X_k).
 // Each pair term is antisymmetric in (k, i), so momentum is conserved pair by pair.
-// With the pair tables: f_k = M_k sum_i w_ki x_ki + sum_i M_i w_ki x_ki (the same sum, split).
+// With the pair tables: f_k = M_k sum_i w_ki x_ki + sum_i M_i w_ki x_ki (the same sum, split). The second sum
+// is kept entry by entry, a_rc = sum_i (M_i)_rc (w_ki x_ki)_c, over the even and the odd slots apart (added at
+// the end), and each row summed last: nine running sums twice, the order the CPU's vector loop reproduces lane
+// for lane (cpu_fallback/mls_pair_sums_cpu.cpp).
+template <typename T>
+INC_HD Vec3<T> mlsForceFromPairSum(const Mat3<T>& mk, const Vec3<T>& weighted_sum, const Mat3<T>& a) {
+  Vec3<T> f = mk * weighted_sum;
+  for (int r = 0; r < 3; ++r) f[r] += (a.m[r][0] + a.m[r][1]) + a.m[r][2];
+  return f;
+}
+
 template <typename T>
 INC_HD Vec3<T> mlsElasticForce(const MlsView<T>& s, std::int64_t k) {
   const Mat3<T> mk = s.stress_moment[k];
   if (s.pair_force) {
-    Vec3<T> f = mk * s.weighted_sum[k];
-    for (std::int64_t p = s.offsets[k]; p < s.offsets[k + 1]; ++p) f += s.stress_moment[s.indices[p]] * s.pair_force[p];
-    return f;
+    Mat3<T> a[2];
+    for (std::int64_t p = s.offsets[k], q = 0; p < s.offsets[k + 1]; ++p, q ^= 1) {
+      const Mat3<T>& mi = s.stress_moment[s.indices[p]];
+      const Vec3<T> wx = s.pair_force[p];
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) a[q].m[r][c] += mi.m[r][c] * wx[c];
+    }
+    a[0] += a[1];
+    return mlsForceFromPairSum(mk, s.weighted_sum[k], a[0]);
   }
   const Vec3<T> xk = s.rest[k];
   Vec3<T> f;
@@ -147,13 +177,17 @@ INC_HD Vec3<T> mlsElasticForce(const MlsView<T>& s, std::int64_t k) {
 // Pass 2 at particle k: gather the force (plus its coupling group's share, eq. 12), then the second half kick
 // (free particles only). The stored force is what the next drift's first half kick uses.
 template <typename T>
-INC_HD void mlsForcePass(const MlsView<T>& s, std::int64_t k, T half_dt, bool kick) {
-  Vec3<T> f = mlsElasticForce(s, k);
+INC_HD void mlsForceAt(const MlsView<T>& s, std::int64_t k, Vec3<T> f, T half_dt, bool kick) {
   if (s.elastic_force) s.elastic_force[k] = f;
   if (s.coupling_group && s.coupling_group[k] >= 0) f += s.coupling_force[s.coupling_group[k]];
   s.force[k] = f;
   if (kick && s.kind[k] == kMlsFree)
     s.velocity[k] = mlsHalfKick(s.velocity[k], f, s.mass[k], s.gravity, half_dt, s.coeffs.damping);
+}
+
+template <typename T>
+INC_HD void mlsForcePass(const MlsView<T>& s, std::int64_t k, T half_dt, bool kick) {
+  mlsForceAt(s, k, mlsElasticForce(s, k), half_dt, kick);
 }
 
 // The force at particle k after the coupling forces changed (new anchors) at an unchanged displacement: the

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "cpu_fallback/mls_pair_sums_cpu.h"
 #include "cpu_fallback/mls_solver_cpu.h"
 #include "host/mls_model.h"
 #include "host/mls_solver.h"
@@ -301,4 +302,54 @@ TEST(MlsForces, MomentumAndAngularMomentumAreConserved) {
     EXPECT_LT(norm(sum) / mag, tol) << (f64 ? "float64" : "float32");
     EXPECT_LT(norm(torque) / tmag, tol) << (f64 ? "float64" : "float32");
   }
+}
+
+// The CPU's float32 passes use AVX2 pair sums where the CPU has them (cpu_fallback/mls_pair_sums_cpu.cpp) and the
+// portable loops of physics/mls_passes.h elsewhere: the two must give the same bits (forces, energies and a run of
+// substeps on a jittered, strained, volume-preserving block), and agree with the recomputing (GPU) sums to 1e-5.
+TEST(MlsForces, VectorPairSumsMatchThePortableLoopBitForBit) {
+  if (!cpu::mlsPairSumsUseAvx2()) GTEST_SKIP() << "no AVX2 on this CPU: only the portable loops exist here";
+  MlsBuildInput in = blockInput(9, 8, 7, 0.01, 0.3);
+  in.material.volume_preservation = true;
+  in.material.damping = 2.0;
+  in.gravity = Vec3d(0, 0, -9.81);
+  std::vector<Vec3d> u;
+  std::vector<Vec3d> f[2], x[2];
+  std::vector<double> e[2];
+  for (const bool portable : {false, true}) {
+    cpu::setMlsPairSumsPortable(portable);
+    auto solver = makeMlsSolver(in, BackendKind::Cpu, Precision::Float32);
+    const std::vector<Vec3d> rest = solver->restPositions();
+    u.resize(rest.size());
+    for (std::size_t i = 0; i < u.size(); ++i) u[i] = Vec3d(hashSigned(i), hashSigned(i + 7777), hashSigned(i + 99999)) * 2e-3;
+    solver->setDisplacements(u);
+    solver->computeForces();
+    solver->forces(f[portable]);
+    solver->energies(e[portable]);
+    solver->step(0.5 * solver->stableTimeStep(), 40);
+    solver->displacements(x[portable]);
+  }
+  cpu::setMlsPairSumsPortable(false);
+  ASSERT_EQ(f[0].size(), f[1].size());
+  for (std::size_t i = 0; i < f[0].size(); ++i) {
+    for (int c = 0; c < 3; ++c) {
+      ASSERT_EQ(f[0][i][c], f[1][i][c]) << "force of particle " << i;
+      ASSERT_EQ(x[0][i][c], x[1][i][c]) << "displacement of particle " << i << " after 40 substeps";
+    }
+    ASSERT_EQ(e[0][i], e[1][i]) << "energy of particle " << i;
+  }
+  // Against the recomputing sums (no pair tables, the CUDA kernels' form) at the same displacement, in float32.
+  MlsModel<float> model = buildMlsModel<float>(in);
+  MlsState<float> state;
+  state.resize(model.size());
+  for (std::size_t i = 0; i < u.size(); ++i) state.displacement[i] = Vec3f(u[i]);
+  const MlsView<float> view = makeMlsView(model, state);
+  for (std::int64_t i = 0; i < view.n; ++i) mlsStressPass(view, i);
+  double worst = 0, fmax = 0;
+  for (std::int64_t k = 0; k < view.n; ++k) {
+    const Vec3d fk(mlsElasticForce(view, k));
+    worst = std::max(worst, norm(fk - f[0][std::size_t(k)]));
+    fmax = std::max(fmax, norm(fk));
+  }
+  EXPECT_LT(worst, 1e-5 * fmax);
 }
