@@ -8,6 +8,7 @@
 #include "cpu_fallback/parallel.h"
 #include "cpu_fallback/team.h"
 #include "physics/pbd_block.h"
+#include "physics/pbd_shape_matching_terms.h"
 #include "physics/pbd_volume.h"
 
 namespace inc::cpu {
@@ -69,6 +70,105 @@ INC_FLATTEN void projectDistanceRange(const pbd::BlockView<T>& v, std::int32_t q
   if (q < q1) pbd::projectDistanceConstraint(v, q, ctx);
 }
 
+// pbd::clusterFrame of clusters cs[0..count), one after another.
+template <typename T>
+void clusterFramesBatch(const pbd::BlockView<T>& b, const std::int32_t* cs, int count, const pbd::SolveContext<T>& ctx,
+                        pbd::ClusterFrame<T>* f) {
+  for (int k = 0; k < count; ++k) {
+    const std::int32_t s0 = b.offsets[cs[k]], s1 = b.offsets[cs[k] + 1];
+    f[k] = pbd::clusterFrame(ctx.x, ctx.mass, b.ids + s0, b.rest_vec + s0, s1 - s0);
+  }
+}
+
+// pbd::shapeMatchMembers with each member's goal correction kept from pass 1 for pass 2 in `goals`.
+template <typename T>
+void shapeMatchMembersKept(const pbd::BlockView<T>& b, int c, const pbd::SolveContext<T>& ctx, const Mat3<T>& rot,
+                           const Vec3<T>& x_cm, pbd::GoalCorrection<T>* goals) {
+  pbd::shapeMatchMembers(b, c, ctx, rot, x_cm, goals);
+}
+
+#if defined(__GNUC__)
+// float32: a member's x, y and z in three lanes of a 16-byte vector (SSE2 on x86-64, which every x86-64 CPU has;
+// other targets get the compiler's own lowering), so each sum of clusterFrame is one vector operation instead of
+// three (nine for a row of the moment matrix: three). The terms are those of physics/pbd_cluster_batch.h
+// (clusterFrame's operations in its order), lane by lane, so every frame equals clusterFrame's bit for bit.
+typedef float F4 __attribute__((vector_size(16)));
+
+inline F4 loadVec3(const Vec3<float>& v) { return F4{v.x, v.y, v.z, 0.0f}; }
+
+template <>
+void clusterFramesBatch<float>(const pbd::BlockView<float>& b, const std::int32_t* cs, int count,
+                               const pbd::SolveContext<float>& ctx, pbd::ClusterFrame<float>* f) {
+  static_assert(sizeof(Vec3<float>) == 12, "Vec3<float> is x, y, z");
+  const Vec3<float>* x = ctx.x;
+  const float* mass = ctx.mass;
+  for (int k = 0; k < count; ++k) {
+    const std::int32_t s0 = b.offsets[cs[k]], s1 = b.offsets[cs[k] + 1];
+    F4 c = {};
+    float msum = 0.0f;
+    for (std::int32_t s = s0; s < s1; ++s) {
+      const std::int32_t i = b.ids[s];
+      pbd::clusterCentreTerm3(c, msum, loadVec3(x[i]), mass[i]);
+    }
+    if (msum > 0.0f) c = c * (1.0f / msum);  // clusterFrame: x_cm *= 1 / sum m_k
+    F4 a[3] = {};
+    for (std::int32_t s = s0; s < s1; ++s) {
+      const std::int32_t i = b.ids[s];
+      pbd::clusterMomentTerm3(a, loadVec3(x[i]) - c, loadVec3(b.rest_vec[s]), mass[i]);
+    }
+    f[k].x_cm = Vec3<float>(c[0], c[1], c[2]);
+    for (int r = 0; r < 3; ++r)
+      for (int j = 0; j < 3; ++j) f[k].a_pq.m[r][j] = a[r][j];
+  }
+}
+
+// The goal of a member (rot r_k + x_cm) and its correction in vector lanes likewise: one division for the three
+// multipliers instead of three (physics/pbd_shape_matching_terms.h: Mat3 * Vec3's and projectGoal's operations).
+template <>
+void shapeMatchMembersKept<float>(const pbd::BlockView<float>& b, int c, const pbd::SolveContext<float>& ctx,
+                                  const Mat3<float>& rot, const Vec3<float>& x_cm, pbd::GoalCorrection<float>* goals) {
+  const std::int32_t s0 = b.offsets[c], s1 = b.offsets[c + 1];
+  const F4 c0 = {rot.m[0][0], rot.m[1][0], rot.m[2][0], 0.0f};
+  const F4 c1 = {rot.m[0][1], rot.m[1][1], rot.m[2][1], 0.0f};
+  const F4 c2 = {rot.m[0][2], rot.m[1][2], rot.m[2][2], 0.0f};
+  const F4 cm = loadVec3(x_cm);
+  Vec3<float> dmom;
+  float mov_mass = 0.0f;
+  for (std::int32_t s = s0; s < s1; ++s) {
+    const std::int32_t p = b.ids[s];
+    const F4 goal = pbd::mulColumns(c0, c1, c2, loadVec3(b.rest_vec[s])) + cm;
+    F4 dp;
+    const F4 dl = pbd::projectGoal3(loadVec3(ctx.x[p]), ctx.w[p], goal, pbd::blockTerm(b, ctx, s), loadVec3(b.lambda[s]), dp);
+    pbd::GoalCorrection<float>& g = goals[s - s0];
+    g.dp = Vec3<float>(dp[0], dp[1], dp[2]);
+    g.dlambda = Vec3<float>(dl[0], dl[1], dl[2]);
+    pbd::shapeMatchMomentumTerm(b, ctx, s, g, dmom, mov_mass);
+  }
+  const Vec3<float> shift = pbd::shapeMatchShift(dmom, mov_mass);
+  for (std::int32_t s = s0; s < s1; ++s) pbd::shapeMatchApplyTerm(b, ctx, s, goals[s - s0], shift);
+}
+#endif
+
+// pbd::projectShapeMatchingClusters (frames, interleaved rotation extractions, member passes) with the frames of
+// clusterFramesBatch and the member passes of shapeMatchMembersKept: the same values.
+template <typename T>
+void projectShapeMatchingClustersKept(const pbd::BlockView<T>& b, const std::int32_t* cs, int count,
+                                      const pbd::SolveContext<T>& ctx, pbd::GoalCorrection<T>* goals) {
+  pbd::ClusterFrame<T> f[pbd::kMaxRotationBatch];
+  Mat3<T> a[pbd::kMaxRotationBatch];
+  pbd::Quat<T> q[pbd::kMaxRotationBatch];
+  clusterFramesBatch(b, cs, count, ctx, f);
+  for (int k = 0; k < count; ++k) {
+    a[k] = f[k].a_pq;
+    q[k] = ctx.rotation[b.ids[b.offsets[cs[k]]]];
+  }
+  pbd::extractRotations(a, q, count, ctx.rotation_iterations);
+  for (int k = 0; k < count; ++k) {
+    ctx.rotation[b.ids[b.offsets[cs[k]]]] = q[k];
+    shapeMatchMembersKept(b, cs[k], ctx, pbd::quatToMatrix(q[k]), f[k].x_cm, goals);
+  }
+}
+
 // Projects constraints order[q] (or q when order is null) for q in [q0, q1) of one block: the kind's function
 // from physics/pbd_block.h called directly (the same one projectConstraint dispatches to), so the loop has no
 // per-constraint dispatch. `goals`: room for one cluster's members (shape matching keeps pass 1's goals for
@@ -99,7 +199,10 @@ void projectRange(const pbd::BlockView<T> v, const std::int32_t* order, std::int
           for (int j = 0; j < k; ++j) repeat = repeat || v.ids[v.offsets[cs[j]]] == v.ids[v.offsets[cs[k]]];
           if (repeat) break;
         }
-        pbd::projectShapeMatchingClusters(v, cs, k, ctx, goals);
+        if (goals)
+          projectShapeMatchingClustersKept(v, cs, k, ctx, goals);
+        else
+          pbd::projectShapeMatchingClusters(v, cs, k, ctx);
       }
       break;
     default:

@@ -1,0 +1,43 @@
+// Shape-matching sums and goal projection written once for 3-vectors of any type (Vec3, or a CPU vector holding x, y, z in its lanes), with the operations and order of clusterFrame, Mat3 * Vec3 and projectGoal.
+#pragma once
+
+#include "physics/hd.h"
+#include "physics/pbd_constraints.h"
+
+namespace inc::pbd {
+
+// One member's term of clusterFrame's centre-of-mass sums: x_cm += x_k m_k and sum m += m_k (before the division).
+// V is Vec3<T> or a CPU vector holding x, y, z in its first lanes; the operations and their order per component are
+// clusterFrame's, so the sums equal clusterFrame's bit for bit when the members are added in order.
+template <typename V, typename T>
+INC_HD void clusterCentreTerm3(V& x_cm, T& msum, const V& x, T m) {
+  x_cm = x_cm + x * m;
+  msum = msum + m;
+}
+
+// One member's term of clusterFrame's moment matrix, row by row: row i of A_pq += (d_i r^T) m_k with d = x_k - x_cm
+// and r = r_k the member's rest offset (clusterFrame: A_pq += outer(d, r) m_k, element (i, j) = (d_i r_j) m_k).
+template <typename V, typename T>
+INC_HD void clusterMomentTerm3(V* a_rows, const V& d, const V& r, T m) {
+  for (int i = 0; i < 3; ++i) a_rows[i] = a_rows[i] + (r * d[i]) * m;
+}
+
+// Mat3 * v for a matrix given by its columns c0, c1, c2 (Mat3 * Vec3: row i = (m_i0 v_x + m_i1 v_y) + m_i2 v_z).
+template <typename V>
+INC_HD V mulColumns(const V& c0, const V& c1, const V& c2, const V& v) {
+  return c0 * v[0] + c1 * v[1] + c2 * v[2];
+}
+
+// projectGoal (C = x - goal, three multipliers with one denominator w + alpha~) for a 3-vector type V: the same
+// values per component as projectGoal's three deltaLambda calls. Returns dlambda; dp = dlambda w.
+template <typename V, typename T>
+INC_HD V projectGoal3(const V& x, T w, const V& goal, const XpbdTerm<T>& term, const V& lambda, V& dp) {
+  const V c = x - goal;
+  const T denom = w + term.alpha_tilde;
+  V dl{};
+  if (denom > T(0)) dl = term.stiffness * (-c - term.alpha_tilde * lambda) / denom;
+  dp = dl * w;
+  return dl;
+}
+
+}  // namespace inc::pbd
