@@ -5,6 +5,10 @@
 #include <chrono>
 #include <cmath>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "cpu_fallback/parallel.h"
 #include "cpu_fallback/team.h"
 #include "physics/pbd_block.h"
@@ -93,8 +97,16 @@ void shapeMatchMembersKept(const pbd::BlockView<T>& b, int c, const pbd::SolveCo
 // three (nine for a row of the moment matrix: three). The terms are those of physics/pbd_cluster_batch.h
 // (clusterFrame's operations in its order), lane by lane, so every frame equals clusterFrame's bit for bit.
 typedef float F4 __attribute__((vector_size(16)));
+constexpr std::int32_t kMaxKeptMembers = 64;  // members of a cluster whose pass-1 results stay on the stack
 
-inline F4 loadVec3(const Vec3<float>& v) { return F4{v.x, v.y, v.z, 0.0f}; }
+inline F4 loadVec3(const Vec3<float>& v) {
+#if defined(__SSE2__)
+  // x, y in one 8-byte load, z in a 4-byte one (the 16-byte load past z could leave the array).
+  return F4(_mm_movelh_ps(_mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(&v.x))), _mm_load_ss(&v.z)));
+#else
+  return F4{v.x, v.y, v.z, 0.0f};
+#endif
+}
 
 template <>
 void clusterFramesBatch<float>(const pbd::BlockView<float>& b, const std::int32_t* cs, int count,
@@ -132,20 +144,37 @@ void shapeMatchMembersKept<float>(const pbd::BlockView<float>& b, int c, const p
   const F4 c1 = {rot.m[0][1], rot.m[1][1], rot.m[2][1], 0.0f};
   const F4 c2 = {rot.m[0][2], rot.m[1][2], rot.m[2][2], 0.0f};
   const F4 cm = loadVec3(x_cm);
-  Vec3<float> dmom;
+  if (s1 - s0 > kMaxKeptMembers) {  // (no such cluster in the scenes: ~15-30 members)
+    pbd::shapeMatchMembers(b, c, ctx, rot, x_cm, goals);
+    return;
+  }
+  // Pass 1: goals and the momentum change, each member's (dp, dlambda) kept in registers' form for pass 2.
+  F4 kept_dp[kMaxKeptMembers], kept_dl[kMaxKeptMembers];
+  F4 dmom = {};
   float mov_mass = 0.0f;
   for (std::int32_t s = s0; s < s1; ++s) {
     const std::int32_t p = b.ids[s];
+    const float w = ctx.w[p];
     const F4 goal = pbd::mulColumns(c0, c1, c2, loadVec3(b.rest_vec[s])) + cm;
     F4 dp;
-    const F4 dl = pbd::projectGoal3(loadVec3(ctx.x[p]), ctx.w[p], goal, pbd::blockTerm(b, ctx, s), loadVec3(b.lambda[s]), dp);
-    pbd::GoalCorrection<float>& g = goals[s - s0];
-    g.dp = Vec3<float>(dp[0], dp[1], dp[2]);
-    g.dlambda = Vec3<float>(dl[0], dl[1], dl[2]);
-    pbd::shapeMatchMomentumTerm(b, ctx, s, g, dmom, mov_mass);
+    kept_dl[s - s0] = pbd::projectGoal3(loadVec3(ctx.x[p]), w, goal, pbd::blockTerm(b, ctx, s), loadVec3(b.lambda[s]), dp);
+    kept_dp[s - s0] = dp;
+    pbd::shapeMatchMomentumTerm3(dmom, mov_mass, dp, pbd::slotScale(b, ctx, s), w, ctx.mass[p]);
   }
-  const Vec3<float> shift = pbd::shapeMatchShift(dmom, mov_mass);
-  for (std::int32_t s = s0; s < s1; ++s) pbd::shapeMatchApplyTerm(b, ctx, s, goals[s - s0], shift);
+  const Vec3<float> shift3 = pbd::shapeMatchShift(Vec3<float>(dmom[0], dmom[1], dmom[2]), mov_mass);
+  const F4 shift = loadVec3(shift3);
+  // Pass 2: corrections (slot output for Jacobi, in place for Gauss-Seidel) and multipliers.
+  for (std::int32_t s = s0; s < s1; ++s) {
+    const std::int32_t p = b.ids[s];
+    const float sc = pbd::slotScale(b, ctx, s);
+    const F4 d = pbd::shapeMatchApplyCorrection3(kept_dp[s - s0], sc, ctx.w[p], shift);
+    if (ctx.jacobi)
+      b.slot_corr[s] = Vec3<float>(d[0], d[1], d[2]);
+    else
+      ctx.x[p] += Vec3<float>(d[0], d[1], d[2]);
+    const F4 l = loadVec3(b.lambda[s]) + kept_dl[s - s0] * sc;
+    b.lambda[s] = Vec3<float>(l[0], l[1], l[2]);
+  }
 }
 #endif
 

@@ -40,4 +40,20 @@ INC_HD V projectGoal3(const V& x, T w, const V& goal, const XpbdTerm<T>& term, c
   return dl;
 }
 
+// shapeMatchMomentumTerm for a 3-vector type: a movable member (w > 0) adds dp (scale m) to the momentum change and
+// m to the moving mass.
+template <typename V, typename T>
+INC_HD void shapeMatchMomentumTerm3(V& dmom, T& mov_mass, const V& dp, T scale, T w, T m) {
+  if (!(w > T(0))) return;
+  dmom = dmom + dp * (scale * m);
+  mov_mass += m;
+}
+
+// shapeMatchApplyTerm's correction for a 3-vector type: dp scale + shift for a movable member, else zero (the
+// multiplier advances by dlambda scale either way).
+template <typename V, typename T>
+INC_HD V shapeMatchApplyCorrection3(const V& dp, T scale, T w, const V& shift) {
+  return w > T(0) ? dp * scale + shift : V{};
+}
+
 }  // namespace inc::pbd
