@@ -12,7 +12,7 @@
 #include "cpu_fallback/parallel.h"
 #include "cpu_fallback/team.h"
 #include "physics/pbd_block.h"
-#include "physics/pbd_shape_matching_terms.h"
+#include "physics/pbd_terms3.h"
 #include "physics/pbd_volume.h"
 
 namespace inc::cpu {
@@ -108,6 +108,8 @@ inline F4 loadVec3(const Vec3<float>& v) {
 #endif
 }
 
+inline void storeVec3(Vec3<float>& out, const F4& v) { out = Vec3<float>(v[0], v[1], v[2]); }
+
 template <>
 void clusterFramesBatch<float>(const pbd::BlockView<float>& b, const std::int32_t* cs, int count,
                                const pbd::SolveContext<float>& ctx, pbd::ClusterFrame<float>* f) {
@@ -135,7 +137,7 @@ void clusterFramesBatch<float>(const pbd::BlockView<float>& b, const std::int32_
 }
 
 // The goal of a member (rot r_k + x_cm) and its correction in vector lanes likewise: one division for the three
-// multipliers instead of three (physics/pbd_shape_matching_terms.h: Mat3 * Vec3's and projectGoal's operations).
+// multipliers instead of three (physics/pbd_terms3.h: Mat3 * Vec3's and projectGoal's operations).
 template <>
 void shapeMatchMembersKept<float>(const pbd::BlockView<float>& b, int c, const pbd::SolveContext<float>& ctx,
                                   const Mat3<float>& rot, const Vec3<float>& x_cm, pbd::GoalCorrection<float>* goals) {
@@ -178,6 +180,51 @@ void shapeMatchMembersKept<float>(const pbd::BlockView<float>& b, int c, const p
 }
 #endif
 
+// pbd::projectLaplacianConstraint.
+template <typename T>
+void projectLaplacianCpu(const pbd::BlockView<T>& b, int c, const pbd::SolveContext<T>& ctx) {
+  pbd::projectLaplacianConstraint(b, c, ctx);
+}
+
+#if defined(__GNUC__)
+// float32: the neighbours' sum, the three multipliers and the corrections as vectors (physics/pbd_terms3.h:
+// projectLaplacian's and laplacianFromSums' operations in their order; the same values).
+template <>
+void projectLaplacianCpu<float>(const pbd::BlockView<float>& b, int c, const pbd::SolveContext<float>& ctx) {
+  const std::int32_t s0 = b.offsets[c], s1 = b.offsets[c + 1];
+  const int count = int(s1 - s0);
+  if (count < 2) {
+    pbd::projectLaplacianConstraint(b, c, ctx);
+    return;
+  }
+  const float scale = ctx.jacobi ? ctx.omega * b.jacobi_scale[s0] : 1.0f;
+  const Vec3<float> rest = pbd::laplacianRest(b, c, ctx);
+  const pbd::XpbdTerm<float> term = pbd::blockTerm(b, ctx, c);
+  const std::int32_t* ids = b.ids + s0;
+  F4 mean_sum = {};
+  float wn = 0.0f;
+  for (int k = 1; k < count; ++k) {
+    mean_sum = mean_sum + loadVec3(ctx.x[ids[k]]);
+    wn += ctx.w[ids[k]];
+  }
+  float inv_n;
+  F4 d_center;
+  const F4 dl = pbd::laplacianFromSums3(loadVec3(ctx.x[ids[0]]), ctx.w[ids[0]], mean_sum, wn, count, loadVec3(rest), term,
+                                        loadVec3(b.lambda[c]), inv_n, d_center);
+  if (ctx.jacobi) {
+    storeVec3(b.slot_corr[s0], d_center * scale);
+    for (std::int32_t s = s0 + 1; s < s1; ++s) storeVec3(b.slot_corr[s], dl * (-ctx.w[b.ids[s]] * inv_n) * scale);
+  } else {
+    storeVec3(ctx.x[ids[0]], loadVec3(ctx.x[ids[0]]) + d_center);
+    for (std::int32_t s = s0 + 1; s < s1; ++s) {
+      Vec3<float>& xs = ctx.x[b.ids[s]];
+      storeVec3(xs, loadVec3(xs) + dl * (-ctx.w[b.ids[s]] * inv_n));
+    }
+  }
+  storeVec3(b.lambda[c], loadVec3(b.lambda[c]) + dl * scale);
+}
+#endif
+
 // pbd::projectShapeMatchingClusters (frames, interleaved rotation extractions, member passes) with the frames of
 // clusterFramesBatch and the member passes of shapeMatchMembersKept: the same values.
 template <typename T>
@@ -214,7 +261,7 @@ void projectRange(const pbd::BlockView<T> v, const std::int32_t* order, std::int
       for (std::int32_t q = q0; q < q1; ++q) pbd::projectDistanceConstraint(v, order[q], ctx);
       break;
     case pbd::kLaplacian:
-      for (std::int32_t q = q0; q < q1; ++q) pbd::projectLaplacianConstraint(v, order ? order[q] : q, ctx);
+      for (std::int32_t q = q0; q < q1; ++q) projectLaplacianCpu(v, order ? order[q] : q, ctx);
       break;
     case pbd::kShapeMatching:
       // In batches of independent clusters (the phase's clusters are; a batch ends early only where a centre
