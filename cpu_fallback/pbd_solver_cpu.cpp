@@ -5,9 +5,14 @@
 #include <chrono>
 #include <cmath>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "cpu_fallback/parallel.h"
 #include "cpu_fallback/team.h"
 #include "physics/pbd_block.h"
+#include "physics/pbd_terms3.h"
 #include "physics/pbd_volume.h"
 
 namespace inc::cpu {
@@ -69,6 +74,177 @@ INC_FLATTEN void projectDistanceRange(const pbd::BlockView<T>& v, std::int32_t q
   if (q < q1) pbd::projectDistanceConstraint(v, q, ctx);
 }
 
+// pbd::clusterFrame of clusters cs[0..count), one after another.
+template <typename T>
+void clusterFramesBatch(const pbd::BlockView<T>& b, const std::int32_t* cs, int count, const pbd::SolveContext<T>& ctx,
+                        pbd::ClusterFrame<T>* f) {
+  for (int k = 0; k < count; ++k) {
+    const std::int32_t s0 = b.offsets[cs[k]], s1 = b.offsets[cs[k] + 1];
+    f[k] = pbd::clusterFrame(ctx.x, ctx.mass, b.ids + s0, b.rest_vec + s0, s1 - s0);
+  }
+}
+
+// pbd::shapeMatchMembers with each member's goal correction kept from pass 1 for pass 2 in `goals`.
+template <typename T>
+void shapeMatchMembersKept(const pbd::BlockView<T>& b, int c, const pbd::SolveContext<T>& ctx, const Mat3<T>& rot,
+                           const Vec3<T>& x_cm, pbd::GoalCorrection<T>* goals) {
+  pbd::shapeMatchMembers(b, c, ctx, rot, x_cm, goals);
+}
+
+#if defined(__GNUC__)
+// float32: a member's x, y and z in three lanes of a 16-byte vector (SSE2 on x86-64, which every x86-64 CPU has;
+// other targets get the compiler's own lowering), so each sum of clusterFrame is one vector operation instead of
+// three (nine for a row of the moment matrix: three). The terms are those of physics/pbd_cluster_batch.h
+// (clusterFrame's operations in its order), lane by lane, so every frame equals clusterFrame's bit for bit.
+typedef float F4 __attribute__((vector_size(16)));
+constexpr std::int32_t kMaxKeptMembers = 64;  // members of a cluster whose pass-1 results stay on the stack
+
+inline F4 loadVec3(const Vec3<float>& v) {
+#if defined(__SSE2__)
+  // x, y in one 8-byte load, z in a 4-byte one (the 16-byte load past z could leave the array).
+  return F4(_mm_movelh_ps(_mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(&v.x))), _mm_load_ss(&v.z)));
+#else
+  return F4{v.x, v.y, v.z, 0.0f};
+#endif
+}
+
+inline void storeVec3(Vec3<float>& out, const F4& v) { out = Vec3<float>(v[0], v[1], v[2]); }
+
+template <>
+void clusterFramesBatch<float>(const pbd::BlockView<float>& b, const std::int32_t* cs, int count,
+                               const pbd::SolveContext<float>& ctx, pbd::ClusterFrame<float>* f) {
+  static_assert(sizeof(Vec3<float>) == 12, "Vec3<float> is x, y, z");
+  const Vec3<float>* x = ctx.x;
+  const float* mass = ctx.mass;
+  for (int k = 0; k < count; ++k) {
+    const std::int32_t s0 = b.offsets[cs[k]], s1 = b.offsets[cs[k] + 1];
+    F4 c = {};
+    float msum = 0.0f;
+    for (std::int32_t s = s0; s < s1; ++s) {
+      const std::int32_t i = b.ids[s];
+      pbd::clusterCentreTerm3(c, msum, loadVec3(x[i]), mass[i]);
+    }
+    if (msum > 0.0f) c = c * (1.0f / msum);  // clusterFrame: x_cm *= 1 / sum m_k
+    F4 a[3] = {};
+    for (std::int32_t s = s0; s < s1; ++s) {
+      const std::int32_t i = b.ids[s];
+      pbd::clusterMomentTerm3(a, loadVec3(x[i]) - c, loadVec3(b.rest_vec[s]), mass[i]);
+    }
+    f[k].x_cm = Vec3<float>(c[0], c[1], c[2]);
+    for (int r = 0; r < 3; ++r)
+      for (int j = 0; j < 3; ++j) f[k].a_pq.m[r][j] = a[r][j];
+  }
+}
+
+// The goal of a member (rot r_k + x_cm) and its correction in vector lanes likewise: one division for the three
+// multipliers instead of three (physics/pbd_terms3.h: Mat3 * Vec3's and projectGoal's operations).
+template <>
+void shapeMatchMembersKept<float>(const pbd::BlockView<float>& b, int c, const pbd::SolveContext<float>& ctx,
+                                  const Mat3<float>& rot, const Vec3<float>& x_cm, pbd::GoalCorrection<float>* goals) {
+  const std::int32_t s0 = b.offsets[c], s1 = b.offsets[c + 1];
+  const F4 c0 = {rot.m[0][0], rot.m[1][0], rot.m[2][0], 0.0f};
+  const F4 c1 = {rot.m[0][1], rot.m[1][1], rot.m[2][1], 0.0f};
+  const F4 c2 = {rot.m[0][2], rot.m[1][2], rot.m[2][2], 0.0f};
+  const F4 cm = loadVec3(x_cm);
+  if (s1 - s0 > kMaxKeptMembers) {  // (no such cluster in the scenes: ~15-30 members)
+    pbd::shapeMatchMembers(b, c, ctx, rot, x_cm, goals);
+    return;
+  }
+  // Pass 1: goals and the momentum change, each member's (dp, dlambda) kept in registers' form for pass 2.
+  F4 kept_dp[kMaxKeptMembers], kept_dl[kMaxKeptMembers];
+  F4 dmom = {};
+  float mov_mass = 0.0f;
+  for (std::int32_t s = s0; s < s1; ++s) {
+    const std::int32_t p = b.ids[s];
+    const float w = ctx.w[p];
+    const F4 goal = pbd::mulColumns(c0, c1, c2, loadVec3(b.rest_vec[s])) + cm;
+    F4 dp;
+    kept_dl[s - s0] = pbd::projectGoal3(loadVec3(ctx.x[p]), w, goal, pbd::blockTerm(b, ctx, s), loadVec3(b.lambda[s]), dp);
+    kept_dp[s - s0] = dp;
+    pbd::shapeMatchMomentumTerm3(dmom, mov_mass, dp, pbd::slotScale(b, ctx, s), w, ctx.mass[p]);
+  }
+  const Vec3<float> shift3 = pbd::shapeMatchShift(Vec3<float>(dmom[0], dmom[1], dmom[2]), mov_mass);
+  const F4 shift = loadVec3(shift3);
+  // Pass 2: corrections (slot output for Jacobi, in place for Gauss-Seidel) and multipliers.
+  for (std::int32_t s = s0; s < s1; ++s) {
+    const std::int32_t p = b.ids[s];
+    const float sc = pbd::slotScale(b, ctx, s);
+    const F4 d = pbd::shapeMatchApplyCorrection3(kept_dp[s - s0], sc, ctx.w[p], shift);
+    if (ctx.jacobi)
+      b.slot_corr[s] = Vec3<float>(d[0], d[1], d[2]);
+    else
+      ctx.x[p] += Vec3<float>(d[0], d[1], d[2]);
+    const F4 l = loadVec3(b.lambda[s]) + kept_dl[s - s0] * sc;
+    b.lambda[s] = Vec3<float>(l[0], l[1], l[2]);
+  }
+}
+#endif
+
+// pbd::projectLaplacianConstraint.
+template <typename T>
+void projectLaplacianCpu(const pbd::BlockView<T>& b, int c, const pbd::SolveContext<T>& ctx) {
+  pbd::projectLaplacianConstraint(b, c, ctx);
+}
+
+#if defined(__GNUC__)
+// float32: the neighbours' sum, the three multipliers and the corrections as vectors (physics/pbd_terms3.h:
+// projectLaplacian's and laplacianFromSums' operations in their order; the same values).
+template <>
+void projectLaplacianCpu<float>(const pbd::BlockView<float>& b, int c, const pbd::SolveContext<float>& ctx) {
+  const std::int32_t s0 = b.offsets[c], s1 = b.offsets[c + 1];
+  const int count = int(s1 - s0);
+  if (count < 2) {
+    pbd::projectLaplacianConstraint(b, c, ctx);
+    return;
+  }
+  const float scale = ctx.jacobi ? ctx.omega * b.jacobi_scale[s0] : 1.0f;
+  const Vec3<float> rest = pbd::laplacianRest(b, c, ctx);
+  const pbd::XpbdTerm<float> term = pbd::blockTerm(b, ctx, c);
+  const std::int32_t* ids = b.ids + s0;
+  F4 mean_sum = {};
+  float wn = 0.0f;
+  for (int k = 1; k < count; ++k) {
+    mean_sum = mean_sum + loadVec3(ctx.x[ids[k]]);
+    wn += ctx.w[ids[k]];
+  }
+  float inv_n;
+  F4 d_center;
+  const F4 dl = pbd::laplacianFromSums3(loadVec3(ctx.x[ids[0]]), ctx.w[ids[0]], mean_sum, wn, count, loadVec3(rest), term,
+                                        loadVec3(b.lambda[c]), inv_n, d_center);
+  if (ctx.jacobi) {
+    storeVec3(b.slot_corr[s0], d_center * scale);
+    for (std::int32_t s = s0 + 1; s < s1; ++s) storeVec3(b.slot_corr[s], dl * (-ctx.w[b.ids[s]] * inv_n) * scale);
+  } else {
+    storeVec3(ctx.x[ids[0]], loadVec3(ctx.x[ids[0]]) + d_center);
+    for (std::int32_t s = s0 + 1; s < s1; ++s) {
+      Vec3<float>& xs = ctx.x[b.ids[s]];
+      storeVec3(xs, loadVec3(xs) + dl * (-ctx.w[b.ids[s]] * inv_n));
+    }
+  }
+  storeVec3(b.lambda[c], loadVec3(b.lambda[c]) + dl * scale);
+}
+#endif
+
+// pbd::projectShapeMatchingClusters (frames, interleaved rotation extractions, member passes) with the frames of
+// clusterFramesBatch and the member passes of shapeMatchMembersKept: the same values.
+template <typename T>
+void projectShapeMatchingClustersKept(const pbd::BlockView<T>& b, const std::int32_t* cs, int count,
+                                      const pbd::SolveContext<T>& ctx, pbd::GoalCorrection<T>* goals) {
+  pbd::ClusterFrame<T> f[pbd::kMaxRotationBatch];
+  Mat3<T> a[pbd::kMaxRotationBatch];
+  pbd::Quat<T> q[pbd::kMaxRotationBatch];
+  clusterFramesBatch(b, cs, count, ctx, f);
+  for (int k = 0; k < count; ++k) {
+    a[k] = f[k].a_pq;
+    q[k] = ctx.rotation[b.ids[b.offsets[cs[k]]]];
+  }
+  pbd::extractRotations(a, q, count, ctx.rotation_iterations);
+  for (int k = 0; k < count; ++k) {
+    ctx.rotation[b.ids[b.offsets[cs[k]]]] = q[k];
+    shapeMatchMembersKept(b, cs[k], ctx, pbd::quatToMatrix(q[k]), f[k].x_cm, goals);
+  }
+}
+
 // Projects constraints order[q] (or q when order is null) for q in [q0, q1) of one block: the kind's function
 // from physics/pbd_block.h called directly (the same one projectConstraint dispatches to), so the loop has no
 // per-constraint dispatch. `goals`: room for one cluster's members (shape matching keeps pass 1's goals for
@@ -85,7 +261,7 @@ void projectRange(const pbd::BlockView<T> v, const std::int32_t* order, std::int
       for (std::int32_t q = q0; q < q1; ++q) pbd::projectDistanceConstraint(v, order[q], ctx);
       break;
     case pbd::kLaplacian:
-      for (std::int32_t q = q0; q < q1; ++q) pbd::projectLaplacianConstraint(v, order ? order[q] : q, ctx);
+      for (std::int32_t q = q0; q < q1; ++q) projectLaplacianCpu(v, order ? order[q] : q, ctx);
       break;
     case pbd::kShapeMatching:
       // In batches of independent clusters (the phase's clusters are; a batch ends early only where a centre
@@ -99,7 +275,10 @@ void projectRange(const pbd::BlockView<T> v, const std::int32_t* order, std::int
           for (int j = 0; j < k; ++j) repeat = repeat || v.ids[v.offsets[cs[j]]] == v.ids[v.offsets[cs[k]]];
           if (repeat) break;
         }
-        pbd::projectShapeMatchingClusters(v, cs, k, ctx, goals);
+        if (goals)
+          projectShapeMatchingClustersKept(v, cs, k, ctx, goals);
+        else
+          pbd::projectShapeMatchingClusters(v, cs, k, ctx);
       }
       break;
     default:
