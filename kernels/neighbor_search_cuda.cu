@@ -783,9 +783,11 @@ void GridNeighborSearch<T>::build(const Vec3<T>* d_points, std::size_t n, T cell
   } else {
     // The same stages as one CUDA graph: launched in one call instead of a dozen launches and CUB calls,
     // re-captured only when the inputs or a buffer change.
-    const BuildGraphKey key{d_points, n, cell_size, sorted_.data(), packed_.data(), perm_.data(), partial_hi_.data(),
-                            keys_.data(), keys_sorted_.data(), iota_.data(), cell_count_.data(), bucket_start_.data(),
-                            temp_.data(), d_params_.data(), partial_lo_.data()};
+    const BuildGraphKey key{{d_points, sorted_.data(), packed_.data(), perm_.data(), keys_.data(), keys_sorted_.data(),
+                             iota_.data(), cell_count_.data(), bucket_start_.data(), temp_.data(), d_params_.data(),
+                             partial_lo_.data(), partial_hi_.data(), partial_bad_.data(), pinned_params_.get()},
+                            n,
+                            cell_size};
     if (!build_graph_ || !(key == build_key_)) {
       build_graph_.reset();
       INC_CUDA(cudaStreamBeginCapture(st, cudaStreamCaptureModeThreadLocal));

@@ -1,6 +1,7 @@
 // CUDA uniform-grid fixed-radius neighbour search (device-resident grid and CSR lists; same lists as the CPU).
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -128,19 +129,10 @@ class GridNeighborSearch {
 
   // What a captured build graph depends on: its inputs and every buffer it touches.
   struct BuildGraphKey {
-    const void* ptrs[14] = {};
+    std::array<const void*, 15> ptrs{};
     std::size_t n = 0;
     T cell = T(0);
-    BuildGraphKey() = default;
-    BuildGraphKey(const void* pts, std::size_t count, T cell_size, const void* a, const void* b, const void* c,
-                  const void* d, const void* e, const void* f, const void* g, const void* h, const void* i,
-                  const void* j, const void* k, const void* l)
-        : ptrs{pts, a, b, c, d, e, f, g, h, i, j, k, l, nullptr}, n(count), cell(cell_size) {}
-    bool operator==(const BuildGraphKey& o) const {
-      for (int q = 0; q < 14; ++q)
-        if (ptrs[q] != o.ptrs[q]) return false;
-      return n == o.n && cell == o.cell;
-    }
+    bool operator==(const BuildGraphKey& o) const { return ptrs == o.ptrs && n == o.n && cell == o.cell; }
   };
 
   // A build whose parameters the host has not read yet holds its point count in pending_n_ (n_ is 0 until

@@ -42,6 +42,16 @@ INC_HD T deltaLambda(T c, T w_grad2, const XpbdTerm<T>& term, T lambda) {
   return term.stiffness * (-c - term.alpha_tilde * lambda) / denom;
 }
 
+// The three multipliers' updates of a 3-vector constraint value c with one denominator: deltaLambda per component.
+// V is Vec3<T> or a CPU vector holding x, y, z in its lanes (needs per-component division by a scalar).
+template <typename V, typename T>
+INC_HD V deltaLambda3(const V& c, T w_grad2, const XpbdTerm<T>& term, const V& lambda) {
+  const T denom = w_grad2 + term.alpha_tilde;
+  V dl{};
+  if (denom > T(0)) dl = term.stiffness * (-c - term.alpha_tilde * lambda) / denom;
+  return dl;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Distance / stretch: C = |p0 - p1| - d (metaballs paper eq. 1, tresca paper eq. 1). With w = 1/m, k = 1 and
 // alpha = 0 the corrections are the paper's eqs. 2-3: dp0 = -w0/(w0+w1) C n = -m1/(m0+m1) C n, dp1 = +m0/(m0+m1) C n.
@@ -178,20 +188,29 @@ struct LaplacianCorrection {
 // The Laplacian correction from the sums over the neighbours (mean_sum = sum_j x_j, wn = sum_j w_j over the
 // count - 1 neighbours): the serial loop below and the CUDA group projection (kernels/pbd_group_projection.cuh)
 // both reduce to these sums and finish here.
+// For any 3-vector type V (count >= 2): returns dlambda; d_center = dlambda wc, and neighbour j's correction is
+// dlambda (-w_j inv_n).
+template <typename V, typename T>
+INC_HD V laplacianFromSums3(const V& x_center, T wc, const V& mean_sum, T wn, int count, const V& rest_delta_rotated,
+                            const XpbdTerm<T>& term, const V& lambda, T& inv_n, V& d_center, V* c_out = nullptr) {
+  inv_n = T(1) / T(count - 1);
+  const V mean = mean_sum * inv_n;
+  const V c = x_center - mean - rest_delta_rotated;
+  if (c_out) *c_out = c;
+  const T wg = wc + wn * inv_n * inv_n;
+  const V dl = deltaLambda3(c, wg, term, lambda);
+  d_center = dl * wc;
+  return dl;
+}
+
 template <typename T>
 INC_HD LaplacianCorrection<T> laplacianFromSums(const Vec3<T>& x_center, T wc, const Vec3<T>& mean_sum, T wn, int count,
                                                 const Vec3<T>& rest_delta_rotated, const XpbdTerm<T>& term,
                                                 const Vec3<T>& lambda) {
   LaplacianCorrection<T> out;
   if (count < 2) return out;
-  const T inv_n = T(1) / T(count - 1);
-  const Vec3<T> mean = mean_sum * inv_n;
-  out.inv_n = inv_n;
-  out.c = x_center - mean - rest_delta_rotated;
-  const T wg = wc + wn * inv_n * inv_n;
-  out.dlambda = Vec3<T>(deltaLambda(out.c.x, wg, term, lambda.x), deltaLambda(out.c.y, wg, term, lambda.y),
-                        deltaLambda(out.c.z, wg, term, lambda.z));
-  out.d_center = out.dlambda * wc;
+  out.dlambda = laplacianFromSums3(x_center, wc, mean_sum, wn, count, rest_delta_rotated, term, lambda, out.inv_n,
+                                   out.d_center, &out.c);
   return out;
 }
 
@@ -245,14 +264,20 @@ struct GoalCorrection {
   Vec3<T> c;
 };
 
+// For any 3-vector type V: returns dlambda; dp = dlambda w.
+template <typename V, typename T>
+INC_HD V projectGoal3(const V& x, T w, const V& goal, const XpbdTerm<T>& term, const V& lambda, V& dp) {
+  const V dl = deltaLambda3(x - goal, w, term, lambda);
+  dp = dl * w;
+  return dl;
+}
+
 template <typename T>
 INC_HD GoalCorrection<T> projectGoal(const Vec3<T>& x, T w, const Vec3<T>& goal, const XpbdTerm<T>& term,
                                      const Vec3<T>& lambda) {
   GoalCorrection<T> out;
   out.c = x - goal;
-  out.dlambda = Vec3<T>(deltaLambda(out.c.x, w, term, lambda.x), deltaLambda(out.c.y, w, term, lambda.y),
-                        deltaLambda(out.c.z, w, term, lambda.z));
-  out.dp = out.dlambda * w;
+  out.dlambda = projectGoal3(x, w, goal, term, lambda, out.dp);
   return out;
 }
 

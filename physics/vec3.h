@@ -26,6 +26,7 @@ template <typename T> INC_HD Vec3<T> operator-(Vec3<T> a, const Vec3<T>& b) { re
 template <typename T> INC_HD Vec3<T> operator-(const Vec3<T>& a) { return {-a.x, -a.y, -a.z}; }
 template <typename T> INC_HD Vec3<T> operator*(Vec3<T> a, T s) { return a *= s; }
 template <typename T> INC_HD Vec3<T> operator*(T s, Vec3<T> a) { return a *= s; }
+template <typename T> INC_HD Vec3<T> operator/(const Vec3<T>& a, T s) { return {a.x / s, a.y / s, a.z / s}; }
 template <typename T> INC_HD T dot(const Vec3<T>& a, const Vec3<T>& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 template <typename T> INC_HD Vec3<T> cross(const Vec3<T>& a, const Vec3<T>& b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
