@@ -44,7 +44,7 @@ double pbdStages(const FrameReport& r) {  // everything that is not a cut / MLS 
 }
 
 struct Row {
-  std::string kind, backend;
+  std::string kind, backend, solver;
   int target = 0, spheres = 0, nodal_points = 0, interface = 0, spheres_after = 0, mls_substeps = 0;
   double cut_length_m = 0;
   double ms_deform = 0, ms_cutting = 0, ms_mls = 0, ms_exchange = 0, ms_pbd = 0, ms_convert = 0;
@@ -54,7 +54,7 @@ struct Row {
 // The liver_cut organ (ellipsoid 18 x 12 x 7 cm, bed glued) at the lattice spacing that gives about `target`
 // spheres; a straight scalpel (10 cm vertical blade) along x in the plane y = 4 mm from x = -12 cm over
 // `length_m` between 0.1 s and 0.4 s, then held in the tissue until `leave_s`.
-Scene liverScene(int target, double length_m, double leave_s, int samples) {
+Scene liverScene(int target, double length_m, double leave_s, int samples, const std::string& pbd_solver) {
   Scene s;
   s.file = "<bench:cutting>";
   s.geometry.kind = GeometrySpec::Kind::Ellipsoid;
@@ -67,7 +67,7 @@ Scene liverScene(int target, double length_m, double leave_s, int samples) {
   s.models.cutting = true;
   s.solver.substeps = 4;
   s.pbd.iterations = 10;
-  s.pbd.solver = "gauss_seidel";
+  s.pbd.solver = pbd_solver;
   s.cutting.samples_per_diameter = samples;
   s.fixed = {{Vec3d(-0.1, -0.07, -0.04), Vec3d(0.1, 0.07, -0.02)}};
   ToolSpec t;
@@ -82,15 +82,34 @@ Scene liverScene(int target, double length_m, double leave_s, int samples) {
   return s;
 }
 
+// The PBD solver of a backend: Gauss-Seidel on the CPU; Jacobi on the GPU, where a liver-sized model's ~80 colours
+// make Gauss-Seidel ~80 dependent phases per iteration (docs/pbd.md, "Solvers").
+std::string solverFor(const std::string& choice, BackendKind backend) {
+  if (choice != "auto") return choice;
+  return backend == BackendKind::Cuda ? "jacobi" : "gauss_seidel";
+}
+
+// Median ms of every stage over the cutting frames, printed with --stages.
+void printStages(const std::string& label, const std::map<std::string, std::vector<double>>& stages) {
+  std::printf("  stages of the cutting frames (%s), median ms:", label.c_str());
+  for (const auto& [name, v] : stages) {
+    if (median(v) >= 0.005) std::printf(" %s %.3f", name.c_str(), median(v));
+  }
+  std::printf("\n");
+}
+
 // Frames: deforming (before the blade), cutting (the points exist), the frame that re-packs, after.
-Row runCase(const std::string& kind, BackendKind backend, int target, double length_m, int samples, int after_frames) {
+Row runCase(const std::string& kind, BackendKind backend, int target, double length_m, int samples, int after_frames,
+            const std::string& pbd_solver, bool stages) {
   Row r;
   r.kind = kind;
   r.backend = backendName(backend);
   r.target = target;
   r.cut_length_m = length_m;
   const double leave = 0.5;
-  const Scene scene = liverScene(target, length_m, leave, samples);
+  r.solver = solverFor(pbd_solver, backend);
+  const Scene scene = liverScene(target, length_m, leave, samples, r.solver);
+  std::map<std::string, std::vector<double>> stage_ms;
   auto sim = makeDissectionSimulation(scene, backend, Precision::Float32);
   r.spheres = int(sim->particleCount());
   std::vector<double> deform, cutting, mls, exchange, pbd, convert, after;
@@ -112,10 +131,13 @@ Row runCase(const std::string& kind, BackendKind backend, int target, double len
       if (int(after.size()) >= after_frames) break;
     } else if (points > 0) {
       cutting.push_back(ms);
-      mls.push_back(stage(rep, "mls_integrate") + stage(rep, "mls_coupling") + stage(rep, "mls_stress") + stage(rep, "mls_forces"));
+      mls.push_back(stage(rep, "mls_wall"));  // the stages' GPU times overlap the wall time: not summed
       exchange.push_back(stage(rep, "coupling_exchange"));
       pbd.push_back(pbdStages(rep));
       convert.push_back(stage(rep, "cut_convert"));
+      std::map<std::string, double> frame_stages;  // a stage may be reported once per exchange
+      for (const auto& st : rep.stages) frame_stages[st.stage] += st.ms;
+      for (const auto& [name, ms_stage] : frame_stages) stage_ms[name].push_back(ms_stage);
       if (int(points) >= r.nodal_points) {
         r.nodal_points = int(points);
         r.interface = int(rep.counters.at("interface_spheres"));
@@ -132,12 +154,13 @@ Row runCase(const std::string& kind, BackendKind backend, int target, double len
   r.ms_pbd = median(pbd);
   r.ms_convert = median(convert);
   r.ms_after = median(after);
+  if (stages) printStages(r.backend + " " + r.solver, stage_ms);
   return r;
 }
 
 void printRow(const Row& r) {
-  std::printf("%-6s %-5s %7d %7d %6.3f %7d %6d %5d | %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f | %8.2f %8.2f %8.2f %7d\n",
-              r.kind.c_str(), r.backend.c_str(), r.target, r.spheres, r.cut_length_m, r.nodal_points, r.interface,
+  std::printf("%-6s %-5s %-12s %7d %7d %6.3f %7d %6d %5d | %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f | %8.2f %8.2f %8.2f %7d\n",
+              r.kind.c_str(), r.backend.c_str(), r.solver.c_str(), r.target, r.spheres, r.cut_length_m, r.nodal_points, r.interface,
               r.mls_substeps, r.ms_deform, r.ms_cutting, r.ms_mls, r.ms_exchange, r.ms_pbd, r.ms_convert, r.ms_repack,
               r.ms_apply_frame, r.ms_after, r.spheres_after);
   std::fflush(stdout);
@@ -149,7 +172,8 @@ int main(int argc, char** argv) {
   CLI::App app{"Cutting: frame time with the MLS nodal points coupled, the re-packing, frame time vs cut length"};
   std::string backend_text = "auto", csv, sizes_text = "500,2000,8000", lengths_text = "0.06,0.12,0.18,0.24";
   int max_spheres = 32000, cpu_max = 8000, samples = 3, long_target = 500, after_frames = 6;
-  bool quick = false, portable = false;
+  bool quick = false, portable = false, stages = false;
+  std::string pbd_solver = "auto";
   app.add_option("--backend", backend_text, "cpu | cuda | auto | both");
   app.add_option("--sizes", sizes_text, "target sphere counts of the full-length cut, comma separated");
   app.add_option("--lengths", lengths_text, "cut lengths (m) of the long-cut series, comma separated");
@@ -158,6 +182,9 @@ int main(int argc, char** argv) {
   app.add_option("--max", max_spheres, "skip sizes above this many spheres");
   app.add_option("--cpu-max", cpu_max, "skip CPU rows above this many spheres");
   app.add_option("--csv", csv, "write the rows as CSV here");
+  app.add_option("--pbd-solver", pbd_solver, "auto (Gauss-Seidel on the CPU, Jacobi on CUDA) | jacobi | gauss_seidel")
+      ->check(CLI::IsMember({"auto", "jacobi", "gauss_seidel"}));
+  app.add_flag("--stages", stages, "print the median of every stage of the cutting frames");
   app.add_flag("--quick", quick, "a short run: size 500, lengths 0.06,0.24");
   app.add_flag("--portable-pair-sums", portable, "CPU MLS: the portable pair loops even where the CPU has AVX2 (same bits)");
   try {
@@ -193,18 +220,18 @@ int main(int argc, char** argv) {
     have_gpu = inc::cuda::queryDevices().device_count > 0;
 #endif
     std::vector<Row> rows;
-    std::printf("%-6s %-5s %7s %7s %6s %7s %6s %5s | %8s %8s %8s %8s %8s %8s | %8s %8s %8s %7s\n", "case", "back",
-                "target", "spheres", "len_m", "nodes", "iface", "mlsub", "deform", "cutting", "mls", "exchng", "pbd",
+    std::printf("%-6s %-5s %-12s %7s %7s %6s %7s %6s %5s | %8s %8s %8s %8s %8s %8s | %8s %8s %8s %7s\n", "case", "back",
+                "pbd", "target", "spheres", "len_m", "nodes", "iface", "mlsub", "deform", "cutting", "mls", "exchng", "pbd",
                 "convert", "repack", "apply", "after", "spheres");
     for (BackendKind b : backends) {
       if (b == BackendKind::Cuda && !have_gpu) continue;
       for (double n : sizes) {
         if (n > max_spheres || (b == BackendKind::Cpu && n > cpu_max)) continue;
-        rows.push_back(runCase("size", b, int(n), 0.24, samples, after_frames));
+        rows.push_back(runCase("size", b, int(n), 0.24, samples, after_frames, pbd_solver, stages));
         printRow(rows.back());
       }
       for (double len : lengths) {
-        rows.push_back(runCase("length", b, long_target, len, samples, after_frames));
+        rows.push_back(runCase("length", b, long_target, len, samples, after_frames, pbd_solver, stages));
         printRow(rows.back());
       }
     }
@@ -212,20 +239,20 @@ int main(int argc, char** argv) {
       std::ofstream f(csv);
       if (!f) throw InputError(csv, "--csv", "cannot write");
       f << "case,backend,target,spheres,cut_length_m,nodal_points,interface_spheres,mls_substeps,ms_deform,ms_cutting,"
-           "ms_mls,ms_exchange,ms_pbd,ms_convert,ms_repack,ms_apply_frame,ms_after,spheres_after\n";
+           "ms_mls,ms_exchange,ms_pbd,ms_convert,ms_repack,ms_apply_frame,ms_after,spheres_after,pbd_solver\n";
       for (const Row& r : rows)
         f << r.kind << ',' << r.backend << ',' << r.target << ',' << r.spheres << ',' << r.cut_length_m << ','
           << r.nodal_points << ',' << r.interface << ',' << r.mls_substeps << ',' << r.ms_deform << ',' << r.ms_cutting
           << ',' << r.ms_mls << ',' << r.ms_exchange << ',' << r.ms_pbd << ',' << r.ms_convert << ',' << r.ms_repack
-          << ',' << r.ms_apply_frame << ',' << r.ms_after << ',' << r.spheres_after << '\n';
+          << ',' << r.ms_apply_frame << ',' << r.ms_after << ',' << r.spheres_after << ',' << r.solver << '\n';
     }
     if (rows.empty()) {
       std::printf("bench_cutting: no rows (sizes above the limits or no device)\n");
       return 0;
     }
     const Row& first = rows.front();
-    std::printf("bench_cutting: %s %d spheres: %.3f ms per frame while cutting (%d nodal points), re-packing %.3f ms\n",
-                first.backend.c_str(), first.spheres, first.ms_cutting, first.nodal_points, first.ms_repack);
+    std::printf("bench_cutting: %s (%s PBD) %d spheres: %.3f ms per frame while cutting (%d nodal points), re-packing %.3f ms\n",
+                first.backend.c_str(), first.solver.c_str(), first.spheres, first.ms_cutting, first.nodal_points, first.ms_repack);
   } catch (const InputError& e) {
     std::fprintf(stderr, "%s\n", e.what());
     return 2;

@@ -294,6 +294,7 @@ class PbdCpuBackend final : public PbdBackend<T> {
 
   void setModel(const PbdModel<T>& model) override {
     model_ = model;
+    has_coloring_ = pbdModelHasColoring(model_);
     const std::size_t n = model_.size();
     state_.positions = model_.rest_positions;
     state_.velocities.assign(n, Vec3<T>());
@@ -376,6 +377,8 @@ class PbdCpuBackend final : public PbdBackend<T> {
     ctx.xpbd = p.xpbd;
     ctx.dt = dt;
     ctx.jacobi = p.solver == PbdSolverKind::Jacobi;
+    if (!ctx.jacobi && !has_coloring_)
+      throw InputError("pbd frame", "solver", "the model was built without a colouring (Jacobi only): use the Jacobi solver");
     ctx.omega = p.jacobi_omega;
     ctx.rotation_iterations = p.rotation_iterations;
     // compliance / dt^2 of every multiplier, once per frame instead of once per projection (the same value).
@@ -660,6 +663,7 @@ class PbdCpuBackend final : public PbdBackend<T> {
     }
   }
 
+  bool has_coloring_ = true;  // Gauss-Seidel needs every solved block coloured (pbdModelHasColoring)
   PbdModel<T> model_;
   PbdState<T> state_;
   std::vector<Vec3<T>> x_prev_;

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <map>
 #include <numeric>
@@ -226,6 +227,12 @@ void NodalRegion::regroup() {
 }
 
 void NodalRegion::rebuild() {
+  const auto t0 = std::chrono::steady_clock::now();
+  rebuildSolver();
+  last_rebuild_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+void NodalRegion::rebuildSolver() {
   regroup();
   MlsBuildInput in = settings_.mls;
   in.rest_positions = rest_;
@@ -233,7 +240,9 @@ void NodalRegion::rebuild() {
   in.kinds = kind_;
   in.spacing = spacing_;
   in.neighbors = supports_;
-  solver_ = makeMlsSolver(in, settings_.backend, settings_.precision);
+  rebuildMlsSolver(solver_, in, settings_.backend, settings_.precision);  // the GPU reuses its buffers
+  // A cut's few thousand points are launch-bound on the GPU: the substeps of an exchange replay as one graph.
+  solver_->setStageTiming(false);
   solver_->setSafety(solver_->safety() * safety_scale_);
   solver_->setDisplacements(u_);
   solver_->setVelocities(v_);

@@ -65,6 +65,7 @@ class NodalRegion {
   double pointSpacing() const { return spacing_; }
   double pointMass() const;                 // kg, sum over the points
   std::size_t supportsRemoved() const { return supports_removed_; }  // directed pairs dropped by the cuts so far
+  double lastRebuildMs() const { return last_rebuild_ms_; }  // the last MLS solver rebuild (model, device upload)
   const MlsSolver* solver() const { return solver_.get(); }
   const NeighborLists& supports() const { return supports_; }
   const std::vector<Vec3d>& restPoints() const { return rest_; }
@@ -109,7 +110,8 @@ class NodalRegion {
     double rest, stiffness;
   };
   void sample(const std::vector<std::int32_t>& batch, const std::function<ConvertedSphereState(std::int32_t)>& state);
-  void rebuild();
+  void rebuild();        // rebuildSolver, timed (lastRebuildMs)
+  void rebuildSolver();
   void regroup();
   void syncState();  // host copies of u, v from the solver
 
@@ -137,6 +139,7 @@ class NodalRegion {
   std::unique_ptr<MlsSolver> solver_;
   MlsReduction last_reduction_;
   double safety_scale_ = 1.0;
+  double last_rebuild_ms_ = 0.0;
 };
 
 }  // namespace inc

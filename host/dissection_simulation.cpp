@@ -185,10 +185,15 @@ class DissectionSimulation final : public SimulationModel {
     rep.stages = st.stages;
     rep.stages.push_back({"cut_sweep", timers_.sweep_ms});
     rep.stages.push_back({"cut_convert", timers_.convert_ms});
+    rep.stages.push_back({"cut_convert_pbd", timers_.convert_pbd_ms});  // a share of cut_convert
+    rep.stages.push_back({"cut_convert_mls", timers_.convert_mls_ms});  // a share of cut_convert
     rep.stages.push_back({"mls_integrate", mls.ms_integrate});
     rep.stages.push_back({"mls_coupling", mls.ms_coupling});
     rep.stages.push_back({"mls_stress", mls.ms_stress});
-    rep.stages.push_back({"mls_forces", mls.ms_forces + mls.ms_reduce});
+    rep.stages.push_back({"mls_forces", mls.ms_forces});
+    rep.stages.push_back({"mls_reduce", mls.ms_reduce});
+    rep.stages.push_back({"mls_substeps", mls.ms_substeps});
+    rep.stages.push_back({"mls_wall", timers_.mls_ms});
     rep.stages.push_back({"coupling_exchange", timers_.exchange_ms});
     rep.stages.push_back({"cut_repack", timers_.repack_ms});
     rep.stages.push_back({"cut_apply", timers_.apply_ms});
@@ -344,6 +349,9 @@ class DissectionSimulation final : public SimulationModel {
  private:
   struct Timers {
     double sweep_ms = 0, convert_ms = 0, exchange_ms = 0, repack_ms = 0, apply_ms = 0;
+    double convert_pbd_ms = 0;  // of convert_ms: the PBD model rebuilt without the converted spheres
+    double convert_mls_ms = 0;  // of convert_ms: the MLS solver rebuilt on the points
+    double mls_ms = 0;  // wall time of the MLS advances (launches, the GPU's work, the reductions' downloads)
   };
 
 
@@ -457,7 +465,10 @@ class DissectionSimulation final : public SimulationModel {
     if (!hit.empty()) {
       if (!a.region) a.region = std::make_unique<NodalRegion>(a.base, regionSettings(), earlierCuts());
       a.region->convert(hit, [&](std::int32_t b) { return sphereState(b); }, a.swept);
+      timers_.convert_mls_ms += a.region->lastRebuildMs();
+      const auto c1 = std::chrono::steady_clock::now();
       rebuildStrokePbd();
+      timers_.convert_pbd_ms += msSince(c1);
     } else if (a.region && a.region->active()) {
       a.region->cutSupports(fresh);
     }
@@ -627,6 +638,7 @@ class DissectionSimulation final : public SimulationModel {
     // The scene's supports must hold the organ as built; after a cut the clamped part may be gone.
     opt.require_fixed_held = model_.size() == 0;
     opt.volume_samples = scene_.pbd.volume_preservation ? 64 : 0;
+    opt.coloring = params_.solver == PbdSolverKind::GaussSeidel;  // Jacobi never reads it (a rebuild per conversion)
     spheres_ = std::move(m);
     model_ = buildMetaballPbdModel<T>(spheres_, opt);
     backend_->setModel(model_);
@@ -711,13 +723,16 @@ class DissectionSimulation final : public SimulationModel {
     const auto pbdPosition = [&](std::int32_t b) { return Vec3d(state_.positions[std::size_t(a.base_to_pbd[std::size_t(b)])]); };
     st = PbdFrameStats{};
     for (int e = 0; e < K; ++e) {
+      const auto cm = std::chrono::steady_clock::now();
       const MlsFrameStats ms = region.advance(dt, scene_.cutting.mls_substeps_per_exchange, pbdPosition);
+      timers_.mls_ms += msSince(cm);
       mls.substeps += ms.substeps;
       mls.ms_integrate += ms.ms_integrate;
       mls.ms_coupling += ms.ms_coupling;
       mls.ms_stress += ms.ms_stress;
       mls.ms_forces += ms.ms_forces;
       mls.ms_reduce += ms.ms_reduce;
+      mls.ms_substeps += ms.ms_substeps;
       mls.totals = ms.totals;
       if (!ms.totals.finite) {
         mls_finite = false;

@@ -30,7 +30,9 @@ namespace inc {
 // Graspers (close at their first keyframe, drag, release at their last) and probes act on the spheres.
 // currentSurface() is the surface moved by the spheres (translation skinning; during a stroke a converted sphere
 // moves by eq. 13 of its points). FrameReport stages: the PBD backend's, cut_sweep, cut_convert, mls_integrate,
-// mls_coupling, mls_stress, mls_forces, coupling_exchange, cut_repack, cut_apply (ms). Counters: spheres, mass_kg,
+// mls_coupling, mls_stress, mls_forces (GPU times per stage; zero on the GPU's graph path), mls_substeps (the
+// GPU's graph of substeps), mls_reduce, mls_wall (wall time of the MLS advances), coupling_exchange, cut_repack,
+// cut_apply (ms). Counters: spheres, mass_kg,
 // cut_spheres_pending, interface_spheres, nodal_points, coupling_springs, coupling_spring_energy_j,
 // coupling_exchanges, mls_substeps, mls_isolated_points, mls_regularised_points, supports_cut, cuts_applied,
 // sphere_components, links, grasped, nodal_points_last_cut, spheres_added_last_cut, repack_* (groups, boundary /

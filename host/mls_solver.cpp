@@ -71,4 +71,21 @@ std::unique_ptr<MlsSolver> makeMlsSolver(const MlsBuildInput& input, BackendKind
   return f64 ? cpu::makeMlsSolverCpu(buildMlsModel<double>(input)) : cpu::makeMlsSolverCpu(buildMlsModel<float>(input));
 }
 
+void rebuildMlsSolver(std::unique_ptr<MlsSolver>& solver, const MlsBuildInput& input, BackendKind backend,
+                      Precision precision) {
+  const BackendKind kind = resolveBackend(backend).kind;
+  // Only the CUDA solver reuses anything: building a model just to have the CPU refuse it would cost a build.
+  if (solver && kind == BackendKind::Cuda && solver->backend() == kind && solver->precision() == precision) {
+    if (precision == Precision::Float64) {
+      MlsModel<double> m = buildMlsModel<double>(input);
+      if (solver->replaceModel(m)) return;
+    } else {
+      MlsModel<float> m = buildMlsModel<float>(input);
+      if (solver->replaceModel(m)) return;
+    }
+  }
+  solver.reset();  // free the old solver's device memory before the new one allocates
+  solver = makeMlsSolver(input, backend, precision);
+}
+
 }  // namespace inc

@@ -37,6 +37,9 @@ struct MlsFrameStats {
   double ms_forces = 0.0;          // pass 2 + second half kick
   double ms_reduce = 0.0;
   double ms_coupling = 0.0;        // coupling group pass (eqs. 11-13), summed over substeps
+  // All substeps together, when the stages are not timed apart (setStageTiming(false) on the GPU: the frame's
+  // substeps replay as one CUDA graph); the per-stage fields above are then zero.
+  double ms_substeps = 0.0;
   MlsReduction totals;
 };
 
@@ -105,6 +108,10 @@ class MlsSolver {
   }
   double safety() const { return safety_; }
   void setSafety(double s) { safety_ = s; }
+  // Per-stage timing of advance() (default on). The CUDA solver then launches each substep's kernels one by
+  // one between timing events; off, it replays the frame's substeps as one CUDA graph and reports only their
+  // total (ms_substeps): small models (a cut's nodal points) are launch-bound. The CPU always times stages.
+  virtual void setStageTiming(bool on) { (void)on; }
 
   // One frame: the substeps stability needs (or exactly `fixed_substeps`, refused when unstable), then the
   // frame reductions. Prescribed particles reach their targets at the end of the frame. Automatic
@@ -141,6 +148,20 @@ class MlsSolver {
   virtual void restoreCheckpoint() = 0;
   virtual MemoryReport memory() const = 0;
 
+  // Replaces the model in place, as a new solver of the same backend and precision would start: state at rest,
+  // no coupling groups, no checkpoint, safety from the model (the stage-timing setting is kept). Returns false (model untouched) where a backend
+  // keeps nothing worth reusing (the CPU); rebuildMlsSolver then makes a new solver. The CUDA solver keeps its
+  // device buffers (grown, never shrunk), its stream, events and executable graph: a cut rebuilds the solver
+  // every frame the blade enters spheres, and allocating and freeing ~30 buffers was a third of that.
+  virtual bool replaceModel(MlsModel<float>& model) {
+    (void)model;
+    return false;
+  }
+  virtual bool replaceModel(MlsModel<double>& model) {
+    (void)model;
+    return false;
+  }
+
  protected:
   // Substeps for a frame: fixed as given (checked against the rest limit: bad input throws), else automatic
   // at the current limit. Returns 0 when the deformed body would need more than kMlsMaxSubsteps (a physics
@@ -167,6 +188,12 @@ class MlsSolver {
   double withCoupling(double dt) const {
     return std::isfinite(coupling_dt_) ? 1.0 / std::sqrt(1.0 / (dt * dt) + 1.0 / (coupling_dt_ * coupling_dt_)) : dt;
   }
+  void resetSolverState(double safety) {  // what a new solver starts with (replaceModel)
+    safety_ = safety;
+    coupling_dt_ = std::numeric_limits<double>::infinity();
+    stiffening_ = 1.0;
+    stiffening_known_ = false;
+  }
   void noteReduction(const MlsReduction& r) {
     stiffening_ = r.finite ? r.stiffening : stiffening_;
     stiffening_known_ = true;
@@ -180,5 +207,10 @@ class MlsSolver {
 // Builds the model in the requested precision and the solver on the requested backend (Auto resolves
 // to CUDA when usable). Throws InputError for bad input or an unavailable backend.
 std::unique_ptr<MlsSolver> makeMlsSolver(const MlsBuildInput& input, BackendKind backend, Precision precision);
+
+// `solver` on the model of `input`: replaced in place when it is a solver of that backend and precision that
+// reuses its resources (replaceModel), else a new one (makeMlsSolver). The same errors as makeMlsSolver.
+void rebuildMlsSolver(std::unique_ptr<MlsSolver>& solver, const MlsBuildInput& input, BackendKind backend,
+                      Precision precision);
 
 }  // namespace inc

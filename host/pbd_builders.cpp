@@ -164,7 +164,7 @@ PbdModel<T> buildMetaballPbdModel(const MetaballModel& mb, const MetaballPbdOpti
     m.overlap_ids.insert(m.overlap_ids.end(), nbr[i].begin(), nbr[i].end());
     m.overlap_offsets.push_back(std::int32_t(m.overlap_ids.size()));
   }
-  finalizePbdModel(m);
+  finalizePbdModel(m, opt.coloring);
   if (opt.volume_samples > 0) computeRestCellVolumes(m, opt.volume_samples);
   return m;
 }

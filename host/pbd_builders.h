@@ -26,6 +26,9 @@ struct MetaballPbdOptions {
   bool require_fixed_held = true;    // false: a box that holds no centre is allowed (a re-packed organ whose
                                      // clamped part was cut away: the scene was checked when it was built)
   int volume_samples = 64;           // per sphere, for the power-cell volumes (0: no volume preservation)
+  bool coloring = true;              // false: no Gauss-Seidel colouring (a Jacobi-only model; a cut rebuilds the
+                                     // model every frame the blade enters spheres, and the colouring is its
+                                     // largest host cost after the volumes); Gauss-Seidel on it is refused
 };
 
 // Throws InputError("metaball model", key, reason) on inconsistent or non-physical input.

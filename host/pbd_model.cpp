@@ -5,6 +5,7 @@
 #include <cmath>
 #include <string>
 
+#include "cpu_fallback/parallel.h"
 #include "host/input_error.h"
 #include "physics/pbd_volume.h"
 
@@ -61,7 +62,7 @@ void validateBlock(const PbdConstraintBlock<T>& b, std::size_t n, const std::str
 }  // namespace
 
 template <typename T>
-void finalizePbdModel(PbdModel<T>& model) {
+void finalizePbdModel(PbdModel<T>& model, bool coloring) {
   const std::size_t n = model.size();
   if (model.masses.size() != n || model.inv_mass.size() != n || model.rest_radii.size() != n)
     throw InputError(kFile, "particles", "masses, inverse masses and radii must have one entry per particle");
@@ -106,7 +107,7 @@ void finalizePbdModel(PbdModel<T>& model) {
         for (std::int32_t s = b.offsets[c]; s < b.offsets[c + 1]; ++s) b.jacobi_scale[s] = T(1) / T(busiest);
       }
     }
-    b.coloring = colorConstraints(b.offsets, b.ids, n, fixed);
+    b.coloring = coloring ? colorConstraints(b.offsets, b.ids, n, fixed) : ConstraintColoring{};
   }
 }
 
@@ -119,17 +120,19 @@ void computeRestCellVolumes(PbdModel<T>& model, int sample_count) {
   model.ball_samples.resize(std::size_t(sample_count));
   for (int k = 0; k < sample_count; ++k) model.ball_samples[k] = Vec3<T>(pbd::unitBallSample<double>(k, sample_count));
   model.rest_cell_volume.assign(n, T(0));
-  for (std::size_t i = 0; i < n; ++i) {
+  // Independent per sphere (each writes its own entry): on the CPU fallback's threads, since a cut rebuilds the
+  // model every frame the blade enters spheres and this is the largest part of a rebuild.
+  cpu::parallelFor(std::int64_t(n), [&](std::int64_t i) {
     const std::int32_t b = model.overlap_offsets[i], e = model.overlap_offsets[i + 1];
     model.rest_cell_volume[i] =
         pbd::powerCellVolume(model.rest_positions[i], model.rest_radii[i], model.rest_positions.data(),
                              model.rest_radii.data(), model.overlap_ids.data() + b, e - b, model.ball_samples.data(),
                              sample_count);
-  }
+  });
 }
 
-template void finalizePbdModel<float>(PbdModel<float>&);
-template void finalizePbdModel<double>(PbdModel<double>&);
+template void finalizePbdModel<float>(PbdModel<float>&, bool);
+template void finalizePbdModel<double>(PbdModel<double>&, bool);
 template void computeRestCellVolumes<float>(PbdModel<float>&, int);
 template void computeRestCellVolumes<double>(PbdModel<double>&, int);
 

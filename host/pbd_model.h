@@ -192,10 +192,19 @@ inline void validateFrameInput(std::size_t n, const PbdStepParams<T>& p, const P
       throw InputError(f, "tools", "capsule not finite or negative radius");
 }
 
-// Fills the derived data of every block (particle->slot CSR, Jacobi scales, colouring) and validates the
-// model; throws InputError(file "pbd model", key, reason) on inconsistent sizes or indices.
+// Fills the derived data of every block (particle->slot CSR, Jacobi scales, colouring unless `coloring` is
+// false: a Jacobi-only model, on which both backends refuse Gauss-Seidel) and validates the model; throws
+// InputError(file "pbd model", key, reason) on inconsistent sizes or indices.
 template <typename T>
-void finalizePbdModel(PbdModel<T>& model);
+void finalizePbdModel(PbdModel<T>& model, bool coloring = true);
+
+// Whether every solved, non-empty block has a colouring (Gauss-Seidel needs one).
+template <typename T>
+bool pbdModelHasColoring(const PbdModel<T>& model) {
+  for (const auto& b : model.blocks)
+    if (b.solve && b.count() > 0 && b.coloring.order.size() != b.count()) return false;
+  return true;
+}
 
 // Rest power-cell volumes and ball samples for volume preservation (needs overlap lists and rest radii).
 template <typename T>

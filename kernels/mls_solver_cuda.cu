@@ -1,10 +1,12 @@
-// CUDA MLS solver: one thread per particle per pass, fixed-shape block reductions for the frame metrics.
+// CUDA MLS solver: a team of lanes (small models) or one thread per particle per pass, fixed-shape block
+// reductions for the frame metrics, the substeps of a frame as one CUDA graph when stages are not timed.
 #include "kernels/mls_solver_cuda.h"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -30,23 +32,80 @@ __global__ void driftKernel(MlsView<T> s, T dt, int remaining) {
   if (k < s.n) mlsDriftPass(s, k, dt, remaining);
 }
 
-template <typename T>
+// Lane teams: each particle (or coupling group) is served by L consecutive lanes of one warp, lane l adding the
+// slots l, l + L, ... of its list (the physics headers' *PairSum / couplingMemberSum with first = l, stride = L),
+// the team's partial sums added by xor shuffles, lane 0 finishing the particle. A cut's few thousand points are
+// latency-bound (one thread walking ~50 neighbours is ~50 dependent loads); L = 1 is the plain one-thread loop,
+// used for large models where the lanes would only multiply the threads (lanesFor).
+template <int L, typename T>
+__device__ void teamSum(T& v) {
+  for (int o = L / 2; o > 0; o /= 2) v += __shfl_xor_sync(0xffffffffu, v, o);
+}
+template <int L, typename T>
+__device__ void teamSum(Vec3<T>& v) {
+  for (int c = 0; c < 3; ++c) teamSum<L>(v[c]);
+}
+template <int L, typename T>
+__device__ void teamSum(Mat3<T>& m) {
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) teamSum<L>(m.m[r][c]);
+}
+
+// The displacement gradient of the team's particle i (every lane of the team gets it; no early exit before the
+// shuffles: lanes past the end add zeros).
+template <int L, typename T>
+__device__ Mat3<T> teamGradient(const MlsView<T>& s, std::int64_t i, int lane) {
+  Mat3<T> b;
+  if (i < s.n) b = mlsGradientPairSum(s, i, lane, L);
+  teamSum<L>(b);
+  return i < s.n ? b * s.moment_inverse[i] : b;
+}
+template <int L, typename T>
+__device__ Vec3<T> teamForce(const MlsView<T>& s, std::int64_t k, int lane) {
+  Vec3<T> f;
+  if (k < s.n) f = mlsForcePairSum(s, k, lane, L);
+  teamSum<L>(f);
+  return f;
+}
+
+template <typename T, int L>
 __global__ void stressKernel(MlsView<T> s) {
-  const std::int64_t i = std::int64_t(blockIdx.x) * blockDim.x + threadIdx.x;
-  if (i < s.n) mlsStressPass(s, i);
+  const std::int64_t t = std::int64_t(blockIdx.x) * blockDim.x + threadIdx.x, i = t / L;
+  const int lane = int(t % L);
+  const Mat3<T> g = teamGradient<L>(s, i, lane);
+  if (i < s.n && lane == 0) mlsStressAt(s, i, g);
 }
 
-template <typename T>
+template <typename T, int L>
 __global__ void forceKernel(MlsView<T> s, T half_dt, bool kick) {
-  const std::int64_t k = std::int64_t(blockIdx.x) * blockDim.x + threadIdx.x;
-  if (k < s.n) mlsForcePass(s, k, half_dt, kick);
+  const std::int64_t t = std::int64_t(blockIdx.x) * blockDim.x + threadIdx.x, k = t / L;
+  const int lane = int(t % L);
+  const Vec3<T> f = teamForce<L>(s, k, lane);
+  if (k < s.n && lane == 0) mlsForceAt(s, k, f, half_dt, kick);
 }
 
-// Coupling groups (eqs. 11-13): one thread per group gathers its members' displacements and its springs.
-template <typename T>
+// The end of one substep and the start of the next, fused (graph path): particle k's force gather and second
+// half kick, then its first half kick and drift of the next substep. Each uses only k's own force, so this is
+// the same per-particle sequence as forceKernel then driftKernel.
+template <typename T, int L>
+__global__ void forceDriftKernel(MlsView<T> s, T half_dt, T dt, int remaining) {
+  const std::int64_t t = std::int64_t(blockIdx.x) * blockDim.x + threadIdx.x, k = t / L;
+  const int lane = int(t % L);
+  const Vec3<T> f = teamForce<L>(s, k, lane);
+  if (k >= s.n || lane != 0) return;
+  mlsForceAt(s, k, f, half_dt, true);
+  mlsDriftPass(s, k, dt, remaining);
+}
+
+// Coupling groups (eqs. 11-13): a team per group adds its members' displacements, lane 0 adds its springs.
+template <typename T, int L>
 __global__ void couplingKernel(CouplingView<T> c, const Vec3<T>* u) {
-  const std::int64_t g = std::int64_t(blockIdx.x) * blockDim.x + threadIdx.x;
-  if (g < c.groups) couplingGroupPass(c, u, std::int32_t(g));
+  const std::int64_t t = std::int64_t(blockIdx.x) * blockDim.x + threadIdx.x, g = t / L;
+  const int lane = int(t % L);
+  Vec3<T> sum;
+  if (g < c.groups) sum = couplingMemberSum(u, c.members, c.member_offsets[g], c.member_offsets[g + 1], lane, L);
+  teamSum<L>(sum);
+  if (g < c.groups && lane == 0) couplingGroupFinish(c, std::int32_t(g), sum);
 }
 
 // Tools: particle idx[p] (unique, validated on the host) becomes prescribed with target tgt[p], unless fixed.
@@ -69,11 +128,18 @@ struct Partial {
 };
 
 // Stiffening per particle over the full grid (a neighbour loop: too much work for the fixed reduction grid).
-template <typename T>
+template <typename T, int L>
 __global__ void stiffeningKernel(MlsView<T> s, T* out) {
-  const std::int64_t i = std::int64_t(blockIdx.x) * blockDim.x + threadIdx.x;
-  if (i < s.n) out[i] = mlsStiffening(s, i);
+  const std::int64_t t = std::int64_t(blockIdx.x) * blockDim.x + threadIdx.x, i = t / L;
+  const int lane = int(t % L);
+  const Mat3<T> g = teamGradient<L>(s, i, lane);
+  if (i < s.n && lane == 0) out[i] = mlsStiffeningOf(g, s.coeffs);
 }
+
+// Lanes per particle: a team of 8 while the teams fill at most about a GPU's resident threads (~270k on an
+// H100); one lane above.
+constexpr std::int64_t kTeamMaxParticles = 32768;
+constexpr int kTeamLanes = 8;
 
 template <typename T>
 __global__ void reduceKernel(MlsView<T> s, const T* stiffening, Partial* out) {
@@ -127,31 +193,20 @@ void uploadVec(DeviceBuffer<T>& d, const std::vector<T>& h) {
 template <typename T>
 class MlsCudaSolver final : public MlsSolver {
  public:
-  explicit MlsCudaSolver(MlsModel<T> model) : model_(std::move(model)) {
-    safety_ = model_.safety;
-    const std::size_t n = model_.size();
-    rest_.upload(model_.rest);
-    mass_.upload(model_.mass);
-    volume_.upload(model_.volume);
-    moment_inverse_.upload(model_.moment_inverse);
-    kind_.upload(model_.kind);
-    offsets_.upload(model_.neighbors.offsets);
-    indices_.upload(model_.neighbors.indices);
-    for (DeviceBuffer<Vec3<T>>* b : {&u_, &v_, &f_, &target_}) {
-      b->resize(n);
-      b->fillZero();
-    }
-    stress_moment_.resize(n);
-    stress_moment_.fillZero();
-    energy_.resize(n);
-    energy_.fillZero();
-    stiffening_buf_.resize(n);
-    partials_.resize(kReduceBlocks);
+  explicit MlsCudaSolver(MlsModel<T> model) {
     // A blocking stream: it is ordered after the legacy-stream copies of DeviceBuffer::upload/download
     // (a pageable cudaMemcpy may return before its DMA lands; a kernel on a non-blocking stream could race it).
     INC_CUDA(cudaStreamCreate(&stream_));
+    load(std::move(model));
+  }
+  using MlsSolver::replaceModel;  // the other precision's overload: refused (false)
+  bool replaceModel(MlsModel<T>& model) override {
+    INC_CUDA(cudaStreamSynchronize(stream_));  // queued work may still read the old model's buffers
+    load(std::move(model));
+    return true;
   }
   ~MlsCudaSolver() override {
+    if (graph_exec_) cudaGraphExecDestroy(graph_exec_);
     for (cudaEvent_t e : events_) cudaEventDestroy(e);
     if (stream_) cudaStreamDestroy(stream_);
   }
@@ -171,10 +226,8 @@ class MlsCudaSolver final : public MlsSolver {
     const MlsView<T> s = view();
     if (s.n == 0) return;
     couplingPass();
-    stressKernel<T><<<gridFor(s.n), kBlock, 0, stream_>>>(s);
-    INC_CUDA_LAUNCH("mls stressKernel");
-    forceKernel<T><<<gridFor(s.n), kBlock, 0, stream_>>>(s, T(0), false);
-    INC_CUDA_LAUNCH("mls forceKernel");
+    launchStress(s);
+    launchForce(s, T(0), false);
     forces_valid_ = true;
   }
 
@@ -193,6 +246,19 @@ class MlsCudaSolver final : public MlsSolver {
     st.substeps = planFrame(frame_dt, fixed_substeps, model_.source);
     if (st.substeps == 0) return unplannableFrame();
     st.dt = frame_dt / st.substeps;
+    if (!stage_timing_) {
+      ensureEvents(2);
+      INC_CUDA(cudaEventRecord(events_[0], stream_));
+      substepsGraph(T(st.dt), st.substeps);
+      INC_CUDA(cudaEventRecord(events_[1], stream_));
+      const auto t0 = std::chrono::steady_clock::now();
+      st.totals = reduce();  // synchronises: the once-per-frame download
+      st.ms_reduce = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      float ms = 0;
+      INC_CUDA(cudaEventElapsedTime(&ms, events_[0], events_[1]));
+      st.ms_substeps = ms;
+      return st;
+    }
     substeps(T(st.dt), st.substeps, true);
     const auto t0 = std::chrono::steady_clock::now();
     st.totals = reduce();  // synchronises: the once-per-frame download
@@ -212,12 +278,47 @@ class MlsCudaSolver final : public MlsSolver {
     return st;
   }
 
+  void setStageTiming(bool on) override { stage_timing_ = on; }
+
+  // The model's arrays into the device buffers (grown as needed), the state at rest, no coupling groups.
+  void load(MlsModel<T> model) {
+    model_ = std::move(model);
+    resetSolverState(model_.safety);
+    const std::size_t n = model_.size();
+    rest_.upload(model_.rest);
+    mass_.upload(model_.mass);
+    volume_.upload(model_.volume);
+    moment_inverse_.upload(model_.moment_inverse);
+    kind_.upload(model_.kind);
+    offsets_.upload(model_.neighbors.offsets);
+    indices_.upload(model_.neighbors.indices);
+    for (DeviceBuffer<Vec3<T>>* b : {&u_, &v_, &f_, &target_}) {
+      b->resize(n);
+      b->fillZero();
+    }
+    stress_moment_.resize(n);
+    stress_moment_.fillZero();
+    energy_.resize(n);
+    energy_.fillZero();
+    stiffening_buf_.resize(n);
+    partials_.resize(kReduceBlocks);
+    groups_ = 0;
+    springs_ = 0;
+    forces_valid_ = false;
+    has_checkpoint_ = false;
+    graph_key_.clear();  // the graph's kernels hold the model's constants (support, coefficients): re-capture
+  }
+
   MlsReduction reduce() override {
     if (!forces_valid_) computeForces();
     const MlsView<T> s = view();
     MlsReduction r;
     if (s.n == 0) return r;
-    stiffeningKernel<T><<<gridFor(s.n), kBlock, 0, stream_>>>(s, stiffening_buf_.data());
+    if (teams(s.n)) {
+      stiffeningKernel<T, kTeamLanes><<<gridFor(s.n * kTeamLanes), kBlock, 0, stream_>>>(s, stiffening_buf_.data());
+    } else {
+      stiffeningKernel<T, 1><<<gridFor(s.n), kBlock, 0, stream_>>>(s, stiffening_buf_.data());
+    }
     INC_CUDA_LAUNCH("mls stiffeningKernel");
     reduceKernel<T><<<kReduceBlocks, kBlock, 0, stream_>>>(s, stiffening_buf_.data(), partials_.data());
     INC_CUDA_LAUNCH("mls reduceKernel");
@@ -413,8 +514,38 @@ class MlsCudaSolver final : public MlsSolver {
   }
   void couplingPass() {
     if (groups_ == 0) return;
-    couplingKernel<T><<<gridFor(groups_), kBlock, 0, stream_>>>(couplingView(), u_.data());
+    if (teams(model_.size())) {
+      couplingKernel<T, kTeamLanes><<<gridFor(std::int64_t(groups_) * kTeamLanes), kBlock, 0, stream_>>>(couplingView(), u_.data());
+    } else {
+      couplingKernel<T, 1><<<gridFor(groups_), kBlock, 0, stream_>>>(couplingView(), u_.data());
+    }
     INC_CUDA_LAUNCH("mls couplingKernel");
+  }
+
+  static bool teams(std::int64_t n) { return n <= kTeamMaxParticles; }
+  void launchStress(const MlsView<T>& s) {
+    if (teams(s.n)) {
+      stressKernel<T, kTeamLanes><<<gridFor(s.n * kTeamLanes), kBlock, 0, stream_>>>(s);
+    } else {
+      stressKernel<T, 1><<<gridFor(s.n), kBlock, 0, stream_>>>(s);
+    }
+    INC_CUDA_LAUNCH("mls stressKernel");
+  }
+  void launchForce(const MlsView<T>& s, T half_dt, bool kick) {
+    if (teams(s.n)) {
+      forceKernel<T, kTeamLanes><<<gridFor(s.n * kTeamLanes), kBlock, 0, stream_>>>(s, half_dt, kick);
+    } else {
+      forceKernel<T, 1><<<gridFor(s.n), kBlock, 0, stream_>>>(s, half_dt, kick);
+    }
+    INC_CUDA_LAUNCH("mls forceKernel");
+  }
+  void launchForceDrift(const MlsView<T>& s, T half_dt, T dt, int remaining) {
+    if (teams(s.n)) {
+      forceDriftKernel<T, kTeamLanes><<<gridFor(s.n * kTeamLanes), kBlock, 0, stream_>>>(s, half_dt, dt, remaining);
+    } else {
+      forceDriftKernel<T, 1><<<gridFor(s.n), kBlock, 0, stream_>>>(s, half_dt, dt, remaining);
+    }
+    INC_CUDA_LAUNCH("mls forceDriftKernel");
   }
 
   // n substeps of dt, all launched asynchronously on the stream; with `timed`, events around each stage.
@@ -432,13 +563,72 @@ class MlsCudaSolver final : public MlsSolver {
       if (timed) INC_CUDA(cudaEventRecord(events_[5 * k + 1], stream_));
       couplingPass();  // the groups' spring forces at the drifted displacement, before the force gather
       if (timed) INC_CUDA(cudaEventRecord(events_[5 * k + 2], stream_));
-      stressKernel<T><<<grid, kBlock, 0, stream_>>>(s);
-      INC_CUDA_LAUNCH("mls stressKernel");
+      launchStress(s);
       if (timed) INC_CUDA(cudaEventRecord(events_[5 * k + 3], stream_));
-      forceKernel<T><<<grid, kBlock, 0, stream_>>>(s, half, true);
-      INC_CUDA_LAUNCH("mls forceKernel");
+      launchForce(s, half, true);
       if (timed) INC_CUDA(cudaEventRecord(events_[5 * k + 4], stream_));
     }
+  }
+
+  // n substeps of dt as one CUDA graph, captured once and replayed while n, dt and the buffers stay the same
+  // (a topology change builds a new solver). The kernels are those of substeps() with each force pass and the
+  // next drift fused (forceDriftKernel): three dependent launches per substep instead of four.
+  void substepsGraph(T dt, int n) {
+    if (!forces_valid_) computeForces();
+    const MlsView<T> s = view();
+    if (s.n == 0 || n <= 0) return;
+    const T half = T(0.5) * dt;
+    const std::vector<std::uint64_t> key = graphKey(dt, n);
+    if (!graph_exec_ || key != graph_key_) {
+      INC_CUDA(cudaStreamBeginCapture(stream_, cudaStreamCaptureModeThreadLocal));
+      cudaGraph_t graph = nullptr;
+      try {
+        const int grid = gridFor(s.n);
+        driftKernel<T><<<grid, kBlock, 0, stream_>>>(s, dt, n);
+        INC_CUDA_LAUNCH("mls driftKernel");
+        for (int k = 0; k < n; ++k) {
+          couplingPass();
+          launchStress(s);
+          if (k + 1 < n) {
+            launchForceDrift(s, half, dt, n - k - 1);
+          } else {
+            launchForce(s, half, true);
+          }
+        }
+      } catch (...) {
+        // leave the stream usable: end (and drop) the broken capture before reporting the failure
+        if (cudaStreamEndCapture(stream_, &graph) == cudaSuccess && graph) cudaGraphDestroy(graph);
+        throw;
+      }
+      INC_CUDA(cudaStreamEndCapture(stream_, &graph));
+      if (graph_exec_) {
+        cudaGraphExecUpdateResultInfo info;
+        if (cudaGraphExecUpdate(graph_exec_, graph, &info) != cudaSuccess) {
+          (void)cudaGetLastError();  // not sticky: clear it and instantiate instead
+          cudaGraphExecDestroy(graph_exec_);
+          graph_exec_ = nullptr;
+        }
+      }
+      cudaError_t inst = cudaSuccess;
+      if (!graph_exec_) inst = cudaGraphInstantiate(&graph_exec_, graph, 0);
+      cudaGraphDestroy(graph);
+      INC_CUDA(inst);
+      graph_key_ = key;
+    }
+    INC_CUDA(cudaGraphLaunch(graph_exec_, stream_));
+  }
+
+  // What the captured graph depends on besides buffer contents: the substep count and size, the particle and
+  // group counts, and every buffer the coupling may have reallocated (setCouplingGroups uploads new arrays).
+  std::vector<std::uint64_t> graphKey(T dt, int n) {
+    const double dt_d = double(dt);
+    std::uint64_t dt_bits = 0;
+    std::memcpy(&dt_bits, &dt_d, sizeof dt_bits);
+    const CouplingView<T> c = couplingView();
+    const auto bits = [](const void* p) { return std::uint64_t(reinterpret_cast<std::uintptr_t>(p)); };
+    return {std::uint64_t(n), dt_bits, std::uint64_t(model_.size()), std::uint64_t(groups_), bits(particle_group_.data()),
+            bits(c.member_offsets), bits(c.members), bits(c.rest_centre), bits(c.spring_offsets), bits(c.anchor),
+            bits(c.rest_length), bits(c.stiffness), bits(c.group_displacement), bits(c.member_force)};
   }
 
   void ensureEvents(std::size_t count) {
@@ -490,6 +680,9 @@ class MlsCudaSolver final : public MlsSolver {
   cudaStream_t stream_ = nullptr;
   std::vector<cudaEvent_t> events_;
   bool forces_valid_ = false;
+  bool stage_timing_ = true;
+  cudaGraphExec_t graph_exec_ = nullptr;  // substepsGraph's frame, for graph_key_
+  std::vector<std::uint64_t> graph_key_;
   bool has_checkpoint_ = false;
 };
 

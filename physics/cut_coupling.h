@@ -25,13 +25,26 @@ struct CouplingView {
   Vec3<T>* member_force = nullptr;               // out: force on each member of the group (N), eq. 12
 };
 
-// eq. 13: the sphere's displacement is the mean displacement of its overlapping points.
+// The sum of the members' displacements over the slots begin + first, begin + first + stride, ... < end: the
+// whole sum with (0, 1); a GPU team of `stride` lanes adds its lanes' partial sums (kernels/mls_solver_cuda.cu).
+template <typename T>
+INC_HD Vec3<T> couplingMemberSum(const Vec3<T>* u, const std::int32_t* members, std::int32_t begin, std::int32_t end,
+                                 std::int32_t first, std::int32_t stride) {
+  Vec3<T> s;
+  for (std::int32_t p = begin + first; p < end; p += stride) s += u[members[p]];
+  return s;
+}
+
+// eq. 13: the sphere's displacement is the mean displacement of its overlapping points (their sum given).
+template <typename T>
+INC_HD Vec3<T> couplingMeanOf(const Vec3<T>& sum, std::int32_t begin, std::int32_t end) {
+  return end > begin ? sum * (T(1) / T(end - begin)) : sum;
+}
+
 template <typename T>
 INC_HD Vec3<T> couplingSphereDisplacement(const Vec3<T>* u, const std::int32_t* members, std::int32_t begin,
                                           std::int32_t end) {
-  Vec3<T> s;
-  for (std::int32_t p = begin; p < end; ++p) s += u[members[p]];
-  return end > begin ? s * (T(1) / T(end - begin)) : s;
+  return couplingMeanOf(couplingMemberSum(u, members, begin, end, 0, 1), begin, end);
 }
 
 // The force on sphere a (at x_a) of the spring a-j (x_j, rest length l, stiffness k): -dE/dx_a of
@@ -57,16 +70,22 @@ INC_HD T couplingSpringEnergy(const Vec3<T>& xa, const Vec3<T>& xj, T rest, T k)
 // the share of each overlapping point, F_a / n (eq. 12: the energy of eq. 11 averaged over the n points). The
 // share is exact: with x_a = C_a + (1/n) sum_i u_i (eq. 13), dE/du_i = (1/n) dE/dx_a, so the points feel the
 // negative gradient of the springs' energy and the coupled system has one total energy.
+// couplingGroupFinish takes the members' displacement sum (couplingMemberSum), however it was added up.
 template <typename T>
-INC_HD void couplingGroupPass(const CouplingView<T>& c, const Vec3<T>* u, std::int32_t g) {
+INC_HD void couplingGroupFinish(const CouplingView<T>& c, std::int32_t g, const Vec3<T>& member_sum) {
   const std::int32_t b = c.member_offsets[g], e = c.member_offsets[g + 1];
-  const Vec3<T> ua = couplingSphereDisplacement(u, c.members, b, e);
+  const Vec3<T> ua = couplingMeanOf(member_sum, b, e);
   c.group_displacement[g] = ua;
   const Vec3<T> xa = c.rest_centre[g] + ua;
   Vec3<T> f;
   for (std::int32_t s = c.spring_offsets[g]; s < c.spring_offsets[g + 1]; ++s)
     f += couplingSpringForce(xa, c.anchor[s], c.rest_length[s], c.stiffness[s]);
   c.member_force[g] = e > b ? f * (T(1) / T(e - b)) : Vec3<T>();
+}
+
+template <typename T>
+INC_HD void couplingGroupPass(const CouplingView<T>& c, const Vec3<T>* u, std::int32_t g) {
+  couplingGroupFinish(c, g, couplingMemberSum(u, c.members, c.member_offsets[g], c.member_offsets[g + 1], 0, 1));
 }
 
 // The largest angular frequency (rad/s) of a group's rigid mode on its springs: sqrt(sum k / m_group). An

@@ -62,6 +62,21 @@ INC_HD void mlsPairTerms(const Mat3<T>& moment_inverse, const Vec3<T>& xij, T w,
     d[c] = wx[0] * moment_inverse.m[0][c] + wx[1] * moment_inverse.m[1][c] + wx[2] * moment_inverse.m[2][c];
 }
 
+// The bracket of eq. 5 over the slots offsets[i] + first, + first + stride, ... (without pair tables): the whole
+// sum with (0, 1); a GPU team of `stride` lanes adds its lanes' partial sums before the product with A_i^{-1}.
+template <typename T>
+INC_HD Mat3<T> mlsGradientPairSum(const MlsView<T>& s, std::int64_t i, int first, int stride) {
+  const Vec3<T> xi = s.rest[i], ui = s.displacement[i];
+  Mat3<T> b;
+  for (std::int64_t p = s.offsets[i] + first; p < s.offsets[i + 1]; p += stride) {
+    const std::int32_t j = s.indices[p];
+    const Vec3<T> xij = s.rest[j] - xi;
+    const T w = mlsKernelWeight(norm2(xij), s.support);
+    accumulateGradient(b, s.displacement[j] - ui, xij, w);
+  }
+  return b;
+}
+
 // eq. 5: G_i = [sum_j w_ij (u_j - u_i) x_ij^T] A_i^{-1}, x_ij = X_j - X_i.
 // With the pair tables: the same sum as sum_j (u_j - u_i) (w_ij x_ij^T A_i^{-1}), one product less per pair,
 // in two running sums (the even and the odd slots of the list, added at the end: two independent addition
@@ -81,15 +96,7 @@ INC_HD Mat3<T> mlsDisplacementGradient(const MlsView<T>& s, std::int64_t i) {
     g += g_odd;
     return g;
   }
-  const Vec3<T> xi = s.rest[i];
-  Mat3<T> b;
-  for (std::int64_t p = s.offsets[i]; p < s.offsets[i + 1]; ++p) {
-    const std::int32_t j = s.indices[p];
-    const Vec3<T> xij = s.rest[j] - xi;
-    const T w = mlsKernelWeight(norm2(xij), s.support);
-    accumulateGradient(b, s.displacement[j] - ui, xij, w);
-  }
-  return b * s.moment_inverse[i];
+  return mlsGradientPairSum(s, i, 0, 1) * s.moment_inverse[i];
 }
 
 // How much stiffer than at rest the material is at gradient G: SVK's tangent modulus along the most
@@ -149,6 +156,22 @@ INC_HD Vec3<T> mlsForceFromPairSum(const Mat3<T>& mk, const Vec3<T>& weighted_su
   return f;
 }
 
+// eq. 9's sum over the slots offsets[k] + first, + first + stride, ... (without pair tables): the whole force with
+// (0, 1); a GPU team of `stride` lanes adds its lanes' partial sums.
+template <typename T>
+INC_HD Vec3<T> mlsForcePairSum(const MlsView<T>& s, std::int64_t k, int first, int stride) {
+  const Mat3<T> mk = s.stress_moment[k];
+  const Vec3<T> xk = s.rest[k];
+  Vec3<T> f;
+  for (std::int64_t p = s.offsets[k] + first; p < s.offsets[k + 1]; p += stride) {
+    const std::int32_t i = s.indices[p];
+    const Vec3<T> xki = s.rest[i] - xk;
+    const T w = mlsKernelWeight(norm2(xki), s.support);
+    f += ((mk + s.stress_moment[i]) * xki) * w;
+  }
+  return f;
+}
+
 template <typename T>
 INC_HD Vec3<T> mlsElasticForce(const MlsView<T>& s, std::int64_t k) {
   const Mat3<T> mk = s.stress_moment[k];
@@ -163,15 +186,7 @@ INC_HD Vec3<T> mlsElasticForce(const MlsView<T>& s, std::int64_t k) {
     a[0] += a[1];
     return mlsForceFromPairSum(mk, s.weighted_sum[k], a[0]);
   }
-  const Vec3<T> xk = s.rest[k];
-  Vec3<T> f;
-  for (std::int64_t p = s.offsets[k]; p < s.offsets[k + 1]; ++p) {
-    const std::int32_t i = s.indices[p];
-    const Vec3<T> xki = s.rest[i] - xk;
-    const T w = mlsKernelWeight(norm2(xki), s.support);
-    f += ((mk + s.stress_moment[i]) * xki) * w;
-  }
-  return f;
+  return mlsForcePairSum(s, k, 0, 1);
 }
 
 // Pass 2 at particle k: gather the force (plus its coupling group's share, eq. 12), then the second half kick

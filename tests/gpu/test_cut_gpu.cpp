@@ -64,21 +64,17 @@ TEST(CutGpu, CrossingPairMaskEqualsCpu) {
   EXPECT_GT(crossing, 0u);
 }
 
-// The same coupling groups (one per 3 x 3 x 3 corner block of a 9 x 6 x 6 lattice, each on two springs to
-// fixed anchors) on both backends, float64, from a non-uniform initial displacement: after 200 steps every
-// displacement and every group's eq. 13 displacement agree to 1e-9 relative.
-TEST(CutGpu, MlsCouplingGroupsMatchCpu) {
-  if (noDevice()) GTEST_SKIP() << "no CUDA device";
-  MlsBuildInput in = mls_test::blockInput(9, 6, 6, 0.005);
-  in.material.damping = 1.0;
-  auto cpu = makeMlsSolver(in, BackendKind::Cpu, Precision::Float64);
-  auto gpu = makeMlsSolver(in, BackendKind::Cuda, Precision::Float64);
-  const std::vector<Vec3d> rest = cpu->restPositions();
+// Coupling groups on a 9 x 6 x 6 lattice: one per 3 x 3 x 3 corner block, each on two springs to fixed anchors.
+struct CornerGroups {
+  MlsCouplingGroups groups;
+  std::vector<Vec3d> anchors;
+};
+CornerGroups cornerGroups(const std::vector<Vec3d>& rest) {
+  CornerGroups out;
+  MlsCouplingGroups& g = out.groups;
   Vec3d lo = rest[0];
   for (const auto& x : rest)
     for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], x[k]);
-  MlsCouplingGroups g;
-  std::vector<Vec3d> anchors;
   for (int block = 0; block < 3; ++block) {
     Vec3d c;
     int n = 0;
@@ -93,15 +89,32 @@ TEST(CutGpu, MlsCouplingGroupsMatchCpu) {
     for (int k = 0; k < 2; ++k) {
       g.rest_lengths.push_back(0.01);
       g.stiffnesses.push_back(20.0 + 10.0 * k);
-      anchors.push_back(g.rest_centres.back() + Vec3d(0.0, k ? 0.012 : 0.0, k ? 0.0 : -0.011));
+      out.anchors.push_back(g.rest_centres.back() + Vec3d(0.0, k ? 0.012 : 0.0, k ? 0.0 : -0.011));
     }
     g.spring_offsets.push_back(std::int32_t(g.rest_lengths.size()));
   }
-  std::vector<Vec3d> u0(rest.size());
-  for (std::size_t i = 0; i < u0.size(); ++i) u0[i] = Vec3d(mls_test::hashSigned(i), mls_test::hashSigned(i + 7), mls_test::hashSigned(i + 13)) * 2e-4;
+  return out;
+}
+
+std::vector<Vec3d> hashedDisplacement(std::size_t n) {
+  std::vector<Vec3d> u0(n);
+  for (std::size_t i = 0; i < n; ++i) u0[i] = Vec3d(mls_test::hashSigned(i), mls_test::hashSigned(i + 7), mls_test::hashSigned(i + 13)) * 2e-4;
+  return u0;
+}
+
+// The same coupling groups on both backends, float64, from a non-uniform initial displacement: after 200 steps
+// every displacement and every group's eq. 13 displacement agree to 1e-9 relative.
+TEST(CutGpu, MlsCouplingGroupsMatchCpu) {
+  if (noDevice()) GTEST_SKIP() << "no CUDA device";
+  MlsBuildInput in = mls_test::blockInput(9, 6, 6, 0.005);
+  in.material.damping = 1.0;
+  auto cpu = makeMlsSolver(in, BackendKind::Cpu, Precision::Float64);
+  auto gpu = makeMlsSolver(in, BackendKind::Cuda, Precision::Float64);
+  const CornerGroups cg = cornerGroups(cpu->restPositions());
+  const std::vector<Vec3d> u0 = hashedDisplacement(cpu->size());
   for (MlsSolver* s : {cpu.get(), gpu.get()}) {
-    s->setCouplingGroups(g);
-    s->setCouplingAnchors(anchors);
+    s->setCouplingGroups(cg.groups);
+    s->setCouplingAnchors(cg.anchors);
     s->setDisplacements(u0);
   }
   const double dt = 0.5 * cpu->stableTimeStep();
@@ -119,9 +132,116 @@ TEST(CutGpu, MlsCouplingGroupsMatchCpu) {
   for (std::size_t k = 0; k < ga.size(); ++k) EXPECT_LT(norm(ga[k] - gb[k]), 1e-9 * scale) << k;
 }
 
-// The same scripted cut on both backends (a 6 x 4 x 3 cm block, a stroke held in the tissue, gravity, float64):
-// the same topology in every frame (spheres, nodal points, interface spheres, springs, sphere-graph components,
-// spheres added by the re-packing, repack classes) and positions within 1e-6 m.
+// The graph path (setStageTiming(false): each exchange's substeps replayed as one CUDA graph, force pass and next
+// drift fused) makes the same per-particle calls in the same order as the timed launches: the same bits, float32
+// and float64, over frames whose anchors move (the graph replays with new anchor values) and whose substep count
+// changes (a new capture); the CPU agrees to 1e-9 relative in float64.
+TEST(CutGpu, MlsGraphFramesEqualTimedLaunchesBitForBit) {
+  if (noDevice()) GTEST_SKIP() << "no CUDA device";
+  MlsBuildInput in = mls_test::blockInput(9, 6, 6, 0.005);
+  in.material.damping = 1.0;
+  for (Precision prec : {Precision::Float32, Precision::Float64}) {
+    auto timed = makeMlsSolver(in, BackendKind::Cuda, prec);
+    auto graph = makeMlsSolver(in, BackendKind::Cuda, prec);
+    auto cpu = makeMlsSolver(in, BackendKind::Cpu, prec);
+    graph->setStageTiming(false);
+    const CornerGroups cg = cornerGroups(timed->restPositions());
+    const std::vector<Vec3d> u0 = hashedDisplacement(timed->size());
+    for (MlsSolver* s : {timed.get(), graph.get(), cpu.get()}) {
+      s->setCouplingGroups(cg.groups);
+      s->setDisplacements(u0);
+    }
+    const double frame = 40.0 * timed->stableTimeStep();
+    double substeps_ms = 0.0;
+    for (int f = 0; f < 6; ++f) {
+      std::vector<Vec3d> anchors = cg.anchors;
+      for (Vec3d& a : anchors) a += Vec3d(0.0005 * f, -0.0003 * f, 0.0002 * f);
+      const int fixed = f < 3 ? 60 : 75;
+      MlsFrameStats st[3];
+      int k = 0;
+      for (MlsSolver* s : {timed.get(), graph.get(), cpu.get()}) {
+        s->setCouplingAnchors(anchors);
+        st[k++] = s->advance(frame, fixed);
+      }
+      EXPECT_EQ(st[0].substeps, st[1].substeps);
+      EXPECT_TRUE(st[1].totals.finite);
+      EXPECT_EQ(st[1].ms_stress, 0.0);  // no per-stage events on the graph path
+      substeps_ms += st[1].ms_substeps;
+    }
+    EXPECT_GT(substeps_ms, 0.0);
+    std::vector<Vec3d> a, b, c, va, vb;
+    timed->displacements(a);
+    graph->displacements(b);
+    cpu->displacements(c);
+    timed->velocities(va);
+    graph->velocities(vb);
+    const double scale = mls_test::maxNorm(a);
+    ASSERT_GT(scale, 1e-5);
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      ASSERT_EQ(a[i].x, b[i].x) << i;
+      ASSERT_EQ(a[i].y, b[i].y) << i;
+      ASSERT_EQ(a[i].z, b[i].z) << i;
+      ASSERT_EQ(va[i].x, vb[i].x) << i;
+      ASSERT_EQ(va[i].y, vb[i].y) << i;
+      ASSERT_EQ(va[i].z, vb[i].z) << i;
+      if (prec == Precision::Float64) {
+        ASSERT_LT(norm(a[i] - c[i]), 1e-9 * scale) << i;
+      }
+    }
+  }
+}
+
+// rebuildMlsSolver reuses the CUDA solver (the same object, its buffers, stream and graph) for another model, and
+// the replaced solver then runs exactly as a new one built on that model: the same bits after coupled frames on
+// the graph path, in both precisions; a replacement by a smaller model too.
+TEST(CutGpu, ReplacedMlsSolverRunsAsANewOne) {
+  if (noDevice()) GTEST_SKIP() << "no CUDA device";
+  for (Precision prec : {Precision::Float32, Precision::Float64}) {
+    MlsBuildInput first = mls_test::blockInput(9, 6, 6, 0.005);
+    first.material.damping = 1.0;
+    std::unique_ptr<MlsSolver> reused = makeMlsSolver(first, BackendKind::Cuda, prec);
+    reused->setStageTiming(false);
+    const CornerGroups g0 = cornerGroups(reused->restPositions());
+    reused->setCouplingGroups(g0.groups);
+    reused->setCouplingAnchors(g0.anchors);
+    reused->setDisplacements(hashedDisplacement(reused->size()));
+    reused->advance(30.0 * reused->stableTimeStep(), 45);
+    for (int shape = 0; shape < 2; ++shape) {
+      MlsBuildInput next = shape == 0 ? mls_test::blockInput(12, 6, 6, 0.005) : mls_test::blockInput(9, 6, 5, 0.005);
+      next.material.damping = 2.0;
+      const MlsSolver* before = reused.get();
+      rebuildMlsSolver(reused, next, BackendKind::Cuda, prec);
+      EXPECT_EQ(reused.get(), before) << "the CUDA solver was not reused";
+      std::unique_ptr<MlsSolver> fresh = makeMlsSolver(next, BackendKind::Cuda, prec);
+      fresh->setStageTiming(false);
+      ASSERT_EQ(reused->size(), fresh->size());
+      EXPECT_EQ(reused->stableTimeStep(), fresh->stableTimeStep());  // the coupling of the old model is gone
+      const CornerGroups cg = cornerGroups(fresh->restPositions());
+      const std::vector<Vec3d> u0 = hashedDisplacement(fresh->size());
+      for (MlsSolver* s : {reused.get(), fresh.get()}) {
+        s->setCouplingGroups(cg.groups);
+        s->setCouplingAnchors(cg.anchors);
+        s->setDisplacements(u0);
+      }
+      for (int f = 0; f < 3; ++f) {
+        const MlsFrameStats a = reused->advance(30.0 * fresh->stableTimeStep(), 45);
+        const MlsFrameStats b = fresh->advance(30.0 * fresh->stableTimeStep(), 45);
+        EXPECT_EQ(a.substeps, b.substeps);
+        EXPECT_EQ(a.totals.elastic_energy, b.totals.elastic_energy);
+      }
+      std::vector<Vec3d> x, y;
+      reused->displacements(x);
+      fresh->displacements(y);
+      ASSERT_GT(mls_test::maxNorm(y), 0.0);
+      for (std::size_t i = 0; i < x.size(); ++i) {
+        ASSERT_EQ(x[i].x, y[i].x) << i;
+        ASSERT_EQ(x[i].y, y[i].y) << i;
+        ASSERT_EQ(x[i].z, y[i].z) << i;
+      }
+    }
+  }
+}
+
 TEST(CutGpu, ScriptedDissectionHasTheSameTopologyOnBothBackends) {
   if (noDevice()) GTEST_SKIP() << "no CUDA device";
   Scene s;
