@@ -68,12 +68,18 @@ __device__ Vec3<T> teamForce(const MlsView<T>& s, std::int64_t k, int lane) {
   return f;
 }
 
-template <typename T, int L>
-__global__ void stressKernel(MlsView<T> s) {
-  const std::int64_t t = std::int64_t(blockIdx.x) * blockDim.x + threadIdx.x, i = t / L;
+// Pass 1 by the team of thread t (lane t % L of particle t / L).
+template <int L, typename T>
+__device__ void stressTeam(const MlsView<T>& s, std::int64_t t) {
+  const std::int64_t i = t / L;
   const int lane = int(t % L);
   const Mat3<T> g = teamGradient<L>(s, i, lane);
   if (i < s.n && lane == 0) mlsStressAt(s, i, g);
+}
+
+template <typename T, int L>
+__global__ void stressKernel(MlsView<T> s) {
+  stressTeam<L>(s, std::int64_t(blockIdx.x) * blockDim.x + threadIdx.x);
 }
 
 template <typename T, int L>
@@ -98,14 +104,30 @@ __global__ void forceDriftKernel(MlsView<T> s, T half_dt, T dt, int remaining) {
 }
 
 // Coupling groups (eqs. 11-13): a team per group adds its members' displacements, lane 0 adds its springs.
-template <typename T, int L>
-__global__ void couplingKernel(CouplingView<T> c, const Vec3<T>* u) {
-  const std::int64_t t = std::int64_t(blockIdx.x) * blockDim.x + threadIdx.x, g = t / L;
+template <int L, typename T>
+__device__ void couplingTeam(const CouplingView<T>& c, const Vec3<T>* u, std::int64_t t) {
+  const std::int64_t g = t / L;
   const int lane = int(t % L);
   Vec3<T> sum;
   if (g < c.groups) sum = couplingMemberSum(u, c.members, c.member_offsets[g], c.member_offsets[g + 1], lane, L);
   teamSum<L>(sum);
   if (g < c.groups && lane == 0) couplingGroupFinish(c, std::int32_t(g), sum);
+}
+
+template <typename T, int L>
+__global__ void couplingKernel(CouplingView<T> c, const Vec3<T>* u) {
+  couplingTeam<L>(c, u, std::int64_t(blockIdx.x) * blockDim.x + threadIdx.x);
+}
+
+// Graph path: pass 1 and the coupling groups in one launch (both only read the drifted displacement; they write
+// disjoint arrays, and the force pass after them reads both): the first stress_blocks blocks take the particles,
+// the rest the groups.
+template <typename T, int L>
+__global__ void stressCouplingKernel(MlsView<T> s, CouplingView<T> c, unsigned stress_blocks) {
+  if (blockIdx.x < stress_blocks)
+    stressTeam<L>(s, std::int64_t(blockIdx.x) * blockDim.x + threadIdx.x);
+  else
+    couplingTeam<L>(c, s.displacement, std::int64_t(blockIdx.x - stress_blocks) * blockDim.x + threadIdx.x);
 }
 
 // Tools: particle idx[p] (unique, validated on the host) becomes prescribed with target tgt[p], unless fixed.
@@ -531,6 +553,19 @@ class MlsCudaSolver final : public MlsSolver {
     }
     INC_CUDA_LAUNCH("mls stressKernel");
   }
+  // Pass 1 and the coupling pass in one launch (graph path); without groups, pass 1 alone.
+  void launchStressCoupling(const MlsView<T>& s) {
+    if (groups_ == 0) return launchStress(s);
+    const std::int64_t lanes = teams(s.n) ? kTeamLanes : 1;
+    const unsigned stress_blocks = unsigned(gridFor(s.n * lanes));
+    const unsigned blocks = stress_blocks + unsigned(gridFor(std::int64_t(groups_) * lanes));
+    if (lanes > 1) {
+      stressCouplingKernel<T, kTeamLanes><<<blocks, kBlock, 0, stream_>>>(s, couplingView(), stress_blocks);
+    } else {
+      stressCouplingKernel<T, 1><<<blocks, kBlock, 0, stream_>>>(s, couplingView(), stress_blocks);
+    }
+    INC_CUDA_LAUNCH("mls stressCouplingKernel");
+  }
   void launchForce(const MlsView<T>& s, T half_dt, bool kick) {
     if (teams(s.n)) {
       forceKernel<T, kTeamLanes><<<gridFor(s.n * kTeamLanes), kBlock, 0, stream_>>>(s, half_dt, kick);
@@ -571,8 +606,8 @@ class MlsCudaSolver final : public MlsSolver {
   }
 
   // n substeps of dt as one CUDA graph, captured once and replayed while n, dt and the buffers stay the same
-  // (a topology change builds a new solver). The kernels are those of substeps() with each force pass and the
-  // next drift fused (forceDriftKernel): three dependent launches per substep instead of four.
+  // (replaceModel re-captures). The kernels are those of substeps() with the coupling pass in the stress launch
+  // and each force pass fused with the next drift (forceDriftKernel): two dependent launches per substep, not four.
   void substepsGraph(T dt, int n) {
     if (!forces_valid_) computeForces();
     const MlsView<T> s = view();
@@ -587,8 +622,7 @@ class MlsCudaSolver final : public MlsSolver {
         driftKernel<T><<<grid, kBlock, 0, stream_>>>(s, dt, n);
         INC_CUDA_LAUNCH("mls driftKernel");
         for (int k = 0; k < n; ++k) {
-          couplingPass();
-          launchStress(s);
+          launchStressCoupling(s);
           if (k + 1 < n) {
             launchForceDrift(s, half, dt, n - k - 1);
           } else {

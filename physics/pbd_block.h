@@ -164,9 +164,10 @@ INC_HD void projectDistanceConstraint(const BlockView<T>& b, int c, const SolveC
   b.lambda[c].x += r.dlambda * scale;
 }
 
-// Bending or tet volume (four particles).
-template <typename T>
-INC_HD void projectFourParticleConstraint(const BlockView<T>& b, int c, const SolveContext<T>& ctx) {
+// Bending (kBend) or tet volume (four particles). The kind is a template argument so that a kernel specialised for
+// one kind carries only that kind's code (registers, hence occupancy: kernels/pbd_solver_cuda.cu).
+template <bool kBend, typename T>
+INC_HD void projectFourParticleConstraintOf(const BlockView<T>& b, int c, const SolveContext<T>& ctx) {
   const std::int32_t s0 = b.offsets[c];
   const T scale = ctx.jacobi ? ctx.omega * b.jacobi_scale[s0] : T(1);
   const Vec3<T>* x = ctx.x;
@@ -175,7 +176,7 @@ INC_HD void projectFourParticleConstraint(const BlockView<T>& b, int c, const So
   const XpbdTerm<T> term = blockTerm(b, ctx, c);
   Vec3<T> dp[4];
   T dl;
-  if (b.kind == kBending) {
+  if (kBend) {
     const BendingCorrection<T> r = projectBending(x[id[0]], x[id[1]], x[id[2]], x[id[3]], w[id[0]], w[id[1]], w[id[2]],
                                                   w[id[3]], b.rest[c], term, b.lambda[c].x);
     for (int k = 0; k < 4; ++k) dp[k] = r.dp[k];
@@ -188,6 +189,14 @@ INC_HD void projectFourParticleConstraint(const BlockView<T>& b, int c, const So
   }
   for (int k = 0; k < 4; ++k) emitCorrection(b, ctx, s0 + k, dp[k], scale);
   b.lambda[c].x += dl * scale;
+}
+
+template <typename T>
+INC_HD void projectFourParticleConstraint(const BlockView<T>& b, int c, const SolveContext<T>& ctx) {
+  if (b.kind == kBending)
+    projectFourParticleConstraintOf<true>(b, c, ctx);
+  else
+    projectFourParticleConstraintOf<false>(b, c, ctx);
 }
 
 template <typename T>
