@@ -2,6 +2,7 @@
 #include "cpu_fallback/pbd_solver_cpu.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 
@@ -10,6 +11,7 @@
 #endif
 
 #include "cpu_fallback/parallel.h"
+#include "cpu_fallback/pbd_rotation_lanes.h"
 #include "cpu_fallback/team.h"
 #include "physics/pbd_block.h"
 #include "physics/pbd_terms3.h"
@@ -52,8 +54,13 @@ void balancedSplit(const std::vector<std::int64_t>& prefix, int parts, std::int3
 }
 
 // Shape-matching clusters projected together (at most pbd::kMaxRotationBatch): enough independent rotation
-// extractions to keep a core busy through their dependent chains.
+// extractions to keep a core busy through their dependent chains, and one per lane of extractRotationsLanes.
 constexpr int kClusterBatch = 4;
+static_assert(kClusterBatch <= kRotationLaneBatch && kClusterBatch <= pbd::kMaxRotationBatch, "batch size");
+
+// Set by tests to run the batches one after another with the scalar pbd::extractRotations instead of
+// projectShapeMatchingPipelined's lanes (the results must not change).
+std::atomic<bool> g_scalar_rotations{false};
 
 #if defined(__GNUC__)
 #define INC_FLATTEN __attribute__((flatten))
@@ -226,7 +233,8 @@ void projectLaplacianCpu<float>(const pbd::BlockView<float>& b, int c, const pbd
 #endif
 
 // pbd::projectShapeMatchingClusters (frames, interleaved rotation extractions, member passes) with the frames of
-// clusterFramesBatch and the member passes of shapeMatchMembersKept: the same values.
+// clusterFramesBatch and the member passes of shapeMatchMembersKept: the same values. The scalar reference for
+// projectShapeMatchingPipelined below (used where there are no SIMD lanes, or when a test asks for it).
 template <typename T>
 void projectShapeMatchingClustersKept(const pbd::BlockView<T>& b, const std::int32_t* cs, int count,
                                       const pbd::SolveContext<T>& ctx, pbd::GoalCorrection<T>* goals) {
@@ -244,6 +252,82 @@ void projectShapeMatchingClustersKept(const pbd::BlockView<T>& b, const std::int
     shapeMatchMembersKept(b, cs[k], ctx, pbd::quatToMatrix(q[k]), f[k].x_cm, goals);
   }
 }
+
+// The next batch of shape-matching clusters order[q] (or q) from [q, q1) into cs: up to kClusterBatch, ending early
+// where a cluster's centre would repeat (the second would have to start from the rotation the first writes).
+// Advances q past the batch; returns its size.
+template <typename T>
+int nextClusterBatch(const pbd::BlockView<T>& v, const std::int32_t* order, std::int32_t& q, std::int32_t q1,
+                     std::int32_t* cs) {
+  int k = 0;
+  for (; k < kClusterBatch && q < q1; ++k, ++q) {
+    cs[k] = order ? order[q] : q;
+    bool repeat = false;
+    for (int j = 0; j < k; ++j) repeat = repeat || v.ids[v.offsets[cs[j]]] == v.ids[v.offsets[cs[k]]];
+    if (repeat) break;
+  }
+  return k;
+}
+
+#if defined(INC_HAVE_ROTATION_LANES)
+// The shape-matching clusters of [q0, q1) as the batches of projectShapeMatchingClustersKept, software-pipelined:
+// batch i+1's rotation extraction (in SIMD lanes: cpu_fallback/pbd_rotation_lanes.h) is a chain of dependent steps
+// that alone leaves the core mostly idle (it took ~17 % of the frame's time for ~8 % of its instructions), while
+// batch i's member passes are independent, throughput-bound work. So batch i+1's frames are computed and its steps
+// issued one at a time between batch i's clusters' member passes, and the core runs both. Every value is the one
+// the batch-by-batch loop computes: the clusters of a phase (a Jacobi block, or one Gauss-Seidel colour) are
+// independent (batch i's member passes move no particle that batch i+1's frames read), and batch i's rotations are
+// written before batch i+1 reads its warm starts.
+template <typename T>
+void projectShapeMatchingPipelined(const pbd::BlockView<T>& v, const std::int32_t* order, std::int32_t q0,
+                                   std::int32_t q1, const pbd::SolveContext<T>& ctx, pbd::GoalCorrection<T>* goals) {
+  struct Batch {
+    std::int32_t cs[pbd::kMaxRotationBatch] = {};
+    int count = 0;
+    pbd::ClusterFrame<T> f[kClusterBatch];
+    pbd::Quat<T> q[kClusterBatch];
+  };
+  RotationLanes<typename RotationLanesOf<T>::type> rot;
+  // Frames and rotation warm starts of the next batch, and its extraction started (no step taken).
+  const auto startBatch = [&](Batch& b, std::int32_t& q) {
+    b.count = nextClusterBatch(v, order, q, q1, b.cs);
+    if (b.count == 0) return;
+    clusterFramesBatch(v, b.cs, b.count, ctx, b.f);
+    Mat3<T> a[kClusterBatch];
+    for (int k = 0; k < b.count; ++k) {
+      a[k] = b.f[k].a_pq;
+      b.q[k] = ctx.rotation[v.ids[v.offsets[b.cs[k]]]];
+    }
+    rot.start(a, b.q, b.count);
+  };
+  const auto finishBatch = [&](Batch& b) {
+    rot.finish(b.q, b.count);
+    for (int k = 0; k < b.count; ++k) ctx.rotation[v.ids[v.offsets[b.cs[k]]]] = b.q[k];
+  };
+  const int iterations = ctx.rotation_iterations;
+  Batch batches[2];
+  std::int32_t q = q0;
+  startBatch(batches[0], q);
+  if (batches[0].count == 0) return;
+  for (int it = 0; it < iterations; ++it)
+    if (!rot.step()) break;
+  finishBatch(batches[0]);
+  for (int i = 0;; i ^= 1) {
+    Batch& cur = batches[i];
+    Batch& next = batches[i ^ 1];
+    startBatch(next, q);
+    bool stepping = next.count > 0 && iterations > 0;
+    int it = 0;
+    for (int k = 0; k < cur.count; ++k) {
+      if (stepping) stepping = rot.step() && ++it < iterations;
+      shapeMatchMembersKept(v, cur.cs[k], ctx, pbd::quatToMatrix(cur.q[k]), cur.f[k].x_cm, goals);
+    }
+    while (stepping) stepping = rot.step() && ++it < iterations;
+    if (next.count == 0) break;
+    finishBatch(next);
+  }
+}
+#endif
 
 // Projects constraints order[q] (or q when order is null) for q in [q0, q1) of one block: the kind's function
 // from physics/pbd_block.h called directly (the same one projectConstraint dispatches to), so the loop has no
@@ -264,17 +348,17 @@ void projectRange(const pbd::BlockView<T> v, const std::int32_t* order, std::int
       for (std::int32_t q = q0; q < q1; ++q) projectLaplacianCpu(v, order ? order[q] : q, ctx);
       break;
     case pbd::kShapeMatching:
+#if defined(INC_HAVE_ROTATION_LANES)
+      if (goals && !g_scalar_rotations.load(std::memory_order_relaxed)) {
+        projectShapeMatchingPipelined(v, order, q0, q1, ctx, goals);
+        break;
+      }
+#endif
       // In batches of independent clusters (the phase's clusters are; a batch ends early only where a centre
       // would repeat), whose rotation extractions the core then overlaps.
       for (std::int32_t q = q0; q < q1;) {
         std::int32_t cs[pbd::kMaxRotationBatch];
-        int k = 0;
-        for (; k < kClusterBatch && q < q1; ++k, ++q) {
-          cs[k] = order ? order[q] : q;
-          bool repeat = false;
-          for (int j = 0; j < k; ++j) repeat = repeat || v.ids[v.offsets[cs[j]]] == v.ids[v.offsets[cs[k]]];
-          if (repeat) break;
-        }
+        const int k = nextClusterBatch(v, order, q, q1, cs);
         if (goals)
           projectShapeMatchingClustersKept(v, cs, k, ctx, goals);
         else
@@ -692,5 +776,7 @@ std::unique_ptr<PbdBackend<T>> makePbdCpuBackend() {
 
 template std::unique_ptr<PbdBackend<float>> makePbdCpuBackend<float>();
 template std::unique_ptr<PbdBackend<double>> makePbdCpuBackend<double>();
+
+void setPbdScalarRotations(bool scalar_only) { g_scalar_rotations = scalar_only; }
 
 }  // namespace inc::cpu
