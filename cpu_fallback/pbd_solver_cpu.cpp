@@ -58,9 +58,10 @@ void balancedSplit(const std::vector<std::int64_t>& prefix, int parts, std::int3
 constexpr int kClusterBatch = 4;
 static_assert(kClusterBatch <= kRotationLaneBatch && kClusterBatch <= pbd::kMaxRotationBatch, "batch size");
 
-// Set by tests to run the batches one after another with the scalar pbd::extractRotations instead of
-// projectShapeMatchingPipelined's lanes (the results must not change).
-std::atomic<bool> g_scalar_rotations{false};
+// Set by tests: shape matching by the shared scalar code (pbd::projectShapeMatchingClusters, the formulas the GPU
+// runs) instead of the CPU's vector forms (frames and member passes in 3-vector lanes, rotation extractions in
+// cluster lanes, software-pipelined); the results must be the same bits.
+std::atomic<bool> g_scalar_shape_matching{false};
 
 #if defined(__GNUC__)
 #define INC_FLATTEN __attribute__((flatten))
@@ -143,46 +144,94 @@ void clusterFramesBatch<float>(const pbd::BlockView<float>& b, const std::int32_
   }
 }
 
-// The goal of a member (rot r_k + x_cm) and its correction in vector lanes likewise: one division for the three
-// multipliers instead of three (physics/pbd_terms3.h: Mat3 * Vec3's and projectGoal's operations).
-template <>
-void shapeMatchMembersKept<float>(const pbd::BlockView<float>& b, int c, const pbd::SolveContext<float>& ctx,
-                                  const Mat3<float>& rot, const Vec3<float>& x_cm, pbd::GoalCorrection<float>* goals) {
-  const std::int32_t s0 = b.offsets[c], s1 = b.offsets[c + 1];
-  const F4 c0 = {rot.m[0][0], rot.m[1][0], rot.m[2][0], 0.0f};
-  const F4 c1 = {rot.m[0][1], rot.m[1][1], rot.m[2][1], 0.0f};
-  const F4 c2 = {rot.m[0][2], rot.m[1][2], rot.m[2][2], 0.0f};
-  const F4 cm = loadVec3(x_cm);
-  if (s1 - s0 > kMaxKeptMembers) {  // (no such cluster in the scenes: ~15-30 members)
-    pbd::shapeMatchMembers(b, c, ctx, rot, x_cm, goals);
-    return;
+// The XPBD term of a shape-matching slot (pbd::blockTerm's value): from the per-frame table where there is one (the
+// usual case), else blockTerm itself. Chosen once per cluster instead of per member.
+struct AlphaTableTerm {
+  const float* alpha_tilde;
+  pbd::XpbdTerm<float> operator()(std::int32_t s) const {
+    pbd::XpbdTerm<float> t;  // stiffness 1, as blockTerm returns it from the table
+    t.alpha_tilde = alpha_tilde[s];
+    return t;
   }
+};
+struct BlockTermOf {
+  const pbd::BlockView<float>& b;
+  const pbd::SolveContext<float>& ctx;
+  pbd::XpbdTerm<float> operator()(std::int32_t s) const { return pbd::blockTerm(b, ctx, s); }
+};
+
+// The member passes of shapeMatchMembersKept<float> for one solver (kJacobi: slot output and Jacobi scales) and one
+// source of XPBD terms: the branches on the solver and on the block's term table, and the loads of the arrays'
+// addresses, taken out of the member loops (the compiler kept them inside: the stores could alias the views); the
+// same operations per member in the same order.
+template <bool kJacobi, class Term>
+void shapeMatchMembersVec(const pbd::BlockView<float>& b, int c, const pbd::SolveContext<float>& ctx, const F4& c0,
+                          const F4& c1, const F4& c2, const F4& cm, Term term) {
+  const std::int32_t s0 = b.offsets[c], s1 = b.offsets[c + 1];
+  const std::int32_t* ids = b.ids;
+  const Vec3<float>* rest = b.rest_vec;
+  Vec3<float>* lambda = b.lambda;
+  const float* jscale = b.jacobi_scale;
+  Vec3<float>* slot_corr = b.slot_corr;
+  Vec3<float>* x = ctx.x;
+  const float* w = ctx.w;
+  const float* mass = ctx.mass;
+  const float omega = ctx.omega;
+  // pbd::slotScale
+  const auto slotScale = [&](std::int32_t s) { return kJacobi ? omega * jscale[s] : 1.0f; };
   // Pass 1: goals and the momentum change, each member's (dp, dlambda) kept in registers' form for pass 2.
   F4 kept_dp[kMaxKeptMembers], kept_dl[kMaxKeptMembers];
   F4 dmom = {};
   float mov_mass = 0.0f;
   for (std::int32_t s = s0; s < s1; ++s) {
-    const std::int32_t p = b.ids[s];
-    const float w = ctx.w[p];
-    const F4 goal = pbd::mulColumns(c0, c1, c2, loadVec3(b.rest_vec[s])) + cm;
+    const std::int32_t p = ids[s];
+    const float wp = w[p];
+    const F4 goal = pbd::mulColumns(c0, c1, c2, loadVec3(rest[s])) + cm;
     F4 dp;
-    kept_dl[s - s0] = pbd::projectGoal3(loadVec3(ctx.x[p]), w, goal, pbd::blockTerm(b, ctx, s), loadVec3(b.lambda[s]), dp);
+    kept_dl[s - s0] = pbd::projectGoal3(loadVec3(x[p]), wp, goal, term(s), loadVec3(lambda[s]), dp);
     kept_dp[s - s0] = dp;
-    pbd::shapeMatchMomentumTerm3(dmom, mov_mass, dp, pbd::slotScale(b, ctx, s), w, ctx.mass[p]);
+    pbd::shapeMatchMomentumTerm3(dmom, mov_mass, dp, slotScale(s), wp, mass[p]);
   }
   const Vec3<float> shift3 = pbd::shapeMatchShift(Vec3<float>(dmom[0], dmom[1], dmom[2]), mov_mass);
   const F4 shift = loadVec3(shift3);
   // Pass 2: corrections (slot output for Jacobi, in place for Gauss-Seidel) and multipliers.
   for (std::int32_t s = s0; s < s1; ++s) {
-    const std::int32_t p = b.ids[s];
-    const float sc = pbd::slotScale(b, ctx, s);
-    const F4 d = pbd::shapeMatchApplyCorrection3(kept_dp[s - s0], sc, ctx.w[p], shift);
-    if (ctx.jacobi)
-      b.slot_corr[s] = Vec3<float>(d[0], d[1], d[2]);
+    const std::int32_t p = ids[s];
+    const float sc = slotScale(s);
+    const F4 d = pbd::shapeMatchApplyCorrection3(kept_dp[s - s0], sc, w[p], shift);
+    if (kJacobi)
+      storeVec3(slot_corr[s], d);
     else
-      ctx.x[p] += Vec3<float>(d[0], d[1], d[2]);
-    const F4 l = loadVec3(b.lambda[s]) + kept_dl[s - s0] * sc;
-    b.lambda[s] = Vec3<float>(l[0], l[1], l[2]);
+      storeVec3(x[p], loadVec3(x[p]) + d);  // ctx.x[p] += d
+    storeVec3(lambda[s], loadVec3(lambda[s]) + kept_dl[s - s0] * sc);
+  }
+}
+
+// The goal of a member (rot r_k + x_cm) and its correction in vector lanes likewise: one division for the three
+// multipliers instead of three (physics/pbd_terms3.h: Mat3 * Vec3's and projectGoal's operations).
+template <>
+void shapeMatchMembersKept<float>(const pbd::BlockView<float>& b, int c, const pbd::SolveContext<float>& ctx,
+                                  const Mat3<float>& rot, const Vec3<float>& x_cm, pbd::GoalCorrection<float>* goals) {
+  if (b.offsets[c + 1] - b.offsets[c] > kMaxKeptMembers) {  // (no such cluster in the scenes: ~15-30 members)
+    pbd::shapeMatchMembers(b, c, ctx, rot, x_cm, goals);
+    return;
+  }
+  const F4 c0 = {rot.m[0][0], rot.m[1][0], rot.m[2][0], 0.0f};
+  const F4 c1 = {rot.m[0][1], rot.m[1][1], rot.m[2][1], 0.0f};
+  const F4 c2 = {rot.m[0][2], rot.m[1][2], rot.m[2][2], 0.0f};
+  const F4 cm = loadVec3(x_cm);
+  if (ctx.xpbd && b.alpha_tilde) {
+    const AlphaTableTerm term{b.alpha_tilde};
+    if (ctx.jacobi)
+      shapeMatchMembersVec<true>(b, c, ctx, c0, c1, c2, cm, term);
+    else
+      shapeMatchMembersVec<false>(b, c, ctx, c0, c1, c2, cm, term);
+  } else {
+    const BlockTermOf term{b, ctx};
+    if (ctx.jacobi)
+      shapeMatchMembersVec<true>(b, c, ctx, c0, c1, c2, cm, term);
+    else
+      shapeMatchMembersVec<false>(b, c, ctx, c0, c1, c2, cm, term);
   }
 }
 #endif
@@ -233,8 +282,8 @@ void projectLaplacianCpu<float>(const pbd::BlockView<float>& b, int c, const pbd
 #endif
 
 // pbd::projectShapeMatchingClusters (frames, interleaved rotation extractions, member passes) with the frames of
-// clusterFramesBatch and the member passes of shapeMatchMembersKept: the same values. The scalar reference for
-// projectShapeMatchingPipelined below (used where there are no SIMD lanes, or when a test asks for it).
+// clusterFramesBatch and the member passes of shapeMatchMembersKept: the same values. Used where there are no
+// SIMD lanes for projectShapeMatchingPipelined below.
 template <typename T>
 void projectShapeMatchingClustersKept(const pbd::BlockView<T>& b, const std::int32_t* cs, int count,
                                       const pbd::SolveContext<T>& ctx, pbd::GoalCorrection<T>* goals) {
@@ -347,9 +396,10 @@ void projectRange(const pbd::BlockView<T> v, const std::int32_t* order, std::int
     case pbd::kLaplacian:
       for (std::int32_t q = q0; q < q1; ++q) projectLaplacianCpu(v, order ? order[q] : q, ctx);
       break;
-    case pbd::kShapeMatching:
+    case pbd::kShapeMatching: {
+      const bool scalar = g_scalar_shape_matching.load(std::memory_order_relaxed);
 #if defined(INC_HAVE_ROTATION_LANES)
-      if (goals && !g_scalar_rotations.load(std::memory_order_relaxed)) {
+      if (goals && !scalar) {
         projectShapeMatchingPipelined(v, order, q0, q1, ctx, goals);
         break;
       }
@@ -359,12 +409,13 @@ void projectRange(const pbd::BlockView<T> v, const std::int32_t* order, std::int
       for (std::int32_t q = q0; q < q1;) {
         std::int32_t cs[pbd::kMaxRotationBatch];
         const int k = nextClusterBatch(v, order, q, q1, cs);
-        if (goals)
+        if (goals && !scalar)
           projectShapeMatchingClustersKept(v, cs, k, ctx, goals);
         else
-          pbd::projectShapeMatchingClusters(v, cs, k, ctx);
+          pbd::projectShapeMatchingClusters(v, cs, k, ctx, goals);
       }
       break;
+    }
     default:
       for (std::int32_t q = q0; q < q1; ++q) pbd::projectConstraint(v, order ? order[q] : q, ctx);
       break;
@@ -777,6 +828,6 @@ std::unique_ptr<PbdBackend<T>> makePbdCpuBackend() {
 template std::unique_ptr<PbdBackend<float>> makePbdCpuBackend<float>();
 template std::unique_ptr<PbdBackend<double>> makePbdCpuBackend<double>();
 
-void setPbdScalarRotations(bool scalar_only) { g_scalar_rotations = scalar_only; }
+void setPbdScalarShapeMatching(bool scalar_only) { g_scalar_shape_matching = scalar_only; }
 
 }  // namespace inc::cpu

@@ -10,9 +10,10 @@ namespace inc::cpu {
 template <typename T>
 std::unique_ptr<PbdBackend<T>> makePbdCpuBackend();
 
-// Forces the scalar rotation extraction (pbd::extractRotations) where the CPU backend otherwise runs four clusters'
-// extractions in SIMD lanes (cpu_fallback/pbd_rotation_lanes.h); the results are the same bits either way, and
-// tests compare the two. Process-wide; default false.
-void setPbdScalarRotations(bool scalar_only);
+// Forces shape matching through the shared scalar code (pbd::projectShapeMatchingClusters in physics/pbd_block.h,
+// the formulas the CUDA kernels run) where the CPU backend otherwise uses its vector forms (3-vector lanes for frames
+// and member passes, cluster lanes for rotation extractions: cpu_fallback/pbd_rotation_lanes.h). The results are the
+// same bits either way; tests compare the two. Process-wide; default false.
+void setPbdScalarShapeMatching(bool scalar_only);
 
 }  // namespace inc::cpu

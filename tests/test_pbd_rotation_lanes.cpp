@@ -1,4 +1,4 @@
-// The CPU's rotation extraction in SIMD lanes (cpu_fallback/pbd_rotation_lanes.h) against the scalar pbd::extractRotations: the same bits for any matrix, and the same PBD states.
+// The CPU's rotation extraction in SIMD lanes (cpu_fallback/pbd_rotation_lanes.h) against the scalar pbd::extractRotations: the same bits for any matrix, and the same PBD states as the shared scalar code.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -121,15 +121,15 @@ TEST(PbdRotationLanes, FloatLanesMatchScalarExtractionBitForBit) { expectLanesMa
 TEST(PbdRotationLanes, DoubleLanesMatchScalarExtractionBitForBit) { expectLanesMatchScalar<double>(); }
 #endif
 
-// Whole frames: a probed, lifted metaball beam (clusters rotate, some stall, batches of fewer than four at phase
-// ends), Jacobi and Gauss-Seidel, float32 and float64: the states after the frames are the same bits with the lanes
-// and with the scalar extraction.
+// Whole frames: a probed, twisted metaball beam (clusters rotate, some stall, batches of fewer than four at phase
+// ends), Jacobi and Gauss-Seidel, float32 and float64: the states after the frames are the same bits with the CPU's
+// shape matching (pipelined batches, rotation lanes, 3-vector member passes) and with the shared scalar code.
 template <typename T>
 void expectFramesMatchScalar() {
   const PbdModel<T> m = test::makeLatticeBeam<T>(0.06, 0.02, 0.02, 0.005, 5.0e3, true, 16);
   for (PbdSolverKind solver : {PbdSolverKind::Jacobi, PbdSolverKind::GaussSeidel}) {
     auto run = [&](bool scalar) {
-      cpu::setPbdScalarRotations(scalar);
+      cpu::setPbdScalarShapeMatching(scalar);
       auto be = cpu::makePbdCpuBackend<T>();
       be->setModel(m);
       PbdStepParams<T> p;
@@ -162,7 +162,7 @@ void expectFramesMatchScalar() {
         }
         EXPECT_TRUE(be->advanceFrame(p, in).finite);
       }
-      cpu::setPbdScalarRotations(false);
+      cpu::setPbdScalarShapeMatching(false);
       PbdState<T> s;
       be->getState(s);
       return s;
@@ -184,5 +184,5 @@ void expectFramesMatchScalar() {
   }
 }
 
-TEST(PbdRotationLanes, FloatFramesMatchScalarExtractionBitForBit) { expectFramesMatchScalar<float>(); }
-TEST(PbdRotationLanes, DoubleFramesMatchScalarExtractionBitForBit) { expectFramesMatchScalar<double>(); }
+TEST(PbdRotationLanes, FloatFramesMatchSharedScalarCodeBitForBit) { expectFramesMatchScalar<float>(); }
+TEST(PbdRotationLanes, DoubleFramesMatchSharedScalarCodeBitForBit) { expectFramesMatchScalar<double>(); }
