@@ -5,6 +5,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <type_traits>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -58,10 +59,9 @@ void balancedSplit(const std::vector<std::int64_t>& prefix, int parts, std::int3
 constexpr int kClusterBatch = 4;
 static_assert(kClusterBatch <= kRotationLaneBatch && kClusterBatch <= pbd::kMaxRotationBatch, "batch size");
 
-// Set by tests: shape matching by the shared scalar code (pbd::projectShapeMatchingClusters, the formulas the GPU
-// runs) instead of the CPU's vector forms (frames and member passes in 3-vector lanes, rotation extractions in
-// cluster lanes, software-pipelined); the results must be the same bits.
-std::atomic<bool> g_scalar_shape_matching{false};
+// Set by tests: every constraint projected by pbd::projectConstraint, one at a time (the shared scalar code the GPU
+// runs), instead of projectRange's per-kind loops and vector forms; the results must be the same bits.
+std::atomic<bool> g_reference_loop{false};
 
 #if defined(__GNUC__)
 #define INC_FLATTEN __attribute__((flatten))
@@ -69,17 +69,80 @@ std::atomic<bool> g_scalar_shape_matching{false};
 #define INC_FLATTEN
 #endif
 
-// Jacobi distance constraints [q0, q1), two per step, inlined: a constraint is a short chain of a square root
-// and two divisions, and two independent chains side by side keep the core busy (the same results).
+// The XPBD term of a block's multiplier i (pbd::blockTerm's value): from the per-frame table where there is one (the
+// usual case on the CPU), else blockTerm itself. Chosen once per loop instead of once per constraint or member.
 template <typename T>
-INC_FLATTEN void projectDistanceRange(const pbd::BlockView<T>& v, std::int32_t q0, std::int32_t q1,
-                                      const pbd::SolveContext<T>& ctx) {
-  std::int32_t q = q0;
-  for (; q + 1 < q1; q += 2) {
-    pbd::projectDistanceConstraint(v, q, ctx);
-    pbd::projectDistanceConstraint(v, q + 1, ctx);
+struct AlphaTableTerm {
+  const T* alpha_tilde;
+  pbd::XpbdTerm<T> operator()(std::int32_t i) const {
+    pbd::XpbdTerm<T> t;  // stiffness 1, as blockTerm returns it from the table
+    t.alpha_tilde = alpha_tilde[i];
+    return t;
   }
-  if (q < q1) pbd::projectDistanceConstraint(v, q, ctx);
+};
+template <typename T>
+struct BlockTermOf {
+  const pbd::BlockView<T>& b;
+  const pbd::SolveContext<T>& ctx;
+  pbd::XpbdTerm<T> operator()(std::int32_t i) const { return pbd::blockTerm(b, ctx, i); }
+};
+
+// Calls f(kJacobi, term) with the solver as a compile-time constant (std::true_type: Jacobi) and the block's term
+// source, so that a loop body instantiated for each has neither branch inside (the compiler kept both inside the
+// loops, and reloaded the views' array addresses at every step: the stores could alias the views).
+template <typename T, class F>
+void withSolverAndTerm(const pbd::BlockView<T>& b, const pbd::SolveContext<T>& ctx, F&& f) {
+  if (ctx.xpbd && b.alpha_tilde) {
+    if (ctx.jacobi)
+      f(std::true_type{}, AlphaTableTerm<T>{b.alpha_tilde});
+    else
+      f(std::false_type{}, AlphaTableTerm<T>{b.alpha_tilde});
+  } else {
+    if (ctx.jacobi)
+      f(std::true_type{}, BlockTermOf<T>{b, ctx});
+    else
+      f(std::false_type{}, BlockTermOf<T>{b, ctx});
+  }
+}
+
+// pbd::projectDistanceConstraint of constraints order[q] (or q) for q in [q0, q1), two per step, inlined: a
+// constraint is a short chain of a square root and two divisions, and two independent chains side by side keep the
+// core busy. The solver and the term source fixed (withSolverAndTerm); the same operations in the same order.
+template <typename T>
+INC_FLATTEN void projectDistanceRange(const pbd::BlockView<T>& v, const std::int32_t* order, std::int32_t q0,
+                                      std::int32_t q1, const pbd::SolveContext<T>& ctx) {
+  withSolverAndTerm(v, ctx, [&](auto jacobi, auto term) {
+    constexpr bool kJacobi = decltype(jacobi)::value;
+    const std::int32_t* offsets = v.offsets;
+    const std::int32_t* ids = v.ids;
+    const T* rest = v.rest;
+    const T* jscale = v.jacobi_scale;
+    Vec3<T>* lambda = v.lambda;
+    Vec3<T>* slot_corr = v.slot_corr;
+    Vec3<T>* x = ctx.x;
+    const T* w = ctx.w;
+    const T omega = ctx.omega;
+    const auto project = [&](std::int32_t c) {
+      const std::int32_t s0 = offsets[c];
+      const T scale = kJacobi ? omega * jscale[s0] : T(1);
+      const std::int32_t i = ids[s0], j = ids[s0 + 1];
+      const pbd::DistanceCorrection<T> r = pbd::projectDistance(x[i], x[j], w[i], w[j], rest[c], term(c), lambda[c].x);
+      if (kJacobi) {  // pbd::emitCorrection
+        slot_corr[s0] = r.dp0 * scale;
+        slot_corr[s0 + 1] = r.dp1 * scale;
+      } else {
+        x[i] += r.dp0;
+        x[j] += r.dp1;
+      }
+      lambda[c].x += r.dlambda * scale;
+    };
+    std::int32_t q = q0;
+    for (; q + 1 < q1; q += 2) {
+      project(order ? order[q] : q);
+      project(order ? order[q + 1] : q + 1);
+    }
+    if (q < q1) project(order ? order[q] : q);
+  });
 }
 
 // pbd::clusterFrame of clusters cs[0..count), one after another.
@@ -144,26 +207,9 @@ void clusterFramesBatch<float>(const pbd::BlockView<float>& b, const std::int32_
   }
 }
 
-// The XPBD term of a shape-matching slot (pbd::blockTerm's value): from the per-frame table where there is one (the
-// usual case), else blockTerm itself. Chosen once per cluster instead of per member.
-struct AlphaTableTerm {
-  const float* alpha_tilde;
-  pbd::XpbdTerm<float> operator()(std::int32_t s) const {
-    pbd::XpbdTerm<float> t;  // stiffness 1, as blockTerm returns it from the table
-    t.alpha_tilde = alpha_tilde[s];
-    return t;
-  }
-};
-struct BlockTermOf {
-  const pbd::BlockView<float>& b;
-  const pbd::SolveContext<float>& ctx;
-  pbd::XpbdTerm<float> operator()(std::int32_t s) const { return pbd::blockTerm(b, ctx, s); }
-};
-
 // The member passes of shapeMatchMembersKept<float> for one solver (kJacobi: slot output and Jacobi scales) and one
-// source of XPBD terms: the branches on the solver and on the block's term table, and the loads of the arrays'
-// addresses, taken out of the member loops (the compiler kept them inside: the stores could alias the views); the
-// same operations per member in the same order.
+// source of XPBD terms (withSolverAndTerm), the arrays' addresses in locals; the same operations per member in the
+// same order.
 template <bool kJacobi, class Term>
 void shapeMatchMembersVec(const pbd::BlockView<float>& b, int c, const pbd::SolveContext<float>& ctx, const F4& c0,
                           const F4& c1, const F4& c2, const F4& cm, Term term) {
@@ -220,19 +266,9 @@ void shapeMatchMembersKept<float>(const pbd::BlockView<float>& b, int c, const p
   const F4 c1 = {rot.m[0][1], rot.m[1][1], rot.m[2][1], 0.0f};
   const F4 c2 = {rot.m[0][2], rot.m[1][2], rot.m[2][2], 0.0f};
   const F4 cm = loadVec3(x_cm);
-  if (ctx.xpbd && b.alpha_tilde) {
-    const AlphaTableTerm term{b.alpha_tilde};
-    if (ctx.jacobi)
-      shapeMatchMembersVec<true>(b, c, ctx, c0, c1, c2, cm, term);
-    else
-      shapeMatchMembersVec<false>(b, c, ctx, c0, c1, c2, cm, term);
-  } else {
-    const BlockTermOf term{b, ctx};
-    if (ctx.jacobi)
-      shapeMatchMembersVec<true>(b, c, ctx, c0, c1, c2, cm, term);
-    else
-      shapeMatchMembersVec<false>(b, c, ctx, c0, c1, c2, cm, term);
-  }
+  withSolverAndTerm(b, ctx, [&](auto jacobi, auto term) {
+    shapeMatchMembersVec<decltype(jacobi)::value>(b, c, ctx, c0, c1, c2, cm, term);
+  });
 }
 #endif
 
@@ -385,21 +421,20 @@ void projectShapeMatchingPipelined(const pbd::BlockView<T>& v, const std::int32_
 template <typename T>
 void projectRange(const pbd::BlockView<T> v, const std::int32_t* order, std::int32_t q0, std::int32_t q1,
                   const pbd::SolveContext<T> ctx, pbd::GoalCorrection<T>* goals) {
+  if (g_reference_loop.load(std::memory_order_relaxed)) {
+    for (std::int32_t q = q0; q < q1; ++q) pbd::projectConstraint(v, order ? order[q] : q, ctx);
+    return;
+  }
   switch (v.kind) {
     case pbd::kDistance:
-      if (!order) {
-        projectDistanceRange(v, q0, q1, ctx);
-        break;
-      }
-      for (std::int32_t q = q0; q < q1; ++q) pbd::projectDistanceConstraint(v, order[q], ctx);
+      projectDistanceRange(v, order, q0, q1, ctx);
       break;
     case pbd::kLaplacian:
       for (std::int32_t q = q0; q < q1; ++q) projectLaplacianCpu(v, order ? order[q] : q, ctx);
       break;
-    case pbd::kShapeMatching: {
-      const bool scalar = g_scalar_shape_matching.load(std::memory_order_relaxed);
+    case pbd::kShapeMatching:
 #if defined(INC_HAVE_ROTATION_LANES)
-      if (goals && !scalar) {
+      if (goals) {
         projectShapeMatchingPipelined(v, order, q0, q1, ctx, goals);
         break;
       }
@@ -409,13 +444,12 @@ void projectRange(const pbd::BlockView<T> v, const std::int32_t* order, std::int
       for (std::int32_t q = q0; q < q1;) {
         std::int32_t cs[pbd::kMaxRotationBatch];
         const int k = nextClusterBatch(v, order, q, q1, cs);
-        if (goals && !scalar)
+        if (goals)
           projectShapeMatchingClustersKept(v, cs, k, ctx, goals);
         else
-          pbd::projectShapeMatchingClusters(v, cs, k, ctx, goals);
+          pbd::projectShapeMatchingClusters(v, cs, k, ctx);
       }
       break;
-    }
     default:
       for (std::int32_t q = q0; q < q1; ++q) pbd::projectConstraint(v, order ? order[q] : q, ctx);
       break;
@@ -828,6 +862,6 @@ std::unique_ptr<PbdBackend<T>> makePbdCpuBackend() {
 template std::unique_ptr<PbdBackend<float>> makePbdCpuBackend<float>();
 template std::unique_ptr<PbdBackend<double>> makePbdCpuBackend<double>();
 
-void setPbdScalarShapeMatching(bool scalar_only) { g_scalar_shape_matching = scalar_only; }
+void setPbdReferenceLoop(bool reference) { g_reference_loop = reference; }
 
 }  // namespace inc::cpu

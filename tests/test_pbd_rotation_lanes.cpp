@@ -1,4 +1,4 @@
-// The CPU's rotation extraction in SIMD lanes (cpu_fallback/pbd_rotation_lanes.h) against the scalar pbd::extractRotations: the same bits for any matrix, and the same PBD states as the shared scalar code.
+// The CPU's rotation extraction in SIMD lanes (cpu_fallback/pbd_rotation_lanes.h) against the scalar pbd::extractRotations: the same bits for any matrix (whole frames: PbdSolver.CpuLoopsMatchSharedScalarCodeBitForBit).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -9,8 +9,6 @@
 #include <vector>
 
 #include "cpu_fallback/pbd_rotation_lanes.h"
-#include "cpu_fallback/pbd_solver_cpu.h"
-#include "pbd_fixtures.h"
 #include "physics/pbd_rotation.h"
 
 using namespace inc;
@@ -120,69 +118,3 @@ void expectLanesMatchScalar() {
 TEST(PbdRotationLanes, FloatLanesMatchScalarExtractionBitForBit) { expectLanesMatchScalar<float>(); }
 TEST(PbdRotationLanes, DoubleLanesMatchScalarExtractionBitForBit) { expectLanesMatchScalar<double>(); }
 #endif
-
-// Whole frames: a probed, twisted metaball beam (clusters rotate, some stall, batches of fewer than four at phase
-// ends), Jacobi and Gauss-Seidel, float32 and float64: the states after the frames are the same bits with the CPU's
-// shape matching (pipelined batches, rotation lanes, 3-vector member passes) and with the shared scalar code.
-template <typename T>
-void expectFramesMatchScalar() {
-  const PbdModel<T> m = test::makeLatticeBeam<T>(0.06, 0.02, 0.02, 0.005, 5.0e3, true, 16);
-  for (PbdSolverKind solver : {PbdSolverKind::Jacobi, PbdSolverKind::GaussSeidel}) {
-    auto run = [&](bool scalar) {
-      cpu::setPbdScalarShapeMatching(scalar);
-      auto be = cpu::makePbdCpuBackend<T>();
-      be->setModel(m);
-      PbdStepParams<T> p;
-      p.solver = solver;
-      p.iterations = 6;
-      p.volume_influence = T(0.01);
-      for (int f = 0; f < 12; ++f) {
-        PbdFrameInput<T> in;
-        pbd::CapsuleCollider<T> c;
-        c.a = Vec3<T>(T(0.03), T(-0.01), T(0.0225 - 0.001 * f));
-        c.b = Vec3<T>(T(0.03), T(0.03), T(0.0225 - 0.001 * f));
-        c.radius = T(0.004);
-        in.tools_from.push_back(c);
-        c.a.z -= T(0.001);
-        c.b.z -= T(0.001);
-        in.tools_to.push_back(c);
-        for (std::size_t i = 0; i < m.size(); ++i) {
-          const Vec3<T> r = m.rest_positions[i];
-          if (r.x > T(0.0549) && r.z > T(0.0149)) {  // the tip's top edge lifted and twisted about x
-            const T a0 = T(0.05 * f), a1 = T(0.05 * (f + 1));
-            auto twisted = [&](T ang) {
-              const T y = r.y - T(0.01), z = r.z - T(0.01);
-              return Vec3<T>(r.x, T(0.01) + std::cos(ang) * y - std::sin(ang) * z,
-                             T(0.01) + std::sin(ang) * y + std::cos(ang) * z + T(0.0005) * ang);
-            };
-            in.kinematic_ids.push_back(std::int32_t(i));
-            in.kinematic_from.push_back(twisted(a0));
-            in.kinematic_to.push_back(twisted(a1));
-          }
-        }
-        EXPECT_TRUE(be->advanceFrame(p, in).finite);
-      }
-      cpu::setPbdScalarShapeMatching(false);
-      PbdState<T> s;
-      be->getState(s);
-      return s;
-    };
-    const PbdState<T> lanes = run(false), scalar = run(true);
-    double turned = 0;
-    for (std::size_t i = 0; i < m.size(); ++i) {
-      ASSERT_EQ(std::memcmp(&lanes.positions[i], &scalar.positions[i], sizeof(lanes.positions[i])), 0) << "particle " << i;
-      ASSERT_EQ(std::memcmp(&lanes.velocities[i], &scalar.velocities[i], sizeof(lanes.velocities[i])), 0)
-          << "particle " << i;
-      ASSERT_EQ(lanes.radii[i], scalar.radii[i]) << "particle " << i;
-      ASSERT_EQ(std::memcmp(&lanes.rotations[i], &scalar.rotations[i], sizeof(lanes.rotations[i])), 0) << "particle " << i;
-      turned = std::max(turned, 2.0 * std::acos(std::min(1.0, std::fabs(double(lanes.rotations[i].w)))));
-    }
-    std::printf("%s %s: %zu spheres, states equal bit for bit; largest cluster rotation %.3f rad\n",
-                sizeof(T) == 4 ? "float32" : "float64", solver == PbdSolverKind::Jacobi ? "jacobi" : "gauss-seidel",
-                m.size(), turned);
-    EXPECT_GT(turned, 0.1);  // the clusters did rotate
-  }
-}
-
-TEST(PbdRotationLanes, FloatFramesMatchSharedScalarCodeBitForBit) { expectFramesMatchScalar<float>(); }
-TEST(PbdRotationLanes, DoubleFramesMatchSharedScalarCodeBitForBit) { expectFramesMatchScalar<double>(); }
