@@ -2,14 +2,17 @@
 #include "cpu_fallback/pbd_solver_cpu.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <type_traits>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
 
 #include "cpu_fallback/parallel.h"
+#include "cpu_fallback/pbd_rotation_lanes.h"
 #include "cpu_fallback/team.h"
 #include "physics/pbd_block.h"
 #include "physics/pbd_terms3.h"
@@ -52,8 +55,13 @@ void balancedSplit(const std::vector<std::int64_t>& prefix, int parts, std::int3
 }
 
 // Shape-matching clusters projected together (at most pbd::kMaxRotationBatch): enough independent rotation
-// extractions to keep a core busy through their dependent chains.
+// extractions to keep a core busy through their dependent chains, and one per lane of extractRotationsLanes.
 constexpr int kClusterBatch = 4;
+static_assert(kClusterBatch <= kRotationLaneBatch && kClusterBatch <= pbd::kMaxRotationBatch, "batch size");
+
+// Set by tests: every constraint projected by pbd::projectConstraint, one at a time (the shared scalar code the GPU
+// runs), instead of projectRange's per-kind loops and vector forms; the results must be the same bits.
+std::atomic<bool> g_reference_loop{false};
 
 #if defined(__GNUC__)
 #define INC_FLATTEN __attribute__((flatten))
@@ -61,17 +69,80 @@ constexpr int kClusterBatch = 4;
 #define INC_FLATTEN
 #endif
 
-// Jacobi distance constraints [q0, q1), two per step, inlined: a constraint is a short chain of a square root
-// and two divisions, and two independent chains side by side keep the core busy (the same results).
+// The XPBD term of a block's multiplier i (pbd::blockTerm's value): from the per-frame table where there is one (the
+// usual case on the CPU), else blockTerm itself. Chosen once per loop instead of once per constraint or member.
 template <typename T>
-INC_FLATTEN void projectDistanceRange(const pbd::BlockView<T>& v, std::int32_t q0, std::int32_t q1,
-                                      const pbd::SolveContext<T>& ctx) {
-  std::int32_t q = q0;
-  for (; q + 1 < q1; q += 2) {
-    pbd::projectDistanceConstraint(v, q, ctx);
-    pbd::projectDistanceConstraint(v, q + 1, ctx);
+struct AlphaTableTerm {
+  const T* alpha_tilde;
+  pbd::XpbdTerm<T> operator()(std::int32_t i) const {
+    pbd::XpbdTerm<T> t;  // stiffness 1, as blockTerm returns it from the table
+    t.alpha_tilde = alpha_tilde[i];
+    return t;
   }
-  if (q < q1) pbd::projectDistanceConstraint(v, q, ctx);
+};
+template <typename T>
+struct BlockTermOf {
+  const pbd::BlockView<T>& b;
+  const pbd::SolveContext<T>& ctx;
+  pbd::XpbdTerm<T> operator()(std::int32_t i) const { return pbd::blockTerm(b, ctx, i); }
+};
+
+// Calls f(kJacobi, term) with the solver as a compile-time constant (std::true_type: Jacobi) and the block's term
+// source, so that a loop body instantiated for each has neither branch inside (the compiler kept both inside the
+// loops, and reloaded the views' array addresses at every step: the stores could alias the views).
+template <typename T, class F>
+void withSolverAndTerm(const pbd::BlockView<T>& b, const pbd::SolveContext<T>& ctx, F&& f) {
+  if (ctx.xpbd && b.alpha_tilde) {
+    if (ctx.jacobi)
+      f(std::true_type{}, AlphaTableTerm<T>{b.alpha_tilde});
+    else
+      f(std::false_type{}, AlphaTableTerm<T>{b.alpha_tilde});
+  } else {
+    if (ctx.jacobi)
+      f(std::true_type{}, BlockTermOf<T>{b, ctx});
+    else
+      f(std::false_type{}, BlockTermOf<T>{b, ctx});
+  }
+}
+
+// pbd::projectDistanceConstraint of constraints order[q] (or q) for q in [q0, q1), two per step, inlined: a
+// constraint is a short chain of a square root and two divisions, and two independent chains side by side keep the
+// core busy. The solver and the term source fixed (withSolverAndTerm); the same operations in the same order.
+template <typename T>
+INC_FLATTEN void projectDistanceRange(const pbd::BlockView<T>& v, const std::int32_t* order, std::int32_t q0,
+                                      std::int32_t q1, const pbd::SolveContext<T>& ctx) {
+  withSolverAndTerm(v, ctx, [&](auto jacobi, auto term) {
+    constexpr bool kJacobi = decltype(jacobi)::value;
+    const std::int32_t* offsets = v.offsets;
+    const std::int32_t* ids = v.ids;
+    const T* rest = v.rest;
+    const T* jscale = v.jacobi_scale;
+    Vec3<T>* lambda = v.lambda;
+    Vec3<T>* slot_corr = v.slot_corr;
+    Vec3<T>* x = ctx.x;
+    const T* w = ctx.w;
+    const T omega = ctx.omega;
+    const auto project = [&](std::int32_t c) {
+      const std::int32_t s0 = offsets[c];
+      const T scale = kJacobi ? omega * jscale[s0] : T(1);
+      const std::int32_t i = ids[s0], j = ids[s0 + 1];
+      const pbd::DistanceCorrection<T> r = pbd::projectDistance(x[i], x[j], w[i], w[j], rest[c], term(c), lambda[c].x);
+      if (kJacobi) {  // pbd::emitCorrection
+        slot_corr[s0] = r.dp0 * scale;
+        slot_corr[s0 + 1] = r.dp1 * scale;
+      } else {
+        x[i] += r.dp0;
+        x[j] += r.dp1;
+      }
+      lambda[c].x += r.dlambda * scale;
+    };
+    std::int32_t q = q0;
+    for (; q + 1 < q1; q += 2) {
+      project(order ? order[q] : q);
+      project(order ? order[q + 1] : q + 1);
+    }
+    if (q < q1) project(order ? order[q] : q);
+  });
 }
 
 // pbd::clusterFrame of clusters cs[0..count), one after another.
@@ -136,47 +207,68 @@ void clusterFramesBatch<float>(const pbd::BlockView<float>& b, const std::int32_
   }
 }
 
-// The goal of a member (rot r_k + x_cm) and its correction in vector lanes likewise: one division for the three
-// multipliers instead of three (physics/pbd_terms3.h: Mat3 * Vec3's and projectGoal's operations).
-template <>
-void shapeMatchMembersKept<float>(const pbd::BlockView<float>& b, int c, const pbd::SolveContext<float>& ctx,
-                                  const Mat3<float>& rot, const Vec3<float>& x_cm, pbd::GoalCorrection<float>* goals) {
+// The member passes of shapeMatchMembersKept<float> for one solver (kJacobi: slot output and Jacobi scales) and one
+// source of XPBD terms (withSolverAndTerm), the arrays' addresses in locals; the same operations per member in the
+// same order.
+template <bool kJacobi, class Term>
+void shapeMatchMembersVec(const pbd::BlockView<float>& b, int c, const pbd::SolveContext<float>& ctx, const F4& c0,
+                          const F4& c1, const F4& c2, const F4& cm, Term term) {
   const std::int32_t s0 = b.offsets[c], s1 = b.offsets[c + 1];
-  const F4 c0 = {rot.m[0][0], rot.m[1][0], rot.m[2][0], 0.0f};
-  const F4 c1 = {rot.m[0][1], rot.m[1][1], rot.m[2][1], 0.0f};
-  const F4 c2 = {rot.m[0][2], rot.m[1][2], rot.m[2][2], 0.0f};
-  const F4 cm = loadVec3(x_cm);
-  if (s1 - s0 > kMaxKeptMembers) {  // (no such cluster in the scenes: ~15-30 members)
-    pbd::shapeMatchMembers(b, c, ctx, rot, x_cm, goals);
-    return;
-  }
+  const std::int32_t* ids = b.ids;
+  const Vec3<float>* rest = b.rest_vec;
+  Vec3<float>* lambda = b.lambda;
+  const float* jscale = b.jacobi_scale;
+  Vec3<float>* slot_corr = b.slot_corr;
+  Vec3<float>* x = ctx.x;
+  const float* w = ctx.w;
+  const float* mass = ctx.mass;
+  const float omega = ctx.omega;
+  // pbd::slotScale
+  const auto slotScale = [&](std::int32_t s) { return kJacobi ? omega * jscale[s] : 1.0f; };
   // Pass 1: goals and the momentum change, each member's (dp, dlambda) kept in registers' form for pass 2.
   F4 kept_dp[kMaxKeptMembers], kept_dl[kMaxKeptMembers];
   F4 dmom = {};
   float mov_mass = 0.0f;
   for (std::int32_t s = s0; s < s1; ++s) {
-    const std::int32_t p = b.ids[s];
-    const float w = ctx.w[p];
-    const F4 goal = pbd::mulColumns(c0, c1, c2, loadVec3(b.rest_vec[s])) + cm;
+    const std::int32_t p = ids[s];
+    const float wp = w[p];
+    const F4 goal = pbd::mulColumns(c0, c1, c2, loadVec3(rest[s])) + cm;
     F4 dp;
-    kept_dl[s - s0] = pbd::projectGoal3(loadVec3(ctx.x[p]), w, goal, pbd::blockTerm(b, ctx, s), loadVec3(b.lambda[s]), dp);
+    kept_dl[s - s0] = pbd::projectGoal3(loadVec3(x[p]), wp, goal, term(s), loadVec3(lambda[s]), dp);
     kept_dp[s - s0] = dp;
-    pbd::shapeMatchMomentumTerm3(dmom, mov_mass, dp, pbd::slotScale(b, ctx, s), w, ctx.mass[p]);
+    pbd::shapeMatchMomentumTerm3(dmom, mov_mass, dp, slotScale(s), wp, mass[p]);
   }
   const Vec3<float> shift3 = pbd::shapeMatchShift(Vec3<float>(dmom[0], dmom[1], dmom[2]), mov_mass);
   const F4 shift = loadVec3(shift3);
   // Pass 2: corrections (slot output for Jacobi, in place for Gauss-Seidel) and multipliers.
   for (std::int32_t s = s0; s < s1; ++s) {
-    const std::int32_t p = b.ids[s];
-    const float sc = pbd::slotScale(b, ctx, s);
-    const F4 d = pbd::shapeMatchApplyCorrection3(kept_dp[s - s0], sc, ctx.w[p], shift);
-    if (ctx.jacobi)
-      b.slot_corr[s] = Vec3<float>(d[0], d[1], d[2]);
+    const std::int32_t p = ids[s];
+    const float sc = slotScale(s);
+    const F4 d = pbd::shapeMatchApplyCorrection3(kept_dp[s - s0], sc, w[p], shift);
+    if (kJacobi)
+      storeVec3(slot_corr[s], d);
     else
-      ctx.x[p] += Vec3<float>(d[0], d[1], d[2]);
-    const F4 l = loadVec3(b.lambda[s]) + kept_dl[s - s0] * sc;
-    b.lambda[s] = Vec3<float>(l[0], l[1], l[2]);
+      storeVec3(x[p], loadVec3(x[p]) + d);  // ctx.x[p] += d
+    storeVec3(lambda[s], loadVec3(lambda[s]) + kept_dl[s - s0] * sc);
   }
+}
+
+// The goal of a member (rot r_k + x_cm) and its correction in vector lanes likewise: one division for the three
+// multipliers instead of three (physics/pbd_terms3.h: Mat3 * Vec3's and projectGoal's operations).
+template <>
+void shapeMatchMembersKept<float>(const pbd::BlockView<float>& b, int c, const pbd::SolveContext<float>& ctx,
+                                  const Mat3<float>& rot, const Vec3<float>& x_cm, pbd::GoalCorrection<float>* goals) {
+  if (b.offsets[c + 1] - b.offsets[c] > kMaxKeptMembers) {  // (no such cluster in the scenes: ~15-30 members)
+    pbd::shapeMatchMembers(b, c, ctx, rot, x_cm, goals);
+    return;
+  }
+  const F4 c0 = {rot.m[0][0], rot.m[1][0], rot.m[2][0], 0.0f};
+  const F4 c1 = {rot.m[0][1], rot.m[1][1], rot.m[2][1], 0.0f};
+  const F4 c2 = {rot.m[0][2], rot.m[1][2], rot.m[2][2], 0.0f};
+  const F4 cm = loadVec3(x_cm);
+  withSolverAndTerm(b, ctx, [&](auto jacobi, auto term) {
+    shapeMatchMembersVec<decltype(jacobi)::value>(b, c, ctx, c0, c1, c2, cm, term);
+  });
 }
 #endif
 
@@ -226,7 +318,8 @@ void projectLaplacianCpu<float>(const pbd::BlockView<float>& b, int c, const pbd
 #endif
 
 // pbd::projectShapeMatchingClusters (frames, interleaved rotation extractions, member passes) with the frames of
-// clusterFramesBatch and the member passes of shapeMatchMembersKept: the same values.
+// clusterFramesBatch and the member passes of shapeMatchMembersKept: the same values. Used where there are no
+// SIMD lanes for projectShapeMatchingPipelined below.
 template <typename T>
 void projectShapeMatchingClustersKept(const pbd::BlockView<T>& b, const std::int32_t* cs, int count,
                                       const pbd::SolveContext<T>& ctx, pbd::GoalCorrection<T>* goals) {
@@ -245,6 +338,82 @@ void projectShapeMatchingClustersKept(const pbd::BlockView<T>& b, const std::int
   }
 }
 
+// The next batch of shape-matching clusters order[q] (or q) from [q, q1) into cs: up to kClusterBatch, ending early
+// where a cluster's centre would repeat (the second would have to start from the rotation the first writes).
+// Advances q past the batch; returns its size.
+template <typename T>
+int nextClusterBatch(const pbd::BlockView<T>& v, const std::int32_t* order, std::int32_t& q, std::int32_t q1,
+                     std::int32_t* cs) {
+  int k = 0;
+  for (; k < kClusterBatch && q < q1; ++k, ++q) {
+    cs[k] = order ? order[q] : q;
+    bool repeat = false;
+    for (int j = 0; j < k; ++j) repeat = repeat || v.ids[v.offsets[cs[j]]] == v.ids[v.offsets[cs[k]]];
+    if (repeat) break;
+  }
+  return k;
+}
+
+#if defined(INC_HAVE_ROTATION_LANES)
+// The shape-matching clusters of [q0, q1) as the batches of projectShapeMatchingClustersKept, software-pipelined:
+// batch i+1's rotation extraction (in SIMD lanes: cpu_fallback/pbd_rotation_lanes.h) is a chain of dependent steps
+// that alone leaves the core mostly idle (it took ~17 % of the frame's time for ~8 % of its instructions), while
+// batch i's member passes are independent, throughput-bound work. So batch i+1's frames are computed and its steps
+// issued one at a time between batch i's clusters' member passes, and the core runs both. Every value is the one
+// the batch-by-batch loop computes: the clusters of a phase (a Jacobi block, or one Gauss-Seidel colour) are
+// independent (batch i's member passes move no particle that batch i+1's frames read), and batch i's rotations are
+// written before batch i+1 reads its warm starts.
+template <typename T>
+void projectShapeMatchingPipelined(const pbd::BlockView<T>& v, const std::int32_t* order, std::int32_t q0,
+                                   std::int32_t q1, const pbd::SolveContext<T>& ctx, pbd::GoalCorrection<T>* goals) {
+  struct Batch {
+    std::int32_t cs[pbd::kMaxRotationBatch] = {};
+    int count = 0;
+    pbd::ClusterFrame<T> f[kClusterBatch];
+    pbd::Quat<T> q[kClusterBatch];
+  };
+  RotationLanes<typename RotationLanesOf<T>::type> rot;
+  // Frames and rotation warm starts of the next batch, and its extraction started (no step taken).
+  const auto startBatch = [&](Batch& b, std::int32_t& q) {
+    b.count = nextClusterBatch(v, order, q, q1, b.cs);
+    if (b.count == 0) return;
+    clusterFramesBatch(v, b.cs, b.count, ctx, b.f);
+    Mat3<T> a[kClusterBatch];
+    for (int k = 0; k < b.count; ++k) {
+      a[k] = b.f[k].a_pq;
+      b.q[k] = ctx.rotation[v.ids[v.offsets[b.cs[k]]]];
+    }
+    rot.start(a, b.q, b.count);
+  };
+  const auto finishBatch = [&](Batch& b) {
+    rot.finish(b.q, b.count);
+    for (int k = 0; k < b.count; ++k) ctx.rotation[v.ids[v.offsets[b.cs[k]]]] = b.q[k];
+  };
+  const int iterations = ctx.rotation_iterations;
+  Batch batches[2];
+  std::int32_t q = q0;
+  startBatch(batches[0], q);
+  if (batches[0].count == 0) return;
+  for (int it = 0; it < iterations; ++it)
+    if (!rot.step()) break;
+  finishBatch(batches[0]);
+  for (int i = 0;; i ^= 1) {
+    Batch& cur = batches[i];
+    Batch& next = batches[i ^ 1];
+    startBatch(next, q);
+    bool stepping = next.count > 0 && iterations > 0;
+    int it = 0;
+    for (int k = 0; k < cur.count; ++k) {
+      if (stepping) stepping = rot.step() && ++it < iterations;
+      shapeMatchMembersKept(v, cur.cs[k], ctx, pbd::quatToMatrix(cur.q[k]), cur.f[k].x_cm, goals);
+    }
+    while (stepping) stepping = rot.step() && ++it < iterations;
+    if (next.count == 0) break;
+    finishBatch(next);
+  }
+}
+#endif
+
 // Projects constraints order[q] (or q when order is null) for q in [q0, q1) of one block: the kind's function
 // from physics/pbd_block.h called directly (the same one projectConstraint dispatches to), so the loop has no
 // per-constraint dispatch. `goals`: room for one cluster's members (shape matching keeps pass 1's goals for
@@ -252,29 +421,29 @@ void projectShapeMatchingClustersKept(const pbd::BlockView<T>& b, const std::int
 template <typename T>
 void projectRange(const pbd::BlockView<T> v, const std::int32_t* order, std::int32_t q0, std::int32_t q1,
                   const pbd::SolveContext<T> ctx, pbd::GoalCorrection<T>* goals) {
+  if (g_reference_loop.load(std::memory_order_relaxed)) {
+    for (std::int32_t q = q0; q < q1; ++q) pbd::projectConstraint(v, order ? order[q] : q, ctx);
+    return;
+  }
   switch (v.kind) {
     case pbd::kDistance:
-      if (!order) {
-        projectDistanceRange(v, q0, q1, ctx);
-        break;
-      }
-      for (std::int32_t q = q0; q < q1; ++q) pbd::projectDistanceConstraint(v, order[q], ctx);
+      projectDistanceRange(v, order, q0, q1, ctx);
       break;
     case pbd::kLaplacian:
       for (std::int32_t q = q0; q < q1; ++q) projectLaplacianCpu(v, order ? order[q] : q, ctx);
       break;
     case pbd::kShapeMatching:
+#if defined(INC_HAVE_ROTATION_LANES)
+      if (goals) {
+        projectShapeMatchingPipelined(v, order, q0, q1, ctx, goals);
+        break;
+      }
+#endif
       // In batches of independent clusters (the phase's clusters are; a batch ends early only where a centre
       // would repeat), whose rotation extractions the core then overlaps.
       for (std::int32_t q = q0; q < q1;) {
         std::int32_t cs[pbd::kMaxRotationBatch];
-        int k = 0;
-        for (; k < kClusterBatch && q < q1; ++k, ++q) {
-          cs[k] = order ? order[q] : q;
-          bool repeat = false;
-          for (int j = 0; j < k; ++j) repeat = repeat || v.ids[v.offsets[cs[j]]] == v.ids[v.offsets[cs[k]]];
-          if (repeat) break;
-        }
+        const int k = nextClusterBatch(v, order, q, q1, cs);
         if (goals)
           projectShapeMatchingClustersKept(v, cs, k, ctx, goals);
         else
@@ -696,5 +865,7 @@ std::unique_ptr<PbdBackend<T>> makePbdCpuBackend() {
 
 template std::unique_ptr<PbdBackend<float>> makePbdCpuBackend<float>();
 template std::unique_ptr<PbdBackend<double>> makePbdCpuBackend<double>();
+
+void setPbdReferenceLoop(bool reference) { g_reference_loop = reference; }
 
 }  // namespace inc::cpu

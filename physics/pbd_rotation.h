@@ -47,6 +47,8 @@ INC_HD Mat3<T> quatToMatrix(const Quat<T>& q) {
 
 // One step of extractRotation below: rotates q towards A's rotational part; false (q unchanged) when the step
 // is below eps (converged, or a degenerate A). `scale` is |A|_F (> 0), the same for every step.
+// cpu_fallback/pbd_rotation_lanes.h runs this step for four clusters in SIMD lanes (the CPU solver) with the same
+// templates in the same order: change both together (tests PbdRotationLanes.* compare them bit for bit).
 template <typename T>
 INC_HD bool extractRotationStep(const Mat3<T>& a, T scale, Quat<T>& q) {
   const T eps = sizeof(T) == 4 ? T(1e-6) : T(1e-12);
