@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "kernels/bulk_upload.h"
 #include "kernels/cuda_check.h"
 #include "kernels/device_buffer.h"
 #include "physics/cut_coupling.h"
@@ -307,21 +308,18 @@ class MlsCudaSolver final : public MlsSolver {
     model_ = std::move(model);
     resetSolverState(model_.safety);
     const std::size_t n = model_.size();
-    rest_.upload(model_.rest);
-    mass_.upload(model_.mass);
-    volume_.upload(model_.volume);
-    moment_inverse_.upload(model_.moment_inverse);
-    kind_.upload(model_.kind);
-    offsets_.upload(model_.neighbors.offsets);
-    indices_.upload(model_.neighbors.indices);
-    for (DeviceBuffer<Vec3<T>>* b : {&u_, &v_, &f_, &target_}) {
-      b->resize(n);
-      b->fillZero();
-    }
-    stress_moment_.resize(n);
-    stress_moment_.fillZero();
-    energy_.resize(n);
-    energy_.fillZero();
+    INC_CUDA(cudaDeviceSynchronize());  // no stream still reads the old model's buffers
+    bulk_.add(rest_, model_.rest);
+    bulk_.add(mass_, model_.mass);
+    bulk_.add(volume_, model_.volume);
+    bulk_.add(moment_inverse_, model_.moment_inverse);
+    bulk_.add(kind_, model_.kind);
+    bulk_.add(offsets_, model_.neighbors.offsets);
+    bulk_.add(indices_, model_.neighbors.indices);
+    for (DeviceBuffer<Vec3<T>>* b : {&u_, &v_, &f_, &target_}) bulk_.zero(*b, n);
+    bulk_.zero(stress_moment_, n);
+    bulk_.zero(energy_, n);
+    bulk_.flush(stream_);  // one wait instead of a synchronous copy per array
     stiffening_buf_.resize(n);
     partials_.resize(kReduceBlocks);
     groups_ = 0;
@@ -431,19 +429,18 @@ class MlsCudaSolver final : public MlsSolver {
     for (std::size_t k = 0; k < g.size(); ++k)
       for (std::int32_t p = g.member_offsets[k]; p < g.member_offsets[k + 1]; ++p)
         group[std::size_t(g.members[std::size_t(p)])] = std::int32_t(k);
-    INC_CUDA(cudaStreamSynchronize(stream_));
-    cg_member_offsets_.upload(g.member_offsets);
-    cg_members_.upload(g.members);
-    cg_spring_offsets_.upload(g.spring_offsets);
-    cg_rest_centre_.upload(centre);
-    cg_anchor_.upload(anchor);
-    cg_rest_length_.upload(std::vector<T>(g.rest_lengths.begin(), g.rest_lengths.end()));
-    cg_stiffness_.upload(std::vector<T>(g.stiffnesses.begin(), g.stiffnesses.end()));
-    particle_group_.upload(group);
-    cg_displacement_.resize(g.size());
-    cg_displacement_.fillZero();
-    cg_force_.resize(g.size());
-    cg_force_.fillZero();
+    INC_CUDA(cudaStreamSynchronize(stream_));  // queued substeps may still read the old groups
+    bulk_.add(cg_member_offsets_, g.member_offsets);
+    bulk_.add(cg_members_, g.members);
+    bulk_.add(cg_spring_offsets_, g.spring_offsets);
+    bulk_.add(cg_rest_centre_, centre);
+    bulk_.add(cg_anchor_, anchor);
+    bulk_.add(cg_rest_length_, std::vector<T>(g.rest_lengths.begin(), g.rest_lengths.end()));
+    bulk_.add(cg_stiffness_, std::vector<T>(g.stiffnesses.begin(), g.stiffnesses.end()));
+    bulk_.add(particle_group_, group);
+    bulk_.zero(cg_displacement_, g.size());
+    bulk_.zero(cg_force_, g.size());
+    bulk_.flush(stream_);
     setCouplingStableStep(mlsCouplingStableStep(g, std::vector<double>(model_.mass.begin(), model_.mass.end())));
     forces_valid_ = false;
   }
@@ -716,6 +713,7 @@ class MlsCudaSolver final : public MlsSolver {
   bool forces_valid_ = false;
   bool stage_timing_ = true;
   cudaGraphExec_t graph_exec_ = nullptr;  // substepsGraph's frame, for graph_key_
+  BulkUpload bulk_;                       // load() and setCouplingGroups() uploads
   std::vector<std::uint64_t> graph_key_;
   bool has_checkpoint_ = false;
 };
