@@ -1,8 +1,10 @@
 // StrokeSupports and NodalRegion's supports over a stroke: the incremental lists equal visibleSupports from scratch.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
+#include <string>
 
 #include "host/cut_nodal_points.h"
 #include "host/cut_nodal_region.h"
