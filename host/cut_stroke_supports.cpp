@@ -2,6 +2,7 @@
 #include "host/cut_stroke_supports.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "host/input_error.h"
@@ -73,6 +74,56 @@ void compact(NeighborLists& lists, const std::vector<char>& keep) {
   lists.indices.resize(w);
 }
 
+// Points binned in cells of edge >= h over their box (x fastest), sorted by cell (a counting sort, stable:
+// ascending index within a cell). The edge grows where the box would need more than 64 cells a point.
+class CellGrid {
+ public:
+  CellGrid(const std::vector<Vec3d>& x, double h) {
+    Vec3d hi = x.front();
+    lo_ = x.front();
+    for (const Vec3d& p : x)
+      for (int a = 0; a < 3; ++a) lo_[a] = std::min(lo_[a], p[a]), hi[a] = std::max(hi[a], p[a]);
+    double edge = h;
+    for (;;) {
+      inv_ = 1.0 / edge;
+      double cells = 1.0;
+      for (int a = 0; a < 3; ++a) cells *= std::floor((hi[a] - lo_[a]) * inv_) + 1.0;
+      if (cells <= 64.0 * double(x.size()) + 1024.0) break;
+      edge *= 2.0;
+    }
+    for (int a = 0; a < 3; ++a) dims_[a] = std::int64_t(std::floor((hi[a] - lo_[a]) * inv_)) + 1;
+    start_.assign(std::size_t(dims_[0] * dims_[1] * dims_[2] + 1), 0);
+    std::vector<std::int64_t> cell(x.size());
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      const auto c = cellOf(x[i]);
+      cell[i] = c[0] + dims_[0] * (c[1] + dims_[1] * c[2]);
+      ++start_[std::size_t(cell[i]) + 1];
+    }
+    for (std::size_t c = 1; c < start_.size(); ++c) start_[c] += start_[c - 1];
+    points_.resize(x.size());
+    std::vector<std::int32_t> at(start_.begin(), start_.end() - 1);
+    for (std::size_t i = 0; i < x.size(); ++i) points_[std::size_t(at[std::size_t(cell[i])]++)] = std::int32_t(i);
+  }
+  // The cell of p, clamped to the grid (every binned point lies inside it).
+  std::array<std::int64_t, 3> cellOf(const Vec3d& p) const {
+    std::array<std::int64_t, 3> c{};
+    for (int a = 0; a < 3; ++a)
+      c[std::size_t(a)] = std::clamp(std::int64_t(std::floor((p[a] - lo_[a]) * inv_)), std::int64_t(0), dims_[a] - 1);
+    return c;
+  }
+  // The first point of cell (i, j, k) in the sorted order (i may be one past the row's last cell).
+  const std::int32_t* cellBegin(std::int64_t i, std::int64_t j, std::int64_t k) const {
+    return points_.data() + start_[std::size_t(i + dims_[0] * (j + dims_[1] * k))];
+  }
+
+ private:
+  Vec3d lo_;
+  double inv_ = 1.0;
+  std::int64_t dims_[3] = {1, 1, 1};
+  std::vector<std::int32_t> start_;   // per cell, its first slot in points_ (plus one past the end)
+  std::vector<std::int32_t> points_;  // point indices sorted by cell
+};
+
 }  // namespace
 
 StrokeSupports::StrokeSupports(double h, std::vector<const SweptSurface*> earlier) : h_(h), earlier_(std::move(earlier)) {
@@ -86,7 +137,6 @@ void StrokeSupports::clear() {
   lists_.offsets.assign(1, 0);
   near_earlier_.clear();
   near_stroke_.clear();
-  cells_.clear();
   removed_ = 0;
 }
 
@@ -157,34 +207,32 @@ std::size_t StrokeSupports::applyStrip(const std::vector<Vec3d>& x, const SweptS
 }
 
 // Rows of the new points x[n0..n): each point's neighbours within h (closed ball, d^2 = distance2Exact <= h^2 as
-// the grid search decides), itself left out, ascending. The cells persist over the stroke (rest positions never
-// move): only the new points are binned. A cell range of h * 1.01 around the query covers every accepted pair
-// whatever the rounding, and the distance alone decides, so the cells change no list.
-NeighborLists StrokeSupports::newRows(const std::vector<Vec3d>& x, std::size_t n0) {
-  const double inv = 1.0 / h_, r2 = h_ * h_, span = 1.01 * h_;
-  const auto cell = [&](double v) { return std::int64_t(std::floor(v * inv)); };
-  const auto key = [](std::int64_t i, std::int64_t j, std::int64_t k) {
-    // 21 bits per axis; a far cell may share a key with another, which only adds candidates
-    return (i & 0x1fffff) | ((j & 0x1fffff) << 21) | ((k & 0x1fffff) << 42);
-  };
-  for (std::size_t i = n0; i < x.size(); ++i)
-    cells_[key(cell(x[i].x), cell(x[i].y), cell(x[i].z))].push_back(std::int32_t(i));
+// the grid search decides), itself left out, ascending. Cells of edge >= h over all points (a counting sort, O(n)
+// per call); a query scans the cells within 1.01 h of it, which hold every accepted neighbour whatever the
+// rounding (the cell of a coordinate is monotone in it), so the distance alone decides the lists.
+NeighborLists StrokeSupports::newRows(const std::vector<Vec3d>& x, std::size_t n0) const {
+  const CellGrid grid(x, h_);
+  const double r2 = h_ * h_, span = 1.01 * h_;
   NeighborLists rows;
   rows.offsets.assign(x.size() - n0 + 1, 0);
   std::vector<std::int32_t> row;
   for (std::size_t q = n0; q < x.size(); ++q) {
     row.clear();
     const Vec3d& p = x[q];
-    for (std::int64_t i = cell(p.x - span); i <= cell(p.x + span); ++i)
-      for (std::int64_t j = cell(p.y - span); j <= cell(p.y + span); ++j)
-        for (std::int64_t k = cell(p.z - span); k <= cell(p.z + span); ++k) {
-          const auto it = cells_.find(key(i, j, k));
-          if (it == cells_.end()) continue;
-          for (std::int32_t c : it->second)
-            if (std::size_t(c) != q && distance2Exact(p, x[std::size_t(c)]) <= r2) row.push_back(c);
+    const auto lo = grid.cellOf(p - Vec3d(span, span, span)), hi = grid.cellOf(p + Vec3d(span, span, span));
+    for (std::int64_t k = lo[2]; k <= hi[2]; ++k)
+      for (std::int64_t j = lo[1]; j <= hi[1]; ++j) {
+        // one row of cells is one run of the sorted points
+        const std::int32_t* first = grid.cellBegin(lo[0], j, k);
+        const std::int32_t* last = grid.cellBegin(hi[0] + 1, j, k);
+        for (const std::int32_t* c = first; c < last; ++c) {
+          const Vec3d d = p - x[std::size_t(*c)];
+          // a cheap reject far outside the ball (the exact test decides the rest)
+          if (d.x * d.x + d.y * d.y + d.z * d.z > r2 * (1.0 + 1e-9)) continue;
+          if (std::size_t(*c) != q && distance2Exact(p, x[std::size_t(*c)]) <= r2) row.push_back(*c);
         }
+      }
     std::sort(row.begin(), row.end());
-    row.erase(std::unique(row.begin(), row.end()), row.end());
     rows.indices.insert(rows.indices.end(), row.begin(), row.end());
     rows.offsets[q - n0 + 1] = std::int64_t(rows.indices.size());
   }

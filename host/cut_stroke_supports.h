@@ -2,7 +2,6 @@
 #pragma once
 
 #include <cstdint>
-#include <unordered_map>
 #include <vector>
 
 #include "host/cut_swept_surface.h"
@@ -51,7 +50,7 @@ class StrokeSupports {
  private:
   std::size_t applyStrip(const std::vector<Vec3d>& x, const SweptSurface& fresh);
   void appendPoints(const std::vector<Vec3d>& x);
-  NeighborLists newRows(const std::vector<Vec3d>& x, std::size_t n0);
+  NeighborLists newRows(const std::vector<Vec3d>& x, std::size_t n0) const;
   bool crosses(const std::vector<Vec3d>& x, std::size_t a, std::size_t b, const std::vector<SweptSurfaceQuery>& earlier,
                const SweptSurfaceQuery& stroke) const;
   void mergeRows(const NeighborLists& rows, const std::vector<char>& keep);
@@ -63,7 +62,6 @@ class StrokeSupports {
   NeighborLists lists_, spare_;                     // spare_: mergeRows' output buffer, swapped with lists_
   std::vector<std::vector<std::uint32_t>> near_earlier_;  // per point: the earlier cuts within reach
   std::vector<char> near_stroke_;                   // per point: within reach of stroke_
-  std::unordered_map<std::int64_t, std::vector<std::int32_t>> cells_;  // points per cell of edge h (packed key)
   std::size_t removed_ = 0;
 };
 
