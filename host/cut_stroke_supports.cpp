@@ -1,4 +1,4 @@
-// StrokeSupports: a stroke's visibility-filtered supports, updated per new strip and new points (exactly visibleSupports).
+// StrokeSupports: a stroke's visibility-filtered supports, updated per new strip and point (= visibleSupports).
 #include "host/cut_stroke_supports.h"
 
 #include <algorithm>
@@ -240,8 +240,8 @@ NeighborLists StrokeSupports::newRows(const std::vector<Vec3d>& x, std::size_t n
 }
 
 // visibleSupports' decision for the pair a < b: some cut both ends lie near is crossed.
-bool StrokeSupports::crosses(const std::vector<Vec3d>& x, std::size_t a, std::size_t b, const std::vector<SweptSurfaceQuery>& earlier,
-                             const SweptSurfaceQuery& stroke) const {
+bool StrokeSupports::crosses(const std::vector<Vec3d>& x, std::size_t a, std::size_t b,
+                             const std::vector<SweptSurfaceQuery>& earlier, const SweptSurfaceQuery& stroke) const {
   const auto& na = near_earlier_[a];
   const auto& nb = near_earlier_[b];
   for (std::size_t i = 0, j = 0; i < na.size() && j < nb.size();) {
