@@ -183,11 +183,6 @@ std::size_t removeCrossingPairs(NeighborLists& lists, const std::vector<Vec3d>& 
 
 }  // namespace
 
-std::size_t removeCrossingPairsSymmetric(NeighborLists& lists, const std::vector<Vec3d>& x, const SweptSurface& cut,
-                                         double max_length) {
-  return removeCrossingPairs(lists, x, {&cut}, max_length);
-}
-
 NeighborLists visibleSupports(const std::vector<Vec3d>& x, double h, const std::vector<const SweptSurface*>& cuts,
                               std::size_t* removed) {
   if (!(h > 0.0)) throw InputError("cut", "support_radius", "must be positive");

@@ -44,10 +44,7 @@ std::vector<Vec3d> sampleSphere(const Vec3d& centre, double radius, int n, const
 // directed entries dropped.
 NeighborLists visibleSupports(const std::vector<Vec3d>& positions, double support_radius,
                               const std::vector<const SweptSurface*>& cuts, std::size_t* removed = nullptr);
-// Drops from `lists` (symmetric, every pair at most `reach` long, m) the pairs crossing `cut` (the same decision
-// as visibleSupports); returns how many.
-std::size_t removeCrossingPairsSymmetric(NeighborLists& lists, const std::vector<Vec3d>& positions, const SweptSurface& cut,
-                                         double reach);
+// A stroke's supports kept up to date as points and strips are added, equal to this: host/cut_stroke_supports.h.
 
 // The spheres the swept surface enters are removed and replaced by nodal points on a lattice of cell size
 // 2 r / samples_per_diameter inside each sphere (cell centres with |x - c| < r; the centre alone when the lattice

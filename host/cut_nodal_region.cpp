@@ -34,6 +34,7 @@ NodalRegion::NodalRegion(const MetaballModel& base, const NodalRegionSettings& s
   double rmean = 0.0;
   for (double r : base_.rest_radii) rmean += r / double(std::max<std::size_t>(1, base_.size()));
   spacing_ = 2.0 * rmean / s.samples_per_diameter;
+  supports_ = StrokeSupports(s.mls.support_factor * spacing_, earlier_);
   adjacency_.resize(base_.size());
   sphere_points_.resize(base_.size());
   for (std::size_t l = 0; l < base_.links.size(); ++l) {
@@ -67,7 +68,6 @@ void NodalRegion::syncState() {
 std::size_t NodalRegion::convert(const std::vector<std::int32_t>& cut,
                                  const std::function<ConvertedSphereState(std::int32_t)>& state, const SweptSurface& stroke) {
   syncState();
-  std::vector<const SweptSurface*> cuts = earlier_;
   std::size_t changed = 0;
   // The spheres converted now (cut ones not sampled yet, and new interface spheres), then their points.
   std::vector<std::int32_t> batch;
@@ -86,11 +86,9 @@ std::size_t NodalRegion::convert(const std::vector<std::int32_t>& cut,
       }
   sample(batch, state);
   if (rest_.empty()) return changed;
-  // Supports: symmetric lists of radius h with the visibility criterion for the stroke and every earlier cut.
-  cuts.push_back(&stroke);
-  std::size_t removed = 0;
-  supports_ = visibleSupports(rest_, settings_.mls.support_factor * spacing_, cuts, &removed);
-  supports_removed_ = removed;
+  // Supports: symmetric lists of radius h with the visibility criterion for the stroke and every earlier cut,
+  // updated for the new points and the stroke's new strip (a conversion's cost stays in what is new).
+  supports_.update(rest_, stroke);
   rebuild();
   return changed;
 }
@@ -160,9 +158,8 @@ void NodalRegion::sample(const std::vector<std::int32_t>& batch, const std::func
 
 std::size_t NodalRegion::cutSupports(const SweptSurface& fresh) {
   if (rest_.empty() || fresh.empty()) return 0;
-  const std::size_t removed = removeCrossingPairsSymmetric(supports_, rest_, fresh, settings_.mls.support_factor * spacing_);
+  const std::size_t removed = supports_.extend(rest_, fresh);
   if (removed == 0) return 0;
-  supports_removed_ += removed;
   syncState();
   rebuild();
   return removed;
@@ -190,8 +187,8 @@ void NodalRegion::regroup() {
         return a;
       };
       for (std::size_t k = 0; k < pts.size(); ++k)
-        for (std::int64_t q = supports_.offsets[std::size_t(pts[k])]; q < supports_.offsets[std::size_t(pts[k]) + 1]; ++q) {
-          const std::int32_t j = local[std::size_t(supports_.indices[std::size_t(q)])];
+        for (std::int64_t q = supports().offsets[std::size_t(pts[k])]; q < supports().offsets[std::size_t(pts[k]) + 1]; ++q) {
+          const std::int32_t j = local[std::size_t(supports().indices[std::size_t(q)])];
           if (j < 0) continue;
           const std::int32_t a = find(std::int32_t(k)), c = find(j);
           if (a != c) parent[std::size_t(std::max(a, c))] = std::min(a, c);
@@ -239,7 +236,7 @@ void NodalRegion::rebuildSolver() {
   in.masses = mass_;
   in.kinds = kind_;
   in.spacing = spacing_;
-  in.neighbors = supports_;
+  in.neighbors = supports();
   rebuildMlsSolver(solver_, in, settings_.backend, settings_.precision);  // the GPU reuses its buffers
   // A cut's few thousand points are launch-bound on the GPU: the substeps of an exchange replay as one graph.
   solver_->setStageTiming(false);
@@ -359,7 +356,7 @@ NodalRegionFinal NodalRegion::finish() {
     f.displacement.push_back(u_[i]);
     f.velocity.push_back(v_[i]);
   }
-  f.points.visible = supports_;
+  f.points.visible = supports();
   f.points.spacing = spacing_;
   f.points.support = settings_.mls.support_factor * spacing_;
   // The nodal points go back to zero between cuts.
@@ -370,7 +367,7 @@ NodalRegionFinal NodalRegion::finish() {
   kind_.clear();
   u_.clear();
   v_.clear();
-  supports_ = NeighborLists{};
+  supports_.clear();
   groups_ = MlsCouplingGroups{};
   group_sphere_.clear();
   spring_other_.clear();

@@ -11,6 +11,7 @@
 
 #include "host/backend.h"
 #include "host/cut_repack.h"
+#include "host/cut_stroke_supports.h"
 #include "host/cut_swept_surface.h"
 #include "host/metaball_model.h"
 #include "host/mls_model.h"
@@ -64,22 +65,25 @@ class NodalRegion {
   std::size_t springCount() const { return groups_.springs(); }
   double pointSpacing() const { return spacing_; }
   double pointMass() const;                 // kg, sum over the points
-  std::size_t supportsRemoved() const { return supports_removed_; }  // directed pairs dropped by the cuts so far
+  std::size_t supportsRemoved() const { return supports_.removed(); }  // directed pairs dropped by the cuts so far
   double lastRebuildMs() const { return last_rebuild_ms_; }  // the last MLS solver rebuild (model, device upload)
   const MlsSolver* solver() const { return solver_.get(); }
-  const NeighborLists& supports() const { return supports_; }
+  const NeighborLists& supports() const { return supports_.lists(); }
   const std::vector<Vec3d>& restPoints() const { return rest_; }
   const std::vector<std::int32_t>& pointSphere() const { return source_; }
 
   // Converts the listed base spheres to role Cut (sampling the ones not converted yet) and their PBD-role link
   // neighbours to role Interface; `state(b)` gives a sphere's state when it is sampled. `stroke`: the stroke's
-  // swept surface so far (kept by pointer until the next call). Rebuilds the supports (visibility against the
-  // stroke and the earlier cuts), the coupling groups and the MLS model (moment matrices of every point
-  // recomputed), carrying the existing points' state. Returns the number of spheres that changed role.
+  // swept surface so far (extending the one of the previous call, else the supports start over). Updates the
+  // supports (visibility against the stroke and the earlier cuts: the lists of the new points, the pairs the new
+  // strip crosses; the same lists as visibleSupports from scratch), rebuilds the coupling groups and the MLS model
+  // (moment matrices of every point recomputed), carrying the existing points' state. Returns the number of
+  // spheres that changed role.
   std::size_t convert(const std::vector<std::int32_t>& cut, const std::function<ConvertedSphereState(std::int32_t)>& state,
                       const SweptSurface& stroke);
-  // The stroke grew by `fresh` (a surface holding only the new triangles): supports crossing it are dropped and,
-  // if any was, the groups and the MLS model are rebuilt (moment matrices recomputed). Returns the pairs dropped.
+  // The stroke grew by `fresh` (a surface holding only the new triangles, the next ones of the stroke the next
+  // convert() gets): supports crossing it are dropped and, if any was, the groups and the MLS model are rebuilt
+  // (moment matrices recomputed). Returns the pairs dropped.
   std::size_t cutSupports(const SweptSurface& fresh);
 
   // One coupling exchange: the springs' anchors from the PBD spheres' current positions (`pbd_position(j)` for
@@ -129,8 +133,7 @@ class NodalRegion {
   std::vector<Vec3d> u_, v_;            // host copies (valid after syncState)
   double spacing_ = 0.0;                // m, the shared sampling lattice's spacing
   std::set<std::array<std::int64_t, 3>> occupied_;  // lattice cells already holding a point
-  NeighborLists supports_;
-  std::size_t supports_removed_ = 0;
+  StrokeSupports supports_;               // visibility-filtered supports, kept across the stroke
   // coupling groups: group g belongs to base sphere group_sphere_[g]
   MlsCouplingGroups groups_;
   std::vector<std::int32_t> group_sphere_;

@@ -87,20 +87,36 @@ bool segmentCrossesSweptSurface(const SweptSurface& s, const Vec3d& p, const Vec
 }
 
 SweptSurfaceQuery::SweptSurfaceQuery(const SweptSurface& s) : s_(s) {
-  lo_.resize(s.triangles.size());
-  hi_.resize(s.triangles.size());
-  n_.resize(s.triangles.size());
-  for (std::size_t i = 0; i < s.triangles.size(); ++i) {
+  const std::size_t nt = s.triangles.size();
+  lo_.resize(nt);
+  hi_.resize(nt);
+  n_.resize(nt);
+  for (std::size_t i = 0; i < nt; ++i) {
     const auto& t = s.triangles[i];
     triangleBox(s.vertices[t[0]], s.vertices[t[1]], s.vertices[t[2]], lo_[i], hi_[i]);
     n_[i] = cross(s.vertices[t[1]] - s.vertices[t[0]], s.vertices[t[2]] - s.vertices[t[0]]);
   }
+  for (std::size_t b = 0; b < nt; b += kBlock) {
+    Vec3d lo = lo_[b], hi = hi_[b];
+    for (std::size_t i = b; i < std::min(nt, b + kBlock); ++i)
+      for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], lo_[i][k]), hi[k] = std::max(hi[k], hi_[i][k]);
+    block_lo_.push_back(lo);
+    block_hi_.push_back(hi);
+  }
 }
 
 bool SweptSurfaceQuery::segmentCrosses(const Vec3d& p, const Vec3d& q) const {
-  for (std::size_t i = 0; i < s_.triangles.size(); ++i) {
-    const auto& t = s_.triangles[i];
-    if (crossesTriangle(p, q, s_.vertices[t[0]], s_.vertices[t[1]], s_.vertices[t[2]], lo_[i], hi_[i], n_[i])) return true;
+  const std::size_t nt = s_.triangles.size();
+  const Vec3d slo(std::min(p.x, q.x), std::min(p.y, q.y), std::min(p.z, q.z));
+  const Vec3d shi(std::max(p.x, q.x), std::max(p.y, q.y), std::max(p.z, q.z));
+  for (std::size_t b = 0; b < block_lo_.size(); ++b) {
+    const Vec3d& lo = block_lo_[b];
+    const Vec3d& hi = block_hi_[b];
+    if (shi.x < lo.x || slo.x > hi.x || shi.y < lo.y || slo.y > hi.y || shi.z < lo.z || slo.z > hi.z) continue;
+    for (std::size_t i = b * kBlock; i < std::min(nt, (b + 1) * kBlock); ++i) {
+      const auto& t = s_.triangles[i];
+      if (crossesTriangle(p, q, s_.vertices[t[0]], s_.vertices[t[1]], s_.vertices[t[2]], lo_[i], hi_[i], n_[i])) return true;
+    }
   }
   return false;
 }

@@ -32,15 +32,19 @@ void extendSweptSurface(SweptSurface& surface, const BladePose& next);
 
 // Visibility criterion: the segment p-q crosses a triangle of the swept surface.
 bool segmentCrossesSweptSurface(const SweptSurface& surface, const Vec3d& p, const Vec3d& q);
-// The same decision with the triangles' boxes and normals computed once (many segments against one surface).
+// The same decision with the triangles' boxes and normals computed once (many segments against one surface), and
+// the boxes of runs of kBlock consecutive triangles: a segment that misses a run's box misses each of its
+// triangles' boxes, which the per-triangle test rejects anyway, so skipping the run changes no answer.
 class SweptSurfaceQuery {
  public:
   explicit SweptSurfaceQuery(const SweptSurface& surface);  // keeps a reference: the surface must outlive it
   bool segmentCrosses(const Vec3d& p, const Vec3d& q) const;
 
  private:
+  static constexpr std::size_t kBlock = 8;
   const SweptSurface& s_;
   std::vector<Vec3d> lo_, hi_, n_;
+  std::vector<Vec3d> block_lo_, block_hi_;  // per run of kBlock triangles: the union of their boxes
 };
 // +1 / -1: the side of p (sign of the oriented normal offset to the closest swept triangle); 0 never returned.
 int sideOfSweptSurface(const SweptSurface& surface, const Vec3d& p);
