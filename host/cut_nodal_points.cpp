@@ -133,19 +133,7 @@ std::size_t removeCrossingPairs(NeighborLists& lists, const std::vector<Vec3d>& 
   });
   std::vector<char> keep(lists.indices.size(), 1);
   const auto decide = [&](std::size_t a, std::size_t b) {  // a < b
-    const auto& na = near[a];
-    const auto& nb = near[b];
-    for (std::size_t i = 0, j = 0; i < na.size() && j < nb.size();) {
-      if (na[i] < nb[j]) {
-        ++i;
-      } else if (nb[j] < na[i]) {
-        ++j;
-      } else {
-        if (queries[na[i]].segmentCrosses(x[a], x[b])) return true;
-        ++i, ++j;
-      }
-    }
-    return false;
+    return crossesACutNearBoth(near[a], near[b], queries, x[a], x[b]);
   };
   cpu::parallelFor(std::int64_t(nq), [&](std::int64_t q) {
     if (near[std::size_t(q)].empty()) return;

@@ -242,18 +242,7 @@ NeighborLists StrokeSupports::newRows(const std::vector<Vec3d>& x, std::size_t n
 // visibleSupports' decision for the pair a < b: some cut both ends lie near is crossed.
 bool StrokeSupports::crosses(const std::vector<Vec3d>& x, std::size_t a, std::size_t b,
                              const std::vector<SweptSurfaceQuery>& earlier, const SweptSurfaceQuery& stroke) const {
-  const auto& na = near_earlier_[a];
-  const auto& nb = near_earlier_[b];
-  for (std::size_t i = 0, j = 0; i < na.size() && j < nb.size();) {
-    if (na[i] < nb[j]) {
-      ++i;
-    } else if (nb[j] < na[i]) {
-      ++j;
-    } else {
-      if (earlier[na[i]].segmentCrosses(x[a], x[b])) return true;
-      ++i, ++j;
-    }
-  }
+  if (crossesACutNearBoth(near_earlier_[a], near_earlier_[b], earlier, x[a], x[b])) return true;
   return near_stroke_[a] && near_stroke_[b] && stroke.segmentCrosses(x[a], x[b]);
 }
 

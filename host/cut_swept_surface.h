@@ -46,6 +46,24 @@ class SweptSurfaceQuery {
   std::vector<Vec3d> lo_, hi_, n_;
   std::vector<Vec3d> block_lo_, block_hi_;  // per run of kBlock triangles: the union of their boxes
 };
+// The support pair's visibility test (visibleSupports, StrokeSupports): whether segment xa-xb crosses one of the
+// cuts that both of its ends lie near (near_a, near_b: ascending indices into `cuts`).
+template <typename Index>
+bool crossesACutNearBoth(const std::vector<Index>& near_a, const std::vector<Index>& near_b,
+                         const std::vector<SweptSurfaceQuery>& cuts, const Vec3d& xa, const Vec3d& xb) {
+  for (std::size_t i = 0, j = 0; i < near_a.size() && j < near_b.size();) {
+    if (near_a[i] < near_b[j]) {
+      ++i;
+    } else if (near_b[j] < near_a[i]) {
+      ++j;
+    } else {
+      if (cuts[near_a[i]].segmentCrosses(xa, xb)) return true;
+      ++i, ++j;
+    }
+  }
+  return false;
+}
+
 // +1 / -1: the side of p (sign of the oriented normal offset to the closest swept triangle); 0 never returned.
 int sideOfSweptSurface(const SweptSurface& surface, const Vec3d& p);
 // Unsigned distance from p to the swept surface (m).

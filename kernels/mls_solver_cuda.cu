@@ -12,6 +12,7 @@
 
 #include "kernels/bulk_upload.h"
 #include "kernels/cuda_check.h"
+#include "kernels/graph_capture.h"
 #include "kernels/device_buffer.h"
 #include "physics/cut_coupling.h"
 #include "physics/mls_passes.h"
@@ -612,9 +613,7 @@ class MlsCudaSolver final : public MlsSolver {
     const T half = T(0.5) * dt;
     const std::vector<std::uint64_t> key = graphKey(dt, n);
     if (!graph_exec_ || key != graph_key_) {
-      INC_CUDA(cudaStreamBeginCapture(stream_, cudaStreamCaptureModeThreadLocal));
-      cudaGraph_t graph = nullptr;
-      try {
+      captureGraph(stream_, graph_exec_, [&] {
         const int grid = gridFor(s.n);
         driftKernel<T><<<grid, kBlock, 0, stream_>>>(s, dt, n);
         INC_CUDA_LAUNCH("mls driftKernel");
@@ -626,24 +625,7 @@ class MlsCudaSolver final : public MlsSolver {
             launchForce(s, half, true);
           }
         }
-      } catch (...) {
-        // leave the stream usable: end (and drop) the broken capture before reporting the failure
-        if (cudaStreamEndCapture(stream_, &graph) == cudaSuccess && graph) cudaGraphDestroy(graph);
-        throw;
-      }
-      INC_CUDA(cudaStreamEndCapture(stream_, &graph));
-      if (graph_exec_) {
-        cudaGraphExecUpdateResultInfo info;
-        if (cudaGraphExecUpdate(graph_exec_, graph, &info) != cudaSuccess) {
-          (void)cudaGetLastError();  // not sticky: clear it and instantiate instead
-          cudaGraphExecDestroy(graph_exec_);
-          graph_exec_ = nullptr;
-        }
-      }
-      cudaError_t inst = cudaSuccess;
-      if (!graph_exec_) inst = cudaGraphInstantiate(&graph_exec_, graph, 0);
-      cudaGraphDestroy(graph);
-      INC_CUDA(inst);
+      });
       graph_key_ = key;
     }
     INC_CUDA(cudaGraphLaunch(graph_exec_, stream_));

@@ -15,6 +15,7 @@
 
 #include "host/input_error.h"
 #include "kernels/cuda_check.h"
+#include "kernels/graph_capture.h"
 
 namespace inc::cuda {
 namespace {
@@ -790,19 +791,8 @@ void GridNeighborSearch<T>::build(const Vec3<T>* d_points, std::size_t n, T cell
                             cell_size};
     if (!build_graph_ || !(key == build_key_)) {
       build_graph_.reset();
-      INC_CUDA(cudaStreamBeginCapture(st, cudaStreamCaptureModeThreadLocal));
-      cudaGraph_t graph = nullptr;
-      try {
-        enqueueBuild(d_points, n, buckets, st);
-      } catch (...) {
-        if (cudaStreamEndCapture(st, &graph) == cudaSuccess && graph) cudaGraphDestroy(graph);
-        throw;
-      }
-      INC_CUDA(cudaStreamEndCapture(st, &graph));
       cudaGraphExec_t exec = nullptr;
-      const cudaError_t inst = cudaGraphInstantiate(&exec, graph, 0);
-      cudaGraphDestroy(graph);
-      INC_CUDA(inst);
+      captureGraph(st, exec, [&] { enqueueBuild(d_points, n, buckets, st); });
       build_graph_ = std::shared_ptr<void>(exec, [](void* q) { cudaGraphExecDestroy(static_cast<cudaGraphExec_t>(q)); });
       build_key_ = key;
     }

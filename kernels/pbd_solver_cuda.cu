@@ -13,6 +13,7 @@
 
 #include "kernels/bulk_upload.h"
 #include "kernels/cuda_check.h"
+#include "kernels/graph_capture.h"
 #include "kernels/device_buffer.h"
 #include "kernels/device_grow.h"
 #include "kernels/pbd_device_cuda.h"
@@ -671,29 +672,8 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
         if (direct) {
           recordFrame(p);
         } else if (stale) {
-          INC_CUDA(cudaStreamBeginCapture(stream_, cudaStreamCaptureModeThreadLocal));
-          cudaGraph_t graph = nullptr;
-          try {
-            recordFrame(p);
-          } catch (...) {
-            // leave the stream usable: end (and drop) the broken capture before reporting the failure
-            if (cudaStreamEndCapture(stream_, &graph) == cudaSuccess && graph) cudaGraphDestroy(graph);
-            throw;
-          }
-          INC_CUDA(cudaStreamEndCapture(stream_, &graph));
-          // After a patch the frame usually differs only in counts and pointers: update the executable graph
-          // in place (cheaper than a new instantiation); a structural change falls back to instantiating.
-          if (graph_exec_) {
-            cudaGraphExecUpdateResultInfo info;
-            if (cudaGraphExecUpdate(graph_exec_, graph, &info) != cudaSuccess) {
-              (void)cudaGetLastError();  // not sticky: clear it and instantiate instead
-              destroyGraph();
-            }
-          }
-          cudaError_t inst = cudaSuccess;
-          if (!graph_exec_) inst = cudaGraphInstantiate(&graph_exec_, graph, 0);
-          cudaGraphDestroy(graph);
-          INC_CUDA(inst);
+          // After a patch the frame usually differs only in counts and pointers: updated in place.
+          captureGraph(stream_, graph_exec_, [&] { recordFrame(p); });
           graph_key_ = key;
         }
         if (!direct) INC_CUDA(cudaGraphLaunch(graph_exec_, stream_));
