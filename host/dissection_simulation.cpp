@@ -50,6 +50,7 @@ struct ActiveStroke {
   SweptSurface swept;
   std::unique_ptr<NodalRegion> region;
   std::vector<std::int32_t> base_to_pbd, pbd_to_base;
+  std::vector<double> base_cell_volume;  // the base PBD model's rest cell volumes (empty: volume preservation off)
   int scripted = -1;  // index into the scripted strokes, -1: the mouse's
 };
 
@@ -441,6 +442,8 @@ class DissectionSimulation final : public SimulationModel {
     active_->base_to_pbd.resize(spheres_.size());
     active_->pbd_to_base.resize(spheres_.size());
     for (std::size_t i = 0; i < spheres_.size(); ++i) active_->base_to_pbd[i] = active_->pbd_to_base[i] = std::int32_t(i);
+    // The base model's rest cell volumes: a stroke rebuild reuses those of spheres that lost no linked neighbour.
+    active_->base_cell_volume.assign(model_.rest_cell_volume.begin(), model_.rest_cell_volume.end());
     last_convert_ms_ = 0;
   }
 
@@ -515,6 +518,18 @@ class DissectionSimulation final : public SimulationModel {
       m.links.push_back({std::min(i, j), std::max(i, j)});
       m.link_rest_lengths.push_back(a.base.link_rest_lengths[l]);
     }
+    // A sphere none of whose base links reaches a cut sphere keeps its link set, hence its rest cell volume.
+    std::vector<double> known;
+    if (a.base_cell_volume.size() == a.base.size()) {
+      std::vector<char> lost(a.base.size(), 0);
+      for (const auto& e : a.base.links) {
+        if (base_to_pbd[std::size_t(e[0])] < 0) lost[std::size_t(e[1])] = 1;
+        if (base_to_pbd[std::size_t(e[1])] < 0) lost[std::size_t(e[0])] = 1;
+      }
+      known.assign(m.size(), std::numeric_limits<double>::quiet_NaN());
+      for (std::size_t i = 0; i < m.size(); ++i)
+        if (!lost[std::size_t(pbd_to_base[i])]) known[i] = a.base_cell_volume[std::size_t(pbd_to_base[i])];
+    }
     std::vector<Vec3d> x(m.size()), v(m.size());
     std::vector<std::int32_t> old_to_new(model_.size(), -1);
     for (std::size_t i = 0; i < m.size(); ++i) {
@@ -526,7 +541,7 @@ class DissectionSimulation final : public SimulationModel {
     a.base_to_pbd = std::move(base_to_pbd);
     a.pbd_to_base = std::move(pbd_to_base);
     mouse_.release();  // sphere indices change
-    setSpheres(std::move(m), x, v, old_to_new);
+    setSpheres(std::move(m), x, v, old_to_new, std::move(known));
   }
 
   // The blade leaves: Algorithm 1 on the cut spheres' points, interface spheres back to PBD (eq. 13 state), the
@@ -628,7 +643,7 @@ class DissectionSimulation final : public SimulationModel {
   // Replaces the PBD model by `m` with the given positions and velocities; old_to_new maps the previous PBD
   // indices (grasps follow their spheres).
   void setSpheres(MetaballModel m, const std::vector<Vec3d>& x, const std::vector<Vec3d>& v,
-                  const std::vector<std::int32_t>& old_to_new) {
+                  const std::vector<std::int32_t>& old_to_new, std::vector<double> known_cell_volumes = {}) {
     MetaballPbdOptions opt;
     opt.youngs_modulus = scene_.material.youngs_modulus;
     opt.stretch_compliance = scene_.pbd.stretch_compliance;
@@ -639,6 +654,7 @@ class DissectionSimulation final : public SimulationModel {
     opt.require_fixed_held = model_.size() == 0;
     opt.volume_samples = scene_.pbd.volume_preservation ? 64 : 0;
     opt.coloring = params_.solver == PbdSolverKind::GaussSeidel;  // Jacobi never reads it (a rebuild per conversion)
+    opt.known_cell_volumes = std::move(known_cell_volumes);
     spheres_ = std::move(m);
     model_ = buildMetaballPbdModel<T>(spheres_, opt);
     backend_->setModel(model_);

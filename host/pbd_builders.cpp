@@ -165,7 +165,10 @@ PbdModel<T> buildMetaballPbdModel(const MetaballModel& mb, const MetaballPbdOpti
     m.overlap_offsets.push_back(std::int32_t(m.overlap_ids.size()));
   }
   finalizePbdModel(m, opt.coloring);
-  if (opt.volume_samples > 0) computeRestCellVolumes(m, opt.volume_samples);
+  if (!opt.known_cell_volumes.empty() && opt.known_cell_volumes.size() != n)
+    throw InputError(f, "known_cell_volumes", "must hold one entry per sphere (or none)");
+  if (opt.volume_samples > 0)
+    computeRestCellVolumes(m, opt.volume_samples, opt.known_cell_volumes.empty() ? nullptr : &opt.known_cell_volumes);
   return m;
 }
 

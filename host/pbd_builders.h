@@ -26,6 +26,10 @@ struct MetaballPbdOptions {
   bool require_fixed_held = true;    // false: a box that holds no centre is allowed (a re-packed organ whose
                                      // clamped part was cut away: the scene was checked when it was built)
   int volume_samples = 64;           // per sphere, for the power-cell volumes (0: no volume preservation)
+  // Rest power-cell volumes to reuse, one per sphere (NaN: compute; empty: compute all). A sphere's volume depends
+  // only on its rest ball and its linked neighbours' balls, so one whose link set is unchanged since an earlier
+  // build may pass that build's value (a cut's stroke model drops only the cut spheres: the dissection does).
+  std::vector<double> known_cell_volumes;
   bool coloring = true;              // false: no Gauss-Seidel colouring (a Jacobi-only model; a cut rebuilds the
                                      // model every frame the blade enters spheres, and the colouring is its
                                      // largest host cost after the volumes); Gauss-Seidel on it is refused

@@ -112,7 +112,7 @@ void finalizePbdModel(PbdModel<T>& model, bool coloring) {
 }
 
 template <typename T>
-void computeRestCellVolumes(PbdModel<T>& model, int sample_count) {
+void computeRestCellVolumes(PbdModel<T>& model, int sample_count, const std::vector<double>* known) {
   const std::size_t n = model.size();
   if (model.overlap_offsets.size() != n + 1 || std::size_t(model.overlap_offsets.back()) != model.overlap_ids.size())
     throw InputError(kFile, "overlap_offsets", "must hold one list per sphere");
@@ -123,6 +123,10 @@ void computeRestCellVolumes(PbdModel<T>& model, int sample_count) {
   // Independent per sphere (each writes its own entry): on the CPU fallback's threads, since a cut rebuilds the
   // model every frame the blade enters spheres and this is the largest part of a rebuild.
   cpu::parallelFor(std::int64_t(n), [&](std::int64_t i) {
+    if (known && !std::isnan((*known)[std::size_t(i)])) {  // the caller's value for an unchanged neighbourhood
+      model.rest_cell_volume[i] = T((*known)[std::size_t(i)]);
+      return;
+    }
     const std::int32_t b = model.overlap_offsets[i], e = model.overlap_offsets[i + 1];
     model.rest_cell_volume[i] =
         pbd::powerCellVolume(model.rest_positions[i], model.rest_radii[i], model.rest_positions.data(),
@@ -133,7 +137,7 @@ void computeRestCellVolumes(PbdModel<T>& model, int sample_count) {
 
 template void finalizePbdModel<float>(PbdModel<float>&, bool);
 template void finalizePbdModel<double>(PbdModel<double>&, bool);
-template void computeRestCellVolumes<float>(PbdModel<float>&, int);
-template void computeRestCellVolumes<double>(PbdModel<double>&, int);
+template void computeRestCellVolumes<float>(PbdModel<float>&, int, const std::vector<double>*);
+template void computeRestCellVolumes<double>(PbdModel<double>&, int, const std::vector<double>*);
 
 }  // namespace inc

@@ -206,9 +206,10 @@ bool pbdModelHasColoring(const PbdModel<T>& model) {
   return true;
 }
 
-// Rest power-cell volumes and ball samples for volume preservation (needs overlap lists and rest radii).
+// Rest power-cell volumes and ball samples for volume preservation (needs overlap lists and rest radii); `known`:
+// per particle a volume to take as it is (NaN: compute it).
 template <typename T>
-void computeRestCellVolumes(PbdModel<T>& model, int sample_count);
+void computeRestCellVolumes(PbdModel<T>& model, int sample_count, const std::vector<double>* known = nullptr);
 
 // CPU or CUDA per `kind` (Auto resolves as resolveBackend does).
 template <typename T>
