@@ -38,7 +38,7 @@ struct Row {
 };
 
 struct Options {
-  bool profile = false, host_path = false, sorted_rebuild = false;
+  bool profile = false, host_path = false, sorted_rebuild = false, stages = false;
   int summary_every = 1;
 };
 
@@ -51,9 +51,10 @@ void addStages(Row& row, int phase, const TearFrameStats& st) {
   }
 }
 
-void printStages(const Row& row) {
-  std::printf("  stages (%s %s %lld, %s path; mean ms per frame, synchronised per stage):\n", row.backend.c_str(),
-              row.method.c_str(), (long long)row.target, row.path.c_str());
+void printStages(const Row& row, bool synchronised) {
+  std::printf("  stages (%s %s %lld, %s path; mean ms per frame, %s):\n", row.backend.c_str(), row.method.c_str(),
+              (long long)row.target, row.path.c_str(),
+              synchronised ? "synchronised per stage" : "host wall time, device work not synchronised");
   std::printf("  %-28s %10s %10s %10s\n", "stage", "before", "during", "after");
   for (const std::string& name : row.stage_order) {
     double v[3];
@@ -213,6 +214,8 @@ int main(int argc, char** argv) {
   app.add_flag("--quick", quick, "a short run: 20000 particles, tears 200,1000, 5/10/5 frames");
   app.add_flag("--profile", opt.profile,
                "per-stage breakdown (device work synchronised around each stage, PBD stages by CUDA events; slower)");
+  app.add_flag("--stages", opt.stages,
+               "print the coarse stages' host wall time per phase (no synchronisation added: what --profile perturbs)");
   app.add_flag("--host-path", opt.host_path, "CUDA: host sheet + host model rebuild every tearing frame (the old path)");
   app.add_flag("--sorted-rebuild", opt.sorted_rebuild,
                "CUDA device path: re-derive the topology by the older radix sorts instead of per particle");
@@ -258,7 +261,7 @@ int main(int argc, char** argv) {
                       r.backend.c_str(), r.method.c_str(), (long long)r.particles, (long long)r.target,
                       (long long)r.gripped, (long long)r.splits, r.ms_before, r.ms_during, r.ms_during_max, r.ms_after,
                       r.ms_tear_during, r.ms_rebuild_during, 100.0 * r.drop, r.path.c_str());
-          if (opt.profile) printStages(r);
+          if (opt.profile || opt.stages) printStages(r, opt.profile);
           std::fflush(stdout);
         }
     }
