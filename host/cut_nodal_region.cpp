@@ -67,6 +67,7 @@ void NodalRegion::syncState() {
 
 std::size_t NodalRegion::convert(const std::vector<std::int32_t>& cut,
                                  const std::function<ConvertedSphereState(std::int32_t)>& state, const SweptSurface& stroke) {
+  last_rebuild_ms_ = 0.0;  // a conversion that samples no point rebuilds nothing
   syncState();
   std::size_t changed = 0;
   // The spheres converted now (cut ones not sampled yet, and new interface spheres), then their points.

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <cstring>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "kernels/bulk_upload.h"
@@ -165,6 +166,16 @@ __global__ void stiffeningKernel(MlsView<T> s, T* out) {
 constexpr std::int64_t kTeamMaxParticles = 32768;
 constexpr int kTeamLanes = 8;
 
+// Calls launch(lanes) with lanes a std::integral_constant of the lane count for a model of n points (the kernels
+// take it as a template argument; every launch of one model uses the same count).
+template <typename Launch>
+void withLanes(std::int64_t n, Launch&& launch) {
+  if (n <= kTeamMaxParticles)
+    launch(std::integral_constant<int, kTeamLanes>{});
+  else
+    launch(std::integral_constant<int, 1>{});
+}
+
 template <typename T>
 __global__ void reduceKernel(MlsView<T> s, const T* stiffening, Partial* out) {
   __shared__ double ke[kBlock], pe[kBlock], el[kBlock], mu[kBlock], sf[kBlock];
@@ -225,8 +236,7 @@ class MlsCudaSolver final : public MlsSolver {
   }
   using MlsSolver::replaceModel;  // the other precision's overload: refused (false)
   bool replaceModel(MlsModel<T>& model) override {
-    INC_CUDA(cudaStreamSynchronize(stream_));  // queued work may still read the old model's buffers
-    load(std::move(model));
+    load(std::move(model));  // load() waits for the device first: queued work may still read the old buffers
     return true;
   }
   ~MlsCudaSolver() override {
@@ -335,11 +345,10 @@ class MlsCudaSolver final : public MlsSolver {
     const MlsView<T> s = view();
     MlsReduction r;
     if (s.n == 0) return r;
-    if (teams(s.n)) {
-      stiffeningKernel<T, kTeamLanes><<<gridFor(s.n * kTeamLanes), kBlock, 0, stream_>>>(s, stiffening_buf_.data());
-    } else {
-      stiffeningKernel<T, 1><<<gridFor(s.n), kBlock, 0, stream_>>>(s, stiffening_buf_.data());
-    }
+    withLanes(s.n, [&](auto lanes) {
+      constexpr int L = decltype(lanes)::value;
+      stiffeningKernel<T, L><<<gridFor(s.n * L), kBlock, 0, stream_>>>(s, stiffening_buf_.data());
+    });
     INC_CUDA_LAUNCH("mls stiffeningKernel");
     reduceKernel<T><<<kReduceBlocks, kBlock, 0, stream_>>>(s, stiffening_buf_.data(), partials_.data());
     INC_CUDA_LAUNCH("mls reduceKernel");
@@ -534,50 +543,43 @@ class MlsCudaSolver final : public MlsSolver {
   }
   void couplingPass() {
     if (groups_ == 0) return;
-    if (teams(model_.size())) {
-      couplingKernel<T, kTeamLanes><<<gridFor(std::int64_t(groups_) * kTeamLanes), kBlock, 0, stream_>>>(couplingView(), u_.data());
-    } else {
-      couplingKernel<T, 1><<<gridFor(groups_), kBlock, 0, stream_>>>(couplingView(), u_.data());
-    }
+    withLanes(std::int64_t(model_.size()), [&](auto lanes) {
+      constexpr int L = decltype(lanes)::value;
+      couplingKernel<T, L><<<gridFor(std::int64_t(groups_) * L), kBlock, 0, stream_>>>(couplingView(), u_.data());
+    });
     INC_CUDA_LAUNCH("mls couplingKernel");
   }
 
-  static bool teams(std::int64_t n) { return n <= kTeamMaxParticles; }
   void launchStress(const MlsView<T>& s) {
-    if (teams(s.n)) {
-      stressKernel<T, kTeamLanes><<<gridFor(s.n * kTeamLanes), kBlock, 0, stream_>>>(s);
-    } else {
-      stressKernel<T, 1><<<gridFor(s.n), kBlock, 0, stream_>>>(s);
-    }
+    withLanes(s.n, [&](auto lanes) {
+      constexpr int L = decltype(lanes)::value;
+      stressKernel<T, L><<<gridFor(s.n * L), kBlock, 0, stream_>>>(s);
+    });
     INC_CUDA_LAUNCH("mls stressKernel");
   }
   // Pass 1 and the coupling pass in one launch (graph path); without groups, pass 1 alone.
   void launchStressCoupling(const MlsView<T>& s) {
     if (groups_ == 0) return launchStress(s);
-    const std::int64_t lanes = teams(s.n) ? kTeamLanes : 1;
-    const unsigned stress_blocks = unsigned(gridFor(s.n * lanes));
-    const unsigned blocks = stress_blocks + unsigned(gridFor(std::int64_t(groups_) * lanes));
-    if (lanes > 1) {
-      stressCouplingKernel<T, kTeamLanes><<<blocks, kBlock, 0, stream_>>>(s, couplingView(), stress_blocks);
-    } else {
-      stressCouplingKernel<T, 1><<<blocks, kBlock, 0, stream_>>>(s, couplingView(), stress_blocks);
-    }
+    withLanes(s.n, [&](auto lanes) {
+      constexpr int L = decltype(lanes)::value;
+      const unsigned stress_blocks = unsigned(gridFor(s.n * L));
+      const unsigned blocks = stress_blocks + unsigned(gridFor(std::int64_t(groups_) * L));
+      stressCouplingKernel<T, L><<<blocks, kBlock, 0, stream_>>>(s, couplingView(), stress_blocks);
+    });
     INC_CUDA_LAUNCH("mls stressCouplingKernel");
   }
   void launchForce(const MlsView<T>& s, T half_dt, bool kick) {
-    if (teams(s.n)) {
-      forceKernel<T, kTeamLanes><<<gridFor(s.n * kTeamLanes), kBlock, 0, stream_>>>(s, half_dt, kick);
-    } else {
-      forceKernel<T, 1><<<gridFor(s.n), kBlock, 0, stream_>>>(s, half_dt, kick);
-    }
+    withLanes(s.n, [&](auto lanes) {
+      constexpr int L = decltype(lanes)::value;
+      forceKernel<T, L><<<gridFor(s.n * L), kBlock, 0, stream_>>>(s, half_dt, kick);
+    });
     INC_CUDA_LAUNCH("mls forceKernel");
   }
   void launchForceDrift(const MlsView<T>& s, T half_dt, T dt, int remaining) {
-    if (teams(s.n)) {
-      forceDriftKernel<T, kTeamLanes><<<gridFor(s.n * kTeamLanes), kBlock, 0, stream_>>>(s, half_dt, dt, remaining);
-    } else {
-      forceDriftKernel<T, 1><<<gridFor(s.n), kBlock, 0, stream_>>>(s, half_dt, dt, remaining);
-    }
+    withLanes(s.n, [&](auto lanes) {
+      constexpr int L = decltype(lanes)::value;
+      forceDriftKernel<T, L><<<gridFor(s.n * L), kBlock, 0, stream_>>>(s, half_dt, dt, remaining);
+    });
     INC_CUDA_LAUNCH("mls forceDriftKernel");
   }
 
