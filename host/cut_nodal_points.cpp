@@ -129,7 +129,7 @@ std::size_t removeCrossingPairs(NeighborLists& lists, const std::vector<Vec3d>& 
   std::vector<std::vector<std::uint16_t>> near(nq);
   cpu::parallelFor(std::int64_t(nq), [&](std::int64_t q) {
     for (std::size_t c = 0; c < cuts.size(); ++c)
-      if (distanceToSweptSurface(*cuts[c], x[std::size_t(q)]) <= reach) near[std::size_t(q)].push_back(std::uint16_t(c));
+      if (queries[c].distance(x[std::size_t(q)]) <= reach) near[std::size_t(q)].push_back(std::uint16_t(c));
   });
   std::vector<char> keep(lists.indices.size(), 1);
   const auto decide = [&](std::size_t a, std::size_t b) {  // a < b

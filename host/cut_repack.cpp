@@ -6,10 +6,10 @@
 #include <limits>
 #include <numeric>
 #include <string>
-#include <unordered_map>
 
 #include "cpu_fallback/parallel.h"
 #include "host/input_error.h"
+#include "host/point_grid.h"
 
 namespace inc {
 
@@ -17,62 +17,6 @@ namespace {
 
 constexpr int kMinInteriorNeighbours = 4;  // fewer visible neighbours: the point cannot be interior
 constexpr std::size_t kMinGroupPoints = 4;  // smaller components are isolated points (merged, see below)
-
-// Uniform hash grid over a subset of points (cell edge `cell`), for nearest and within-distance queries.
-class PointHash {
- public:
-  PointHash(const std::vector<Vec3d>& x, const std::vector<std::int32_t>& ids, double cell) : x_(x), cell_(cell) {
-    for (std::int32_t i : ids) cells_[key(x[std::size_t(i)])].push_back(i);
-  }
-  // Nearest member to p (distance in `dist`), -1 when empty: rings of cells outward; a member in ring R is at
-  // least (R - 1) cells away, so the search stops once the best distance is below that.
-  std::int32_t nearest(const Vec3d& p, double& dist) const {
-    dist = std::numeric_limits<double>::infinity();
-    std::int32_t best = -1;
-    if (cells_.empty()) return best;
-    const std::int64_t c[3] = {coord(p.x), coord(p.y), coord(p.z)};
-    for (std::int64_t ring = 0;; ++ring) {
-      if (best >= 0 && double(ring - 1) * cell_ > dist) break;
-      for (std::int64_t a = -ring; a <= ring; ++a)
-        for (std::int64_t b = -ring; b <= ring; ++b)
-          for (std::int64_t d = -ring; d <= ring; ++d) {
-            if (std::max({std::llabs(a), std::llabs(b), std::llabs(d)}) != ring) continue;
-            auto it = cells_.find(pack(c[0] + a, c[1] + b, c[2] + d));
-            if (it == cells_.end()) continue;
-            for (std::int32_t i : it->second) {
-              const double q = norm(x_[std::size_t(i)] - p);
-              if (q < dist || (q == dist && i < best)) dist = q, best = i;
-            }
-          }
-    }
-    return best;
-  }
-  // True when a member lies within r of p (Algorithm 1 packs only where every centre is farther than d).
-  bool anyWithin(const Vec3d& p, double r) const {
-    const std::int64_t reach = std::int64_t(std::ceil(r / cell_));
-    const std::int64_t c[3] = {coord(p.x), coord(p.y), coord(p.z)};
-    for (std::int64_t a = -reach; a <= reach; ++a)
-      for (std::int64_t b = -reach; b <= reach; ++b)
-        for (std::int64_t d = -reach; d <= reach; ++d) {
-          auto it = cells_.find(pack(c[0] + a, c[1] + b, c[2] + d));
-          if (it == cells_.end()) continue;
-          for (std::int32_t i : it->second)
-            if (norm(x_[std::size_t(i)] - p) <= r) return true;
-        }
-    return false;
-  }
-  void insert(std::int32_t i) { cells_[key(x_[std::size_t(i)])].push_back(i); }
-
- private:
-  std::int64_t coord(double v) const { return std::int64_t(std::floor(v / cell_)); }
-  static std::uint64_t pack(std::int64_t a, std::int64_t b, std::int64_t c) {
-    return (std::uint64_t(a & 0x1FFFFF) << 42) | (std::uint64_t(b & 0x1FFFFF) << 21) | std::uint64_t(c & 0x1FFFFF);
-  }
-  std::uint64_t key(const Vec3d& p) const { return pack(coord(p.x), coord(p.y), coord(p.z)); }
-  const std::vector<Vec3d>& x_;
-  double cell_;
-  std::unordered_map<std::uint64_t, std::vector<std::int32_t>> cells_;
-};
 
 std::vector<std::vector<std::int32_t>> components(const NeighborLists& l, std::size_t n, const std::vector<std::uint8_t>& skip) {
   std::vector<std::int32_t> parent(n);
@@ -128,6 +72,15 @@ RepackResult packNodalPoints(const RepackPoints& p, const SweptSurface& cut, con
   if (n == 0) return r;
   const double h = p.spacing;
   const auto groups = components(p.visible, n, p.context);
+  // The grids below cover the points' box; a cell count of a few per point bounds their memory and set-up.
+  Vec3d lo = p.rest[0], hi = p.rest[0];
+  for (const Vec3d& x : p.rest)
+    for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], x[k]), hi[k] = std::max(hi[k], x[k]);
+  const std::size_t max_cells = 8 * n + 4096;
+  const auto grid = [&](const std::vector<Vec3d>& x, double cell) { return PointGrid(x, lo, hi, cell, max_cells); };
+  const SweptSurfaceQuery cut_query(cut);
+  std::vector<SweptSurfaceQuery> earlier_queries;
+  for (const SweptSurface* c : s.earlier_cuts) earlier_queries.emplace_back(*c);
 
   // 1. Boundary points.
   cpu::parallelFor(std::int64_t(n), [&](std::int64_t i) {
@@ -157,7 +110,8 @@ RepackResult packNodalPoints(const RepackPoints& p, const SweptSurface& cut, con
     for (std::size_t i = 0; i < n; ++i)
       if (near[i] && r.point_class[i] == kRepackBoundary) bnd.push_back(std::int32_t(i));
     if (!bnd.empty()) {
-      PointHash hash(p.rest, bnd, p.support);
+      PointGrid hash = grid(p.rest, p.support);
+      for (std::int32_t i : bnd) hash.insert(i);
       cpu::parallelFor(std::int64_t(n), [&](std::int64_t i) {
         double d = 0.0;
         if (r.point_class[std::size_t(i)] != kRepackBoundary) hash.nearest(p.rest[std::size_t(i)], d);
@@ -189,7 +143,7 @@ RepackResult packNodalPoints(const RepackPoints& p, const SweptSurface& cut, con
     if (medial.empty()) medial = pts;  // a sliver with no interior point: every point is a candidate centre
     // 3. eq. 14: spacing from the medial points' distance to the cut (at least one lattice spacing).
     double smax = 0.0;
-    for (std::int32_t i : medial) smax = std::max(smax, distanceToSweptSurface(cut, p.rest[std::size_t(i)]));
+    for (std::int32_t i : medial) smax = std::max(smax, cut_query.distance(p.rest[std::size_t(i)]));
     double d = std::max(h, std::isfinite(smax) ? s.spacing_factor * smax : h);
     // Capped balls need a spacing well below their radius: at most 2/3 of the cap (the organ's own spacing when
     // the cap is 1.5 x its radius), or the re-packed regions thin out cut after cut.
@@ -213,7 +167,7 @@ RepackResult packNodalPoints(const RepackPoints& p, const SweptSurface& cut, con
     };
     const auto pack = [&](double dd) {
       std::vector<std::int32_t> accepted;
-      PointHash centres(p.rest, {}, dd);
+      PointGrid centres = grid(p.rest, dd);
       for (std::int32_t i : order) {
         if (centres.anyWithin(p.rest[std::size_t(i)], dd)) continue;
         centres.insert(i);
@@ -248,7 +202,7 @@ RepackResult packNodalPoints(const RepackPoints& p, const SweptSurface& cut, con
     }
     std::vector<std::int32_t> local(accepted.size());
     std::iota(local.begin(), local.end(), 0);
-    PointHash centres(r.centres, {}, dd);
+    PointGrid centres = grid(r.centres, dd);
     for (std::size_t k = 0; k < accepted.size(); ++k) centres.insert(std::int32_t(first + k));
     cpu::parallelFor(std::int64_t(pts.size()), [&](std::int64_t k) {
       double dist = 0.0;
@@ -273,9 +227,9 @@ RepackResult packNodalPoints(const RepackPoints& p, const SweptSurface& cut, con
     for (std::size_t q = 0; q < r.centres.size(); ++q) {
       const double dq = norm(r.centres[q] - x0);
       if (!(dq < bd)) continue;
-      bool hidden = segmentCrossesSweptSurface(cut, x0, r.centres[q]);
-      for (std::size_t c = 0; c < s.earlier_cuts.size() && !hidden; ++c)
-        hidden = segmentCrossesSweptSurface(*s.earlier_cuts[c], x0, r.centres[q]);
+      bool hidden = cut_query.segmentCrosses(x0, r.centres[q]);
+      for (std::size_t c = 0; c < earlier_queries.size() && !hidden; ++c)
+        hidden = earlier_queries[c].segmentCrosses(x0, r.centres[q]);
       if (!hidden) bd = dq, best = std::int32_t(q);
     }
     if (best < 0) {
@@ -313,6 +267,8 @@ std::size_t appendRepackedSpheres(MetaballModel& spheres, const RepackResult& r,
   }
   const std::size_t total = spheres.size();
   // Candidate pairs per new sphere, decided in parallel, appended in (i, j) order: deterministic.
+  std::vector<SweptSurfaceQuery> queries;
+  for (const SweptSurface* c : cuts) queries.emplace_back(*c);
   std::vector<std::vector<std::int32_t>> found(total - first_new);
   cpu::parallelFor(std::int64_t(total - first_new), [&](std::int64_t k) {
     const std::size_t i = first_new + std::size_t(k);
@@ -320,8 +276,8 @@ std::size_t appendRepackedSpheres(MetaballModel& spheres, const RepackResult& r,
       const double d = norm(spheres.rest_centers[i] - spheres.rest_centers[j]);
       if (!(d < spheres.rest_radii[i] + spheres.rest_radii[j]) || !(d > 0)) continue;
       bool across = false;
-      for (std::size_t c = 0; c < cuts.size() && !across; ++c)
-        across = segmentCrossesSweptSurface(*cuts[c], spheres.rest_centers[i], spheres.rest_centers[j]);
+      for (std::size_t c = 0; c < queries.size() && !across; ++c)
+        across = queries[c].segmentCrosses(spheres.rest_centers[i], spheres.rest_centers[j]);
       if (!across) found[std::size_t(k)].push_back(std::int32_t(j));
     }
   });

@@ -30,12 +30,12 @@ Box surfaceBox(const SweptSurface& s) {
 
 // visibleSupports' "p lies near the cut": distanceToSweptSurface <= reach. A point farther than 2 reach outside
 // the surface's box (in one coordinate) is farther than reach from every triangle whatever the rounding, so the
-// box only skips the distance where it cannot decide.
-bool withinReach(const SweptSurface& s, const Box& box, const Vec3d& p, double reach) {
+// box only skips the distance where it cannot decide. The query's distance is distanceToSweptSurface's, bit for bit.
+bool withinReach(const SweptSurfaceQuery& s, const Box& box, const Vec3d& p, double reach) {
   if (box.empty) return false;
   for (int a = 0; a < 3; ++a)
     if (p[a] < box.lo[a] - 2.0 * reach || p[a] > box.hi[a] + 2.0 * reach) return false;
-  return distanceToSweptSurface(s, p) <= reach;
+  return s.distance(p) <= reach;
 }
 
 // Whether p lies "by" `box`, a surface's box: an end of a pair (at most h long) that crosses one of its triangles
@@ -181,12 +181,13 @@ std::size_t StrokeSupports::applyStrip(const std::vector<Vec3d>& x, const SweptS
   if (fresh.empty()) return 0;
   const Box fresh_box = surfaceBox(fresh);
   std::vector<char> near_fresh(n, 0), by_fresh(n, 0);
+  const SweptSurfaceQuery strip(fresh);
   for (std::size_t i = 0; i < n; ++i) {
     by_fresh[i] = byBox(fresh_box, x[i], h_) ? 1 : 0;
-    near_fresh[i] = by_fresh[i] && withinReach(fresh, fresh_box, x[i], reach_) ? 1 : 0;
+    near_fresh[i] = by_fresh[i] && withinReach(strip, fresh_box, x[i], reach_) ? 1 : 0;
   }
   appendTriangles(stroke_, fresh, 0);
-  const SweptSurfaceQuery strip(fresh), whole(stroke_);
+  const SweptSurfaceQuery whole(stroke_);
   const auto nearNow = [&](std::size_t i) { return near_stroke_[i] || near_fresh[i]; };
   const auto drop = [&](std::size_t a, std::size_t b) {  // a < b, both near S0 + F and by F's box
     return (near_stroke_[a] && near_stroke_[b] ? strip : whole).segmentCrosses(x[a], x[b]);
@@ -256,16 +257,16 @@ void StrokeSupports::appendPoints(const std::vector<Vec3d>& x) {
   near_earlier_.resize(n);
   near_stroke_.resize(n, 0);
   const Box stroke_box = surfaceBox(stroke_);
-  for (std::size_t c = 0; c < earlier_.size(); ++c) {
-    const Box box = surfaceBox(*earlier_[c]);
-    for (std::size_t i = n0; i < n; ++i)
-      if (withinReach(*earlier_[c], box, x[i], reach_)) near_earlier_[i].push_back(std::uint32_t(c));
-  }
-  for (std::size_t i = n0; i < n; ++i) near_stroke_[i] = withinReach(stroke_, stroke_box, x[i], reach_) ? 1 : 0;
   std::vector<SweptSurfaceQuery> earlier_queries;
   earlier_queries.reserve(earlier_.size());
   for (const SweptSurface* c : earlier_) earlier_queries.emplace_back(*c);
   const SweptSurfaceQuery stroke_query(stroke_);
+  for (std::size_t c = 0; c < earlier_.size(); ++c) {
+    const Box box = surfaceBox(*earlier_[c]);
+    for (std::size_t i = n0; i < n; ++i)
+      if (withinReach(earlier_queries[c], box, x[i], reach_)) near_earlier_[i].push_back(std::uint32_t(c));
+  }
+  for (std::size_t i = n0; i < n; ++i) near_stroke_[i] = withinReach(stroke_query, stroke_box, x[i], reach_) ? 1 : 0;
   const NeighborLists rows = newRows(x, n0);  // row r: point n0 + r
   std::vector<char> keep(rows.indices.size(), 1);
   for (std::size_t r = 0; r < n - n0; ++r) {

@@ -122,6 +122,53 @@ bool SweptSurfaceQuery::segmentCrosses(const Vec3d& p, const Vec3d& q) const {
 }
 
 namespace {
+// Squared distance from p to the box [lo, hi] (0 inside).
+double boxDistance2(const Vec3d& p, const Vec3d& lo, const Vec3d& hi) {
+  double d2 = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    const double e = p[k] < lo[k] ? lo[k] - p[k] : (p[k] > hi[k] ? p[k] - hi[k] : 0.0);
+    d2 += e * e;
+  }
+  return d2;
+}
+}  // namespace
+
+int SweptSurfaceQuery::closestTriangle(const Vec3d& p, Vec3d& closest) const {
+  const std::size_t nt = s_.triangles.size(), nb = block_lo_.size();
+  if (nt == 0) return -1;
+  double best = std::numeric_limits<double>::infinity();
+  int best_t = -1;
+  const auto scan = [&](std::size_t b) {
+    for (std::size_t i = b * kBlock; i < std::min(nt, (b + 1) * kBlock); ++i) {
+      const auto& t = s_.triangles[i];
+      const Vec3d k = cut::closestPointOnTriangle(p, s_.vertices[t[0]], s_.vertices[t[1]], s_.vertices[t[2]]);
+      const double d2 = norm2(k - p);
+      if (d2 < best || (d2 == best && int(i) < best_t)) best = d2, best_t = int(i), closest = k;
+    }
+  };
+  // The nearest run first, so that the bound prunes most of the others.
+  std::size_t first = 0;
+  double first_d2 = std::numeric_limits<double>::infinity();
+  for (std::size_t b = 0; b < nb; ++b) {
+    const double d2 = boxDistance2(p, block_lo_[b], block_hi_[b]);
+    if (d2 < first_d2) first_d2 = d2, first = b;
+  }
+  scan(first);
+  // A run whose padded box lies farther than the best triangle holds no triangle as close (computed distances
+  // of points inside a box exceed its rounding-free margin), so skipping it changes neither the distance nor,
+  // with the index tie-break, the triangle.
+  for (std::size_t b = 0; b < nb; ++b)
+    if (b != first && !(boxDistance2(p, block_lo_[b], block_hi_[b]) > best)) scan(b);
+  return best_t;
+}
+
+double SweptSurfaceQuery::distance(const Vec3d& p) const {
+  Vec3d k;
+  if (closestTriangle(p, k) < 0) return std::numeric_limits<double>::infinity();
+  return norm(k - p);
+}
+
+namespace {
 // Closest triangle and the closest point on it.
 int closestTriangle(const SweptSurface& s, const Vec3d& p, Vec3d& closest) {
   double best = std::numeric_limits<double>::infinity();

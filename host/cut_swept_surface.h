@@ -39,6 +39,12 @@ class SweptSurfaceQuery {
  public:
   explicit SweptSurfaceQuery(const SweptSurface& surface);  // keeps a reference: the surface must outlive it
   bool segmentCrosses(const Vec3d& p, const Vec3d& q) const;
+  // The closest swept triangle to p (the lowest index among equally close ones, as the brute-force scan picks)
+  // and the closest point on it; -1 for an empty surface. Runs whose box is farther than the best triangle so
+  // far are skipped (the boxes are padded far above rounding, so the answer is the brute-force one, bit for bit).
+  int closestTriangle(const Vec3d& p, Vec3d& closest) const;
+  // distanceToSweptSurface(surface, p), the same bits.
+  double distance(const Vec3d& p) const;
 
  private:
   static constexpr std::size_t kBlock = 8;

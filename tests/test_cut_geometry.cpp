@@ -89,5 +89,37 @@ TEST(CutGeometry, IncrementalSweepEqualsBatchSweep) {
   for (std::size_t i = 0; i < batch.vertices.size(); ++i) EXPECT_EQ(norm(batch.vertices[i] - inc.vertices[i]), 0.0);
 }
 
+// The pruned query (runs of triangles skipped by their boxes) must give the brute-force scan's triangle and
+// distance bit for bit, near the strip and far from it, for a curved strip of many runs.
+TEST(CutGeometry, QueryClosestTriangleEqualsTheBruteForceScan) {
+  std::vector<BladePose> poses;
+  for (int k = 0; k < 40; ++k) {
+    const double a = 0.08 * k;
+    poses.push_back({Vec3d(0.1 * std::cos(a), 0.1 * std::sin(a), -0.03 + 0.001 * k),
+                     Vec3d(0.1 * std::cos(a), 0.1 * std::sin(a), 0.03)});
+  }
+  const SweptSurface s = sweepSurface(poses);
+  ASSERT_GT(s.triangles.size(), 60u);
+  const SweptSurfaceQuery q(s);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-0.15, 0.15);
+  int near = 0;
+  for (int i = 0; i < 4000; ++i) {
+    Vec3d p(u(rng), u(rng), 0.4 * u(rng));
+    if (i % 4 == 0) p = s.vertices[std::size_t(i) % s.vertices.size()] + Vec3d(1e-4, -2e-4, 1e-4) * u(rng);
+    if (i % 97 == 0) p = s.vertices[std::size_t(i) % s.vertices.size()];  // exactly on the strip: ties
+    const double brute = distanceToSweptSurface(s, p);
+    ASSERT_EQ(q.distance(p), brute) << i;
+    Vec3d kq, kb, n;
+    ASSERT_TRUE(closestOnSweptSurface(s, p, kb, n));
+    ASSERT_GE(q.closestTriangle(p, kq), 0);
+    ASSERT_EQ(norm(kq - kb), 0.0) << i;
+    near += brute < 0.01;
+  }
+  EXPECT_GT(near, 800);
+  Vec3d k;
+  EXPECT_EQ(SweptSurfaceQuery(SweptSurface{}).closestTriangle(Vec3d(), k), -1);
+}
+
 }  // namespace
 }  // namespace inc
