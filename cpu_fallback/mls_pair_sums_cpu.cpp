@@ -1,6 +1,7 @@
 // The CPU's MLS stress and force passes with the rest pair tables, vectorised within each pair term with AVX2
 // (detected at run time) or looped portably; both give the same bits (physics/mls_passes.h defines the order).
 #include "cpu_fallback/mls_pair_sums_cpu.h"
+#include "cpu_fallback/mls_stress_lanes.h"
 
 #include <atomic>
 
@@ -38,13 +39,17 @@ bool cpuHasAvx2() {
 // A vector read of a 3-vector takes 4 floats: the pair tables carry one spare entry at their end, the
 // displacements (not padded) are read with a lane mask.
 
-// Pass 1 over [begin, end): the gradient's pair sum G_i = sum_j (u_j - u_i) d_ij^T, then mlsStressAt.
+// Pass 1 over [begin, end): the gradient's pair sum G_i = sum_j (u_j - u_i) d_ij^T, then mlsStressAt (four
+// particles at a time in SIMD lanes: cpu_fallback/mls_stress_lanes.h).
 INC_TARGET_AVX2 void stressRangeAvx2(const MlsView<float>& s, std::int64_t begin, std::int64_t end) {
   const __m128i xyz = _mm_setr_epi32(-1, -1, -1, 0);
   const __m256i rows = _mm256_setr_epi32(0, 0, 0, 1, 1, 1, 2, 2);
   const __m256i cols = _mm256_setr_epi32(0, 1, 2, 0, 1, 2, 0, 1);
   const float* u = &s.displacement[0].x;
   const float* d = &s.pair_gradient[0].x;
+  // Gradients of four consecutive particles, then their stress points in SIMD lanes (the scalar bits).
+  Mat3<float> batch[4];
+  std::int64_t first = begin;
   for (std::int64_t i = begin; i < end; ++i) {
     const __m128 ui = _mm_maskload_ps(u + 3 * i, xyz);
     __m256 acc[2] = {_mm256_setzero_ps(), _mm256_setzero_ps()};
@@ -63,11 +68,15 @@ INC_TARGET_AVX2 void stressRangeAvx2(const MlsView<float>& s, std::int64_t begin
       add(p + 1, 1);
     }
     if (p < e) add(p, 0);
-    Mat3<float> g;
+    Mat3<float>& g = batch[i - first];
     _mm256_storeu_ps(&g.m[0][0], _mm256_add_ps(acc[0], acc[1]));
     _mm_store_ss(&g.m[2][2], _mm_add_ss(acc8[0], acc8[1]));
-    mlsStressAt(s, i, g);
+    if (i - first == 3) {
+      mlsStressAtLanes(s, first, batch);
+      first = i + 1;
+    }
   }
+  for (std::int64_t i = first; i < end; ++i) mlsStressAt(s, i, batch[i - first]);
 }
 
 // Pass 2 over [begin, end): a_rc = sum_i (M_i)_rc (w x)_c, then mlsForceFromPairSum and mlsForceAt.
@@ -113,7 +122,17 @@ void mlsStressRange(const MlsView<T>& s, std::int64_t begin, std::int64_t end, b
   }
 #endif
   (void)avx2;
-  for (std::int64_t i = begin; i < end; ++i) mlsStressPass(s, i);
+  std::int64_t i = begin;
+#if defined(INC_HAVE_MLS_STRESS_LANES)
+  if constexpr (sizeof(T) == 4) {
+    for (; i + 4 <= end; i += 4) {
+      const Mat3<float> g[4] = {mlsDisplacementGradient(s, i), mlsDisplacementGradient(s, i + 1),
+                                mlsDisplacementGradient(s, i + 2), mlsDisplacementGradient(s, i + 3)};
+      mlsStressAtLanes(s, i, g);
+    }
+  }
+#endif
+  for (; i < end; ++i) mlsStressPass(s, i);
 }
 
 template <typename T>

@@ -101,20 +101,22 @@ struct MlsStressPoint {
   T energy_density;     // psi + k_v/2 (J - 1)^2  (J/m^3)
 };
 
-template <typename T>
-INC_HD MlsStressPoint<T> mlsStressPoint(const Mat3<T>& g, const MlsCoefficients<T>& c) {
+// T may be a lane type (cpu_fallback/mls_stress_lanes.h: four particles at once, the coefficients broadcast);
+// C is the coefficients' scalar type, so the volume term's switch stays a scalar branch.
+template <typename T, typename C>
+INC_HD MlsStressPoint<T> mlsStressPoint(const Mat3<T>& g, const MlsCoefficients<C>& c) {
   const Mat3<T> f = Mat3<T>::identity() + g;
   const Mat3<T> e = greenStrain(g);
-  const Mat3<T> s = svkStress(e, c.mu, c.lambda);
+  const Mat3<T> s = svkStress(e, T(c.mu), T(c.lambda));
   MlsStressPoint<T> out;
   out.piola = f * s;
-  out.energy_density = svkEnergyDensity(e, c.mu, c.lambda);
-  if (c.k_volume > T(0)) {
+  out.energy_density = svkEnergyDensity(e, T(c.mu), T(c.lambda));
+  if (c.k_volume > C(0)) {
     // psi_v = k_v/2 (J - 1)^2, dpsi_v/dF = k_v (J - 1) cof(F): nearly incompressible tissue and inverted
     // neighbourhoods (J <= 0) are pushed back towards J = 1 instead of collapsing.
     const T jm1 = volumeChange(g);
-    out.piola += cofactor(f) * (c.k_volume * jm1);
-    out.energy_density += T(0.5) * c.k_volume * jm1 * jm1;
+    out.piola += cofactor(f) * (T(c.k_volume) * jm1);
+    out.energy_density += T(0.5) * T(c.k_volume) * jm1 * jm1;
   }
   return out;
 }

@@ -128,12 +128,18 @@ INC_HD T mlsStiffeningOf(const Mat3<T>& g, const MlsCoefficients<T>& coeffs) {
 // Pass 1 at particle i: gradient, strain, stress, energy; stores M_i = v_i P_i A_i^{-1} for pass 2.
 // Split in two so that a CPU loop may form the gradient's pair sum its own way (the same sums, in the same
 // order: cpu_fallback/mls_pair_sums_cpu.cpp) and call the rest from here.
+// What pass 1 stores of a particle of volume v from its stress point: M = v P A^{-1} and its energy v psi.
+// T may be a lane type (cpu_fallback/mls_stress_lanes.h).
+template <typename T>
+INC_HD void mlsStressOutputs(const MlsStressPoint<T>& sp, const T& v, const Mat3<T>& moment_inverse, Mat3<T>& moment,
+                             T& energy) {
+  moment = (sp.piola * v) * moment_inverse;
+  energy = v * sp.energy_density;
+}
+
 template <typename T>
 INC_HD void mlsStressAt(const MlsView<T>& s, std::int64_t i, const Mat3<T>& g) {
-  const MlsStressPoint<T> sp = mlsStressPoint(g, s.coeffs);
-  const T v = s.volume[i];
-  s.stress_moment[i] = (sp.piola * v) * s.moment_inverse[i];
-  s.energy[i] = v * sp.energy_density;
+  mlsStressOutputs(mlsStressPoint(g, s.coeffs), s.volume[i], s.moment_inverse[i], s.stress_moment[i], s.energy[i]);
   if (s.stiffening) s.stiffening[i] = mlsStiffeningOf(g, s.coeffs);
 }
 
