@@ -266,9 +266,11 @@ bool SurfaceDistance::insideByRays(const Vec3d& p) const {
   static const Vec3d kDirs[3] = {{0.8191520442889918, 0.4539904997395468, 0.3507556053865862},
                                  {-0.2873478855663454, 0.9076733711353459, -0.3059617310829767},
                                  {0.3255681544571567, -0.2249510543438651, -0.9183613517770219}};
-  int votes = 0;
-  for (const auto& d : kDirs) votes += bvh_.countRayCrossings(p, d) & 1;
-  return votes >= 2;
+  // The majority of three: when the first two agree, the third cannot change it (a cut's sampling asks this
+  // for every candidate point).
+  const int a = bvh_.countRayCrossings(p, kDirs[0]) & 1, b = bvh_.countRayCrossings(p, kDirs[1]) & 1;
+  if (a == b) return a == 1;
+  return (bvh_.countRayCrossings(p, kDirs[2]) & 1) == 1;
 }
 
 }  // namespace inc::pack

@@ -22,21 +22,22 @@ void validateMetaballs(const MetaballModel& mb) {
     throw InputError(f, "rest_radii/masses", "need one radius and one mass per sphere");
   if (mb.link_rest_lengths.size() != mb.links.size())
     throw InputError(f, "link_rest_lengths", "need one rest length per link");
+  // The keys are spelled out only on failure: a cut rebuilds the model every frame the blade enters spheres.
+  const auto at = [](const char* key, std::size_t i) { return std::string(key) + "[" + std::to_string(i) + "]"; };
   for (std::size_t i = 0; i < n; ++i) {
-    const std::string k = "[" + std::to_string(i) + "]";
-    if (!isFinite(mb.rest_centers[i])) throw InputError(f, "rest_centers" + k, "not finite");
-    if (!(mb.rest_radii[i] > 0) || !std::isfinite(mb.rest_radii[i])) throw InputError(f, "rest_radii" + k, "must be > 0");
-    if (!(mb.masses[i] > 0) || !std::isfinite(mb.masses[i])) throw InputError(f, "masses" + k, "must be > 0");
+    if (!isFinite(mb.rest_centers[i])) throw InputError(f, at("rest_centers", i), "not finite");
+    if (!(mb.rest_radii[i] > 0) || !std::isfinite(mb.rest_radii[i])) throw InputError(f, at("rest_radii", i), "must be > 0");
+    if (!(mb.masses[i] > 0) || !std::isfinite(mb.masses[i])) throw InputError(f, at("masses", i), "must be > 0");
   }
   std::vector<std::pair<int, int>> seen;
   seen.reserve(mb.links.size());
   for (std::size_t l = 0; l < mb.links.size(); ++l) {
     const auto& e = mb.links[l];
-    const std::string k = "links[" + std::to_string(l) + "]";
-    if (e[0] < 0 || e[1] < 0 || std::size_t(e[0]) >= n || std::size_t(e[1]) >= n) throw InputError(f, k, "index out of range");
-    if (e[0] == e[1]) throw InputError(f, k, "links a sphere to itself");
+    if (e[0] < 0 || e[1] < 0 || std::size_t(e[0]) >= n || std::size_t(e[1]) >= n)
+      throw InputError(f, at("links", l), "index out of range");
+    if (e[0] == e[1]) throw InputError(f, at("links", l), "links a sphere to itself");
     if (!(mb.link_rest_lengths[l] > 0) || !std::isfinite(mb.link_rest_lengths[l]))
-      throw InputError(f, "link_rest_lengths[" + std::to_string(l) + "]", "must be > 0");
+      throw InputError(f, at("link_rest_lengths", l), "must be > 0");
     seen.emplace_back(std::min(e[0], e[1]), std::max(e[0], e[1]));
   }
   std::sort(seen.begin(), seen.end());
@@ -104,8 +105,13 @@ PbdModel<T> buildMetaballPbdModel(const MetaballModel& mb, const MetaballPbdOpti
   shape.kind = PbdConstraintKind::ShapeMatching;
   shape.solve = opt.shape_matching;
   shape.stiffness = T(opt.pbd_stiffness);
+  shape.ids.reserve(n + 2 * mb.links.size());
+  shape.rest_vec.reserve(n + 2 * mb.links.size());
+  shape.compliance.reserve(n + 2 * mb.links.size());
+  shape.offsets.reserve(n + 1);
+  std::vector<std::int32_t> members;
   for (std::size_t i = 0; i < n; ++i) {
-    std::vector<std::int32_t> members{std::int32_t(i)};
+    members.assign(1, std::int32_t(i));
     members.insert(members.end(), nbr[i].begin(), nbr[i].end());
     Vec3d cm;
     double msum = 0;
