@@ -67,6 +67,13 @@ void NodalRegion::syncState() {
 
 std::size_t NodalRegion::convert(const std::vector<std::int32_t>& cut,
                                  const std::function<ConvertedSphereState(std::int32_t)>& state, const SweptSurface& stroke) {
+  const std::size_t changed = beginConversion(cut, state);
+  finishConversion(stroke);
+  return changed;
+}
+
+std::size_t NodalRegion::beginConversion(const std::vector<std::int32_t>& cut,
+                                         const std::function<ConvertedSphereState(std::int32_t)>& state) {
   last_rebuild_ms_ = 0.0;  // a conversion that samples no point rebuilds nothing
   syncState();
   std::size_t changed = 0;
@@ -86,12 +93,15 @@ std::size_t NodalRegion::convert(const std::vector<std::int32_t>& cut,
         ++changed;
       }
   sample(batch, state);
-  if (rest_.empty()) return changed;
+  return changed;
+}
+
+void NodalRegion::finishConversion(const SweptSurface& stroke) {
+  if (rest_.empty()) return;
   // Supports: symmetric lists of radius h with the visibility criterion for the stroke and every earlier cut,
   // updated for the new points and the stroke's new strip (a conversion's cost stays in what is new).
   supports_.update(rest_, stroke);
   rebuild();
-  return changed;
 }
 
 // Section 5.1's uniform sampling, on one lattice shared by every converted sphere (spacing 2 r_mean / n, cell

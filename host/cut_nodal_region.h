@@ -81,6 +81,12 @@ class NodalRegion {
   // spheres that changed role.
   std::size_t convert(const std::vector<std::int32_t>& cut, const std::function<ConvertedSphereState(std::int32_t)>& state,
                       const SweptSurface& stroke);
+  // convert() in two halves: the roles and the new points' samples (the only part that reads the PBD state through
+  // `state`; role() is final after it), then the supports and the MLS rebuild, which touch nothing outside this
+  // region, so a caller may rebuild its PBD model on another thread meanwhile. Returns as convert() does.
+  std::size_t beginConversion(const std::vector<std::int32_t>& cut,
+                              const std::function<ConvertedSphereState(std::int32_t)>& state);
+  void finishConversion(const SweptSurface& stroke);
   // The stroke grew by `fresh` (a surface holding only the new triangles, the next ones of the stroke the next
   // convert() gets): supports crossing it are dropped and, if any was, the groups and the MLS model are rebuilt
   // (moment matrices recomputed). Returns the pairs dropped.

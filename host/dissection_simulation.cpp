@@ -8,6 +8,7 @@
 #include <limits>
 #include <map>
 
+#include "host/background_task.h"
 #include "host/cut_nodal_points.h"
 #include "host/cut_nodal_region.h"
 #include "host/cut_repack.h"
@@ -467,11 +468,22 @@ class DissectionSimulation final : public SimulationModel {
     const auto c0 = std::chrono::steady_clock::now();
     if (!hit.empty()) {
       if (!a.region) a.region = std::make_unique<NodalRegion>(a.base, regionSettings(), earlierCuts());
-      a.region->convert(hit, [&](std::int32_t b) { return sphereState(b); }, a.swept);
-      timers_.convert_mls_ms += a.region->lastRebuildMs();
+      a.region->beginConversion(hit, [&](std::int32_t b) { return sphereState(b); });
+      // The region's supports and MLS rebuild touch nothing of the PBD side (the roles are final, the samples
+      // read the PBD state already): they run on the worker while this thread rebuilds the PBD model.
+      NodalRegion& region = *a.region;
+      const SweptSurface& swept = a.swept;
+      convert_worker_.start([&region, &swept] { region.finishConversion(swept); });
       const auto c1 = std::chrono::steady_clock::now();
-      rebuildStrokePbd();
+      try {
+        rebuildStrokePbd();
+      } catch (...) {
+        convert_worker_.wait();  // never leave the worker running on a region that may go away
+        throw;
+      }
       timers_.convert_pbd_ms += msSince(c1);
+      convert_worker_.wait();
+      timers_.convert_mls_ms += a.region->lastRebuildMs();
     } else if (a.region && a.region->active()) {
       a.region->cutSupports(fresh);
     }
@@ -874,6 +886,7 @@ class DissectionSimulation final : public SimulationModel {
   NodalRegionSettings region_;
   double reference_mass_ = 0.0, reference_radius_ = 0.0;  // kg, m: the organ's mean sphere before any cut
   std::shared_ptr<const pack::SurfaceDistance> tissue_;   // the organ's rest surface (inside test)
+  BackgroundTask convert_worker_;                         // a conversion's MLS half, beside the PBD rebuild
   MetaballModel spheres_;  // the spheres of the PBD model (during a stroke: the base minus the cut ones)
   TriangleMesh rest_surface_;  // the surface after every cut so far (rest configuration) = surface_.mesh
   CutSurfaceState surface_;    // the split surface with its wall flags and binding probes
