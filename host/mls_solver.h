@@ -112,6 +112,10 @@ class MlsSolver {
   // one between timing events; off, it replays the frame's substeps as one CUDA graph and reports only their
   // total (ms_substeps): small models (a cut's nodal points) are launch-bound. The CPU always times stages.
   virtual void setStageTiming(bool on) { (void)on; }
+  // Untimed CUDA frames (setStageTiming(false)): all substeps in one persistent cooperative launch, phases apart by
+  // grid-wide barriers (default on; the graph where the device cannot hold the grid at once). Off: the CUDA graph.
+  // The same kernels' arithmetic either way, the same bits. The CPU ignores it.
+  virtual void setPersistentSubsteps(bool on) { (void)on; }
 
   // One frame: the substeps stability needs (or exactly `fixed_substeps`, refused when unstable), then the
   // frame reductions. Prescribed particles reach their targets at the end of the frame. Automatic

@@ -1,6 +1,9 @@
 // CUDA MLS solver: a team of lanes (small models) or one thread per particle per pass, fixed-shape block
-// reductions for the frame metrics, the substeps of a frame as one CUDA graph when stages are not timed.
+// reductions for the frame metrics, the substeps of a frame as one persistent cooperative launch (or one CUDA
+// graph) when stages are not timed.
 #include "kernels/mls_solver_cuda.h"
+
+#include <cooperative_groups.h>
 
 #include <algorithm>
 #include <chrono>
@@ -131,6 +134,38 @@ __global__ void stressCouplingKernel(MlsView<T> s, CouplingView<T> c, unsigned s
     stressTeam<L>(s, std::int64_t(blockIdx.x) * blockDim.x + threadIdx.x);
   else
     couplingTeam<L>(c, s.displacement, std::int64_t(blockIdx.x - stress_blocks) * blockDim.x + threadIdx.x);
+}
+
+// The substeps of one frame in one cooperative launch: the graph path's kernels (drift; then per substep the
+// stress and coupling teams, then the force gather with the second half kick and the next drift) as phases of one
+// persistent grid, separated by grid-wide barriers instead of kernel boundaries. Each phase walks the same thread
+// indices as its kernel (grid-stride), calls the same per-particle functions with the same lane teams, so every
+// value is the graph path's, bit for bit. Loop bounds are rounded up to whole warps so that a team's shuffles
+// always see all 32 lanes (lanes past the end add zeros, as in the kernels).
+template <typename T, int L>
+__global__ void substepsPersistentKernel(MlsView<T> s, CouplingView<T> c, bool coupling, T dt, T half_dt, int n) {
+  cooperative_groups::grid_group grid = cooperative_groups::this_grid();
+  const std::int64_t stride = std::int64_t(gridDim.x) * blockDim.x;
+  const std::int64_t t0 = std::int64_t(blockIdx.x) * blockDim.x + threadIdx.x;
+  const auto warps = [](std::int64_t threads) { return (threads + 31) / 32 * 32; };
+  const std::int64_t team_threads = warps(s.n * L);
+  const std::int64_t group_threads = coupling ? warps(std::int64_t(c.groups) * L) : 0;
+  for (std::int64_t k = t0; k < s.n; k += stride) mlsDriftPass(s, k, dt, n);
+  grid.sync();
+  for (int step = 0; step < n; ++step) {
+    for (std::int64_t t = t0; t < team_threads; t += stride) stressTeam<L>(s, t);
+    for (std::int64_t t = t0; t < group_threads; t += stride) couplingTeam<L>(c, s.displacement, t);
+    grid.sync();
+    const int remaining = n - step - 1;
+    for (std::int64_t t = t0; t < team_threads; t += stride) {
+      const std::int64_t k = t / L;
+      const Vec3<T> f = teamForce<L>(s, k, int(t % L));
+      if (k >= s.n || t % L != 0) continue;
+      mlsForceAt(s, k, f, half_dt, true);
+      if (remaining > 0) mlsDriftPass(s, k, dt, remaining);
+    }
+    if (remaining > 0) grid.sync();
+  }
 }
 
 // Tools: particle idx[p] (unique, validated on the host) becomes prescribed with target tgt[p], unless fixed.
@@ -283,7 +318,7 @@ class MlsCudaSolver final : public MlsSolver {
     if (!stage_timing_) {
       ensureEvents(2);
       INC_CUDA(cudaEventRecord(events_[0], stream_));
-      substepsGraph(T(st.dt), st.substeps);
+      if (!persistent_ || !substepsPersistent(T(st.dt), st.substeps)) substepsGraph(T(st.dt), st.substeps);
       INC_CUDA(cudaEventRecord(events_[1], stream_));
       const auto t0 = std::chrono::steady_clock::now();
       st.totals = reduce();  // synchronises: the once-per-frame download
@@ -313,6 +348,7 @@ class MlsCudaSolver final : public MlsSolver {
   }
 
   void setStageTiming(bool on) override { stage_timing_ = on; }
+  void setPersistentSubsteps(bool on) override { persistent_ = on; }
 
   // The model's arrays into the device buffers (grown as needed), the state at rest, no coupling groups.
   void load(MlsModel<T> model) {
@@ -633,6 +669,43 @@ class MlsCudaSolver final : public MlsSolver {
     INC_CUDA(cudaGraphLaunch(graph_exec_, stream_));
   }
 
+  // n substeps of dt in one cooperative launch (substepsPersistentKernel): false, with nothing launched, where the
+  // device has no cooperative launch or the grid the model needs cannot be resident at once (the caller replays
+  // the graph instead). The grid: the graph path's blocks for the teams, at most what the SMs hold together.
+  bool substepsPersistent(T dt, int n) {
+    if (n <= 0) return true;
+    const MlsView<T> s = view();
+    if (s.n == 0) return true;
+    bool launched = false;
+    withLanes(s.n, [&](auto lanes) {
+      constexpr int L = decltype(lanes)::value;
+      const auto kernel = substepsPersistentKernel<T, L>;
+      if (coop_blocks_ < 0 || coop_lanes_ != L) {  // asked once per lane count (a model's size class)
+        int dev = 0, coop = 0, sms = 0, per_sm = 0;
+        INC_CUDA(cudaGetDevice(&dev));
+        INC_CUDA(cudaDeviceGetAttribute(&coop, cudaDevAttrCooperativeLaunch, dev));
+        INC_CUDA(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, dev));
+        INC_CUDA(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&per_sm, kernel, kBlock, 0));
+        coop_blocks_ = coop ? per_sm * sms : 0;
+        coop_lanes_ = L;
+      }
+      const std::int64_t want = std::max<std::int64_t>(gridFor(s.n * L), gridFor(std::int64_t(groups_) * L));
+      if (coop_blocks_ <= 0 || want > coop_blocks_) return;
+      if (!forces_valid_) computeForces();
+      CouplingView<T> c = couplingView();
+      bool coupling = groups_ > 0;
+      T step = dt, half = T(0.5) * dt;
+      int count = n;
+      MlsView<T> sv = s;
+      void* args[] = {&sv, &c, &coupling, &step, &half, &count};
+      INC_CUDA(cudaLaunchCooperativeKernel(reinterpret_cast<const void*>(kernel), dim3(unsigned(want)), dim3(kBlock),
+                                           args, 0, stream_));
+      INC_CUDA_LAUNCH("mls substepsPersistentKernel");
+      launched = true;
+    });
+    return launched;
+  }
+
   // What the captured graph depends on besides buffer contents: the substep count and size, the particle and
   // group counts, and every buffer the coupling may have reallocated (setCouplingGroups uploads new arrays).
   std::vector<std::uint64_t> graphKey(T dt, int n) {
@@ -696,6 +769,9 @@ class MlsCudaSolver final : public MlsSolver {
   std::vector<cudaEvent_t> events_;
   bool forces_valid_ = false;
   bool stage_timing_ = true;
+  bool persistent_ = true;   // untimed frames as one cooperative launch where it fits (substepsPersistent)
+  int coop_blocks_ = -1;     // blocks the device holds at once for the persistent kernel (-1: not asked yet)
+  int coop_lanes_ = 0;       // the lane count coop_blocks_ was asked for
   cudaGraphExec_t graph_exec_ = nullptr;  // substepsGraph's frame, for graph_key_
   BulkUpload bulk_;                       // load() and setCouplingGroups() uploads
   std::vector<std::uint64_t> graph_key_;

@@ -136,7 +136,8 @@ TEST(CutGpu, MlsCouplingGroupsMatchCpu) {
 // The graph path (setStageTiming(false): each exchange's substeps replayed as one CUDA graph, force pass and next
 // drift fused) makes the same per-particle calls in the same order as the timed launches: the same bits, float32
 // and float64, over frames whose anchors move (the graph replays with new anchor values) and whose substep count
-// changes (a new capture); the CPU agrees to 1e-9 relative in float64.
+// changes (a new capture); so does the persistent path (the substeps in one cooperative launch, grid barriers
+// between the phases); the CPU agrees to 1e-9 relative in float64.
 TEST(CutGpu, MlsGraphFramesEqualTimedLaunchesBitForBit) {
   if (noDevice()) GTEST_SKIP() << "no CUDA device";
   MlsBuildInput in = mls_test::blockInput(9, 6, 6, 0.005);
@@ -144,11 +145,14 @@ TEST(CutGpu, MlsGraphFramesEqualTimedLaunchesBitForBit) {
   for (Precision prec : {Precision::Float32, Precision::Float64}) {
     auto timed = makeMlsSolver(in, BackendKind::Cuda, prec);
     auto graph = makeMlsSolver(in, BackendKind::Cuda, prec);
+    auto persistent = makeMlsSolver(in, BackendKind::Cuda, prec);
     auto cpu = makeMlsSolver(in, BackendKind::Cpu, prec);
     graph->setStageTiming(false);
+    graph->setPersistentSubsteps(false);  // the CUDA graph
+    persistent->setStageTiming(false);    // one cooperative launch per frame (the default when untimed)
     const CornerGroups cg = cornerGroups(timed->restPositions());
     const std::vector<Vec3d> u0 = hashedDisplacement(timed->size());
-    for (MlsSolver* s : {timed.get(), graph.get(), cpu.get()}) {
+    for (MlsSolver* s : {timed.get(), graph.get(), persistent.get(), cpu.get()}) {
       s->setCouplingGroups(cg.groups);
       s->setDisplacements(u0);
     }
@@ -158,24 +162,28 @@ TEST(CutGpu, MlsGraphFramesEqualTimedLaunchesBitForBit) {
       std::vector<Vec3d> anchors = cg.anchors;
       for (Vec3d& a : anchors) a += Vec3d(0.0005 * f, -0.0003 * f, 0.0002 * f);
       const int fixed = f < 3 ? 60 : 75;
-      MlsFrameStats st[3];
+      MlsFrameStats st[4];
       int k = 0;
-      for (MlsSolver* s : {timed.get(), graph.get(), cpu.get()}) {
+      for (MlsSolver* s : {timed.get(), graph.get(), persistent.get(), cpu.get()}) {
         s->setCouplingAnchors(anchors);
         st[k++] = s->advance(frame, fixed);
       }
       EXPECT_EQ(st[0].substeps, st[1].substeps);
+      EXPECT_EQ(st[0].substeps, st[2].substeps);
+      EXPECT_EQ(st[2].ms_stress, 0.0);
       EXPECT_TRUE(st[1].totals.finite);
       EXPECT_EQ(st[1].ms_stress, 0.0);  // no per-stage events on the graph path
       substeps_ms += st[1].ms_substeps;
     }
     EXPECT_GT(substeps_ms, 0.0);
-    std::vector<Vec3d> a, b, c, va, vb;
+    std::vector<Vec3d> a, b, c, p, va, vb, vp;
     timed->displacements(a);
     graph->displacements(b);
+    persistent->displacements(p);
     cpu->displacements(c);
     timed->velocities(va);
     graph->velocities(vb);
+    persistent->velocities(vp);
     const double scale = mls_test::maxNorm(a);
     ASSERT_GT(scale, 1e-5);
     for (std::size_t i = 0; i < a.size(); ++i) {
@@ -185,6 +193,12 @@ TEST(CutGpu, MlsGraphFramesEqualTimedLaunchesBitForBit) {
       ASSERT_EQ(va[i].x, vb[i].x) << i;
       ASSERT_EQ(va[i].y, vb[i].y) << i;
       ASSERT_EQ(va[i].z, vb[i].z) << i;
+      ASSERT_EQ(a[i].x, p[i].x) << i;
+      ASSERT_EQ(a[i].y, p[i].y) << i;
+      ASSERT_EQ(a[i].z, p[i].z) << i;
+      ASSERT_EQ(va[i].x, vp[i].x) << i;
+      ASSERT_EQ(va[i].y, vp[i].y) << i;
+      ASSERT_EQ(va[i].z, vp[i].z) << i;
       if (prec == Precision::Float64) {
         ASSERT_LT(norm(a[i] - c[i]), 1e-9 * scale) << i;
       }
