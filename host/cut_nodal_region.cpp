@@ -8,6 +8,7 @@
 #include <map>
 #include <numeric>
 
+#include "cpu_fallback/parallel.h"
 #include "host/cut_nodal_points.h"
 #include "host/input_error.h"
 #include "physics/cut_coupling.h"
@@ -117,7 +118,15 @@ void NodalRegion::sample(const std::vector<std::int32_t>& batch, const std::func
     std::int32_t sphere;
     double power;
   };
-  std::map<std::array<std::int64_t, 3>, Candidate> cells;  // ordered: deterministic
+  // The candidate cells of every sphere of the batch (in the ball, not taken earlier), in batch order; their
+  // inside and hidden tests (independent per cell and per candidate) in parallel; then the sequential choice.
+  struct Trial {
+    std::int32_t sphere;
+    std::array<std::int64_t, 3> key;
+    double power;
+    char visible = 1;  // inside the tissue and seen from the sphere's centre
+  };
+  std::vector<Trial> trials;
   for (std::int32_t b : batch) {
     const Vec3d c = base_.rest_centers[std::size_t(b)];
     const double r = base_.rest_radii[std::size_t(b)];
@@ -133,14 +142,33 @@ void NodalRegion::sample(const std::vector<std::int32_t>& batch, const std::func
           if (occupied_.count(key)) continue;
           const Vec3d x((double(i) + 0.5) * p, (double(j) + 0.5) * p, (double(k) + 0.5) * p);
           const double power = norm2(x - c) - r * r;
-          if (!(power < 0)) continue;
-          auto it = cells.find(key);
-          if (it != cells.end() && !(power < it->second.power)) continue;
-          if (settings_.inside && !settings_.inside(x)) continue;
-          bool hidden = false;
-          for (std::size_t q = 0; q < earlier_.size() && !hidden; ++q) hidden = segmentCrossesSweptSurface(*earlier_[q], c, x);
-          if (!hidden) cells[key] = {b, power};
+          if (power < 0) trials.push_back({b, key, power});
         }
+  }
+  const auto centreOf = [p](const std::array<std::int64_t, 3>& key) {
+    return Vec3d((double(key[0]) + 0.5) * p, (double(key[1]) + 0.5) * p, (double(key[2]) + 0.5) * p);
+  };
+  cpu::parallelFor(std::int64_t(trials.size()), [&](std::int64_t t) {
+    Trial& tr = trials[std::size_t(t)];
+    const Vec3d x = centreOf(tr.key);
+    if (settings_.inside && !settings_.inside(x)) {
+      tr.visible = 0;
+      return;
+    }
+    const Vec3d c = base_.rest_centers[std::size_t(tr.sphere)];
+    for (std::size_t q = 0; q < earlier_.size(); ++q)
+      if (segmentCrossesSweptSurface(*earlier_[q], c, x)) {
+        tr.visible = 0;
+        return;
+      }
+  });
+  // A cell goes to the visible candidate of least power, the first one on ties (the batch order).
+  std::map<std::array<std::int64_t, 3>, Candidate> cells;  // ordered: deterministic
+  for (const Trial& tr : trials) {
+    if (!tr.visible) continue;
+    auto it = cells.find(tr.key);
+    if (it != cells.end() && !(tr.power < it->second.power)) continue;
+    cells[tr.key] = {tr.sphere, tr.power};
   }
   std::map<std::int32_t, std::vector<Vec3d>> taken;
   for (const auto& [key, cand] : cells) {

@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 
+#include "cpu_fallback/parallel.h"
 #include "host/input_error.h"
 #include "physics/distance.h"
 
@@ -182,10 +183,10 @@ std::size_t StrokeSupports::applyStrip(const std::vector<Vec3d>& x, const SweptS
   const Box fresh_box = surfaceBox(fresh);
   std::vector<char> near_fresh(n, 0), by_fresh(n, 0);
   const SweptSurfaceQuery strip(fresh);
-  for (std::size_t i = 0; i < n; ++i) {
-    by_fresh[i] = byBox(fresh_box, x[i], h_) ? 1 : 0;
-    near_fresh[i] = by_fresh[i] && withinReach(strip, fresh_box, x[i], reach_) ? 1 : 0;
-  }
+  cpu::parallelFor(std::int64_t(n), [&](std::int64_t i) {
+    by_fresh[std::size_t(i)] = byBox(fresh_box, x[std::size_t(i)], h_) ? 1 : 0;
+    near_fresh[std::size_t(i)] = by_fresh[std::size_t(i)] && withinReach(strip, fresh_box, x[std::size_t(i)], reach_) ? 1 : 0;
+  });
   appendTriangles(stroke_, fresh, 0);
   const SweptSurfaceQuery whole(stroke_);
   const auto nearNow = [&](std::size_t i) { return near_stroke_[i] || near_fresh[i]; };
@@ -193,13 +194,14 @@ std::size_t StrokeSupports::applyStrip(const std::vector<Vec3d>& x, const SweptS
     return (near_stroke_[a] && near_stroke_[b] ? strip : whole).segmentCrosses(x[a], x[b]);
   };
   std::vector<char> keep(lists_.indices.size(), 1);
-  for (std::size_t a = 0; a < n; ++a) {
-    if (!by_fresh[a] || !nearNow(a)) continue;
+  cpu::parallelFor(std::int64_t(n), [&](std::int64_t row) {  // each row writes its own entries only
+    const std::size_t a = std::size_t(row);
+    if (!by_fresh[a] || !nearNow(a)) return;
     for (std::int64_t k = lists_.offsets[a]; k < lists_.offsets[a + 1]; ++k) {
       const std::size_t b = std::size_t(lists_.indices[std::size_t(k)]);
       if (by_fresh[b] && nearNow(b) && drop(std::min(a, b), std::max(a, b))) keep[std::size_t(k)] = 0;
     }
-  }
+  });
   for (std::size_t i = 0; i < n; ++i) near_stroke_[i] = char(nearNow(i));
   const std::size_t dropped = std::size_t(std::count(keep.begin(), keep.end(), 0));
   if (dropped > 0) compact(lists_, keep);
@@ -214,11 +216,11 @@ std::size_t StrokeSupports::applyStrip(const std::vector<Vec3d>& x, const SweptS
 NeighborLists StrokeSupports::newRows(const std::vector<Vec3d>& x, std::size_t n0) const {
   const CellGrid grid(x, h_);
   const double r2 = h_ * h_, span = 1.01 * h_;
-  NeighborLists rows;
-  rows.offsets.assign(x.size() - n0 + 1, 0);
-  std::vector<std::int32_t> row;
-  for (std::size_t q = n0; q < x.size(); ++q) {
-    row.clear();
+  // Rows in parallel (each its own buffer), then concatenated in order.
+  std::vector<std::vector<std::int32_t>> found(x.size() - n0);
+  cpu::parallelFor(std::int64_t(x.size() - n0), [&](std::int64_t r) {
+    const std::size_t q = n0 + std::size_t(r);
+    std::vector<std::int32_t>& row = found[std::size_t(r)];
     const Vec3d& p = x[q];
     const auto lo = grid.cellOf(p - Vec3d(span, span, span)), hi = grid.cellOf(p + Vec3d(span, span, span));
     for (std::int64_t k = lo[2]; k <= hi[2]; ++k)
@@ -234,9 +236,13 @@ NeighborLists StrokeSupports::newRows(const std::vector<Vec3d>& x, std::size_t n
         }
       }
     std::sort(row.begin(), row.end());
-    rows.indices.insert(rows.indices.end(), row.begin(), row.end());
-    rows.offsets[q - n0 + 1] = std::int64_t(rows.indices.size());
-  }
+  });
+  NeighborLists rows;
+  rows.offsets.assign(x.size() - n0 + 1, 0);
+  for (std::size_t r = 0; r < found.size(); ++r) rows.offsets[r + 1] = rows.offsets[r] + std::int64_t(found[r].size());
+  rows.indices.resize(std::size_t(rows.offsets.back()));
+  for (std::size_t r = 0; r < found.size(); ++r)
+    std::copy(found[r].begin(), found[r].end(), rows.indices.begin() + rows.offsets[r]);
   return rows;
 }
 
@@ -261,27 +267,31 @@ void StrokeSupports::appendPoints(const std::vector<Vec3d>& x) {
   earlier_queries.reserve(earlier_.size());
   for (const SweptSurface* c : earlier_) earlier_queries.emplace_back(*c);
   const SweptSurfaceQuery stroke_query(stroke_);
-  for (std::size_t c = 0; c < earlier_.size(); ++c) {
-    const Box box = surfaceBox(*earlier_[c]);
-    for (std::size_t i = n0; i < n; ++i)
-      if (withinReach(earlier_queries[c], box, x[i], reach_)) near_earlier_[i].push_back(std::uint32_t(c));
-  }
-  for (std::size_t i = n0; i < n; ++i) near_stroke_[i] = withinReach(stroke_query, stroke_box, x[i], reach_) ? 1 : 0;
+  std::vector<Box> earlier_boxes;
+  for (const SweptSurface* c : earlier_) earlier_boxes.push_back(surfaceBox(*c));
+  cpu::parallelFor(std::int64_t(n - n0), [&](std::int64_t r) {  // each new point its own entries
+    const std::size_t i = n0 + std::size_t(r);
+    for (std::size_t c = 0; c < earlier_.size(); ++c)
+      if (withinReach(earlier_queries[c], earlier_boxes[c], x[i], reach_)) near_earlier_[i].push_back(std::uint32_t(c));
+    near_stroke_[i] = withinReach(stroke_query, stroke_box, x[i], reach_) ? 1 : 0;
+  });
   const NeighborLists rows = newRows(x, n0);  // row r: point n0 + r
   std::vector<char> keep(rows.indices.size(), 1);
-  for (std::size_t r = 0; r < n - n0; ++r) {
-    const std::size_t q = n0 + r;
+  std::vector<std::size_t> row_removed(n - n0, 0);
+  cpu::parallelFor(std::int64_t(n - n0), [&](std::int64_t row) {  // each row its own entries and count
+    const std::size_t r = std::size_t(row), q = n0 + r;
     for (std::int64_t k = rows.offsets[r]; k < rows.offsets[r + 1]; ++k) {
       const std::size_t j = std::size_t(rows.indices[std::size_t(k)]);
       if (j < n0) {
         keep[std::size_t(k)] = crosses(x, j, q, earlier_queries, stroke_query) ? 0 : 1;
-        removed_ += keep[std::size_t(k)] ? 0 : 2;  // this entry and the mirror j's list would hold
+        row_removed[r] += keep[std::size_t(k)] ? 0 : 2;  // this entry and the mirror j's list would hold
       } else {  // two new points: each row decides the pair (lower index first), so both get the same answer
         keep[std::size_t(k)] = crosses(x, std::min(j, q), std::max(j, q), earlier_queries, stroke_query) ? 0 : 1;
-        removed_ += keep[std::size_t(k)] ? 0 : 1;
+        row_removed[r] += keep[std::size_t(k)] ? 0 : 1;
       }
     }
-  }
+  });
+  for (std::size_t c : row_removed) removed_ += c;
   mergeRows(rows, keep);
 }
 
