@@ -16,6 +16,12 @@
 namespace inc {
 
 namespace {
+double msSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+}  // namespace
+
+namespace {
 
 const double kPi = 3.141592653589793;
 
@@ -76,6 +82,8 @@ std::size_t NodalRegion::convert(const std::vector<std::int32_t>& cut,
 std::size_t NodalRegion::beginConversion(const std::vector<std::int32_t>& cut,
                                          const std::function<ConvertedSphereState(std::int32_t)>& state) {
   last_rebuild_ms_ = 0.0;  // a conversion that samples no point rebuilds nothing
+  times_ = ConversionTimes{};
+  const auto t0 = std::chrono::steady_clock::now();
   syncState();
   std::size_t changed = 0;
   // The spheres converted now (cut ones not sampled yet, and new interface spheres), then their points.
@@ -94,6 +102,7 @@ std::size_t NodalRegion::beginConversion(const std::vector<std::int32_t>& cut,
         ++changed;
       }
   sample(batch, state);
+  times_.sample_ms = msSince(t0);
   return changed;
 }
 
@@ -101,7 +110,9 @@ void NodalRegion::finishConversion(const SweptSurface& stroke) {
   if (rest_.empty()) return;
   // Supports: symmetric lists of radius h with the visibility criterion for the stroke and every earlier cut,
   // updated for the new points and the stroke's new strip (a conversion's cost stays in what is new).
+  const auto t0 = std::chrono::steady_clock::now();
   supports_.update(rest_, stroke);
+  times_.supports_ms = msSince(t0);
   rebuild();
 }
 
@@ -276,7 +287,10 @@ void NodalRegion::rebuildSolver() {
   in.kinds = kind_;
   in.spacing = spacing_;
   in.neighbors = supports();
+  const auto t0 = std::chrono::steady_clock::now();
   rebuildMlsSolver(solver_, in, settings_.backend, settings_.precision);  // the GPU reuses its buffers
+  times_.model_ms = msSince(t0);
+  const auto t1 = std::chrono::steady_clock::now();
   // A cut's few thousand points are launch-bound on the GPU: the substeps of an exchange replay as one graph.
   solver_->setStageTiming(false);
   solver_->setSafety(solver_->safety() * safety_scale_);
@@ -293,6 +307,7 @@ void NodalRegion::rebuildSolver() {
     }
   solver_->setCouplingAnchors(anchors_);
   last_reduction_ = solver_->reduce();
+  times_.setup_ms = msSince(t1);
 }
 
 MlsFrameStats NodalRegion::advance(double dt, int fixed_substeps, const std::function<Vec3d(std::int32_t)>& pbd_position) {

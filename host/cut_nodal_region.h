@@ -67,6 +67,12 @@ class NodalRegion {
   double pointMass() const;                 // kg, sum over the points
   std::size_t supportsRemoved() const { return supports_.removed(); }  // directed pairs dropped by the cuts so far
   double lastRebuildMs() const { return last_rebuild_ms_; }  // the last MLS solver rebuild (model, device upload)
+  // The parts of the last conversion (ms): sampling (beginConversion), supports, the MLS model built and loaded
+  // (rebuildMlsSolver), the rest of the rebuild (groups, state and anchor uploads, the stable-step reduction).
+  struct ConversionTimes {
+    double sample_ms = 0, supports_ms = 0, model_ms = 0, setup_ms = 0;
+  };
+  const ConversionTimes& lastConversionTimes() const { return times_; }
   const MlsSolver* solver() const { return solver_.get(); }
   const NeighborLists& supports() const { return supports_.lists(); }
   const std::vector<Vec3d>& restPoints() const { return rest_; }
@@ -149,6 +155,7 @@ class NodalRegion {
   MlsReduction last_reduction_;
   double safety_scale_ = 1.0;
   double last_rebuild_ms_ = 0.0;
+  ConversionTimes times_;
 };
 
 }  // namespace inc

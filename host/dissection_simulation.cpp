@@ -189,6 +189,11 @@ class DissectionSimulation final : public SimulationModel {
     rep.stages.push_back({"cut_convert", timers_.convert_ms});
     rep.stages.push_back({"cut_convert_pbd", timers_.convert_pbd_ms});  // a share of cut_convert
     rep.stages.push_back({"cut_convert_mls", timers_.convert_mls_ms});  // a share of cut_convert
+    // The conversion's parts: sampling, then beside the PBD rebuild the supports and the MLS rebuild (model, setup).
+    rep.stages.push_back({"cut_convert_sample", timers_.convert_sample_ms});
+    rep.stages.push_back({"cut_convert_supports", timers_.convert_supports_ms});
+    rep.stages.push_back({"cut_convert_mls_model", timers_.convert_mls_model_ms});
+    rep.stages.push_back({"cut_convert_mls_setup", timers_.convert_mls_setup_ms});
     rep.stages.push_back({"mls_integrate", mls.ms_integrate});
     rep.stages.push_back({"mls_coupling", mls.ms_coupling});
     rep.stages.push_back({"mls_stress", mls.ms_stress});
@@ -353,6 +358,7 @@ class DissectionSimulation final : public SimulationModel {
     double sweep_ms = 0, convert_ms = 0, exchange_ms = 0, repack_ms = 0, apply_ms = 0;
     double convert_pbd_ms = 0;  // of convert_ms: the PBD model rebuilt without the converted spheres
     double convert_mls_ms = 0;  // of convert_ms: the MLS solver rebuilt on the points
+    double convert_sample_ms = 0, convert_supports_ms = 0, convert_mls_model_ms = 0, convert_mls_setup_ms = 0;
     double mls_ms = 0;  // wall time of the MLS advances (launches, the GPU's work, the reductions' downloads)
   };
 
@@ -484,6 +490,11 @@ class DissectionSimulation final : public SimulationModel {
       timers_.convert_pbd_ms += msSince(c1);
       convert_worker_.wait();
       timers_.convert_mls_ms += a.region->lastRebuildMs();
+      const NodalRegion::ConversionTimes& ct = a.region->lastConversionTimes();
+      timers_.convert_sample_ms += ct.sample_ms;
+      timers_.convert_supports_ms += ct.supports_ms;
+      timers_.convert_mls_model_ms += ct.model_ms;
+      timers_.convert_mls_setup_ms += ct.setup_ms;
     } else if (a.region && a.region->active()) {
       a.region->cutSupports(fresh);
     }
