@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
 #include <limits>
 #include <map>
 
@@ -107,8 +106,6 @@ class DissectionSimulation final : public SimulationModel {
     // Gauss-Seidel up to thousands of spheres, but for Jacobi only below ~300 spheres; on sm_90 Jacobi models of up
     // to cluster_max_particles run the thread-block cluster frame instead (faster still, docs/pbd.md).
     params_.fused_max_particles = params_.solver == PbdSolverKind::Jacobi ? 256 : 4096;
-    // Measurement knob (docs/cutting.md): the cluster frame's size limit during a dissection.
-    if (const char* v = std::getenv("INCISION_CUT_PBD_CLUSTER_MAX")) params_.cluster_max_particles = std::atoi(v);
     params_.xpbd = scene.pbd.xpbd;
     params_.gravity = Vec3<T>(scene.solver.gravity);
     params_.damping = T(scene.material.damping);
