@@ -288,7 +288,7 @@ void NodalRegion::rebuildSolver() {
   in.spacing = spacing_;
   in.neighbors = supports();
   const auto t0 = std::chrono::steady_clock::now();
-  rebuildMlsSolver(solver_, in, settings_.backend, settings_.precision);  // the GPU reuses its buffers
+  rebuildMlsSolver(solver_, in, settings_.backend, settings_.precision, &times_.model_build_ms);  // the GPU reuses its buffers
   times_.model_ms = msSince(t0);
   const auto t1 = std::chrono::steady_clock::now();
   // A cut's few thousand points are launch-bound on the GPU: the substeps of an exchange replay as one graph.

@@ -71,6 +71,7 @@ class NodalRegion {
   // (rebuildMlsSolver), the rest of the rebuild (groups, state and anchor uploads, the stable-step reduction).
   struct ConversionTimes {
     double sample_ms = 0, supports_ms = 0, model_ms = 0, setup_ms = 0;
+    double model_build_ms = 0;  // of model_ms: the host build (CUDA reuse; 0 where a new solver was made)
   };
   const ConversionTimes& lastConversionTimes() const { return times_; }
   const MlsSolver* solver() const { return solver_.get(); }

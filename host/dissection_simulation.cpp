@@ -194,6 +194,7 @@ class DissectionSimulation final : public SimulationModel {
     rep.stages.push_back({"cut_convert_supports", timers_.convert_supports_ms});
     rep.stages.push_back({"cut_convert_mls_model", timers_.convert_mls_model_ms});
     rep.stages.push_back({"cut_convert_mls_setup", timers_.convert_mls_setup_ms});
+    rep.stages.push_back({"cut_convert_mls_build", timers_.convert_mls_build_ms});  // of _mls_model
     rep.stages.push_back({"mls_integrate", mls.ms_integrate});
     rep.stages.push_back({"mls_coupling", mls.ms_coupling});
     rep.stages.push_back({"mls_stress", mls.ms_stress});
@@ -359,6 +360,7 @@ class DissectionSimulation final : public SimulationModel {
     double convert_pbd_ms = 0;  // of convert_ms: the PBD model rebuilt without the converted spheres
     double convert_mls_ms = 0;  // of convert_ms: the MLS solver rebuilt on the points
     double convert_sample_ms = 0, convert_supports_ms = 0, convert_mls_model_ms = 0, convert_mls_setup_ms = 0;
+    double convert_mls_build_ms = 0;
     double mls_ms = 0;  // wall time of the MLS advances (launches, the GPU's work, the reductions' downloads)
   };
 
@@ -495,6 +497,7 @@ class DissectionSimulation final : public SimulationModel {
       timers_.convert_supports_ms += ct.supports_ms;
       timers_.convert_mls_model_ms += ct.model_ms;
       timers_.convert_mls_setup_ms += ct.setup_ms;
+      timers_.convert_mls_build_ms += ct.model_build_ms;
     } else if (a.region && a.region->active()) {
       a.region->cutSupports(fresh);
     }

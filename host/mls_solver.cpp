@@ -2,6 +2,7 @@
 #include "host/mls_solver.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -72,18 +73,25 @@ std::unique_ptr<MlsSolver> makeMlsSolver(const MlsBuildInput& input, BackendKind
 }
 
 void rebuildMlsSolver(std::unique_ptr<MlsSolver>& solver, const MlsBuildInput& input, BackendKind backend,
-                      Precision precision) {
+                      Precision precision, double* build_ms) {
   const BackendKind kind = resolveBackend(backend).kind;
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto built = [&] {
+    if (build_ms) *build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  };
   // Only the CUDA solver reuses anything: building a model just to have the CPU refuse it would cost a build.
   if (solver && kind == BackendKind::Cuda && solver->backend() == kind && solver->precision() == precision) {
     if (precision == Precision::Float64) {
       MlsModel<double> m = buildMlsModel<double>(input);
+      built();
       if (solver->replaceModel(m)) return;
     } else {
       MlsModel<float> m = buildMlsModel<float>(input);
+      built();
       if (solver->replaceModel(m)) return;
     }
   }
+  if (build_ms) *build_ms = 0.0;  // built inside makeMlsSolver, not timed apart
   solver.reset();  // free the old solver's device memory before the new one allocates
   solver = makeMlsSolver(input, backend, precision);
 }

@@ -214,7 +214,8 @@ std::unique_ptr<MlsSolver> makeMlsSolver(const MlsBuildInput& input, BackendKind
 
 // `solver` on the model of `input`: replaced in place when it is a solver of that backend and precision that
 // reuses its resources (replaceModel), else a new one (makeMlsSolver). The same errors as makeMlsSolver.
+// `build_ms`, when given, receives the host time of the model build alone (the rest is the solver's load).
 void rebuildMlsSolver(std::unique_ptr<MlsSolver>& solver, const MlsBuildInput& input, BackendKind backend,
-                      Precision precision);
+                      Precision precision, double* build_ms = nullptr);
 
 }  // namespace inc

@@ -2,6 +2,8 @@
 // asynchronous copies on one stream, waited for once.
 #pragma once
 
+#include <algorithm>
+
 #include <cuda_runtime.h>
 
 #include <cstddef>
@@ -48,12 +50,13 @@ class BulkUpload {
 
   // Queues every copy and memset on `stream` and waits for them (the page-locked buffer is reused next time).
   void flush(cudaStream_t stream) {
-    if (packed_.size() > capacity_) {
+    if (packed_.size() > capacity_) {  // at least doubled: page-locking is slow, and a cut's uploads grow each frame
+      const std::size_t cap = std::max(packed_.size() + packed_.size() / 4, 2 * capacity_);
       if (pinned_) INC_CUDA(cudaFreeHost(pinned_));
       pinned_ = nullptr;
       capacity_ = 0;
-      INC_CUDA(cudaMallocHost(&pinned_, packed_.size() + packed_.size() / 4));
-      capacity_ = packed_.size() + packed_.size() / 4;
+      INC_CUDA(cudaMallocHost(&pinned_, cap));
+      capacity_ = cap;
     }
     if (!packed_.empty()) std::memcpy(pinned_, packed_.data(), packed_.size());
     for (const Op& op : ops_) {

@@ -1,6 +1,7 @@
 // Owning typed device allocation (RAII) with checked copies; the unit of device-resident SoA data.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <utility>
 #include <vector>
@@ -29,11 +30,13 @@ class DeviceBuffer {
     return *this;
   }
 
-  // Grows geometrically and never shrinks, so that repeated rebuilds do not re-allocate.
+  // Grows geometrically and never shrinks, so that repeated rebuilds do not re-allocate: the first allocation
+  // holds n + n/4, a later one at least twice the last (a cut's point set grows every frame; each cudaFree
+  // synchronises the device and cudaMalloc costs host time, so few, larger steps are cheaper).
   void resize(std::size_t n) {
     if (n > capacity_) {
+      const std::size_t cap = std::max(n + n / 4, 2 * capacity_);
       release();
-      std::size_t cap = n + n / 4;
       INC_CUDA(cudaMalloc(reinterpret_cast<void**>(&ptr_), cap * sizeof(T)));
       capacity_ = cap;
     }
