@@ -31,7 +31,9 @@ BackendChoice resolveBackend(BackendKind requested) {
     c.note = "backend: cpu (requested)";
     return c;
   }
-  const cuda::DeviceReport dev = cuda::queryDevices();
+  // Queried once per process: cudaGetDeviceProperties costs ~1 ms, and a cut resolves the backend at every
+  // MLS rebuild (every frame the blade enters spheres). The devices a process sees do not change while it runs.
+  static const cuda::DeviceReport dev = cuda::queryDevices();
   const bool usable = dev.compiled && dev.device_count > 0;
   if (usable) {
     c.kind = BackendKind::Cuda;
