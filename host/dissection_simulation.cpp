@@ -579,26 +579,47 @@ class DissectionSimulation final : public SimulationModel {
     const auto c0 = std::chrono::steady_clock::now();
     std::vector<const SweptSurface*> cuts{&a->swept};
     for (const SweptSurface& c : earlier_cuts_) cuts.push_back(&c);
+    // The surface split (the CGAL walls, host/cut_surface_split.h) touches only the surface state: it runs on the
+    // worker while this thread re-packs and rebuilds the PBD model; the skin binding below needs both.
+    const SweptSurface& swept = a->swept;
+    convert_worker_.start([this, &swept] { surfaceAfterCut(swept); });
+    try {
+      repackStroke(*a, cuts, c0);
+    } catch (...) {
+      convert_worker_.wait();  // never leave the worker running on state that may go away
+      throw;
+    }
+    convert_worker_.wait();
+    earlier_cuts_.push_back(a->swept);  // after the re-pack: `cuts` points into earlier_cuts_
+    bindSurface();
+    surface_components_ = analyzeMesh(rest_surface_).components;
+    sphere_components_ = sphereGraphComponents(spheres_);
+  }
+
+  // Algorithm 1 on the stroke's points and the PBD model rebuilt with the new spheres (nothing when the blade
+  // converted no sphere).
+  void repackStroke(ActiveStroke& a, const std::vector<const SweptSurface*>& cuts,
+                    std::chrono::steady_clock::time_point c0) {
     last_points_ = 0;
     last_added_ = 0;
-    if (a->region && a->region->active()) {
-      last_points_ = a->region->pointCount();
-      NodalRegionFinal fin = a->region->finish();
+    if (a.region && a.region->active()) {
+      last_points_ = a.region->pointCount();
+      NodalRegionFinal fin = a.region->finish();
       // New model: base spheres not cut (PBD and interface), then the re-packed ones.
       MetaballModel m;
-      std::vector<std::int32_t> base_to_new(a->base.size(), -1);
+      std::vector<std::int32_t> base_to_new(a.base.size(), -1);
       std::vector<Vec3d> x, v;
       std::vector<std::int32_t> old_to_new(model_.size(), -1);
       std::map<std::int32_t, std::size_t> iface;
       for (std::size_t k = 0; k < fin.interface_ids.size(); ++k) iface[fin.interface_ids[k]] = k;
-      for (std::size_t b = 0; b < a->base.size(); ++b) {
-        const SphereRole role = a->region->role(std::int32_t(b));
+      for (std::size_t b = 0; b < a.base.size(); ++b) {
+        const SphereRole role = a.region->role(std::int32_t(b));
         if (role == SphereRole::Cut) continue;
         base_to_new[b] = std::int32_t(m.size());
-        m.rest_centers.push_back(a->base.rest_centers[b]);
-        m.rest_radii.push_back(a->base.rest_radii[b]);
-        m.masses.push_back(a->base.masses[b]);
-        const std::int32_t pbd = a->base_to_pbd[b];
+        m.rest_centers.push_back(a.base.rest_centers[b]);
+        m.rest_radii.push_back(a.base.rest_radii[b]);
+        m.masses.push_back(a.base.masses[b]);
+        const std::int32_t pbd = a.base_to_pbd[b];
         old_to_new[std::size_t(pbd)] = std::int32_t(m.size() - 1);
         const auto it = iface.find(std::int32_t(b));
         if (it != iface.end()) {
@@ -609,11 +630,11 @@ class DissectionSimulation final : public SimulationModel {
           v.push_back(Vec3d(state_.velocities[std::size_t(pbd)]));
         }
       }
-      for (std::size_t l = 0; l < a->base.links.size(); ++l) {
-        const std::int32_t i = base_to_new[std::size_t(a->base.links[l][0])], j = base_to_new[std::size_t(a->base.links[l][1])];
+      for (std::size_t l = 0; l < a.base.links.size(); ++l) {
+        const std::int32_t i = base_to_new[std::size_t(a.base.links[l][0])], j = base_to_new[std::size_t(a.base.links[l][1])];
         if (i < 0 || j < 0) continue;
         m.links.push_back({std::min(i, j), std::max(i, j)});
-        m.link_rest_lengths.push_back(a->base.link_rest_lengths[l]);
+        m.link_rest_lengths.push_back(a.base.link_rest_lengths[l]);
       }
       RepackSettings rs;
       rs.boundary_offset = scene_.cutting.repack_boundary_offset;
@@ -622,7 +643,7 @@ class DissectionSimulation final : public SimulationModel {
       rs.reference_mass = reference_mass_;
       rs.max_radius = 1.5 * reference_radius_;
       rs.earlier_cuts.assign(cuts.begin() + 1, cuts.end());
-      const RepackResult r = packNodalPoints(fin.points, a->swept, rs);
+      const RepackResult r = packNodalPoints(fin.points, a.swept, rs);
       last_repack_ = r;
       // New spheres take the mass-weighted mean displacement and velocity of the points they took.
       std::vector<Vec3d> nu(r.centres.size()), nv(r.centres.size());
@@ -641,16 +662,8 @@ class DissectionSimulation final : public SimulationModel {
       appendRepackedSpheres(m, r, cuts);
       last_added_ = r.centres.size();
       timers_.repack_ms += msSince(c0);
-      surfaceAfterCut(a->swept);
-      earlier_cuts_.push_back(a->swept);
       setSpheres(std::move(m), x, v, old_to_new);
-    } else {
-      surfaceAfterCut(a->swept);
-      earlier_cuts_.push_back(a->swept);
     }
-    bindSurface();
-    surface_components_ = analyzeMesh(rest_surface_).components;
-    sphere_components_ = sphereGraphComponents(spheres_);
   }
 
   // The surface: split along the swept surface whatever its shape (a partial cut leaves one closed mesh with a
