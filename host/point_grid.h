@@ -11,12 +11,12 @@
 
 namespace inc {
 
-// Members are indices into `x` (kept by reference: it must outlive the grid), inserted at construction or one by
-// one. The grid covers the box [lo, hi] given at construction; a member or query outside it lands in the nearest
-// border cell, which keeps the queries exact (a cell only bounds distances from below through its index range,
-// see below). The cell edge is at least `cell`, grown when the box would need more than `max_cells` cells, so a
-// small cell over a wide box stays cheap. Both queries are independent of the insertion order (ties go to the
-// lower index), so the results are those of any other exact search.
+// Members are indices into `x` (kept by reference: it must outlive the grid), inserted one by one. The grid covers
+// the box [lo, hi] given at construction; a member or query outside it lands in the nearest border cell, and the
+// queries widen their bounds by how far the query lies outside, so they stay exact. The cell edge is at least
+// `cell`, grown when the box would need more than `max_cells` cells, so a small cell over a wide box stays cheap.
+// Both queries are independent of the insertion order (ties go to the lower index): the results are those of any
+// other exact search.
 class PointGrid {
  public:
   PointGrid(const std::vector<Vec3d>& x, const Vec3d& lo, const Vec3d& hi, double cell, std::size_t max_cells)
@@ -35,9 +35,11 @@ class PointGrid {
 
   double cell() const { return cell_; }
 
+  // Adds member i; a repeated insert of the same index is ignored (the lists are linked through next_).
   void insert(std::int32_t i) {
     const std::int64_t c = cellIndex(coord(x_[std::size_t(i)]));
-    if (std::size_t(i) >= next_.size()) next_.resize(std::size_t(i) + 1, -1);
+    if (std::size_t(i) >= next_.size()) next_.resize(std::size_t(i) + 1, kAbsent);
+    if (next_[std::size_t(i)] != kAbsent) return;
     next_[std::size_t(i)] = head_[std::size_t(c)];
     head_[std::size_t(c)] = i;
     ++members_;
@@ -52,11 +54,10 @@ class PointGrid {
     std::int32_t best = -1;
     if (members_ == 0) return best;
     const Coord c = coord(p);
-    // Exact clamp distance: how far p lies outside the grid box, in cells (rings closer than this are empty
-    // of meaning for the bound but are still visited; the bound below subtracts it).
+    const double off = outside(p);  // a member of ring R lies at least (R - 1) cells minus this from p
     const std::int64_t max_ring = std::max({dim_[0], dim_[1], dim_[2]});
     for (std::int64_t ring = 0; ring <= max_ring; ++ring) {
-      if (best >= 0 && double(ring - 1) * cell_ - outside(p) > dist) break;
+      if (best >= 0 && double(ring - 1) * cell_ - off > dist) break;
       forShell(c, ring, [&](std::int64_t cell) {
         for (std::int32_t i = head_[std::size_t(cell)]; i >= 0; i = next_[std::size_t(i)]) {
           const double q = norm(x_[std::size_t(i)] - p);
@@ -127,6 +128,7 @@ class PointGrid {
     }
   }
 
+  static constexpr std::int32_t kAbsent = -2;  // next_ of an index not inserted (-1 ends a cell's list)
   const std::vector<Vec3d>& x_;
   Vec3d lo_;
   double cell_ = 1.0;
