@@ -195,6 +195,8 @@ class DissectionSimulation final : public SimulationModel {
     rep.stages.push_back({"cut_convert_mls_model", timers_.convert_mls_model_ms});
     rep.stages.push_back({"cut_convert_mls_setup", timers_.convert_mls_setup_ms});
     rep.stages.push_back({"cut_convert_mls_build", timers_.convert_mls_build_ms});  // of _mls_model
+    rep.stages.push_back({"cut_convert_pbd_build", timers_.convert_pbd_build_ms});  // of cut_convert_pbd
+    rep.stages.push_back({"cut_convert_wait", timers_.convert_wait_ms});  // the MLS half outlasting the PBD half
     rep.stages.push_back({"mls_integrate", mls.ms_integrate});
     rep.stages.push_back({"mls_coupling", mls.ms_coupling});
     rep.stages.push_back({"mls_stress", mls.ms_stress});
@@ -361,6 +363,8 @@ class DissectionSimulation final : public SimulationModel {
     double convert_mls_ms = 0;  // of convert_ms: the MLS solver rebuilt on the points
     double convert_sample_ms = 0, convert_supports_ms = 0, convert_mls_model_ms = 0, convert_mls_setup_ms = 0;
     double convert_mls_build_ms = 0;
+    double convert_pbd_build_ms = 0;  // of convert_pbd_ms: the host build (buildMetaballPbdModel)
+    double convert_wait_ms = 0;       // of convert_ms: waiting for the MLS half after the PBD half
     double mls_ms = 0;  // wall time of the MLS advances (launches, the GPU's work, the reductions' downloads)
   };
 
@@ -490,7 +494,10 @@ class DissectionSimulation final : public SimulationModel {
         throw;
       }
       timers_.convert_pbd_ms += msSince(c1);
+      timers_.convert_pbd_build_ms += last_pbd_build_ms_;
+      const auto c2 = std::chrono::steady_clock::now();
       convert_worker_.wait();
+      timers_.convert_wait_ms += msSince(c2);
       timers_.convert_mls_ms += a.region->lastRebuildMs();
       const NodalRegion::ConversionTimes& ct = a.region->lastConversionTimes();
       timers_.convert_sample_ms += ct.sample_ms;
@@ -695,7 +702,9 @@ class DissectionSimulation final : public SimulationModel {
     opt.coloring = params_.solver == PbdSolverKind::GaussSeidel;  // Jacobi never reads it (a rebuild per conversion)
     opt.known_cell_volumes = std::move(known_cell_volumes);
     spheres_ = std::move(m);
+    const auto t0 = std::chrono::steady_clock::now();
     model_ = buildMetaballPbdModel<T>(spheres_, opt);
+    last_pbd_build_ms_ = msSince(t0);
     backend_->setModel(model_);
     backend_->getState(state_);
     for (std::size_t i = 0; i < spheres_.size(); ++i) {
@@ -913,6 +922,7 @@ class DissectionSimulation final : public SimulationModel {
   NodalRegionSettings region_;
   double reference_mass_ = 0.0, reference_radius_ = 0.0;  // kg, m: the organ's mean sphere before any cut
   std::shared_ptr<const pack::SurfaceDistance> tissue_;   // the organ's rest surface (inside test)
+  double last_pbd_build_ms_ = 0;  // setSpheres' host build of the PBD model (timed for the stages)
   BackgroundTask convert_worker_;                         // a conversion's MLS half, beside the PBD rebuild
   MetaballModel spheres_;  // the spheres of the PBD model (during a stroke: the base minus the cut ones)
   TriangleMesh rest_surface_;  // the surface after every cut so far (rest configuration) = surface_.mesh
