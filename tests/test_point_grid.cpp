@@ -21,7 +21,9 @@ TEST(PointGrid, QueriesEqualBruteForceInsideAndOutsideTheBox) {
   // A fine cell (grid of 8 cells at most: the edge grows) and a coarse one; every other point a member.
   for (const std::size_t max_cells : {std::size_t(8), std::size_t(100000)}) {
     PointGrid g(x, lo, hi, 0.004, max_cells);
-    if (max_cells == 8) EXPECT_GT(g.cell(), 0.004);
+    if (max_cells == 8) {
+      EXPECT_GT(g.cell(), 0.004);
+    }
     std::vector<std::int32_t> members;
     for (std::int32_t i = 0; i < std::int32_t(x.size()); i += 2) members.push_back(i);
     members.push_back(std::int32_t(x.size()) - 1);  // the duplicate point, inserted twice: the second is ignored
