@@ -2,12 +2,15 @@
 // caller rebuilds PBD). Long-lived so that its OpenMP thread pool is made once, not per task.
 #pragma once
 
+#include <chrono>
 #include <condition_variable>
 #include <exception>
 #include <functional>
 #include <mutex>
 #include <thread>
 #include <utility>
+
+#include "host/elapsed_ms.h"
 
 namespace inc {
 
@@ -35,6 +38,23 @@ class BackgroundTask {
       done_ = false;
     }
     wake_.notify_all();
+  }
+
+  // Runs `task` on the worker and `here` on the calling thread at the same time, then waits for the task (also when
+  // `here` throws: the task never outlives the state both share). Rethrows what either threw; returns the
+  // milliseconds the caller waited after `here` returned.
+  template <typename Here>
+  double runBeside(std::function<void()> task, Here&& here) {
+    start(std::move(task));
+    try {
+      here();
+    } catch (...) {
+      wait();
+      throw;
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    wait();
+    return msSince(t0);
   }
 
   // Waits for the task started last; rethrows what it threw.

@@ -10,16 +10,11 @@
 
 #include "cpu_fallback/parallel.h"
 #include "host/cut_nodal_points.h"
+#include "host/elapsed_ms.h"
 #include "host/input_error.h"
 #include "physics/cut_coupling.h"
 
 namespace inc {
-
-namespace {
-double msSince(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
-}  // namespace
 
 namespace {
 
@@ -276,7 +271,7 @@ void NodalRegion::regroup() {
 void NodalRegion::rebuild() {
   const auto t0 = std::chrono::steady_clock::now();
   rebuildSolver();
-  last_rebuild_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  last_rebuild_ms_ = msSince(t0);
 }
 
 void NodalRegion::rebuildSolver() {

@@ -15,6 +15,7 @@
 #include "host/cut_surface_state.h"
 #include "host/cut_swept_surface.h"
 #include "host/dissection_render_layers.h"
+#include "host/elapsed_ms.h"
 #include "host/grasper.h"
 #include "host/input_error.h"
 #include "host/interactive_tool.h"
@@ -33,9 +34,6 @@ namespace inc {
 
 namespace {
 
-double msSince(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
 
 // A scripted stroke: one scalpel tool, cutting from its first keyframe's time to its last.
 struct ScriptedStroke {
@@ -485,19 +483,12 @@ class DissectionSimulation final : public SimulationModel {
       // read the PBD state already): they run on the worker while this thread rebuilds the PBD model.
       NodalRegion& region = *a.region;
       const SweptSurface& swept = a.swept;
-      convert_worker_.start([&region, &swept] { region.finishConversion(swept); });
-      const auto c1 = std::chrono::steady_clock::now();
-      try {
+      timers_.convert_wait_ms += convert_worker_.runBeside([&region, &swept] { region.finishConversion(swept); }, [&] {
+        const auto c1 = std::chrono::steady_clock::now();
         rebuildStrokePbd();
-      } catch (...) {
-        convert_worker_.wait();  // never leave the worker running on a region that may go away
-        throw;
-      }
-      timers_.convert_pbd_ms += msSince(c1);
-      timers_.convert_pbd_build_ms += last_pbd_build_ms_;
-      const auto c2 = std::chrono::steady_clock::now();
-      convert_worker_.wait();
-      timers_.convert_wait_ms += msSince(c2);
+        timers_.convert_pbd_ms += msSince(c1);
+        timers_.convert_pbd_build_ms += last_pbd_build_ms_;
+      });
       timers_.convert_mls_ms += a.region->lastRebuildMs();
       const NodalRegion::ConversionTimes& ct = a.region->lastConversionTimes();
       timers_.convert_sample_ms += ct.sample_ms;
@@ -589,14 +580,7 @@ class DissectionSimulation final : public SimulationModel {
     // The surface split (the CGAL walls, host/cut_surface_split.h) touches only the surface state: it runs on the
     // worker while this thread re-packs and rebuilds the PBD model; the skin binding below needs both.
     const SweptSurface& swept = a->swept;
-    convert_worker_.start([this, &swept] { surfaceAfterCut(swept); });
-    try {
-      repackStroke(*a, cuts, c0);
-    } catch (...) {
-      convert_worker_.wait();  // never leave the worker running on state that may go away
-      throw;
-    }
-    convert_worker_.wait();
+    convert_worker_.runBeside([this, &swept] { surfaceAfterCut(swept); }, [&] { repackStroke(*a, cuts, c0); });
     earlier_cuts_.push_back(a->swept);  // after the re-pack: `cuts` points into earlier_cuts_
     bindSurface();
     surface_components_ = analyzeMesh(rest_surface_).components;
@@ -923,7 +907,7 @@ class DissectionSimulation final : public SimulationModel {
   double reference_mass_ = 0.0, reference_radius_ = 0.0;  // kg, m: the organ's mean sphere before any cut
   std::shared_ptr<const pack::SurfaceDistance> tissue_;   // the organ's rest surface (inside test)
   double last_pbd_build_ms_ = 0;  // setSpheres' host build of the PBD model (timed for the stages)
-  BackgroundTask convert_worker_;                         // a conversion's MLS half, beside the PBD rebuild
+  BackgroundTask convert_worker_;  // a conversion's MLS half beside the PBD rebuild; a stroke's surface split beside its re-pack
   MetaballModel spheres_;  // the spheres of the PBD model (during a stroke: the base minus the cut ones)
   TriangleMesh rest_surface_;  // the surface after every cut so far (rest configuration) = surface_.mesh
   CutSurfaceState surface_;    // the split surface with its wall flags and binding probes

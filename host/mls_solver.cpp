@@ -8,6 +8,7 @@
 #include <string>
 
 #include "cpu_fallback/mls_solver_cpu.h"
+#include "host/elapsed_ms.h"
 #include "physics/cut_coupling.h"
 #if INCISION_HAVE_CUDA
 #include "kernels/mls_solver_cuda.h"
@@ -77,7 +78,7 @@ void rebuildMlsSolver(std::unique_ptr<MlsSolver>& solver, const MlsBuildInput& i
   const BackendKind kind = resolveBackend(backend).kind;
   const auto t0 = std::chrono::steady_clock::now();
   const auto built = [&] {
-    if (build_ms) *build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    if (build_ms) *build_ms = msSince(t0);
   };
   // Only the CUDA solver reuses anything: building a model just to have the CPU refuse it would cost a build.
   if (solver && kind == BackendKind::Cuda && solver->backend() == kind && solver->precision() == precision) {

@@ -4,6 +4,7 @@
 #include <chrono>
 
 #include "cpu_fallback/tearing_cpu.h"
+#include "host/elapsed_ms.h"
 #include "host/input_error.h"
 #if INCISION_HAVE_CUDA
 #include "kernels/pbd_device_cuda.h"
@@ -14,7 +15,6 @@ namespace inc {
 
 namespace {
 using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 template <typename T>
 class TearStepCpu final : public TearStepBackend<T> {
