@@ -154,6 +154,9 @@ void NodalRegion::sample(const std::vector<std::int32_t>& batch, const std::func
   const auto centreOf = [p](const std::array<std::int64_t, 3>& key) {
     return Vec3d((double(key[0]) + 0.5) * p, (double(key[1]) + 0.5) * p, (double(key[2]) + 0.5) * p);
   };
+  std::vector<SweptSurfaceQuery> earlier;  // segmentCrossesSweptSurface's decisions, triangles boxed once
+  earlier.reserve(earlier_.size());
+  for (const SweptSurface* c : earlier_) earlier.emplace_back(*c);
   cpu::parallelFor(std::int64_t(trials.size()), [&](std::int64_t t) {
     Trial& tr = trials[std::size_t(t)];
     const Vec3d x = centreOf(tr.key);
@@ -162,8 +165,8 @@ void NodalRegion::sample(const std::vector<std::int32_t>& batch, const std::func
       return;
     }
     const Vec3d c = base_.rest_centers[std::size_t(tr.sphere)];
-    for (std::size_t q = 0; q < earlier_.size(); ++q)
-      if (segmentCrossesSweptSurface(*earlier_[q], c, x)) {
+    for (const SweptSurfaceQuery& q : earlier)
+      if (q.segmentCrosses(c, x)) {
         tr.visible = 0;
         return;
       }

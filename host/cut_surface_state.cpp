@@ -54,6 +54,9 @@ SkinBinding bindSkinAcrossCuts(const CutSurfaceState& state, const MetaballModel
                                const std::vector<SweptSurface>& cuts, int k, const std::string& file) {
   std::vector<Box> boxes;
   for (const auto& c : cuts) boxes.push_back(boxOf(c));
+  std::vector<SweptSurfaceQuery> queries;  // the same decisions as segmentCrossesSweptSurface, triangles pre-boxed
+  queries.reserve(cuts.size());
+  for (const auto& c : cuts) queries.emplace_back(c);
   const SkinFilter sees = [&](int v, int sphere) {
     const Vec3d& p = state.probe[std::size_t(v)];
     const Vec3d& q = spheres.rest_centers[std::size_t(sphere)];
@@ -61,7 +64,7 @@ SkinBinding bindSkinAcrossCuts(const CutSurfaceState& state, const MetaballModel
       bool apart = false;  // the segment's box misses the cut's box: no crossing possible
       for (int a = 0; a < 3 && !apart; ++a)
         apart = std::max(p[a], q[a]) < boxes[c].lo[a] || std::min(p[a], q[a]) > boxes[c].hi[a];
-      if (!apart && segmentCrossesSweptSurface(cuts[c], p, q)) return false;
+      if (!apart && queries[c].segmentCrosses(p, q)) return false;
     }
     return true;
   };
