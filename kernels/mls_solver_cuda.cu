@@ -9,8 +9,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
-#include <cstdlib>
 #include <cstring>
 #include <string>
 #include <type_traits>
@@ -354,15 +352,12 @@ class MlsCudaSolver final : public MlsSolver {
 
   // The model's arrays into the device buffers (grown as needed), the state at rest, no coupling groups.
   void load(MlsModel<T> model) {
-    static const bool profile = std::getenv("INCISION_MLS_LOAD_PROFILE") != nullptr;
-    const auto t0 = std::chrono::steady_clock::now();
     model_ = std::move(model);
     resetSolverState(model_.safety);
     const std::size_t n = model_.size();
     // No kernel still reads the old model's buffers: they all run on stream_ (the device-wide wait also waited for
     // the PBD model's upload that a cut runs beside this one on another thread).
     INC_CUDA(cudaStreamSynchronize(stream_));
-    const auto t1 = std::chrono::steady_clock::now();
     bulk_.add(rest_, model_.rest);
     bulk_.add(mass_, model_.mass);
     bulk_.add(volume_, model_.volume);
@@ -373,16 +368,9 @@ class MlsCudaSolver final : public MlsSolver {
     for (DeviceBuffer<Vec3<T>>* b : {&u_, &v_, &f_, &target_}) bulk_.zero(*b, n);
     bulk_.zero(stress_moment_, n);
     bulk_.zero(energy_, n);
-    const auto t2 = std::chrono::steady_clock::now();
     bulk_.flush(stream_);  // one wait instead of a synchronous copy per array
-    const auto t3 = std::chrono::steady_clock::now();
     stiffening_buf_.resize(n);
     partials_.resize(kReduceBlocks);
-    if (profile) {
-      const auto ms = [](auto a, auto b) { return std::chrono::duration<double, std::milli>(b - a).count(); };
-      std::fprintf(stderr, "mls load n=%zu sync %.3f add %.3f flush %.3f rest %.3f ms\n", n, ms(t0, t1), ms(t1, t2),
-                   ms(t2, t3), ms(t3, std::chrono::steady_clock::now()));
-    }
     groups_ = 0;
     springs_ = 0;
     forces_valid_ = false;
