@@ -152,27 +152,47 @@ INC_HD Vec3<T> laplacianRest(const BlockView<T>& b, int c, const SolveContext<T>
 // and the multiplier advances by the same scaled amount, so lambda always matches the displacement actually
 // applied and XPBD's equilibrium is kept; Gauss-Seidel: positions move in place (the colouring makes that
 // race-free).
+// The default emitter of the projections below: emitCorrection (slot output for Jacobi, in place for
+// Gauss-Seidel). A backend may pass its own for Jacobi (the CUDA kernels stage a block's slots in shared memory
+// to store them coalesced); it receives the slot, the particle and the already scaled correction.
+template <typename T>
+struct EmitToBlock {
+  const BlockView<T>& b;
+  const SolveContext<T>& ctx;
+  INC_HD void operator()(std::int32_t slot, std::int32_t /*particle*/, const Vec3<T>& d, T scale) const {
+    emitCorrection(b, ctx, slot, d, scale);
+  }
+};
+
+// Distance constraint c with its two particle ids given (a backend may load them together).
+template <typename T, typename Emit>
+INC_HD void projectDistanceConstraintIds(const BlockView<T>& b, int c, const SolveContext<T>& ctx, std::int32_t i,
+                                         std::int32_t j, const Emit& emit) {
+  const std::int32_t s0 = b.offsets[c];
+  const T scale = ctx.jacobi ? ctx.omega * b.jacobi_scale[s0] : T(1);
+  const XpbdTerm<T> term = blockTerm(b, ctx, c);
+  const DistanceCorrection<T> r = projectDistance(ctx.x[i], ctx.x[j], ctx.w[i], ctx.w[j], b.rest[c], term, b.lambda[c].x);
+  emit(s0, i, r.dp0, scale);
+  emit(s0 + 1, j, r.dp1, scale);
+  b.lambda[c].x += r.dlambda * scale;
+}
+
 template <typename T>
 INC_HD void projectDistanceConstraint(const BlockView<T>& b, int c, const SolveContext<T>& ctx) {
   const std::int32_t s0 = b.offsets[c];
-  const T scale = ctx.jacobi ? ctx.omega * b.jacobi_scale[s0] : T(1);
-  const std::int32_t i = b.ids[s0], j = b.ids[s0 + 1];
-  const XpbdTerm<T> term = blockTerm(b, ctx, c);
-  const DistanceCorrection<T> r = projectDistance(ctx.x[i], ctx.x[j], ctx.w[i], ctx.w[j], b.rest[c], term, b.lambda[c].x);
-  emitCorrection(b, ctx, s0, r.dp0, scale);
-  emitCorrection(b, ctx, s0 + 1, r.dp1, scale);
-  b.lambda[c].x += r.dlambda * scale;
+  projectDistanceConstraintIds(b, c, ctx, b.ids[s0], b.ids[s0 + 1], EmitToBlock<T>{b, ctx});
 }
 
 // Bending (kBend) or tet volume (four particles). The kind is a template argument so that a kernel specialised for
 // one kind carries only that kind's code (registers, hence occupancy: kernels/pbd_solver_cuda.cu).
-template <bool kBend, typename T>
-INC_HD void projectFourParticleConstraintOf(const BlockView<T>& b, int c, const SolveContext<T>& ctx) {
+// `id`: the constraint's four particle ids (b.ids + offsets[c], or a backend's copy of them).
+template <bool kBend, typename T, typename Emit>
+INC_HD void projectFourParticleConstraintIds(const BlockView<T>& b, int c, const SolveContext<T>& ctx,
+                                             const std::int32_t* id, const Emit& emit) {
   const std::int32_t s0 = b.offsets[c];
   const T scale = ctx.jacobi ? ctx.omega * b.jacobi_scale[s0] : T(1);
   const Vec3<T>* x = ctx.x;
   const T* w = ctx.w;
-  const std::int32_t* id = b.ids + s0;
   const XpbdTerm<T> term = blockTerm(b, ctx, c);
   Vec3<T> dp[4];
   T dl;
@@ -187,8 +207,13 @@ INC_HD void projectFourParticleConstraintOf(const BlockView<T>& b, int c, const 
     for (int k = 0; k < 4; ++k) dp[k] = r.dp[k];
     dl = r.dlambda;
   }
-  for (int k = 0; k < 4; ++k) emitCorrection(b, ctx, s0 + k, dp[k], scale);
+  for (int k = 0; k < 4; ++k) emit(s0 + k, id[k], dp[k], scale);
   b.lambda[c].x += dl * scale;
+}
+
+template <bool kBend, typename T>
+INC_HD void projectFourParticleConstraintOf(const BlockView<T>& b, int c, const SolveContext<T>& ctx) {
+  projectFourParticleConstraintIds<kBend>(b, c, ctx, b.ids + b.offsets[c], EmitToBlock<T>{b, ctx});
 }
 
 template <typename T>
