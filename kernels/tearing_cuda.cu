@@ -178,7 +178,7 @@ __global__ void cornerScatterKernel(const std::int32_t* tris, int nh, const std:
 __global__ void sortRowsKernel(int n, const std::int32_t* off, std::int32_t* rows) {
   const int p = blockIdx.x * blockDim.x + threadIdx.x;
   if (p >= n) return;
-  tear::sortRow(rows + off[p], off[p + 1] - off[p]);
+  tear::sortRowLocal(rows + off[p], off[p + 1] - off[p]);
 }
 
 // n + 1 entries (entry n zero) so that the exclusive scan's entry n is the totals.

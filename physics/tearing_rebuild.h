@@ -134,6 +134,23 @@ INC_HD void sortRow(std::int32_t* a, int n) {
   }
 }
 
+// Rows of up to kLocalRow entries are built and sorted in a per-thread array and written once: on the device
+// that array is local memory, which L1 keeps, where sorting in place costs a dependent global load and store
+// per insertion step (the per-particle passes are one wave of threads, each as slow as its longest chain of
+// dependent loads). Longer rows are handled in place, with the same result.
+constexpr int kLocalRow = 32;
+
+INC_HD void sortRowLocal(std::int32_t* a, int n) {
+  if (n > kLocalRow) {
+    sortRow(a, n);
+    return;
+  }
+  std::int32_t t[kLocalRow];
+  for (int i = 0; i < n; ++i) t[i] = a[i];
+  sortRow(t, n);
+  for (int i = 0; i < n; ++i) a[i] = t[i];
+}
+
 // The particle -> triangles CSR (rows ascending once sorted) over the triangle list.
 struct Fan {
   const std::int32_t* tris = nullptr;        // 3 per triangle
@@ -243,7 +260,9 @@ INC_HD FanCounts fanCounts(const Fan& f, std::int32_t p, int fan_cache = FanRow:
     const std::int32_t v = row.corner(k);
     if (v == p || seenInFan(row, k, v)) continue;
     ++r.partners;
-    const bool bend = v > p ? bendingWings(row, v, p2, p3) : bendingWings(f, v, p, p2, p3);
+    // Edge p-v's triangles are the triangles of p's fan that contain v, whichever end is lower: p's own fan
+    // answers for both (no walk through v's fan in global memory).
+    const bool bend = bendingWings(row, v, p2, p3);
     if (v > p) {
       ++r.upper;
       r.bend_upper += bend ? 1 : 0;
@@ -300,8 +319,10 @@ template <typename T>
 INC_HD void writeFanEdges(const Fan& f, const FanOutputs<T>& o, std::int32_t p, int fan_cache = FanRow::kCache) {
   const FanCounts &b = o.off[p], &e = o.off[p + 1];
   const FanRow fr(f, p, fan_cache);
-  std::int32_t* row = o.pe_partner + b.partners;
+  std::int32_t* const out_row = o.pe_partner + b.partners;
   const int np = e.partners - b.partners, m = fr.corners();
+  std::int32_t local[kLocalRow];
+  std::int32_t* row = np <= kLocalRow ? local : out_row;
   int w = 0;
   for (int k = 0; k < m && w < np; ++k) {  // w < np: fanCounts counted exactly these, so this never cuts
     const std::int32_t v = fr.corner(k);
@@ -311,6 +332,8 @@ INC_HD void writeFanEdges(const Fan& f, const FanOutputs<T>& o, std::int32_t p, 
     if (!dup) row[w++] = v;
   }
   sortRow(row, w);
+  if (row == local)
+    for (int j = 0; j < w; ++j) out_row[j] = local[j];
   const int nup = e.upper - b.upper, nlow = np - nup;
   std::int32_t c = b.bend_upper;
   for (int k = 0; k < nup; ++k) {
@@ -344,8 +367,10 @@ INC_HD void writeFanIncidence(const Fan& f, const FanOutputs<T>& o, std::int32_t
   const int np = e.partners - b.partners, nlow = np - (e.upper - b.upper);
   for (int i = 0; i < nlow; ++i) o.dist_particle_slots[b.partners + i] = 2 * edgeNumber(o, row[i], p) + 1;
   if (!o.bend_ids) return;
-  std::int32_t* out = o.bend_particle_slots + b.bend_slots;
+  std::int32_t* const out_row = o.bend_particle_slots + b.bend_slots;
   const int cap = e.bend_slots - b.bend_slots;
+  std::int32_t local[kLocalRow];
+  std::int32_t* out = cap <= kLocalRow ? local : out_row;
   int w = 0;
   for (int i = 0; i < np && w < cap; ++i) {  // w < cap: fanCounts counted exactly these
     const std::int32_t edge = i < nlow ? (o.dist_particle_slots[b.partners + i] - 1) / 2 : b.upper + (i - nlow);
@@ -361,6 +386,8 @@ INC_HD void writeFanIncidence(const Fan& f, const FanOutputs<T>& o, std::int32_t
     if (c >= 0) out[w++] = 4 * c + (o.bend_ids[4 * c + 2] == p ? 2 : 3);
   }
   sortRow(out, w);
+  if (out == local)
+    for (int j = 0; j < w; ++j) out_row[j] = local[j];
 }
 
 }  // namespace inc::tear
