@@ -145,7 +145,7 @@ TearSortedRebuild<T> rebuildTearFans(const TearSheet<T>& s, const TearModelOptio
   for (std::size_t p = 0; p < n; ++p) off[p + 1] = tear::AddFanCounts()(off[p], tear::fanCounts(fan, std::int32_t(p), fan_cache));
   const tear::FanCounts total = off[n];
   const std::size_t ne = std::size_t(total.upper), nb = std::size_t(total.bend_upper);
-  if (std::size_t(total.partners) != 2 * ne || std::size_t(total.bend_slots) != 4 * nb)
+  if (std::size_t(total.partners) != 2 * ne)
     throw std::logic_error("rebuildTearFans: inconsistent counts (a degenerate or duplicated triangle?)");
   // 3, 4: rows, edges, constraints, incidence.
   PbdConstraintBlock<T>& d = r.distance;
@@ -190,7 +190,16 @@ TearSortedRebuild<T> rebuildTearFans(const TearSheet<T>& s, const TearModelOptio
   o.bend_particle_slots = b.particle_slots.data();
   for (std::size_t p = 0; p <= n; ++p) tear::writeFanOffsets(o, std::int32_t(p));
   for (std::size_t p = 0; p < n; ++p) tear::writeFanEdges(fan, o, std::int32_t(p), fan_cache);
-  for (std::size_t p = 0; p < n; ++p) tear::writeFanIncidence(fan, o, std::int32_t(p));
+  for (std::size_t e = 0; e < ne; ++e) tear::writeLowerDistanceSlot(o, std::int64_t(e));
+  // The bending rows: counts, exclusive scan, placement (ascending slots here, so the rows need no sort; the
+  // device places them in any order and sorts).
+  std::vector<std::int32_t> fill(n + 1, 0);
+  for (std::size_t q = 0; q < 4 * nb; ++q) ++fill[std::size_t(tear::bendingSlotParticle(o, std::int64_t(q)))];
+  b.particle_offsets[0] = 0;
+  for (std::size_t p = 0; p < n; ++p) b.particle_offsets[p + 1] = b.particle_offsets[p] + fill[p];
+  std::copy(b.particle_offsets.begin(), b.particle_offsets.end() - 1, fill.begin());
+  for (std::size_t q = 0; q < 4 * nb; ++q)
+    b.particle_slots[std::size_t(fill[std::size_t(tear::bendingSlotParticle(o, std::int64_t(q)))]++)] = std::int32_t(q);
   // 5: offsets and Jacobi scales, as commitBlockIncidence.
   std::vector<T> inv_mass(n);
   for (std::size_t i = 0; i < n; ++i) inv_mass[i] = s.fixed[i] ? T(0) : T(1) / s.mass[i];

@@ -34,7 +34,8 @@ TearSortedRebuild<T> rebuildTearSorted(const TearSheet<T>& s, const TearModelOpt
 //    order here; the device's atomic cursors give any order), each row sorted -> particle -> triangles;
 //  2 fanCounts per particle, exclusive scan over n + 1 entries (the totals last: the device's one read);
 //  3 writeFanOffsets and writeFanEdges per particle: partner rows, edges, constraints, own distance slots;
-//  4 writeFanIncidence per particle: the rest of the distance rows and the bending rows;
+//  4 writeLowerDistanceSlot per edge: the rest of the distance rows; the bending rows counted, scanned and
+//    filled from the bending constraints (the device fills them through atomic cursors and sorts each row);
 //  5 Jacobi scales per constraint (what PbdDevicePatch::commitBlockIncidence computes on the device).
 // Precondition: no degenerate or duplicated triangle (checkTearMesh). fan_cache: the per-thread fan copy's
 // capacity in triangles (tear::FanRow; tests pass 0 to force the uncached reads); the result never depends on it.

@@ -197,10 +197,25 @@ __global__ void fanEdgesKernel(tear::Fan f, tear::FanOutputs<T> o, int n) {
 }
 
 template <typename T>
-__global__ void fanIncidenceKernel(tear::Fan f, tear::FanOutputs<T> o, int n) {
-  const int p = blockIdx.x * blockDim.x + threadIdx.x;
-  if (p >= n) return;
-  tear::writeFanIncidence(f, o, p);
+__global__ void lowerDistanceSlotsKernel(tear::FanOutputs<T> o, int ne) {
+  const int e = blockIdx.x * blockDim.x + threadIdx.x;
+  if (e < ne) tear::writeLowerDistanceSlot(o, e);
+}
+
+// The bending rows as the corners' rows: counts (integer atomics: exact), a scan, placement through atomic
+// cursors (any order), then sortRowsKernel.
+template <typename T>
+__global__ void bendingSlotCountKernel(tear::FanOutputs<T> o, int slots, std::int32_t* count) {
+  const int s = blockIdx.x * blockDim.x + threadIdx.x;
+  if (s < slots) atomicAdd(count + tear::bendingSlotParticle(o, s), 1);
+}
+
+template <typename T>
+__global__ void bendingSlotScatterKernel(tear::FanOutputs<T> o, int slots, std::int32_t* count) {
+  const int s = blockIdx.x * blockDim.x + threadIdx.x;
+  if (s >= slots) return;
+  const std::int32_t p = tear::bendingSlotParticle(o, s);
+  o.bend_particle_slots[o.bend_particle_offsets[p] + atomicSub(count + p, 1) - 1] = s;
 }
 
 template <typename T>
@@ -574,7 +589,7 @@ class TearResident {
     tear::FanCounts total;
     INC_CUDA(cudaMemcpy(&total, fan_off_.data() + n, sizeof(total), cudaMemcpyDeviceToHost));
     const int ne = total.upper, nb = total.bend_upper;
-    if (total.partners != 2 * ne || total.bend_slots != 4 * nb)
+    if (total.partners != 2 * ne)
       throw InputError("tearing", "topology", "device rebuild: inconsistent counts (a degenerate or duplicated triangle)");
     stage("rebuild_edges");
     // 3: partner rows, edges as constraints, the distance rows' upper parts, CSR offsets.
@@ -608,10 +623,30 @@ class TearResident {
     fanEdgesKernel<T><<<gridFor(nz + 1), kBlock>>>(fan, o, n);
     INC_CUDA_LAUNCH("tear fan edges");
     stage("rebuild_adjacency");
-    // 4: the rest of the distance rows and the bending rows; 5: offsets, Jacobi scales, multipliers.
-    if (n > 0) {
-      fanIncidenceKernel<T><<<gridFor(nz), kBlock>>>(fan, o, n);
-      INC_CUDA_LAUNCH("tear fan incidence");
+    // 4: the rest of the distance rows (per edge) and the bending rows (from the bending constraints, as the
+    // corners' rows); 5: offsets, Jacobi scales, multipliers.
+    if (ne > 0) {
+      lowerDistanceSlotsKernel<T><<<gridFor(std::size_t(ne)), kBlock>>>(o, ne);
+      INC_CUDA_LAUNCH("tear lower distance slots");
+    }
+    if (bending_) {
+      const int bs = 4 * nb;
+      bend_count_.resize(nz + 1);
+      INC_CUDA(cudaMemsetAsync(bend_count_.data(), 0, bend_count_.bytes()));
+      if (bs > 0) {
+        bendingSlotCountKernel<T><<<gridFor(std::size_t(bs)), kBlock>>>(o, bs, bend_count_.data());
+        INC_CUDA_LAUNCH("tear bending slot counts");
+      }
+      // The same n + 1 int scan as step 1's (temp_ holds at least b1 bytes).
+      INC_CUDA(cub::DeviceScan::ExclusiveSum(temp_.data(), b1, bend_count_.data(), inc_b.particle_offsets, n + 1));
+      if (bs > 0) {
+        bendingSlotScatterKernel<T><<<gridFor(std::size_t(bs)), kBlock>>>(o, bs, bend_count_.data());
+        INC_CUDA_LAUNCH("tear bending slot rows");
+      }
+      if (n > 0) {
+        sortRowsKernel<<<gridFor(nz), kBlock>>>(n, inc_b.particle_offsets, inc_b.particle_slots);
+        INC_CUDA_LAUNCH("tear bending rows sorted");
+      }
     }
     patch_->commitBlockIncidence(0, ne);
     if (bending_) patch_->commitBlockIncidence(1, nb);
@@ -725,6 +760,7 @@ class TearResident {
       ids_, list_, c_tri_, h_opp_, h_opp_out_, head_, bend_, e_idx_, b_idx_, edge_a_, edge_b_, gather_ids_, pt_count_,
       edge_bend_;
   DeviceBuffer<tear::FanCounts> fan_counts_, fan_off_;
+  DeviceBuffer<std::int32_t> bend_count_;
   DeviceBuffer<std::uint32_t> c_key_, c_key_out_;
   DeviceBuffer<std::uint64_t> h_key_, h_key_out_, p_key_, p_key_out_;
   DeviceBuffer<int> counts_, moved_, backed_;

@@ -223,17 +223,13 @@ INC_HD bool bendingWings(const FanRow& r, std::int32_t b, std::int32_t& p2, std:
   p3 = w[0] < w[1] ? w[1] : w[0];
   return true;
 }
-// The same over a's fan in global memory (an edge seen from its upper particle or from a wing).
-INC_HD bool bendingWings(const Fan& f, std::int32_t a, std::int32_t b, std::int32_t& p2, std::int32_t& p3) {
-  return bendingWings(FanRow(f, a, 0), b, p2, p3);
-}
-
 // Per-particle counts; their exclusive scan numbers everything: partners (pe_offsets, and the distance block's
 // particle -> slot offsets, since a particle's distance slots are its bonds), upper partners (edges (p, b),
-// b > p: the edge numbers in (a, b) order), bending constraints on those edges (bending numbers in edge order)
-// and bending slots of p (the bending block's particle -> slot offsets).
+// b > p: the edge numbers in (a, b) order) and bending constraints on those edges (bending numbers in edge
+// order). The bending block's particle -> slot offsets are counted from its constraints once they exist
+// (countBendingSlot): a particle's wing slots would need the fans of its opposite edges' ends.
 struct FanCounts {
-  std::int32_t partners = 0, upper = 0, bend_upper = 0, bend_slots = 0;
+  std::int32_t partners = 0, upper = 0, bend_upper = 0;
 };
 struct AddFanCounts {
   INC_HD FanCounts operator()(const FanCounts& x, const FanCounts& y) const {
@@ -241,15 +237,14 @@ struct AddFanCounts {
     r.partners = x.partners + y.partners;
     r.upper = x.upper + y.upper;
     r.bend_upper = x.bend_upper + y.bend_upper;
-    r.bend_slots = x.bend_slots + y.bend_slots;
     return r;
   }
 };
 
 // p's partners are the distinct other vertices of its triangles (an edge joins every two vertices of a
-// triangle, so this is rebuildTopology's pe row: partners below p, then above, both ascending). p takes a
-// bending slot in every bending constraint of an edge at p (slot 0 or 1) and of the edge opposite p in each
-// of its triangles (a wing: slot 2 or 3).
+// triangle, so this is rebuildTopology's pe row: partners below p, then above, both ascending); its upper edges
+// (p, v), v > p, and those of them with a bending constraint (bendingWings over p's own fan, which holds both
+// triangles of the edge).
 // fan_cache: FanRow's capacity (tests pass 0 to force the uncached reads).
 INC_HD FanCounts fanCounts(const Fan& f, std::int32_t p, int fan_cache = FanRow::kCache) {
   FanCounts r;
@@ -260,20 +255,10 @@ INC_HD FanCounts fanCounts(const Fan& f, std::int32_t p, int fan_cache = FanRow:
     const std::int32_t v = row.corner(k);
     if (v == p || seenInFan(row, k, v)) continue;
     ++r.partners;
-    // Edge p-v's triangles are the triangles of p's fan that contain v, whichever end is lower: p's own fan
-    // answers for both (no walk through v's fan in global memory).
-    const bool bend = bendingWings(row, v, p2, p3);
     if (v > p) {
       ++r.upper;
-      r.bend_upper += bend ? 1 : 0;
+      r.bend_upper += bendingWings(row, v, p2, p3) ? 1 : 0;
     }
-    r.bend_slots += bend ? 1 : 0;
-  }
-  for (int q = 0; q < row.count; ++q) {
-    std::int32_t u = 0, v = 0;
-    row.opposite(q, u, v);
-    if (u == v || u == p || v == p) continue;  // degenerate triangle: no edge opposite p
-    r.bend_slots += bendingWings(f, u < v ? u : v, u < v ? v : u, p2, p3) ? 1 : 0;
   }
   return r;
 }
@@ -308,13 +293,12 @@ INC_HD void writeFanOffsets(const FanOutputs<T>& o, std::int32_t p) {
   const FanCounts& b = o.off[p];
   if (o.pe_offsets) o.pe_offsets[p] = b.partners;
   if (o.dist_particle_offsets) o.dist_particle_offsets[p] = b.partners;
-  if (o.bend_ids && o.bend_particle_offsets) o.bend_particle_offsets[p] = b.bend_slots;
 }
 
 // Pass 2 for particle p < n: its partner row (ascending), its upper edges (p, b) as distance constraints (and
 // bending constraints where the edge has two triangles), their number of bending constraint, and p's own
 // distance slots 2 e of those edges (the upper part of its distance row; the lower part needs the partners'
-// rows: writeFanIncidence).
+// rows: writeLowerDistanceSlot).
 template <typename T>
 INC_HD void writeFanEdges(const Fan& f, const FanOutputs<T>& o, std::int32_t p, int fan_cache = FanRow::kCache) {
   const FanCounts &b = o.off[p], &e = o.off[p + 1];
@@ -349,45 +333,25 @@ INC_HD void writeFanEdges(const Fan& f, const FanOutputs<T>& o, std::int32_t p, 
   }
 }
 
-// Number of edge a-b (a < b, an edge of the mesh): a's first edge plus b's rank among a's upper partners.
+// Pass 3 for edge e = (a, b), a < b (after writeFanEdges of every particle): slot 2 e + 1 in b's distance row.
+// The row's lower part lists b's partners below b ascending, and b's edges from below are numbered in the same
+// order (by their lower end), so the slot's place is a's rank there: one search in b's own row.
 template <typename T>
-INC_HD std::int32_t edgeNumber(const FanOutputs<T>& o, std::int32_t a, std::int32_t b) {
-  const FanCounts &s = o.off[a], &e = o.off[a + 1];
-  const std::int32_t lo = e.partners - (e.upper - s.upper);  // a's upper partners: [lo, e.partners)
-  return s.upper + std::int32_t(lowerBound<std::int32_t>(o.pe_partner + lo, e.partners - lo, b));
+INC_HD void writeLowerDistanceSlot(const FanOutputs<T>& o, std::int64_t e) {
+  const std::int32_t a = o.dist_ids[2 * e], b = o.dist_ids[2 * e + 1];
+  const FanCounts &s = o.off[b], &t = o.off[b + 1];
+  const std::int32_t nlow = (t.partners - s.partners) - (t.upper - s.upper);
+  const std::int64_t k = lowerBound<std::int32_t>(o.pe_partner + s.partners, nlow, a);
+  o.dist_particle_slots[s.partners + k] = std::int32_t(2 * e + 1);
 }
 
-// Pass 3 for particle p < n (after writeFanEdges of every particle): the lower part of p's distance row (slot
-// 2 e + 1 of edge (q, p) for each partner q < p, ascending q = ascending e, all below p's upper edges) and p's
-// bending row, ascending slots: 4 c + 0 / 1 on bending edges at p, 4 c + 2 / 3 where p is a wing.
+// The bending block's particle -> slot CSR from its constraints (after writeFanEdges): slot s belongs to particle
+// bend_ids[s]. A backend counts the slots per particle (bendingSlotParticle), scans the counts into
+// bend_particle_offsets, places each slot in its particle's row (any order: atomic cursors on the device) and
+// sorts the rows ascending: the order the slots have in rebuildTopology + buildTearPbdModel.
 template <typename T>
-INC_HD void writeFanIncidence(const Fan& f, const FanOutputs<T>& o, std::int32_t p) {
-  const FanCounts &b = o.off[p], &e = o.off[p + 1];
-  const std::int32_t* row = o.pe_partner + b.partners;
-  const int np = e.partners - b.partners, nlow = np - (e.upper - b.upper);
-  for (int i = 0; i < nlow; ++i) o.dist_particle_slots[b.partners + i] = 2 * edgeNumber(o, row[i], p) + 1;
-  if (!o.bend_ids) return;
-  std::int32_t* const out_row = o.bend_particle_slots + b.bend_slots;
-  const int cap = e.bend_slots - b.bend_slots;
-  std::int32_t local[kLocalRow];
-  std::int32_t* out = cap <= kLocalRow ? local : out_row;
-  int w = 0;
-  for (int i = 0; i < np && w < cap; ++i) {  // w < cap: fanCounts counted exactly these
-    const std::int32_t edge = i < nlow ? (o.dist_particle_slots[b.partners + i] - 1) / 2 : b.upper + (i - nlow);
-    const std::int32_t c = o.edge_bend[edge];
-    if (c >= 0) out[w++] = 4 * c + (i < nlow ? 1 : 0);
-  }
-  const FanRow fr(f, p, 0);  // one pass over the fan: nothing to gain from a copy
-  for (int q = 0; q < fr.count && w < cap; ++q) {
-    std::int32_t u = 0, v = 0;
-    fr.opposite(q, u, v);
-    if (u == v || u == p || v == p) continue;
-    const std::int32_t c = o.edge_bend[edgeNumber(o, u < v ? u : v, u < v ? v : u)];
-    if (c >= 0) out[w++] = 4 * c + (o.bend_ids[4 * c + 2] == p ? 2 : 3);
-  }
-  sortRow(out, w);
-  if (out == local)
-    for (int j = 0; j < w; ++j) out_row[j] = local[j];
+INC_HD std::int32_t bendingSlotParticle(const FanOutputs<T>& o, std::int64_t s) {
+  return o.bend_ids[s];
 }
 
 }  // namespace inc::tear

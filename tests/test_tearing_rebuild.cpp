@@ -118,8 +118,8 @@ TEST(TearingRebuild, RowSortAndFanCounts) {
   EXPECT_EQ(a[0], -1);
   EXPECT_EQ(a[6], 12);
   tear::sortRow(a, 0);  // empty rows are fine
-  // A 40-spoke fan: the centre has 40 partners (all above it: 40 edges), each spoke has two triangles (40
-  // bending constraints at the centre), and the rim edges opposite it have one triangle each (no wing slots).
+  // A 40-spoke fan: the centre has 40 partners (all above it: 40 edges) and each spoke has two triangles (40
+  // bending constraints at the centre).
   TearSheet<double> s = fanSheet(40);
   s.rebuildTopology();
   tear::Fan f;
@@ -130,9 +130,8 @@ TEST(TearingRebuild, RowSortAndFanCounts) {
   EXPECT_EQ(c.partners, 40);
   EXPECT_EQ(c.upper, 40);
   EXPECT_EQ(c.bend_upper, 40);
-  EXPECT_EQ(c.bend_slots, 40);
   const tear::FanCounts unused = tear::fanCounts(f, 41);
-  EXPECT_EQ(unused.partners + unused.upper + unused.bend_upper + unused.bend_slots, 0);
+  EXPECT_EQ(unused.partners + unused.upper + unused.bend_upper, 0);
   // The fan copy (up to FanRow::kCache triangles) and the global reads count the same on a torn sheet.
   TearSheet<double> torn = tornSheet<double>(false, 8, 5);
   torn.rebuildTopology();
@@ -145,7 +144,6 @@ TEST(TearingRebuild, RowSortAndFanCounts) {
     ASSERT_EQ(a.partners, b.partners) << p;
     ASSERT_EQ(a.upper, b.upper) << p;
     ASSERT_EQ(a.bend_upper, b.bend_upper) << p;
-    ASSERT_EQ(a.bend_slots, b.bend_slots) << p;
     cached += torn.pt_offsets[p + 1] - torn.pt_offsets[p] <= tear::FanRow::kCache ? 1 : 0;
   }
   EXPECT_EQ(cached, int(torn.size())) << "a torn lattice's fans fit the copy";
