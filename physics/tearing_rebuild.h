@@ -59,29 +59,36 @@ INC_HD std::int64_t lowerBound(const K* keys, std::int64_t n, K v) {
   return lo;
 }
 
-// Writes unique edge e (the run starting at sorted half-edge h) as distance constraint e, and, when the edge
-// has exactly two triangles, bending constraint c (wings ascending). Rest values from rest positions, exactly
-// as buildTearPbdModel computes them.
 // Distance constraint e on edge a-b (a < b) and, when c >= 0 and bend_ids is set, bending constraint c with
 // wings w0, w1 (written ascending). Rest values from rest positions, exactly as buildTearPbdModel computes them.
+// Every rest position is read before the first store: the output pointers may alias `rest` as far as a compiler
+// knows, so a store between loads would order the loads behind it (on the device: one more dependent trip to
+// L2 per edge in a pass that is as slow as its longest thread).
 template <typename T>
 INC_HD void writeEdgeConstraint(std::int32_t a, std::int32_t b, std::int32_t w0, std::int32_t w1, std::int64_t e,
                                 std::int64_t c, const Vec3<T>* rest, T stretch_compliance, T bending_compliance,
                                 std::int32_t* edge_a, std::int32_t* edge_b, std::int32_t* dist_ids, T* dist_rest,
                                 T* dist_compliance, std::int32_t* bend_ids, T* bend_rest, T* bend_compliance) {
+  const bool bend = c >= 0 && bend_ids;
+  const std::int32_t p2 = w0 < w1 ? w0 : w1, p3 = w0 < w1 ? w1 : w0;
+  const Vec3<T> ra = rest[a], rb = rest[b];
+  Vec3<T> r2, r3;
+  if (bend) {
+    r2 = rest[p2];
+    r3 = rest[p3];
+  }
   if (edge_a) edge_a[e] = a;
   if (edge_b) edge_b[e] = b;
   dist_ids[2 * e] = a;
   dist_ids[2 * e + 1] = b;
-  dist_rest[e] = norm(rest[a] - rest[b]);
+  dist_rest[e] = norm(ra - rb);
   dist_compliance[e] = stretch_compliance;
-  if (c < 0 || !bend_ids) return;
-  const std::int32_t p2 = w0 < w1 ? w0 : w1, p3 = w0 < w1 ? w1 : w0;
+  if (!bend) return;
   bend_ids[4 * c] = a;
   bend_ids[4 * c + 1] = b;
   bend_ids[4 * c + 2] = p2;
   bend_ids[4 * c + 3] = p3;
-  bend_rest[c] = pbd::dihedralAngle(rest[a], rest[b], rest[p2], rest[p3]);
+  bend_rest[c] = pbd::dihedralAngle(ra, rb, r2, r3);
   bend_compliance[c] = bending_compliance;
 }
 
@@ -163,7 +170,7 @@ struct Fan {
 // loads are what they cost on the device); a larger fan is read from the global arrays every time. Both give
 // the same values, so the results never depend on the capacity (TearingRebuild.* check both).
 struct FanRow {
-  static constexpr int kCache = 12;  // triangles; a lattice vertex has 6, a split one fewer
+  static constexpr int kCache = 8;  // triangles; a lattice vertex has 6, a split one fewer (a smaller copy: less local memory)
   const Fan* fan;
   std::int32_t p;
   int count;    // triangles
