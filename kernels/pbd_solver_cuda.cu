@@ -102,6 +102,12 @@ __global__ void __launch_bounds__(kThreads, MinBlocks) projectKindKernel(pbd::Bl
 // - the corrections are staged in shared memory and the block's contiguous slot range is stored by the whole
 //   block at once. Stored directly, a thread's corrections are A x 12 contiguous bytes, so each store instruction
 //   of a warp touches one sector per thread and uses 4-5 of its 32 bytes (ncu on the 150k tearing sheet).
+// Register caps of the staged kernels, measured with ncu on the 150k tearing sheet (H100, 2026-11-27): bending
+// 29.0-30.4 us at 40 registers (12 blocks per SM), 25.3-26.0 at 48 (10), 26.4-27.1 at 63 (8), 29.3-30.6 at 76,
+// 35.9-38.3 at 32 (spills); distance 18.7-21.3 us uncapped (79 registers: the staging copy), 15.2-17.4 at 40,
+// 14.9-16.0 at 32 (16 blocks).
+constexpr int kStagedBendingMinBlocks = 10;
+constexpr int kStagedDistanceMinBlocks = 16;
 template <typename T, int Kind, int MinBlocks = 1>
 __global__ void __launch_bounds__(kThreads, MinBlocks) projectKindStagedKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx, int count) {
   constexpr int A = Kind == pbd::kDistance ? 2 : 4;
@@ -155,10 +161,10 @@ void launchProjection(const pbd::BlockView<T>& b, const pbd::SolveContext<T>& ct
   if (ctx.jacobi && !order) {
     switch (b.kind) {
       case pbd::kDistance:
-        projectKindStagedKernel<T, pbd::kDistance><<<blocks, kThreads, 0, stream>>>(b, ctx, count);
+        projectKindStagedKernel<T, pbd::kDistance, kStagedDistanceMinBlocks><<<blocks, kThreads, 0, stream>>>(b, ctx, count);
         return;
       case pbd::kBending:
-        projectKindStagedKernel<T, pbd::kBending, kFourParticleMinBlocks><<<blocks, kThreads, 0, stream>>>(b, ctx, count);
+        projectKindStagedKernel<T, pbd::kBending, kStagedBendingMinBlocks><<<blocks, kThreads, 0, stream>>>(b, ctx, count);
         return;
       case pbd::kTetVolume:
         projectKindStagedKernel<T, pbd::kTetVolume, kFourParticleMinBlocks><<<blocks, kThreads, 0, stream>>>(b, ctx, count);
