@@ -141,13 +141,47 @@ INC_HD void sortRow(std::int32_t* a, int n) {
   }
 }
 
+// Ascending bitonic sorting network over kNetworkRow values. Unrolled, every index is a constant, so on the device
+// the array stays in registers: no memory access at all, where an insertion sort waits on a load per step.
+constexpr int kNetworkRow = 16;
+
+INC_HD void sortNetwork(std::int32_t (&v)[kNetworkRow]) {
+  INC_UNROLL
+  for (int ks = 1; ks <= 4; ++ks) {  // merge blocks of k = 2^ks (kNetworkRow = 2^4)
+    INC_UNROLL
+    for (int js = ks - 1; js >= 0; --js) {  // compare partners j = 2^js apart
+      INC_UNROLL
+      for (int i = 0; i < kNetworkRow; ++i) {
+        const int l = i ^ (1 << js);
+        if (l <= i) continue;
+        const bool ascending = (i & (1 << ks)) == 0;
+        const std::int32_t a = v[i], b = v[l];
+        const bool swap = ascending ? a > b : a < b;
+        v[i] = swap ? b : a;
+        v[l] = swap ? a : b;
+      }
+    }
+  }
+}
+
 // Rows of up to kLocalRow entries are built and sorted in a per-thread array and written once: on the device
 // that array is local memory, which L1 keeps, where sorting in place costs a dependent global load and store
 // per insertion step (the per-particle passes are one wave of threads, each as slow as its longest chain of
-// dependent loads). Longer rows are handled in place, with the same result.
+// dependent loads); rows of up to kNetworkRow entries (a lattice vertex's triangles, bending slots and partners)
+// are sorted in registers by the network. Longer rows are handled in place. All give the same ascending row.
 constexpr int kLocalRow = 32;
 
 INC_HD void sortRowLocal(std::int32_t* a, int n) {
+  if (n <= kNetworkRow) {
+    std::int32_t v[kNetworkRow];
+    INC_UNROLL
+    for (int i = 0; i < kNetworkRow; ++i) v[i] = i < n ? a[i] : INT32_MAX;  // the padding sorts last
+    sortNetwork(v);
+    INC_UNROLL
+    for (int i = 0; i < kNetworkRow; ++i)
+      if (i < n) a[i] = v[i];
+    return;
+  }
   if (n > kLocalRow) {
     sortRow(a, n);
     return;
@@ -322,9 +356,12 @@ INC_HD void writeFanEdges(const Fan& f, const FanOutputs<T>& o, std::int32_t p, 
     for (int j = 0; j < w && !dup; ++j) dup = row[j] == v;
     if (!dup) row[w++] = v;
   }
-  sortRow(row, w);
-  if (row == local)
+  if (row == local) {
+    sortRowLocal(local, w);
     for (int j = 0; j < w; ++j) out_row[j] = local[j];
+  } else {
+    sortRow(row, w);
+  }
   const int nup = e.upper - b.upper, nlow = np - nup;
   std::int32_t c = b.bend_upper;
   for (int k = 0; k < nup; ++k) {

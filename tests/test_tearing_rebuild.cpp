@@ -111,6 +111,27 @@ TearSheet<double> fanSheet(int spokes) {
 
 }  // namespace
 
+// The three sorts behind sortRowLocal (register network up to 16, per-thread copy up to 32, in place beyond) give
+// std::sort's row for every length across their bounds, with repeated values and negative ones.
+TEST(TearingRebuild, RowSortsOfEveryLengthEqualStdSort) {
+  std::uint32_t state = 12345u;
+  for (int n = 0; n <= 40; ++n) {
+    for (int trial = 0; trial < 5; ++trial) {
+      std::vector<std::int32_t> row(std::size_t(n) + 1, 0);
+      for (int i = 0; i < n; ++i) {
+        state = state * 1664525u + 1013904223u;
+        row[std::size_t(i)] = std::int32_t(state >> 8) % 97 - 20;
+      }
+      row[std::size_t(n)] = 777;  // past the row: must stay untouched
+      std::vector<std::int32_t> want(row.begin(), row.begin() + n);
+      std::sort(want.begin(), want.end());
+      tear::sortRowLocal(row.data(), n);
+      ASSERT_EQ(std::vector<std::int32_t>(row.begin(), row.begin() + n), want) << "n " << n;
+      ASSERT_EQ(row[std::size_t(n)], 777) << "n " << n;
+    }
+  }
+}
+
 TEST(TearingRebuild, RowSortAndFanCounts) {
   std::int32_t a[] = {9, 3, 7, 3, -1, 12, 0};
   tear::sortRow(a, 7);
