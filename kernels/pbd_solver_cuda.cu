@@ -204,9 +204,7 @@ inline unsigned groupBlocksFor(std::int64_t n) { return blocksFor(n * pbdgroup::
 // sum in its order, with the loads of four slots issued before their additions (the slots are scattered lines
 // in L2; one at a time, each addition waited for two dependent loads).
 template <typename T>
-__global__ void gatherKernel(int n, pbd::BlockView<T> b, Vec3<T>* x) {
-  const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i >= n) return;
+__device__ __forceinline__ Vec3<T> gatherSum(const pbd::BlockView<T>& b, int i) {
   const std::int32_t k1 = b.particle_offsets[i + 1];
   std::int32_t k = b.particle_offsets[i];
   Vec3<T> sum;
@@ -220,7 +218,14 @@ __global__ void gatherKernel(int n, pbd::BlockView<T> b, Vec3<T>* x) {
     sum += d3;
   }
   for (; k < k1; ++k) sum += b.slot_corr[b.particle_slots[k]];
-  x[i] += sum;
+  return sum;
+}
+
+template <typename T>
+__global__ void gatherKernel(int n, pbd::BlockView<T> b, Vec3<T>* x) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= n) return;
+  x[i] += gatherSum(b, i);
 }
 
 template <typename T>
@@ -237,6 +242,21 @@ __global__ void contactKernel(int n, Vec3<T>* x, const T* r, const T* w, const p
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i >= n || !(w[i] > T(0))) return;
   x[i] = pbd::resolveContacts(x[i], r[i], planes, np, boxes, nb, tools_from, tools_to, nt, t);
+}
+
+// The last Jacobi block's gather and then the iteration's contacts, per particle in one pass: a particle's contact
+// reads only its own gathered position, so this is the two kernels' result (the same operations on each particle
+// in the same order) without the second pass over the positions and its launch.
+template <typename T>
+__global__ void gatherContactKernel(int n, pbd::BlockView<T> b, Vec3<T>* x, const T* r, const T* w,
+                                    const pbd::PlaneCollider<T>* planes, int np, const pbd::BoxCollider<T>* boxes,
+                                    int nb, const pbd::CapsuleCollider<T>* tools_from,
+                                    const pbd::CapsuleCollider<T>* tools_to, int nt, T t) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= n) return;
+  Vec3<T> xi = x[i] + gatherSum(b, i);
+  if (w[i] > T(0)) xi = pbd::resolveContacts(xi, r[i], planes, np, boxes, nb, tools_from, tools_to, nt, t);
+  x[i] = xi;
 }
 
 template <typename T>
@@ -1313,6 +1333,11 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
       if (n_att_ > 0) INC_CUDA(cudaMemsetAsync(att_lambda_.data(), 0, att_lambda_.bytes(), stream_));
       stageEnd(0, ev);
 
+      // Jacobi without attachments: the iteration's contacts ride on the last block's gather (gatherContactKernel).
+      int last_solved = -1;
+      for (std::size_t bi = 0; bi < blocks_.size(); ++bi)
+        if (blocks_[bi].solve && blocks_[bi].count > 0) last_solved = int(bi);
+      const bool fuse_contacts = ctx.jacobi && !profile_ && n_att_ == 0 && last_solved >= 0 && n_ > 0;
       for (int it = 0; it < p.iterations; ++it) {
         for (std::size_t bi = 0; bi < blocks_.size(); ++bi) {
           DeviceBlock<T>& d = blocks_[bi];
@@ -1325,8 +1350,15 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
             else
               launchProjection(b, ctx, nullptr, d.count, stream_);
             INC_CUDA_LAUNCH("pbd project (jacobi)");
-            gatherKernel<T><<<gn, kThreads, 0, stream_>>>(n_, b, x_.data());
-            INC_CUDA_LAUNCH("pbd gather");
+            if (fuse_contacts && int(bi) == last_solved) {
+              gatherContactKernel<T><<<gn, kThreads, 0, stream_>>>(n_, b, x_.data(), radii_.data(), w_.data(),
+                                                                   planes_.data(), n_planes_, boxes_.data(), n_boxes_,
+                                                                   tools_from_.data(), tools_to_.data(), n_tools_, t_end);
+              INC_CUDA_LAUNCH("pbd gather + contacts");
+            } else {
+              gatherKernel<T><<<gn, kThreads, 0, stream_>>>(n_, b, x_.data());
+              INC_CUDA_LAUNCH("pbd gather");
+            }
           } else {
             for (std::size_t k = 0; k + 1 < d.color_offsets.size(); ++k) {
               const int c0 = d.color_offsets[k], cnt = d.color_offsets[k + 1] - c0;
@@ -1350,7 +1382,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
         }
         stageEnd(1, ev);
         ev = stageBegin();
-        if (n_ > 0) {
+        if (n_ > 0 && !fuse_contacts) {
           contactKernel<T><<<gn, kThreads, 0, stream_>>>(n_, x_.data(), radii_.data(), w_.data(), planes_.data(),
                                                          n_planes_, boxes_.data(), n_boxes_, tools_from_.data(),
                                                          tools_to_.data(), n_tools_, t_end);
