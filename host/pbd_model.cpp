@@ -81,13 +81,7 @@ void finalizePbdModel(PbdModel<T>& model, bool coloring) {
     PbdConstraintBlock<T>& b = model.blocks[bi];
     const std::string key = std::string("blocks[") + std::to_string(bi) + "](" + pbdConstraintKindName(b.kind) + ")";
     validateBlock(b, n, key);
-    // particle -> slot CSR (counting sort keeps slots ascending per particle: deterministic gather order)
-    b.particle_offsets.assign(n + 1, 0);
-    for (std::int32_t p : b.ids) ++b.particle_offsets[p + 1];
-    for (std::size_t p = 0; p < n; ++p) b.particle_offsets[p + 1] += b.particle_offsets[p];
-    b.particle_slots.resize(b.ids.size());
-    std::vector<std::int32_t> fill(b.particle_offsets.begin(), b.particle_offsets.end() - 1);
-    for (std::size_t s = 0; s < b.ids.size(); ++s) b.particle_slots[fill[b.ids[s]]++] = std::int32_t(s);
+    fillParticleSlots(b, n);
     // Jacobi scale: a constraint's step is divided by the number of this block's constraints acting on its
     // busiest movable participant, so that each particle's summed correction is at most an average.
     b.jacobi_scale.assign(b.ids.size(), T(1));

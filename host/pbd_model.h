@@ -192,6 +192,19 @@ inline void validateFrameInput(std::size_t n, const PbdStepParams<T>& p, const P
       throw InputError(f, "tools", "capsule not finite or negative radius");
 }
 
+// A block's particle -> slot CSR from its ids (n particles): a counting sort, so each particle's slots are
+// ascending (the deterministic gather order). finalizePbdModel's first derived step, also for builders that
+// derive the rest themselves.
+template <typename T>
+void fillParticleSlots(PbdConstraintBlock<T>& b, std::size_t n) {
+  b.particle_offsets.assign(n + 1, 0);
+  for (std::int32_t p : b.ids) ++b.particle_offsets[std::size_t(p) + 1];
+  for (std::size_t p = 0; p < n; ++p) b.particle_offsets[p + 1] += b.particle_offsets[p];
+  b.particle_slots.resize(b.ids.size());
+  std::vector<std::int32_t> fill(b.particle_offsets.begin(), b.particle_offsets.end() - 1);
+  for (std::size_t s = 0; s < b.ids.size(); ++s) b.particle_slots[std::size_t(fill[std::size_t(b.ids[s])]++)] = std::int32_t(s);
+}
+
 // Fills the derived data of every block (particle->slot CSR, Jacobi scales, colouring unless `coloring` is
 // false: a Jacobi-only model, on which both backends refuse Gauss-Seidel) and validates the model; throws
 // InputError(file "pbd model", key, reason) on inconsistent sizes or indices.

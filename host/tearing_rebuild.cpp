@@ -157,7 +157,6 @@ TearSortedRebuild<T> rebuildTearFans(const TearSheet<T>& s, const TearModelOptio
   r.pe_partner.resize(2 * ne);
   r.edge_a.resize(ne);
   r.edge_b.resize(ne);
-  std::vector<std::int32_t> edge_bend(ne);
   d.ids.resize(2 * ne);
   d.rest.resize(ne);
   d.compliance.resize(ne);
@@ -177,7 +176,6 @@ TearSortedRebuild<T> rebuildTearFans(const TearSheet<T>& s, const TearModelOptio
   o.pe_partner = r.pe_partner.data();
   o.edge_a = r.edge_a.data();
   o.edge_b = r.edge_b.data();
-  o.edge_bend = edge_bend.data();
   o.dist_ids = d.ids.data();
   o.dist_rest = d.rest.data();
   o.dist_compliance = d.compliance.data();
@@ -191,15 +189,8 @@ TearSortedRebuild<T> rebuildTearFans(const TearSheet<T>& s, const TearModelOptio
   for (std::size_t p = 0; p <= n; ++p) tear::writeFanOffsets(o, std::int32_t(p));
   for (std::size_t p = 0; p < n; ++p) tear::writeFanEdges(fan, o, std::int32_t(p), fan_cache);
   for (std::size_t e = 0; e < ne; ++e) tear::writeLowerDistanceSlot(o, std::int64_t(e));
-  // The bending rows: counts, exclusive scan, placement (ascending slots here, so the rows need no sort; the
-  // device places them in any order and sorts).
-  std::vector<std::int32_t> fill(n + 1, 0);
-  for (std::size_t q = 0; q < 4 * nb; ++q) ++fill[std::size_t(tear::bendingSlotParticle(o, std::int64_t(q)))];
-  b.particle_offsets[0] = 0;
-  for (std::size_t p = 0; p < n; ++p) b.particle_offsets[p + 1] = b.particle_offsets[p] + fill[p];
-  std::copy(b.particle_offsets.begin(), b.particle_offsets.end() - 1, fill.begin());
-  for (std::size_t q = 0; q < 4 * nb; ++q)
-    b.particle_slots[std::size_t(fill[std::size_t(tear::bendingSlotParticle(o, std::int64_t(q)))]++)] = std::int32_t(q);
+  // The bending rows from the bending constraints (the device counts and places them through atomics and sorts).
+  fillParticleSlots(b, n);
   // 5: offsets and Jacobi scales, as commitBlockIncidence.
   std::vector<T> inv_mass(n);
   for (std::size_t i = 0; i < n; ++i) inv_mass[i] = s.fixed[i] ? T(0) : T(1) / s.mass[i];

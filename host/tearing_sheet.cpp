@@ -293,12 +293,7 @@ PbdModel<T> buildTearPbdModel(const TearSheet<T>& s, const TearModelOptions& opt
   }
   // finalizePbdModel's derived data without the colouring (valid by construction: ids from the mesh).
   for (PbdConstraintBlock<T>& b : m.blocks) {
-    b.particle_offsets.assign(n + 1, 0);
-    for (std::int32_t p : b.ids) ++b.particle_offsets[p + 1];
-    for (std::size_t p = 0; p < n; ++p) b.particle_offsets[p + 1] += b.particle_offsets[p];
-    b.particle_slots.resize(b.ids.size());
-    std::vector<std::int32_t> fill(b.particle_offsets.begin(), b.particle_offsets.end() - 1);
-    for (std::size_t q = 0; q < b.ids.size(); ++q) b.particle_slots[fill[b.ids[q]]++] = std::int32_t(q);
+    fillParticleSlots(b, n);
     b.jacobi_scale.assign(b.ids.size(), T(1));
     cpu::parallelFor(std::int64_t(b.count()), [&](std::int64_t c) {
       int busiest = 1;

@@ -159,20 +159,22 @@ __global__ void csrFromSorted64Kernel(int n, const std::uint64_t* sorted, int co
 }
 
 // Per-particle rebuild (physics/tearing_rebuild.h; rebuildTearFans in host/tearing_rebuild.h is its CPU
-// reference). Corner counts by integer atomics (exact, so deterministic); the scatter's atomic cursors give
-// each particle's row in any order, and sortRowsKernel puts it in the one ascending order.
-__global__ void cornerCountKernel(const std::int32_t* tris, int nh, std::int32_t* count) {
+// reference). A particle -> items CSR from the items' particles key[0 .. m) (the corners' vertices, or the bending
+// slots' particles): counts by integer atomics (exact, so deterministic), a scan, placement of item / per through
+// atomic cursors (any order within a row: the triangle of a corner, per = 3; the slot itself, per = 1), then
+// sortRowsKernel puts each row in the one ascending order.
+__global__ void rowCountKernel(const std::int32_t* key, int m, std::int32_t* count) {
   const int h = blockIdx.x * blockDim.x + threadIdx.x;
-  if (h >= nh) return;
-  atomicAdd(count + tris[h], 1);
+  if (h >= m) return;
+  atomicAdd(count + key[h], 1);
 }
 
-__global__ void cornerScatterKernel(const std::int32_t* tris, int nh, const std::int32_t* pt_off, std::int32_t* count,
-                                    std::int32_t* pt_tris) {
+__global__ void rowScatterKernel(const std::int32_t* key, int m, int per, const std::int32_t* off, std::int32_t* count,
+                                 std::int32_t* rows) {
   const int h = blockIdx.x * blockDim.x + threadIdx.x;
-  if (h >= nh) return;
-  const std::int32_t p = tris[h];
-  pt_tris[pt_off[p] + atomicSub(count + p, 1) - 1] = h / 3;
+  if (h >= m) return;
+  const std::int32_t p = key[h];
+  rows[off[p] + atomicSub(count + p, 1) - 1] = h / per;
 }
 
 __global__ void sortRowsKernel(int n, const std::int32_t* off, std::int32_t* rows) {
@@ -200,22 +202,6 @@ template <typename T>
 __global__ void lowerDistanceSlotsKernel(tear::FanOutputs<T> o, int ne) {
   const int e = blockIdx.x * blockDim.x + threadIdx.x;
   if (e < ne) tear::writeLowerDistanceSlot(o, e);
-}
-
-// The bending rows as the corners' rows: counts (integer atomics: exact), a scan, placement through atomic
-// cursors (any order), then sortRowsKernel.
-template <typename T>
-__global__ void bendingSlotCountKernel(tear::FanOutputs<T> o, int slots, std::int32_t* count) {
-  const int s = blockIdx.x * blockDim.x + threadIdx.x;
-  if (s < slots) atomicAdd(count + tear::bendingSlotParticle(o, s), 1);
-}
-
-template <typename T>
-__global__ void bendingSlotScatterKernel(tear::FanOutputs<T> o, int slots, std::int32_t* count) {
-  const int s = blockIdx.x * blockDim.x + threadIdx.x;
-  if (s >= slots) return;
-  const std::int32_t p = tear::bendingSlotParticle(o, s);
-  o.bend_particle_slots[o.bend_particle_offsets[p] + atomicSub(count + p, 1) - 1] = s;
 }
 
 template <typename T>
@@ -553,7 +539,7 @@ class TearResident {
     pt_tris_.resize(std::size_t(nh));
     INC_CUDA(cudaMemsetAsync(pt_count_.data(), 0, pt_count_.bytes()));
     if (nh > 0) {
-      cornerCountKernel<<<gridFor(nhz), kBlock>>>(tris_.data(), nh, pt_count_.data());
+      rowCountKernel<<<gridFor(nhz), kBlock>>>(tris_.data(), nh, pt_count_.data());
       INC_CUDA_LAUNCH("tear corner counts");
     }
     std::size_t b1 = 0, b2 = 0;
@@ -565,7 +551,7 @@ class TearResident {
     temp_.resize(std::max({b1, b2, std::size_t(1)}));
     INC_CUDA(cub::DeviceScan::ExclusiveSum(temp_.data(), b1, pt_count_.data(), pt_off_.data(), n + 1));
     if (nh > 0) {
-      cornerScatterKernel<<<gridFor(nhz), kBlock>>>(tris_.data(), nh, pt_off_.data(), pt_count_.data(), pt_tris_.data());
+      rowScatterKernel<<<gridFor(nhz), kBlock>>>(tris_.data(), nh, 3, pt_off_.data(), pt_count_.data(), pt_tris_.data());
       INC_CUDA_LAUNCH("tear corner scatter");
     }
     if (n > 0) {
@@ -595,7 +581,6 @@ class TearResident {
     // 3: partner rows, edges as constraints, the distance rows' upper parts, CSR offsets.
     pe_off_.resize(nz + 1);
     pe_partner_.resize(std::size_t(2 * ne));
-    edge_bend_.resize(std::max<std::size_t>(std::size_t(ne), 1));
     const PbdDeviceIncidence inc_d = patch_->reserveIncidence(0, std::size_t(ne));
     PbdDeviceIncidence inc_b;
     if (bending_) inc_b = patch_->reserveIncidence(1, std::size_t(nb));
@@ -607,7 +592,6 @@ class TearResident {
     o.bending_compliance = T(opt_.bending_compliance);
     o.pe_offsets = pe_off_.data();
     o.pe_partner = pe_partner_.data();
-    o.edge_bend = edge_bend_.data();
     o.dist_ids = dist.ids;
     o.dist_rest = dist.rest;
     o.dist_compliance = dist.compliance;
@@ -634,13 +618,14 @@ class TearResident {
       bend_count_.resize(nz + 1);
       INC_CUDA(cudaMemsetAsync(bend_count_.data(), 0, bend_count_.bytes()));
       if (bs > 0) {
-        bendingSlotCountKernel<T><<<gridFor(std::size_t(bs)), kBlock>>>(o, bs, bend_count_.data());
+        rowCountKernel<<<gridFor(std::size_t(bs)), kBlock>>>(bend.ids, bs, bend_count_.data());
         INC_CUDA_LAUNCH("tear bending slot counts");
       }
       // The same n + 1 int scan as step 1's (temp_ holds at least b1 bytes).
       INC_CUDA(cub::DeviceScan::ExclusiveSum(temp_.data(), b1, bend_count_.data(), inc_b.particle_offsets, n + 1));
       if (bs > 0) {
-        bendingSlotScatterKernel<T><<<gridFor(std::size_t(bs)), kBlock>>>(o, bs, bend_count_.data());
+        rowScatterKernel<<<gridFor(std::size_t(bs)), kBlock>>>(bend.ids, bs, 1, inc_b.particle_offsets, bend_count_.data(),
+                                                               inc_b.particle_slots);
         INC_CUDA_LAUNCH("tear bending slot rows");
       }
       if (n > 0) {
@@ -757,8 +742,7 @@ class TearResident {
   DeviceBuffer<T> k_, tau_, t_pred_;
   DeviceBuffer<Vec3<T>> dir_, gather_out_;
   DeviceBuffer<std::int32_t> tris_, pe_off_, pe_partner_, pt_off_, pt_tris_, yield_i32_, accept_i32_, rank_, partner_,
-      ids_, list_, c_tri_, h_opp_, h_opp_out_, head_, bend_, e_idx_, b_idx_, edge_a_, edge_b_, gather_ids_, pt_count_,
-      edge_bend_;
+      ids_, list_, c_tri_, h_opp_, h_opp_out_, head_, bend_, e_idx_, b_idx_, edge_a_, edge_b_, gather_ids_, pt_count_;
   DeviceBuffer<tear::FanCounts> fan_counts_, fan_off_;
   DeviceBuffer<std::int32_t> bend_count_;
   DeviceBuffer<std::uint32_t> c_key_, c_key_out_;

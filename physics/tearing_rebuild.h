@@ -171,19 +171,25 @@ INC_HD void sortNetwork(std::int32_t (&v)[kNetworkRow]) {
 // are sorted in registers by the network. Longer rows are handled in place. All give the same ascending row.
 constexpr int kLocalRow = 32;
 
-INC_HD void sortRowLocal(std::int32_t* a, int n) {
-  if (n <= kNetworkRow) {
-    std::int32_t v[kNetworkRow];
-    INC_UNROLL
-    for (int i = 0; i < kNetworkRow; ++i) v[i] = i < n ? a[i] : INT32_MAX;  // the padding sorts last
-    sortNetwork(v);
-    INC_UNROLL
-    for (int i = 0; i < kNetworkRow; ++i)
-      if (i < n) a[i] = v[i];
+// A row already in a per-thread array (or one too long for it): the network up to kNetworkRow, else in place.
+INC_HD void sortShortRow(std::int32_t* a, int n) {
+  if (n > kNetworkRow) {
+    sortRow(a, n);
     return;
   }
-  if (n > kLocalRow) {
-    sortRow(a, n);
+  std::int32_t v[kNetworkRow];
+  INC_UNROLL
+  for (int i = 0; i < kNetworkRow; ++i) v[i] = i < n ? a[i] : INT32_MAX;  // the padding sorts last
+  sortNetwork(v);
+  INC_UNROLL
+  for (int i = 0; i < kNetworkRow; ++i)
+    if (i < n) a[i] = v[i];
+}
+
+// A row in global memory.
+INC_HD void sortRowLocal(std::int32_t* a, int n) {
+  if (n <= kNetworkRow || n > kLocalRow) {
+    sortShortRow(a, n);
     return;
   }
   std::int32_t t[kLocalRow];
@@ -315,7 +321,6 @@ struct FanOutputs {
   std::int32_t* pe_partner = nullptr;  // off[n].partners
   std::int32_t* edge_a = nullptr;      // optional: off[n].upper each
   std::int32_t* edge_b = nullptr;
-  std::int32_t* edge_bend = nullptr;   // off[n].upper: the edge's bending constraint, -1 for none
   std::int32_t* dist_ids = nullptr;
   T* dist_rest = nullptr;
   T* dist_compliance = nullptr;
@@ -324,6 +329,9 @@ struct FanOutputs {
   std::int32_t* bend_ids = nullptr;
   T* bend_rest = nullptr;
   T* bend_compliance = nullptr;
+  // The bending block's particle -> slot CSR is not written per particle: slot s belongs to particle bend_ids[s],
+  // so a backend counts, scans and places the slots after writeFanEdges and sorts each row ascending (the order of
+  // rebuildTopology + buildTearPbdModel).
   std::int32_t* bend_particle_offsets = nullptr;  // n + 1
   std::int32_t* bend_particle_slots = nullptr;    // 4 per bending constraint
 };
@@ -356,12 +364,9 @@ INC_HD void writeFanEdges(const Fan& f, const FanOutputs<T>& o, std::int32_t p, 
     for (int j = 0; j < w && !dup; ++j) dup = row[j] == v;
     if (!dup) row[w++] = v;
   }
-  if (row == local) {
-    sortRowLocal(local, w);
+  sortShortRow(row, w);
+  if (row == local)
     for (int j = 0; j < w; ++j) out_row[j] = local[j];
-  } else {
-    sortRow(row, w);
-  }
   const int nup = e.upper - b.upper, nlow = np - nup;
   std::int32_t c = b.bend_upper;
   for (int k = 0; k < nup; ++k) {
@@ -371,7 +376,6 @@ INC_HD void writeFanEdges(const Fan& f, const FanOutputs<T>& o, std::int32_t p, 
     writeEdgeConstraint<T>(p, q, p2, p3, edge, bend ? c : -1, o.rest, o.stretch_compliance, o.bending_compliance,
                            o.edge_a, o.edge_b, o.dist_ids, o.dist_rest, o.dist_compliance, o.bend_ids, o.bend_rest,
                            o.bend_compliance);
-    o.edge_bend[edge] = bend ? c : -1;
     c += bend ? 1 : 0;
     o.dist_particle_slots[b.partners + nlow + k] = 2 * edge;
   }
@@ -387,15 +391,6 @@ INC_HD void writeLowerDistanceSlot(const FanOutputs<T>& o, std::int64_t e) {
   const std::int32_t nlow = (t.partners - s.partners) - (t.upper - s.upper);
   const std::int64_t k = lowerBound<std::int32_t>(o.pe_partner + s.partners, nlow, a);
   o.dist_particle_slots[s.partners + k] = std::int32_t(2 * e + 1);
-}
-
-// The bending block's particle -> slot CSR from its constraints (after writeFanEdges): slot s belongs to particle
-// bend_ids[s]. A backend counts the slots per particle (bendingSlotParticle), scans the counts into
-// bend_particle_offsets, places each slot in its particle's row (any order: atomic cursors on the device) and
-// sorts the rows ascending: the order the slots have in rebuildTopology + buildTearPbdModel.
-template <typename T>
-INC_HD std::int32_t bendingSlotParticle(const FanOutputs<T>& o, std::int64_t s) {
-  return o.bend_ids[s];
 }
 
 }  // namespace inc::tear
