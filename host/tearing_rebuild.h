@@ -37,10 +37,10 @@ TearSortedRebuild<T> rebuildTearSorted(const TearSheet<T>& s, const TearModelOpt
 //  4 writeLowerDistanceSlot per edge: the rest of the distance rows; the bending rows counted, scanned and
 //    filled from the bending constraints (the device fills them through atomic cursors and sorts each row);
 //  5 Jacobi scales per constraint (what PbdDevicePatch::commitBlockIncidence computes on the device).
-// Precondition: no degenerate or duplicated triangle (checkTearMesh). fan_cache: the per-thread fan copy's
-// capacity in triangles (tear::FanRow; tests pass 0 to force the uncached reads); the result never depends on it.
+// Precondition: no degenerate or duplicated triangle (checkTearMesh). fan_cache: the most triangles of a fan the
+// register path takes (tear::FanPairs; tests pass 0 to force the global reads); the result never depends on it.
 template <typename T>
 TearSortedRebuild<T> rebuildTearFans(const TearSheet<T>& s, const TearModelOptions& opt,
-                                     int fan_cache = tear::FanRow::kCache);
+                                     int fan_cache = tear::kFanPairs);
 
 }  // namespace inc

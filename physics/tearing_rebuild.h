@@ -205,42 +205,84 @@ struct Fan {
   const std::int32_t* pt_tris = nullptr;
 };
 
-// Particle p's fan as the per-particle passes read it: a fan of up to kCache triangles is copied once into a
-// per-thread array (registers / local memory: the passes read each corner many times, and gathered global
-// loads are what they cost on the device); a larger fan is read from the global arrays every time. Both give
-// the same values, so the results never depend on the capacity (TearingRebuild.* check both).
+// Particle p's fan read from the global arrays: the general path, for fans too large for FanPairs (and for the
+// tests, which force it to check that both paths give the same rows).
 struct FanRow {
-  static constexpr int kCache = 8;  // triangles; a lattice vertex has 6, a split one fewer (a smaller copy: less local memory)
   const Fan* fan;
   std::int32_t p;
-  int count;    // triangles
-  bool cached;
-  std::int32_t v[3 * kCache];
-  INC_HD FanRow(const Fan& f, std::int32_t p_, int cache = kCache)
-      : fan(&f), p(p_), count(f.pt_offsets[p_ + 1] - f.pt_offsets[p_]) {
-    cached = count <= cache && count <= kCache;
-    if (!cached) return;
-    for (int q = 0; q < count; ++q) {
-      const std::int32_t* t = f.tris + 3 * f.pt_tris[f.pt_offsets[p] + q];
-      v[3 * q] = t[0];
-      v[3 * q + 1] = t[1];
-      v[3 * q + 2] = t[2];
-    }
-  }
-  INC_HD const std::int32_t* triangle(int q) const {
-    return cached ? v + 3 * q : fan->tris + 3 * fan->pt_tris[fan->pt_offsets[p] + q];
-  }
+  int count;  // triangles
+  INC_HD FanRow(const Fan& f, std::int32_t p_) : fan(&f), p(p_), count(f.pt_offsets[p_ + 1] - f.pt_offsets[p_]) {}
+  INC_HD const std::int32_t* triangle(int q) const { return fan->tris + 3 * fan->pt_tris[fan->pt_offsets[p] + q]; }
   // Corner k: vertex k % 3 of the (k / 3)-th triangle (p itself is one of each triangle's three).
   INC_HD std::int32_t corner(int k) const { return triangle(k / 3)[k % 3]; }
   INC_HD int corners() const { return 3 * count; }
-  // The two vertices of the q-th triangle other than p, in the triangle's cyclic order after p.
-  INC_HD void opposite(int q, std::int32_t& u, std::int32_t& w) const {
-    const std::int32_t* t = triangle(q);
-    const int c = t[0] == p ? 0 : (t[1] == p ? 1 : 2);
-    u = t[(c + 1) % 3];
-    w = t[(c + 2) % 3];
+};
+
+// The fast path for fans of up to kFanPairs triangles (a lattice vertex has 6, a split one fewer): the two other
+// vertices of each triangle, 2 kFanPairs values in registers (every loop over them is unrolled, so no index is
+// dynamic and nothing goes to local memory), padded with INT32_MAX. Sorted by the register network they give p's
+// partners (the distinct values), and a value's run length is the number of p's triangles on that edge (two: a
+// bending constraint, whose wings are the values paired with it). On the device this replaced corner-by-corner
+// duplicate searches over a per-thread copy in local memory: those passes issued ~10k instructions per warp.
+constexpr int kFanPairs = kNetworkRow / 2;
+
+struct FanPairs {
+  std::int32_t o[kNetworkRow];  // (u, w) of triangle q at 2 q, 2 q + 1
+
+  // False (nothing loaded) when p has more than min(cache, kFanPairs) triangles.
+  INC_HD bool load(const Fan& f, std::int32_t p, int cache) {
+    const std::int32_t b = f.pt_offsets[p];
+    const int count = f.pt_offsets[p + 1] - b;
+    if (count > cache || count > kFanPairs) return false;
+    INC_UNROLL
+    for (int q = 0; q < kFanPairs; ++q) {
+      std::int32_t u = INT32_MAX, w = INT32_MAX;
+      if (q < count) {
+        const std::int32_t* t = f.tris + 3 * f.pt_tris[b + q];
+        const std::int32_t t0 = t[0], t1 = t[1], t2 = t[2];
+        u = t0 == p ? t1 : (t1 == p ? t2 : t0);
+        w = t0 == p ? t2 : (t1 == p ? t0 : t1);
+      }
+      o[2 * q] = u;
+      o[2 * q + 1] = w;
+    }
+    return true;
+  }
+
+  // The wings of edge p-b: true when exactly two of p's triangles contain b (bendingWings' rule).
+  INC_HD bool wings(std::int32_t b, std::int32_t& p2, std::int32_t& p3) const {
+    int found = 0;
+    std::int32_t w0 = -1, w1 = -1;
+    INC_UNROLL
+    for (int q = 0; q < kFanPairs; ++q) {
+      const std::int32_t u = o[2 * q], w = o[2 * q + 1];
+      if (u != b && w != b) continue;
+      const std::int32_t wing = u == b ? w : u;
+      if (found == 0) w0 = wing;
+      if (found == 1) w1 = wing;
+      ++found;
+    }
+    if (found != 2) return false;
+    p2 = w0 < w1 ? w0 : w1;
+    p3 = w0 < w1 ? w1 : w0;
+    return true;
+  }
+
+  // The values sorted ascending (padding last).
+  INC_HD void sorted(std::int32_t (&s)[kNetworkRow]) const {
+    INC_UNROLL
+    for (int i = 0; i < kNetworkRow; ++i) s[i] = o[i];
+    sortNetwork(s);
   }
 };
+
+// In sorted pair values s: whether s[i] starts a run (a distinct partner), and whether that run has length 2.
+INC_HD bool pairRunHead(const std::int32_t (&s)[kNetworkRow], int i) {
+  return s[i] != INT32_MAX && (i == 0 || s[i - 1] != s[i]);
+}
+INC_HD bool pairRunOfTwo(const std::int32_t (&s)[kNetworkRow], int i) {
+  return i + 1 < kNetworkRow && s[i + 1] == s[i] && !(i + 2 < kNetworkRow && s[i + 2] == s[i]);
+}
 
 // Whether corner k's vertex v already occurred among corners [0, k) of the fan (the first occurrence counts).
 INC_HD bool seenInFan(const FanRow& r, int k, std::int32_t v) {
@@ -292,10 +334,26 @@ struct AddFanCounts {
 // triangle, so this is rebuildTopology's pe row: partners below p, then above, both ascending); its upper edges
 // (p, v), v > p, and those of them with a bending constraint (bendingWings over p's own fan, which holds both
 // triangles of the edge).
-// fan_cache: FanRow's capacity (tests pass 0 to force the uncached reads).
-INC_HD FanCounts fanCounts(const Fan& f, std::int32_t p, int fan_cache = FanRow::kCache) {
+// fan_cache: the most triangles FanPairs takes (tests pass 0 to force FanRow's global reads); the counts never
+// depend on it.
+INC_HD FanCounts fanCounts(const Fan& f, std::int32_t p, int fan_cache = kFanPairs) {
   FanCounts r;
-  const FanRow row(f, p, fan_cache);
+  FanPairs fp;
+  if (fp.load(f, p, fan_cache)) {
+    std::int32_t s[kNetworkRow];
+    fp.sorted(s);
+    INC_UNROLL
+    for (int i = 0; i < kNetworkRow; ++i) {
+      if (!pairRunHead(s, i)) continue;
+      ++r.partners;
+      if (s[i] > p) {
+        ++r.upper;
+        r.bend_upper += pairRunOfTwo(s, i) ? 1 : 0;
+      }
+    }
+    return r;
+  }
+  const FanRow row(f, p);
   const int m = row.corners();
   std::int32_t p2 = 0, p3 = 0;
   for (int k = 0; k < m; ++k) {
@@ -349,30 +407,41 @@ INC_HD void writeFanOffsets(const FanOutputs<T>& o, std::int32_t p) {
 // distance slots 2 e of those edges (the upper part of its distance row; the lower part needs the partners'
 // rows: writeLowerDistanceSlot).
 template <typename T>
-INC_HD void writeFanEdges(const Fan& f, const FanOutputs<T>& o, std::int32_t p, int fan_cache = FanRow::kCache) {
+INC_HD void writeFanEdges(const Fan& f, const FanOutputs<T>& o, std::int32_t p, int fan_cache = kFanPairs) {
   const FanCounts &b = o.off[p], &e = o.off[p + 1];
-  const FanRow fr(f, p, fan_cache);
   std::int32_t* const out_row = o.pe_partner + b.partners;
-  const int np = e.partners - b.partners, m = fr.corners();
-  std::int32_t local[kLocalRow];
-  std::int32_t* row = np <= kLocalRow ? local : out_row;
-  int w = 0;
-  for (int k = 0; k < m && w < np; ++k) {  // w < np: fanCounts counted exactly these, so this never cuts
-    const std::int32_t v = fr.corner(k);
-    if (v == p) continue;
-    bool dup = false;
-    for (int j = 0; j < w && !dup; ++j) dup = row[j] == v;
-    if (!dup) row[w++] = v;
+  const int np = e.partners - b.partners, nup = e.upper - b.upper, nlow = np - nup;
+  FanPairs fp;
+  const bool pairs = fp.load(f, p, fan_cache);
+  if (pairs) {
+    std::int32_t s[kNetworkRow];
+    fp.sorted(s);
+    int w = 0;
+    INC_UNROLL
+    for (int i = 0; i < kNetworkRow; ++i)
+      if (pairRunHead(s, i)) out_row[w++] = s[i];
+  } else {
+    const FanRow fr(f, p);
+    const int m = fr.corners();
+    std::int32_t local[kLocalRow];
+    std::int32_t* row = np <= kLocalRow ? local : out_row;
+    int w = 0;
+    for (int k = 0; k < m && w < np; ++k) {  // w < np: fanCounts counted exactly these, so this never cuts
+      const std::int32_t v = fr.corner(k);
+      if (v == p) continue;
+      bool dup = false;
+      for (int j = 0; j < w && !dup; ++j) dup = row[j] == v;
+      if (!dup) row[w++] = v;
+    }
+    sortShortRow(row, w);
+    if (row == local)
+      for (int j = 0; j < w; ++j) out_row[j] = local[j];
   }
-  sortShortRow(row, w);
-  if (row == local)
-    for (int j = 0; j < w; ++j) out_row[j] = local[j];
-  const int nup = e.upper - b.upper, nlow = np - nup;
   std::int32_t c = b.bend_upper;
   for (int k = 0; k < nup; ++k) {
-    const std::int32_t q = row[nlow + k], edge = b.upper + k;
+    const std::int32_t q = out_row[nlow + k], edge = b.upper + k;
     std::int32_t p2 = -1, p3 = -1;
-    const bool bend = bendingWings(fr, q, p2, p3);
+    const bool bend = pairs ? fp.wings(q, p2, p3) : bendingWings(FanRow(f, p), q, p2, p3);
     writeEdgeConstraint<T>(p, q, p2, p3, edge, bend ? c : -1, o.rest, o.stretch_compliance, o.bending_compliance,
                            o.edge_a, o.edge_b, o.dist_ids, o.dist_rest, o.dist_compliance, o.bend_ids, o.bend_rest,
                            o.bend_compliance);

@@ -153,7 +153,7 @@ TEST(TearingRebuild, RowSortAndFanCounts) {
   EXPECT_EQ(c.bend_upper, 40);
   const tear::FanCounts unused = tear::fanCounts(f, 41);
   EXPECT_EQ(unused.partners + unused.upper + unused.bend_upper, 0);
-  // The fan copy (up to FanRow::kCache triangles) and the global reads count the same on a torn sheet.
+  // The register path (fans of up to kFanPairs triangles) and the global reads count the same on a torn sheet.
   TearSheet<double> torn = tornSheet<double>(false, 8, 5);
   torn.rebuildTopology();
   f.tris = torn.tris.front().data();
@@ -165,9 +165,9 @@ TEST(TearingRebuild, RowSortAndFanCounts) {
     ASSERT_EQ(a.partners, b.partners) << p;
     ASSERT_EQ(a.upper, b.upper) << p;
     ASSERT_EQ(a.bend_upper, b.bend_upper) << p;
-    cached += torn.pt_offsets[p + 1] - torn.pt_offsets[p] <= tear::FanRow::kCache ? 1 : 0;
+    cached += torn.pt_offsets[p + 1] - torn.pt_offsets[p] <= tear::kFanPairs ? 1 : 0;
   }
-  EXPECT_EQ(cached, int(torn.size())) << "a torn lattice's fans fit the copy";
+  EXPECT_EQ(cached, int(torn.size())) << "a torn lattice's fans fit the register path";
 }
 
 // Fans far larger than a lattice's, an unused particle and a non-manifold edge: the per-particle rebuild has no
