@@ -38,7 +38,7 @@ struct Row {
 };
 
 struct Options {
-  bool profile = false, host_path = false, sorted_rebuild = false, stages = false;
+  bool profile = false, host_path = false, sorted_rebuild = false, stages = false, no_graph = false;
   int summary_every = 1;
 };
 
@@ -107,6 +107,7 @@ Row runCase(BackendKind backend, TearCriterion crit, std::int64_t particles, std
   sp.iterations = 5;
   sp.damping = 2.0f;
   sp.volume_preservation = false;
+  sp.use_graph = !opt.no_graph;
   TearingDriver<float> d(s, tp, mo, sp, backend);
   if (opt.host_path) {
     d.allow_device_resident = false;
@@ -219,6 +220,7 @@ int main(int argc, char** argv) {
   app.add_flag("--host-path", opt.host_path, "CUDA: host sheet + host model rebuild every tearing frame (the old path)");
   app.add_flag("--sorted-rebuild", opt.sorted_rebuild,
                "CUDA device path: re-derive the topology by the older radix sorts instead of per particle");
+  app.add_flag("--no-graph", opt.no_graph, "CUDA: launch every PBD frame directly (no CUDA graph), to measure the graph's part");
   app.add_option("--summary-every", opt.summary_every, "CUDA: PBD residual/finiteness summary every N frames");
   try {
     app.parse(argc, argv);

@@ -536,6 +536,10 @@ class PbdCpuBackend final : public PbdBackend<T> {
       w_[in.kinematic_ids[k]] = T(0);
       kinematic_of_[in.kinematic_ids[k]] = std::int32_t(k);
     }
+    if (in.kinematic_from_positions) {
+      kinematic_from_.resize(in.kinematic_ids.size());
+      for (std::size_t k = 0; k < in.kinematic_ids.size(); ++k) kinematic_from_[k] = state_.positions[in.kinematic_ids[k]];
+    }
     attach_lambda_.assign(in.attach_ids.size(), Vec3<T>());
 
     pbd::SolveContext<T> ctx;
@@ -603,6 +607,7 @@ class PbdCpuBackend final : public PbdBackend<T> {
                                         : nullptr;
     Clock::time_point t0;
 
+    const std::vector<Vec3<T>>& kin_from = in.kinematic_from_positions ? kinematic_from_ : in.kinematic_from;
     for (int s = 0; s < p.substeps; ++s) {
       const T t_end = T(s + 1) / T(p.substeps);
       if (lead) t0 = Clock::now();
@@ -610,7 +615,7 @@ class PbdCpuBackend final : public PbdBackend<T> {
       for (std::int64_t i = t.begin(ni), i1 = t.end(ni); i < i1; ++i) {
         pbd::predictParticle(x[i], v[i], x_prev_[i], w_[i], p.gravity, damp, dt);
         const std::int32_t k = kinematic_of_[i];
-        if (k >= 0) x[i] = pbd::lerp(in.kinematic_from[k], in.kinematic_to[k], t_end);
+        if (k >= 0) x[i] = pbd::lerp(kin_from[k], in.kinematic_to[k], t_end);
       }
       for (auto& l : lambda_) {
         const std::int64_t m = std::int64_t(l.size());
@@ -840,6 +845,7 @@ class PbdCpuBackend final : public PbdBackend<T> {
   std::vector<T> radii_next_;
   std::vector<std::uint8_t> active_;         // spheres whose radius is solved this frame
   std::vector<std::int32_t> kinematic_of_;   // per particle: its index in this frame's kinematic list, or -1
+  std::vector<Vec3<T>> kinematic_from_;      // the frame's start positions (PbdFrameInput::kinematic_from_positions)
   std::vector<std::vector<Vec3<T>>> lambda_;
   std::vector<std::vector<Vec3<T>>> slot_corr_;
   std::vector<std::vector<T>> alpha_tilde_;  // per block and multiplier: compliance / dt^2 of this frame

@@ -111,6 +111,9 @@ template <typename T>
 struct PbdFrameInput {
   std::vector<std::int32_t> kinematic_ids;
   std::vector<Vec3<T>> kinematic_from, kinematic_to;
+  // kinematic_from left empty: each kinematic particle starts the frame where it is (a caller whose state stays on
+  // the device need not download those positions only to send them back).
+  bool kinematic_from_positions = false;
   std::vector<std::int32_t> attach_ids;        // unique, not kinematic
   std::vector<Vec3<T>> attach_from, attach_to; // target at the frame's start and end (m)
   std::vector<T> attach_compliance;            // m/N, >= 0
@@ -164,7 +167,10 @@ inline void validateFrameInput(std::size_t n, const PbdStepParams<T>& p, const P
   if (!(p.jacobi_omega > T(0) && p.jacobi_omega < T(2))) throw InputError(f, "jacobi_omega", "must be in (0, 2)");
   if (!(p.damping >= T(0))) throw InputError(f, "damping", "must be >= 0");
   if (!(p.max_radius_growth >= T(1))) throw InputError(f, "max_radius_growth", "must be >= 1");
-  if (in.kinematic_from.size() != in.kinematic_ids.size() || in.kinematic_to.size() != in.kinematic_ids.size())
+  if (in.kinematic_from_positions && !in.kinematic_from.empty())
+    throw InputError(f, "kinematic_from", "must be empty with kinematic_from_positions");
+  if ((!in.kinematic_from_positions && in.kinematic_from.size() != in.kinematic_ids.size()) ||
+      in.kinematic_to.size() != in.kinematic_ids.size())
     throw InputError(f, "kinematic", "ids, from and to must have equal sizes");
   std::vector<std::uint8_t> seen(n, 0);
   for (std::size_t k = 0; k < in.kinematic_ids.size(); ++k) {
@@ -172,7 +178,8 @@ inline void validateFrameInput(std::size_t n, const PbdStepParams<T>& p, const P
     if (id < 0 || std::size_t(id) >= n) throw InputError(f, "kinematic_ids", "index out of range");
     if (seen[id]) throw InputError(f, "kinematic_ids", "duplicate index " + std::to_string(id));
     seen[id] = 1;
-    if (!isFinite(in.kinematic_from[k]) || !isFinite(in.kinematic_to[k])) throw InputError(f, "kinematic", "not finite");
+    if ((!in.kinematic_from_positions && !isFinite(in.kinematic_from[k])) || !isFinite(in.kinematic_to[k]))
+      throw InputError(f, "kinematic", "not finite");
   }
   if (in.attach_from.size() != in.attach_ids.size() || in.attach_to.size() != in.attach_ids.size() ||
       in.attach_compliance.size() != in.attach_ids.size())

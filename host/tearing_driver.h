@@ -52,11 +52,6 @@ class TearStepBackend {
     return 0;
   }
   virtual std::size_t residentSize() const { return 0; }
-  // Current positions of the given particles (a small gather and download).
-  virtual void gatherPositions(const std::vector<std::int32_t>& ids, std::vector<Vec3<T>>& out) {
-    (void)ids;
-    out.clear();
-  }
   // The device sheet into s. full: particles (rest, x, v, mass, fixed, k, tau_f) and triangles (the caller
   // rebuilds the adjacency; ref_normal and step are the caller's); else positions and velocities only (the
   // topology has not changed since the last full download).

@@ -4,6 +4,7 @@
 #include <cub/cub.cuh>
 
 #include <algorithm>
+#include <cfloat>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -14,6 +15,7 @@
 #include "kernels/bulk_upload.h"
 #include "kernels/cuda_check.h"
 #include "kernels/graph_capture.h"
+#include "kernels/pinned_staging.h"
 #include "kernels/device_buffer.h"
 #include "kernels/device_grow.h"
 #include "kernels/pbd_device_cuda.h"
@@ -29,7 +31,25 @@ namespace inc::cuda {
 namespace {
 
 constexpr int kThreads = 128;
-constexpr int kReduceBlocks = 256;  // fixed grid of the reductions: partials are summed on the host in order
+// Most blocks of a summary reduction (their partials are then reduced on the device in a fixed tree order, so the
+// result is the same every run for the same counts). The grid grows with the count up to this (reduceBlocksFor):
+// with a fixed 256 blocks of kThreads the residual pass over the 150k tearing sheet's ~450k constraints held 12 %
+// of the H100's warps and took 19 us (ncu, 2026-11-27).
+constexpr int kReduceBlocks = 1024;
+inline int reduceBlocksFor(std::int64_t count) {
+  return int(std::max<std::int64_t>(1, std::min<std::int64_t>(kReduceBlocks, (count + 4 * kThreads - 1) / (4 * kThreads))));
+}
+
+// The device copies of the counts a frame's kernels read (PbdCudaBackend::live_): entry 0 the particle count, entry
+// 1 + b block b's constraint count. Written by one small launch before a frame whenever a patch changed them.
+constexpr int kMaxLiveBlocks = 31;
+struct LiveCounts {
+  int v[1 + kMaxLiveBlocks];
+  int k;
+};
+__global__ void setLiveKernel(LiveCounts c, int* live) {
+  if (int(threadIdx.x) < c.k) live[threadIdx.x] = c.v[threadIdx.x];
+}
 
 inline unsigned blocksFor(std::int64_t n) { return unsigned((n + kThreads - 1) / kThreads); }
 
@@ -45,13 +65,19 @@ inline const char* kindName(PbdConstraintKind k) {
   return "block";
 }
 
+// The count a frame kernel stops at: its argument, or once the model was patched on the device the live count in
+// device memory (PbdCudaBackend::live_), so that a captured frame stays valid across patches. Unpatched models pass
+// no pointer and pay no load.
+__device__ __forceinline__ int liveCount(const int* live, int count) { return live ? *live : count; }
+
 // ----------------------------------------------------------------------------------------------
 // Kernels: each is one loop of the CPU backend (cpu_fallback/pbd_solver_cpu.cpp) with the same physics calls.
 
 template <typename T>
-__global__ void predictKernel(int n, Vec3<T>* x, Vec3<T>* v, Vec3<T>* x_prev, const T* w, Vec3<T> g, T damp, T dt) {
+__global__ void predictKernel(int n, const int* live_n, Vec3<T>* x, Vec3<T>* v, Vec3<T>* x_prev, const T* w, Vec3<T> g, T damp,
+                              T dt) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i >= n) return;
+  if (i >= liveCount(live_n, n)) return;
   pbd::predictParticle(x[i], v[i], x_prev[i], w[i], g, damp, dt);
 }
 
@@ -64,6 +90,12 @@ __global__ void kinematicKernel(int k, Vec3<T>* x, const std::int32_t* ids, cons
 }
 
 template <typename T>
+__global__ void gatherKinematicKernel(int k, const Vec3<T>* x, const std::int32_t* ids, Vec3<T>* from) {
+  const int q = blockIdx.x * blockDim.x + threadIdx.x;
+  if (q < k) from[q] = x[ids[q]];
+}
+
+template <typename T>
 __global__ void attachKernel(int k, Vec3<T>* x, const T* w, const std::int32_t* ids, const Vec3<T>* from,
                              const Vec3<T>* to, const T* compliance, Vec3<T>* lambda, bool xpbd, T dt, T t) {
   const int q = blockIdx.x * blockDim.x + threadIdx.x;
@@ -73,9 +105,9 @@ __global__ void attachKernel(int k, Vec3<T>* x, const T* w, const std::int32_t* 
 }
 
 template <typename T>
-__global__ void projectAllKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx) {
+__global__ void projectAllKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx, const int* live_count) {
   const int c = blockIdx.x * blockDim.x + threadIdx.x;
-  if (c >= b.count) return;
+  if (c >= liveCount(live_count, b.count)) return;
   pbd::projectConstraint(b, c, ctx);
 }
 
@@ -86,8 +118,9 @@ __global__ void projectAllKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx) 
 // 46.1 at 32 (spilling) on the H100 (ncu, 2026-11-27); distance needs 32 on its own.
 constexpr int kFourParticleMinBlocks = 12;
 template <typename T, int Kind, int MinBlocks = 1>
-__global__ void __launch_bounds__(kThreads, MinBlocks) projectKindKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx, const std::int32_t* order, int count) {
+__global__ void __launch_bounds__(kThreads, MinBlocks) projectKindKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx, const std::int32_t* order, int count, const int* live_count) {
   const int q = blockIdx.x * blockDim.x + threadIdx.x;
+  count = liveCount(live_count, count);
   if (q >= count) return;
   const int c = order ? order[q] : q;
   if constexpr (Kind == pbd::kDistance)
@@ -109,7 +142,8 @@ __global__ void __launch_bounds__(kThreads, MinBlocks) projectKindKernel(pbd::Bl
 constexpr int kStagedBendingMinBlocks = 10;
 constexpr int kStagedDistanceMinBlocks = 16;
 template <typename T, int Kind, int MinBlocks = 1>
-__global__ void __launch_bounds__(kThreads, MinBlocks) projectKindStagedKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx, int count) {
+__global__ void __launch_bounds__(kThreads, MinBlocks) projectKindStagedKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx, int count, const int* live_count) {
+  count = liveCount(live_count, count);
   constexpr int A = Kind == pbd::kDistance ? 2 : 4;
   // Raw bytes: a __shared__ array may not have a constructor (Vec3 zero-initialises).
   __shared__ __align__(16) unsigned char stage_bytes[kThreads * A * sizeof(Vec3<T>)];
@@ -154,45 +188,51 @@ __global__ void projectColorKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx
 }
 
 // Distance, bending and tet-volume blocks through their specialised kernel, other kinds through the generic ones.
+// Jacobi (order == nullptr): `count` sizes the grid; in a patched model it is a bucket (PbdCudaBackend::gridCount)
+// and *live_count the constraint count, read on the device so that a captured frame stays valid when a patch
+// changes it. A colour (order set): its `count` constraints.
 template <typename T>
 void launchProjection(const pbd::BlockView<T>& b, const pbd::SolveContext<T>& ctx, const std::int32_t* order, int count,
-                      cudaStream_t stream) {
+                      const int* live_count, cudaStream_t stream) {
   const unsigned blocks = unsigned((count + kThreads - 1) / kThreads);
+  if (order) live_count = nullptr;
   if (ctx.jacobi && !order) {
     switch (b.kind) {
       case pbd::kDistance:
-        projectKindStagedKernel<T, pbd::kDistance, kStagedDistanceMinBlocks><<<blocks, kThreads, 0, stream>>>(b, ctx, count);
+        projectKindStagedKernel<T, pbd::kDistance, kStagedDistanceMinBlocks><<<blocks, kThreads, 0, stream>>>(b, ctx, count, live_count);
         return;
       case pbd::kBending:
-        projectKindStagedKernel<T, pbd::kBending, kStagedBendingMinBlocks><<<blocks, kThreads, 0, stream>>>(b, ctx, count);
+        projectKindStagedKernel<T, pbd::kBending, kStagedBendingMinBlocks><<<blocks, kThreads, 0, stream>>>(b, ctx, count, live_count);
         return;
       case pbd::kTetVolume:
-        projectKindStagedKernel<T, pbd::kTetVolume, kFourParticleMinBlocks><<<blocks, kThreads, 0, stream>>>(b, ctx, count);
+        projectKindStagedKernel<T, pbd::kTetVolume, kFourParticleMinBlocks><<<blocks, kThreads, 0, stream>>>(b, ctx, count, live_count);
         return;
       default: break;
     }
   }
   switch (b.kind) {
-    case pbd::kDistance: projectKindKernel<T, pbd::kDistance><<<blocks, kThreads, 0, stream>>>(b, ctx, order, count); break;
+    case pbd::kDistance: projectKindKernel<T, pbd::kDistance><<<blocks, kThreads, 0, stream>>>(b, ctx, order, count, live_count); break;
     case pbd::kBending:
-      projectKindKernel<T, pbd::kBending, kFourParticleMinBlocks><<<blocks, kThreads, 0, stream>>>(b, ctx, order, count);
+      projectKindKernel<T, pbd::kBending, kFourParticleMinBlocks><<<blocks, kThreads, 0, stream>>>(b, ctx, order, count, live_count);
       break;
     case pbd::kTetVolume:
-      projectKindKernel<T, pbd::kTetVolume, kFourParticleMinBlocks><<<blocks, kThreads, 0, stream>>>(b, ctx, order, count);
+      projectKindKernel<T, pbd::kTetVolume, kFourParticleMinBlocks><<<blocks, kThreads, 0, stream>>>(b, ctx, order, count, live_count);
       break;
     default:
       if (order)
         projectColorKernel<T><<<blocks, kThreads, 0, stream>>>(b, ctx, order, count);
       else
-        projectAllKernel<T><<<blocks, kThreads, 0, stream>>>(b, ctx);
+        projectAllKernel<T><<<blocks, kThreads, 0, stream>>>(b, ctx, live_count);
   }
 }
 
 // Cluster kinds (shape matching, Laplacian): kGroup lanes per constraint (kernels/pbd_group_projection.cuh).
 // order == nullptr: constraints 0 .. count (Jacobi); else the colour's constraints order[0 .. count).
 template <typename T>
-__global__ void projectGroupKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx, const std::int32_t* order, int count) {
+__global__ void projectGroupKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx, const std::int32_t* order, int count,
+                                   const int* live_count) {
   const long long g = (long long)blockIdx.x * blockDim.x + threadIdx.x;
+  count = liveCount(live_count, count);
   const int q = int(g / pbdgroup::kGroup);
   const bool valid = q < count;  // no early return: the whole warp takes part in the shuffles
   pbdgroup::projectGroup(b, valid ? (order ? order[q] : q) : 0, valid, ctx, int(threadIdx.x) % pbdgroup::kGroup);
@@ -222,25 +262,25 @@ __device__ __forceinline__ Vec3<T> gatherSum(const pbd::BlockView<T>& b, int i) 
 }
 
 template <typename T>
-__global__ void gatherKernel(int n, pbd::BlockView<T> b, Vec3<T>* x) {
+__global__ void gatherKernel(int n, const int* live_n, pbd::BlockView<T> b, Vec3<T>* x) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i >= n) return;
+  if (i >= liveCount(live_n, n)) return;
   x[i] += gatherSum(b, i);
 }
 
 template <typename T>
-__global__ void rotationKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx) {
+__global__ void rotationKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx, const int* live_count) {
   const int c = blockIdx.x * blockDim.x + threadIdx.x;
-  if (c >= b.count) return;
+  if (c >= liveCount(live_count, b.count)) return;
   pbd::updateClusterRotation(b, c, ctx);
 }
 
 template <typename T>
-__global__ void contactKernel(int n, Vec3<T>* x, const T* r, const T* w, const pbd::PlaneCollider<T>* planes, int np,
-                              const pbd::BoxCollider<T>* boxes, int nb, const pbd::CapsuleCollider<T>* tools_from,
+__global__ void contactKernel(int n, const int* live_n, Vec3<T>* x, const T* r, const T* w, const pbd::PlaneCollider<T>* planes,
+                              int np, const pbd::BoxCollider<T>* boxes, int nb, const pbd::CapsuleCollider<T>* tools_from,
                               const pbd::CapsuleCollider<T>* tools_to, int nt, T t) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i >= n || !(w[i] > T(0))) return;
+  if (i >= liveCount(live_n, n) || !(w[i] > T(0))) return;
   x[i] = pbd::resolveContacts(x[i], r[i], planes, np, boxes, nb, tools_from, tools_to, nt, t);
 }
 
@@ -248,21 +288,21 @@ __global__ void contactKernel(int n, Vec3<T>* x, const T* r, const T* w, const p
 // reads only its own gathered position, so this is the two kernels' result (the same operations on each particle
 // in the same order) without the second pass over the positions and its launch.
 template <typename T>
-__global__ void gatherContactKernel(int n, pbd::BlockView<T> b, Vec3<T>* x, const T* r, const T* w,
+__global__ void gatherContactKernel(int n, const int* live_n, pbd::BlockView<T> b, Vec3<T>* x, const T* r, const T* w,
                                     const pbd::PlaneCollider<T>* planes, int np, const pbd::BoxCollider<T>* boxes,
                                     int nb, const pbd::CapsuleCollider<T>* tools_from,
                                     const pbd::CapsuleCollider<T>* tools_to, int nt, T t) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i >= n) return;
+  if (i >= liveCount(live_n, n)) return;
   Vec3<T> xi = x[i] + gatherSum(b, i);
   if (w[i] > T(0)) xi = pbd::resolveContacts(xi, r[i], planes, np, boxes, nb, tools_from, tools_to, nt, t);
   x[i] = xi;
 }
 
 template <typename T>
-__global__ void velocityKernel(int n, const Vec3<T>* x, const Vec3<T>* x_prev, Vec3<T>* v, T inv_dt) {
+__global__ void velocityKernel(int n, const int* live_n, const Vec3<T>* x, const Vec3<T>* x_prev, Vec3<T>* v, T inv_dt) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i >= n) return;
+  if (i >= liveCount(live_n, n)) return;
   v[i] = (x[i] - x_prev[i]) * inv_dt;
 }
 
@@ -296,9 +336,9 @@ __global__ void radiusKernel(int n, const Vec3<T>* x, const T* radii, T* radii_n
 }
 
 template <typename T>
-__global__ void restRadiiKernel(int n, T* radii, const T* rest_r) {
+__global__ void restRadiiKernel(int n, const int* live_n, T* radii, const T* rest_r) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i >= n) return;
+  if (i >= liveCount(live_n, n)) return;
   radii[i] = rest_r[i];
 }
 
@@ -366,6 +406,30 @@ __global__ void summaryKernel(int n, const Vec3<T>* x, const Vec3<T>* v, const T
     part_active[blockIdx.x] = double(sact[0]);
     part_ratio[blockIdx.x] = srat[0];
   }
+}
+
+// The summary's partial groups reduced on the device: the used[g] partials of group g (its reduction's grid) ->
+// totals[g], one block per group in a fixed tree order. Groups 0 .. 2 nd - 1 are the distance blocks' (max, sum)
+// pairs, then (min, sum, max) of summaryKernel. One small download instead of all the partials.
+struct FinishPlan {
+  int nd = 0;
+  int used[2 * kMaxLiveBlocks + 3] = {};
+};
+__global__ void __launch_bounds__(kReduceBlocks) finishPartialsKernel(const double* part, FinishPlan plan, double* totals) {
+  __shared__ double s[kReduceBlocks];
+  const int g = blockIdx.x, t = threadIdx.x, nd = plan.nd;
+  const int op = g < 2 * nd ? (g % 2 == 0 ? 2 : 0) : (g == 2 * nd ? 1 : (g == 2 * nd + 1 ? 0 : 2));  // 0 sum, 1 min, 2 max
+  const double identity = op == 0 ? 0.0 : (op == 1 ? DBL_MAX : -DBL_MAX);
+  s[t] = t < plan.used[g] ? part[std::size_t(g) * kReduceBlocks + t] : identity;
+  __syncthreads();
+  for (int h = kReduceBlocks / 2; h > 0; h /= 2) {
+    if (t < h) {
+      const double a = s[t], b = s[t + h];
+      s[t] = op == 0 ? a + b : (op == 1 ? (a < b ? a : b) : (a > b ? a : b));
+    }
+    __syncthreads();
+  }
+  if (t == 0) totals[g] = s[0];
 }
 
 // ----------------------------------------------------------------------------------------------
@@ -559,7 +623,11 @@ struct GraphKey {
   std::size_t kinematic = 0, tools = 0;
   std::size_t attached = 0;
   const void* ptrs[11] = {};  // frame-input buffers
+  // Grid sizes of the particle and per-block launches (PbdCudaBackend::gridCount: buckets once the model was patched,
+  // the counts themselves in the single-kernel frames, which take them as arguments).
   int n = 0;
+  int counts[kMaxLiveBlocks] = {};
+  bool patched = false;
   std::uint64_t topo = 0;     // PbdCudaBackend::topo_version_
 };
 
@@ -576,7 +644,8 @@ bool sameKey(const GraphKey<T>& a, const GraphKey<T>& b) {
          x.cluster_ctas == y.cluster_ctas &&
          a.kinematic == b.kinematic &&
          a.tools == b.tools && a.attached == b.attached && std::equal(a.ptrs, a.ptrs + 11, b.ptrs) &&
-         a.n == b.n && a.topo == b.topo;
+         a.n == b.n && std::equal(a.counts, a.counts + kMaxLiveBlocks, b.counts) && a.patched == b.patched &&
+         a.topo == b.topo;
 }
 
 template <typename T>
@@ -584,7 +653,10 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
  public:
   // A blocking stream: it orders itself after the synchronous cudaMemcpy uploads of DeviceBuffer (legacy
   // default stream), so a frame never reads an input whose DMA is still in flight.
-  PbdCudaBackend() { INC_CUDA(cudaStreamCreate(&stream_)); }
+  PbdCudaBackend() {
+    INC_CUDA(cudaStreamCreate(&stream_));
+    live_.resize(1 + kMaxLiveBlocks);  // one allocation for the backend's life: captured frames hold its address
+  }
   ~PbdCudaBackend() override {
     destroyGraph();
     for (cudaEvent_t e : events_) cudaEventDestroy(e);
@@ -601,7 +673,10 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
   // keeps the executable graph for cudaGraphExecUpdate: the topology version makes the key stale, so the graph
   // is re-captured before it is launched again.
   void setModel(const PbdModel<T>& m) override {
+    if (m.blocks.size() > std::size_t(kMaxLiveBlocks))
+      throw InputError("pbd model", "blocks", "at most " + std::to_string(kMaxLiveBlocks) + " constraint blocks on CUDA");
     ++topo_version_;
+    live_dirty_ = true;
     has_coloring_ = pbdModelHasColoring(m);
     patched_ = false;
     frame_count_ = 0;
@@ -664,7 +739,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     int reduced_blocks = 0;
     for (const DeviceBlock<T>& d : blocks_)
       if (d.kind == PbdConstraintKind::Distance && d.solve && d.count > 0) ++reduced_blocks;
-    bulk_.zero(partials_, std::size_t(2 * reduced_blocks + 3) * kReduceBlocks);
+    bulk_.zero(partials_, std::size_t(2 * reduced_blocks + 3) * (kReduceBlocks + 1));  // partials, then totals
     INC_CUDA(cudaDeviceSynchronize());  // no stream (this one or another) still reads the old model's buffers
     bulk_.flush(stream_);               // one wait for every copy and memset above
   }
@@ -711,6 +786,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     // Per-frame inputs (synchronous uploads: the previous frame has finished with these buffers).
     INC_CUDA(cudaStreamSynchronize(stream_));
     uploadFrameInput(in);
+    uploadLive();
 
     const bool jacobi = p.solver == PbdSolverKind::Jacobi;
     if (!jacobi && patched_)
@@ -758,12 +834,19 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
                                 tools_to_.data(),   w_.data(),         att_ids_.data(),     att_from_.data(),
                                 att_to_.data(),     att_comp_.data(),  att_lambda_.data()};
         std::copy(ptrs, ptrs + 11, key.ptrs);
-        key.n = n_;
+        const bool exact = singleKernelFrame(p);
+        key.n = exact ? n_ : gridCount(n_);
+        for (std::size_t bi = 0; bi < blocks_.size(); ++bi) {
+          const int c = blocks_[bi].count;
+          key.counts[bi] = exact ? c : gridCount(c);
+        }
+        key.patched = patched_;
         key.topo = topo_version_;
         const bool stale = !graph_exec_ || !sameKey(key, graph_key_);
-        // Right after a topology change (a tearing frame patches the model every frame) the frame is launched
+        // Right after a new model (a cut sets one every frame the blade enters new spheres) the frame is launched
         // directly: capturing and updating a graph costs more host time than it saves for one launch. The graph
-        // is captured once the topology has stayed the same for a frame.
+        // is captured once the model has stayed the same for a frame. A device patch (a tearing frame) changes
+        // only counts, which the kernels read from live_: the graph stays valid until a grid bucket changes.
         // (Measured 2026-11-27 on the 150k tearing sheet: capture + update every tearing frame made the solve's
         // host time 0.05-0.2 ms longer than direct launches.)
         const bool direct = stale && key.topo != last_direct_topo_;
@@ -853,7 +936,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     host_rest_radii_.resize(m, T(0));
     n_ = n_new;
     updateStaging();
-    ++topo_version_;
+    live_dirty_ = true;  // the frame's kernels read the count from live_ (no re-capture unless its bucket changes)
   }
 
   PbdDeviceBlock<T> reserveBlock(int block, std::size_t constraints) override {
@@ -1002,10 +1085,10 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     d.order.resize(0);
     d.color_offsets.assign(1, 0);
     // The summary's reduction partials: room for every block (a block that was empty at setModel may not be).
-    const std::size_t need = std::size_t(2 * blocks_.size() + 3) * kReduceBlocks;
+    const std::size_t need = std::size_t(2 * blocks_.size() + 3) * (kReduceBlocks + 1);
     if (partials_.size() < need) partials_.resize(need);
     patched_ = true;
-    ++topo_version_;
+    live_dirty_ = true;  // as appendParticles: counts travel through live_
   }
 
   // particle -> slot CSR: slots sorted by particle with a stable radix sort over the index bits (slots stay
@@ -1201,15 +1284,30 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
   void uploadFrameInput(const PbdFrameInput<T>& in) {
     // Inverse masses of this frame: kinematic particles get w = 0 (a device copy and a scatter of zeros on the
     // stream, after the synchronous id upload; no per-particle host array crosses the bus).
-    kin_ids_.upload(in.kinematic_ids);
+    // A grasp holds the same particles frame after frame: their ids cross the bus once.
+    if (in.kinematic_ids != kin_ids_host_) {
+      kin_ids_.upload(in.kinematic_ids);
+      kin_ids_host_ = in.kinematic_ids;
+    }
     if (n_ > 0) INC_CUDA(cudaMemcpyAsync(w_.data(), inv_mass_.data(), std::size_t(n_) * sizeof(T), cudaMemcpyDeviceToDevice, stream_));
     if (!in.kinematic_ids.empty()) {
       zeroKinematicKernel<T><<<blocksFor(std::int64_t(in.kinematic_ids.size())), kThreads, 0, stream_>>>(
           int(in.kinematic_ids.size()), w_.data(), kin_ids_.data());
       INC_CUDA_LAUNCH("pbd kinematic w");
     }
-    kin_from_.upload(in.kinematic_from);
-    kin_to_.upload(in.kinematic_to);
+    if (in.kinematic_from_positions) {
+      // The start positions gathered on the device (the previous frame's work is ordered before this on stream_).
+      kin_from_.resize(in.kinematic_ids.size());
+      if (!in.kinematic_ids.empty()) {
+        gatherKinematicKernel<T><<<blocksFor(std::int64_t(in.kinematic_ids.size())), kThreads, 0, stream_>>>(
+            int(in.kinematic_ids.size()), x_.data(), kin_ids_.data(), kin_from_.data());
+        INC_CUDA_LAUNCH("pbd kinematic start positions");
+      }
+    } else {
+      kin_from_.upload(in.kinematic_from);
+    }
+    kin_to_.resize(in.kinematic_to.size());  // the stream is idle (advanceFrame): the staging may be rewritten
+    kin_to_staging_.upload(kin_to_.data(), in.kinematic_to.data(), in.kinematic_to.size(), stream_);
     tools_from_.upload(in.tools_from);
     tools_to_.upload(in.tools_to);
     att_ids_.upload(in.attach_ids);
@@ -1240,11 +1338,54 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     return b;
   }
 
+  // Writes live_ when a patch or a new model changed the counts (one launch, ordered before the frame on stream_).
+  void uploadLive() {
+    if (!live_dirty_) return;
+    LiveCounts c{};
+    c.k = 1 + int(blocks_.size());
+    c.v[0] = n_;
+    for (std::size_t bi = 0; bi < blocks_.size(); ++bi) c.v[1 + bi] = blocks_[bi].count;
+    setLiveKernel<<<1, 1 + kMaxLiveBlocks, 0, stream_>>>(c, live_.data());
+    INC_CUDA_LAUNCH("pbd live counts");
+    live_dirty_ = false;
+  }
+
+  // Grid size of a launch over `count` particles or constraints: the count itself until the model is patched on the
+  // device, then a bucket (a multiple of max(2048, 1/32 of the next power of two)), so that a tearing frame's few
+  // hundred new particles and constraints keep the captured graph: its kernels stop at the live count, and it is
+  // re-captured when the count crosses into the next bucket (about every 3 % of growth). The bucket costs at most
+  // 1/32 more (empty) blocks.
+  int gridCount(int count) const {
+    if (!patched_ || count <= 0) return count;
+    int g = 2048;
+    while (g < count / 32) g *= 2;
+    return (count + g - 1) / g * g;
+  }
+
+  // Bytes a frame's memset clears in a buffer of the live count: its gridCount bucket within the capacity (at least
+  // the size), so that the captured size does not change with every patch.
+  template <typename U>
+  std::size_t bucketBytes(const DeviceBuffer<U>& b) const {
+    return std::min(capacityOf(b), std::size_t(gridCount(int(b.size())))) * sizeof(U);
+  }
+
+  // Whether the frame is one kernel (fused or cluster), which takes the counts as arguments.
+  bool singleKernelFrame(const PbdStepParams<T>& p) const {
+    const bool jacobi = p.solver == PbdSolverKind::Jacobi;
+    const bool cluster = !profile_ && cluster_ok_ && !patched_ && jacobi && n_ <= p.cluster_max_particles;
+    // The single-block frame beats per-block launches for Gauss-Seidel up to thousands of spheres (one launch
+    // instead of one per colour) but for Jacobi only up to a few hundred (H100: 1008 spheres 0.23 ms per
+    // iteration fused against 0.029 ms on launches), whatever fused_max_particles asks.
+    const int fused_limit = jacobi ? std::min(p.fused_max_particles, kFusedJacobiMaxParticles) : p.fused_max_particles;
+    return cluster || (!profile_ && n_ > 0 && n_ <= fused_limit && int(blocks_.size()) <= kMaxFusedBlocks);
+  }
+
   // Enqueues one whole frame on stream_ (captured into a graph, or run directly). No host synchronisation.
   void recordFrame(const PbdStepParams<T>& p) {
     const T dt = p.frame_dt / T(p.substeps);
     const T damp = std::exp(-p.damping * dt);
-    const unsigned gn = blocksFor(n_);
+    const unsigned gn = blocksFor(gridCount(n_));
+    const int* live_n = patched_ ? live_.data() : nullptr;
     pbd::SolveContext<T> ctx;
     ctx.x = x_.data();
     ctx.w = w_.data();
@@ -1257,12 +1398,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     ctx.rotation_iterations = p.rotation_iterations;
 
     const bool cluster = !profile_ && cluster_ok_ && !patched_ && ctx.jacobi && n_ <= p.cluster_max_particles;
-    // The single-block frame beats per-block launches for Gauss-Seidel up to thousands of spheres (one launch
-    // instead of one per colour) but for Jacobi only up to a few hundred (H100: 1008 spheres 0.23 ms per
-    // iteration fused against 0.029 ms on launches), whatever fused_max_particles asks.
-    const int fused_limit = ctx.jacobi ? std::min(p.fused_max_particles, kFusedJacobiMaxParticles) : p.fused_max_particles;
-    const bool fused =
-        cluster || (!profile_ && n_ > 0 && n_ <= fused_limit && int(blocks_.size()) <= kMaxFusedBlocks);
+    const bool fused = singleKernelFrame(p);
     last_path_ = cluster ? "cluster" : fused ? "fused" : "launches";
     if (fused) {
       FusedFrame<T> f;
@@ -1319,7 +1455,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
       const T t_end = T(s + 1) / T(p.substeps);
       std::size_t ev = stageBegin();
       if (n_ > 0) {
-        predictKernel<T><<<gn, kThreads, 0, stream_>>>(n_, x_.data(), v_.data(), x_prev_.data(), w_.data(), p.gravity,
+        predictKernel<T><<<gn, kThreads, 0, stream_>>>(n_, live_n, x_.data(), v_.data(), x_prev_.data(), w_.data(), p.gravity,
                                                        damp, dt);
         INC_CUDA_LAUNCH("pbd predict");
       }
@@ -1329,7 +1465,8 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
         INC_CUDA_LAUNCH("pbd kinematic");
       }
       for (DeviceBlock<T>& d : blocks_)
-        if (d.lambda.size()) INC_CUDA(cudaMemsetAsync(d.lambda.data(), 0, d.lambda.bytes(), stream_));
+        if (d.lambda.size())
+          INC_CUDA(cudaMemsetAsync(d.lambda.data(), 0, bucketBytes(d.lambda), stream_));
       if (n_att_ > 0) INC_CUDA(cudaMemsetAsync(att_lambda_.data(), 0, att_lambda_.bytes(), stream_));
       stageEnd(0, ev);
 
@@ -1344,19 +1481,21 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
           if (!d.solve || d.count == 0) continue;
           ev = stageBegin();  // profiling: each block is its own record (stage 5 + block index)
           const pbd::BlockView<T> b = view(d);
+          const int* live_count = patched_ ? live_.data() + 1 + bi : nullptr;
           if (ctx.jacobi) {
+            const int gc = gridCount(d.count);
             if (pbdgroup::usesGroup(b.kind))
-              projectGroupKernel<T><<<groupBlocksFor(d.count), kThreads, 0, stream_>>>(b, ctx, nullptr, d.count);
+              projectGroupKernel<T><<<groupBlocksFor(gc), kThreads, 0, stream_>>>(b, ctx, nullptr, gc, live_count);
             else
-              launchProjection(b, ctx, nullptr, d.count, stream_);
+              launchProjection(b, ctx, nullptr, gc, live_count, stream_);
             INC_CUDA_LAUNCH("pbd project (jacobi)");
             if (fuse_contacts && int(bi) == last_solved) {
-              gatherContactKernel<T><<<gn, kThreads, 0, stream_>>>(n_, b, x_.data(), radii_.data(), w_.data(),
+              gatherContactKernel<T><<<gn, kThreads, 0, stream_>>>(n_, live_n, b, x_.data(), radii_.data(), w_.data(),
                                                                    planes_.data(), n_planes_, boxes_.data(), n_boxes_,
                                                                    tools_from_.data(), tools_to_.data(), n_tools_, t_end);
               INC_CUDA_LAUNCH("pbd gather + contacts");
             } else {
-              gatherKernel<T><<<gn, kThreads, 0, stream_>>>(n_, b, x_.data());
+              gatherKernel<T><<<gn, kThreads, 0, stream_>>>(n_, live_n, b, x_.data());
               INC_CUDA_LAUNCH("pbd gather");
             }
           } else {
@@ -1364,9 +1503,10 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
               const int c0 = d.color_offsets[k], cnt = d.color_offsets[k + 1] - c0;
               if (cnt == 0) continue;
               if (pbdgroup::usesGroup(b.kind))
-                projectGroupKernel<T><<<groupBlocksFor(cnt), kThreads, 0, stream_>>>(b, ctx, d.order.data() + c0, cnt);
+                projectGroupKernel<T><<<groupBlocksFor(cnt), kThreads, 0, stream_>>>(b, ctx, d.order.data() + c0, cnt,
+                                                                                     nullptr);
               else
-                launchProjection(b, ctx, d.order.data() + c0, cnt, stream_);
+                launchProjection(b, ctx, d.order.data() + c0, cnt, nullptr, stream_);
               INC_CUDA_LAUNCH("pbd project (colour)");
             }
           }
@@ -1383,7 +1523,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
         stageEnd(1, ev);
         ev = stageBegin();
         if (n_ > 0 && !fuse_contacts) {
-          contactKernel<T><<<gn, kThreads, 0, stream_>>>(n_, x_.data(), radii_.data(), w_.data(), planes_.data(),
+          contactKernel<T><<<gn, kThreads, 0, stream_>>>(n_, live_n, x_.data(), radii_.data(), w_.data(), planes_.data(),
                                                          n_planes_, boxes_.data(), n_boxes_, tools_from_.data(),
                                                          tools_to_.data(), n_tools_, t_end);
           INC_CUDA_LAUNCH("pbd contacts");
@@ -1392,7 +1532,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
       }
       ev = stageBegin();
       if (n_ > 0) {
-        velocityKernel<T><<<gn, kThreads, 0, stream_>>>(n_, x_.data(), x_prev_.data(), v_.data(), T(1) / dt);
+        velocityKernel<T><<<gn, kThreads, 0, stream_>>>(n_, live_n, x_.data(), x_prev_.data(), v_.data(), T(1) / dt);
         INC_CUDA_LAUNCH("pbd velocities");
       }
       stageEnd(3, ev);
@@ -1401,7 +1541,8 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     std::size_t ev = stageBegin();
     if (rotation_block_ >= 0 && !blocks_[rotation_block_].solve && blocks_[rotation_block_].count > 0) {
       DeviceBlock<T>& d = blocks_[rotation_block_];
-      rotationKernel<T><<<blocksFor(d.count), kThreads, 0, stream_>>>(view(d), ctx);
+      rotationKernel<T><<<blocksFor(gridCount(d.count)), kThreads, 0, stream_>>>(view(d), ctx,
+                                                                                patched_ ? live_.data() + 1 + rotation_block_ : nullptr);
       INC_CUDA_LAUNCH("pbd rotations");
     }
     stageEnd(1, ev);
@@ -1422,8 +1563,8 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
           INC_CUDA(cudaMemcpyAsync(radii_.data(), radii_next_.data(), radii_.bytes(), cudaMemcpyDeviceToDevice, stream_));
         }
       } else {
-        INC_CUDA(cudaMemsetAsync(active_.data(), 0, active_.bytes(), stream_));
-        restRadiiKernel<T><<<gn, kThreads, 0, stream_>>>(n_, radii_.data(), rest_radii_.data());
+        INC_CUDA(cudaMemsetAsync(active_.data(), 0, bucketBytes(active_), stream_));
+        restRadiiKernel<T><<<gn, kThreads, 0, stream_>>>(n_, live_n, radii_.data(), rest_radii_.data());
         INC_CUDA_LAUNCH("pbd rest radii");
       }
     }
@@ -1438,9 +1579,11 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     double* part = partials_.data();
     std::size_t rcount = 0;
     int nd = 0;
+    FinishPlan plan;
     for (DeviceBlock<T>& d : blocks_) {
       if (d.kind != PbdConstraintKind::Distance || !d.solve || d.count == 0) continue;
-      residualKernel<T><<<kReduceBlocks, kThreads, 0, stream_>>>(view(d), x_.data(), p.xpbd, dt,
+      plan.used[2 * nd] = plan.used[2 * nd + 1] = reduceBlocksFor(d.count);
+      residualKernel<T><<<plan.used[2 * nd], kThreads, 0, stream_>>>(view(d), x_.data(), p.xpbd, dt,
                                                                   part + std::size_t(2 * nd) * kReduceBlocks,
                                                                   part + std::size_t(2 * nd + 1) * kReduceBlocks);
       INC_CUDA_LAUNCH("pbd residual");
@@ -1449,34 +1592,36 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     }
     double* sum_part = part + std::size_t(2 * nd) * kReduceBlocks;
     if (n_ > 0) {
-      summaryKernel<T><<<kReduceBlocks, kThreads, 0, stream_>>>(n_, x_.data(), v_.data(), radii_.data(),
+      plan.used[2 * nd] = plan.used[2 * nd + 1] = plan.used[2 * nd + 2] = reduceBlocksFor(n_);
+      summaryKernel<T><<<plan.used[2 * nd], kThreads, 0, stream_>>>(n_, x_.data(), v_.data(), radii_.data(),
                                                                  rest_radii_.data(), active_.data(), sum_part,
                                                                  sum_part + kReduceBlocks, sum_part + 2 * kReduceBlocks);
       INC_CUDA_LAUNCH("pbd summary");
     }
-    INC_CUDA(cudaStreamSynchronize(stream_));
-    if (nd == 0 && n_ == 0) return;
-    const std::size_t used = std::size_t(2 * nd + (n_ > 0 ? 3 : 0)) * kReduceBlocks;
-    host_partials_.resize(used);
-    INC_CUDA(cudaMemcpy(host_partials_.data(), part, used * sizeof(double), cudaMemcpyDeviceToHost));
+    const int groups = 2 * nd + (n_ > 0 ? 3 : 0);
+    if (groups == 0) {
+      INC_CUDA(cudaStreamSynchronize(stream_));
+      return;
+    }
+    // The totals live after the partials (partials_ has room: see setModel and commit).
+    double* totals = part + std::size_t(groups) * kReduceBlocks;
+    plan.nd = nd;
+    finishPartialsKernel<<<groups, kReduceBlocks, 0, stream_>>>(part, plan, totals);
+    INC_CUDA_LAUNCH("pbd summary totals");
+    host_partials_.resize(std::size_t(groups));
+    summary_staging_.download(host_partials_.data(), totals, std::size_t(groups), stream_);  // waits for the frame
     const double* h = host_partials_.data();
     double rmax = 0, rsum = 0;
-    for (int b = 0; b < nd; ++b)
-      for (int k = 0; k < kReduceBlocks; ++k) {
-        rmax = std::max(rmax, h[std::size_t(2 * b) * kReduceBlocks + k]);
-        rsum += h[std::size_t(2 * b + 1) * kReduceBlocks + k];
-      }
+    for (int b = 0; b < nd; ++b) {
+      rmax = std::max(rmax, h[2 * b]);
+      rsum += h[2 * b + 1];
+    }
     st.residual_max = rmax;
     st.residual_rms = rcount ? std::sqrt(rsum / double(rcount)) : 0.0;
     if (n_ > 0) {
-      const double* hs = h + std::size_t(2 * nd) * kReduceBlocks;
-      long long bad = n_, act = 0;
-      double rat = 1.0;
-      for (int k = 0; k < kReduceBlocks; ++k) {
-        bad = std::min(bad, (long long)hs[k]);
-        act += (long long)hs[kReduceBlocks + k];
-        rat = std::max(rat, hs[2 * kReduceBlocks + k]);
-      }
+      const double* hs = h + 2 * nd;
+      const long long bad = (long long)hs[0], act = (long long)hs[1];
+      const double rat = std::max(1.0, hs[2]);
       st.volume_active = int(act);
       st.max_radius_ratio = rat;
       if (bad < n_) {
@@ -1491,7 +1636,11 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
   BulkUpload bulk_;  // setModel's uploads
   GraphKey<T> graph_key_;
   bool has_coloring_ = true;  // Gauss-Seidel needs every solved block coloured (pbdModelHasColoring)
-  std::uint64_t topo_version_ = 0;  // bumped by every patch: the captured graph holds counts and pointers
+  std::uint64_t topo_version_ = 0;  // bumped by a new model and by a reallocation: the captured graph holds pointers
+  DeviceBuffer<int> live_;          // the counts the frame's kernels read (uploadLive)
+  std::vector<std::int32_t> kin_ids_host_;  // what kin_ids_ holds
+  PinnedStaging summary_staging_, kin_to_staging_;
+  bool live_dirty_ = true;
   std::uint64_t last_direct_topo_ = ~std::uint64_t(0);
   bool patched_ = false;            // a block was rebuilt on the device: no colouring (Jacobi only)
   int summary_every_ = 1;

@@ -2,6 +2,7 @@
 #include "kernels/tearing_cuda.h"
 
 #include <cub/cub.cuh>
+#include <thrust/iterator/counting_iterator.h>
 
 #include <algorithm>
 #include <chrono>
@@ -13,6 +14,7 @@
 #include "kernels/device_buffer.h"
 #include "kernels/device_grow.h"
 #include "kernels/pbd_device_cuda.h"
+#include "kernels/pinned_staging.h"
 #include "physics/tearing_phases.h"
 #include "physics/tearing_rebuild.h"
 
@@ -35,15 +37,22 @@ __global__ void detectKernel(tear::SheetView<T> s, int n, int criterion, T break
   t_pred[i] = d.t_pred;
 }
 
+// yield_accept (optional): (yield, accept) per particle, reduced to the step's two counts in one pass.
 template <typename T>
 __global__ void acceptKernel(tear::SheetView<T> s, int n, const std::uint8_t* yield, std::uint32_t seed,
-                             std::uint32_t step, std::uint8_t* accept, std::int32_t* accept_i32) {
+                             std::uint32_t step, std::uint8_t* accept, std::int32_t* accept_i32,
+                             int2* yield_accept = nullptr) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i >= n) return;
   const std::uint8_t a = tear::acceptSplit(s, yield, i, seed, step);
   accept[i] = a;
   accept_i32[i] = a;
+  if (yield_accept) yield_accept[i] = make_int2(yield[i], a);
 }
+
+struct AddInt2 {
+  __host__ __device__ int2 operator()(const int2& a, const int2& b) const { return make_int2(a.x + b.x, a.y + b.y); }
+};
 
 __global__ void iotaKernel(std::int32_t* out, int n) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
@@ -75,19 +84,6 @@ __global__ void triangleKernel(tear::SheetView<T> s, int nt, const std::uint8_t*
 
 // ----------------------------------------------------------------------------------------------
 // Device-resident rebuild (host/tearing_rebuild.h runs the same steps on the CPU as the reference).
-
-template <typename T>
-__global__ void detectResidentKernel(tear::SheetView<T> s, int n, int criterion, T break_strain, std::uint8_t* yield,
-                                     std::int32_t* yield_i32, std::int32_t* partner, Vec3<T>* dir, T* t_pred) {
-  const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i >= n) return;
-  const tear::Detection<T> d = tear::detectYield(s, i, criterion, break_strain);
-  yield[i] = d.yield;
-  yield_i32[i] = d.yield;
-  partner[i] = d.partner;
-  dir[i] = d.dir;
-  t_pred[i] = d.t_pred;
-}
 
 // Corner h of the triangle list: key its particle, value its triangle (sorted: particle -> triangles).
 __global__ void cornerKernel(const std::int32_t* tris, int nh, std::uint32_t* key, std::int32_t* tri) {
@@ -177,10 +173,26 @@ __global__ void rowScatterKernel(const std::int32_t* key, int m, int per, const 
   rows[off[p] + atomicSub(count + p, 1) - 1] = h / per;
 }
 
-__global__ void sortRowsKernel(int n, const std::int32_t* off, std::int32_t* rows) {
-  const int p = blockIdx.x * blockDim.x + threadIdx.x;
-  if (p >= n) return;
-  tear::sortRowLocal(rows + off[p], off[p + 1] - off[p]);
+// The block's rows are one contiguous range: loaded into shared memory with coalesced loads, sorted there per
+// thread, stored back coalesced. Each thread reading its own row from global memory made every load and store
+// instruction of a warp touch 32 different rows (ncu: the bending rows' sort was bound by L1 wavefronts, 27 us on
+// the 150k sheet). A block whose rows exceed the staging (average over kStagedRow entries) sorts in place.
+constexpr int kStagedRow = 16;
+__global__ void __launch_bounds__(kBlock) sortRowsKernel(int n, const std::int32_t* off, std::int32_t* rows) {
+  __shared__ std::int32_t stage[kBlock * kStagedRow];
+  const int p0 = blockIdx.x * kBlock, p1 = min(p0 + kBlock, n);
+  const std::int32_t b0 = off[p0], len = off[p1] - b0;
+  const bool staged = len <= kBlock * kStagedRow;  // the same for every thread of the block
+  if (staged) {
+    for (int k = int(threadIdx.x); k < len; k += kBlock) stage[k] = rows[b0 + k];
+    __syncthreads();
+  }
+  const int p = p0 + int(threadIdx.x);
+  if (p < n) tear::sortRowLocal(staged ? stage + (off[p] - b0) : rows + off[p], off[p + 1] - off[p]);
+  if (staged) {
+    __syncthreads();
+    for (int k = int(threadIdx.x); k < len; k += kBlock) rows[b0 + k] = stage[k];
+  }
 }
 
 // n + 1 entries (entry n zero) so that the exclusive scan's entry n is the totals.
@@ -190,8 +202,10 @@ __global__ void fanCountsKernel(tear::Fan f, int n, tear::FanCounts* counts) {
   counts[p] = p < n ? tear::fanCounts(f, p) : tear::FanCounts();
 }
 
+// Five blocks per SM (<= 48 registers): the ~150k threads of the leg sheet in one wave (56 registers uncapped left
+// four blocks per SM, 1.13 waves).
 template <typename T>
-__global__ void fanEdgesKernel(tear::Fan f, tear::FanOutputs<T> o, int n) {
+__global__ void __launch_bounds__(kBlock, 5) fanEdgesKernel(tear::Fan f, tear::FanOutputs<T> o, int n) {
   const int p = blockIdx.x * blockDim.x + threadIdx.x;
   if (p > n) return;
   tear::writeFanOffsets(o, p);
@@ -202,13 +216,6 @@ template <typename T>
 __global__ void lowerDistanceSlotsKernel(tear::FanOutputs<T> o, int ne) {
   const int e = blockIdx.x * blockDim.x + threadIdx.x;
   if (e < ne) tear::writeLowerDistanceSlot(o, e);
-}
-
-template <typename T>
-__global__ void gatherPositionsKernel(const Vec3<T>* x, const std::int32_t* ids, int k, Vec3<T>* out) {
-  const int q = blockIdx.x * blockDim.x + threadIdx.x;
-  if (q >= k) return;
-  out[q] = x[ids[q]];
 }
 
 template <typename T>
@@ -398,40 +405,41 @@ class TearResident {
     if (n == 0) return 0;
     const std::size_t nz = std::size_t(n);
     yield_.resize(nz);
-    yield_i32_.resize(nz);
+    yield_accept_.resize(nz);
     accept_.resize(nz);
     accept_i32_.resize(nz);
     rank_.resize(nz + 1);
     partner_.resize(nz);
     dir_.resize(nz);
     t_pred_.resize(nz);
-    ids_.resize(nz);
     list_.resize(nz);
+    ensureTemp();
     tear::SheetView<T> view = sheetView();
-    detectResidentKernel<T><<<gridFor(nz), kBlock>>>(view, n, int(p.criterion), p.break_strain, yield_.data(),
-                                                     yield_i32_.data(), partner_.data(), dir_.data(), t_pred_.data());
+    detectKernel<T><<<gridFor(nz), kBlock>>>(view, n, int(p.criterion), p.break_strain, yield_.data(), partner_.data(),
+                                             dir_.data(), t_pred_.data());
     INC_CUDA_LAUNCH("tear detect");
-    acceptKernel<T><<<gridFor(nz), kBlock>>>(view, n, yield_.data(), p.seed, step, accept_.data(), accept_i32_.data());
+    acceptKernel<T><<<gridFor(nz), kBlock>>>(view, n, yield_.data(), p.seed, step, accept_.data(), accept_i32_.data(),
+                                             yield_accept_.data());
     INC_CUDA_LAUNCH("tear accept");
-    iotaKernel<<<gridFor(nz), kBlock>>>(ids_.data(), n);
-    INC_CUDA_LAUNCH("tear iota");
-    std::size_t b1 = 0, b2 = 0, b3 = 0;
-    INC_CUDA(cub::DeviceScan::ExclusiveSum(nullptr, b1, accept_i32_.data(), rank_.data(), n));
-    INC_CUDA(cub::DeviceSelect::Flagged(nullptr, b2, ids_.data(), accept_.data(), list_.data(), counts_.data(), n));
-    INC_CUDA(cub::DeviceReduce::Sum(nullptr, b3, yield_i32_.data(), counts_.data() + 1, n));
-    temp_.resize(std::max({b1, b2, b3, std::size_t(1)}));
-    INC_CUDA(cub::DeviceScan::ExclusiveSum(temp_.data(), b1, accept_i32_.data(), rank_.data(), n));
-    INC_CUDA(cub::DeviceSelect::Flagged(temp_.data(), b2, ids_.data(), accept_.data(), list_.data(), counts_.data(), n));
-    INC_CUDA(cub::DeviceReduce::Sum(temp_.data(), b3, yield_i32_.data(), counts_.data() + 1, n));
-    // Synchronisation 1: the split count sizes the split launch and the particle append.
-    int cnt[2] = {0, 0};
-    INC_CUDA(cudaMemcpy(cnt, counts_.data(), sizeof(cnt), cudaMemcpyDeviceToHost));
-    const int splits = cnt[0];
+    // Synchronisation 1: the yield and split counts (one reduction); the split count sizes the split launch and
+    // the particle append. A frame without splits (most frames) stops here.
+    std::size_t bytes = temp_.capacity();
+    INC_CUDA(cub::DeviceReduce::Reduce(temp_.data(), bytes, yield_accept_.data(), yield_accept_sum_.data(), n, AddInt2(),
+                                       make_int2(0, 0)));
+    int2 cnt = make_int2(0, 0);
+    staging_.download(&cnt, yield_accept_sum_.data(), 1, cudaStreamLegacy);
+    const int splits = cnt.y;
     st.splits += splits;
-    st.yielding += cnt[1];
-    st.deferred += cnt[1] - splits;
+    st.yielding += cnt.x;
+    st.deferred += cnt.x - splits;
     stage("tear_detect");
     if (splits == 0) return 0;
+    // rank[i] = accepted particles before i (the new particle's index offset); list = the accepted ids, ascending.
+    bytes = temp_.capacity();
+    INC_CUDA(cub::DeviceScan::ExclusiveSum(temp_.data(), bytes, accept_i32_.data(), rank_.data(), n));
+    bytes = temp_.capacity();
+    INC_CUDA(cub::DeviceSelect::Flagged(temp_.data(), bytes, thrust::counting_iterator<std::int32_t>(0), accept_.data(),
+                                        list_.data(), counts_.data(), n));
 
     const int m = n + splits;
     patch_->reserveParticles(std::size_t(m));  // reallocates (and synchronises) only beyond the capacity
@@ -464,17 +472,6 @@ class TearResident {
     return splits;
   }
 
-  void gather(const std::vector<std::int32_t>& ids, std::vector<Vec3<T>>& out) {
-    out.resize(ids.size());
-    if (ids.empty()) return;
-    gather_ids_.upload(ids);
-    gather_out_.resize(ids.size());
-    gatherPositionsKernel<T><<<gridFor(ids.size()), kBlock>>>(patch_->deviceParticles().x, gather_ids_.data(),
-                                                              int(ids.size()), gather_out_.data());
-    INC_CUDA_LAUNCH("tear gather positions");
-    gather_out_.download(out.data(), ids.size());
-  }
-
   void download(TearSheet<T>& s, bool full) {
     INC_CUDA(cudaDeviceSynchronize());
     const PbdDeviceParticles<T> d = patch_->deviceParticles();
@@ -501,6 +498,27 @@ class TearResident {
   }
 
  private:
+  // CUB's scratch for every scan, selection and reduction of a step, sized once for the particle capacity (each
+  // algorithm's need grows with the item count, so the capacity's covers every smaller call): a size query is a
+  // host-side dispatch as costly as the call itself, and a step made ten of them.
+  void ensureTemp() {
+    const std::size_t cap = std::max<std::size_t>(patch_->deviceParticles().capacity, std::size_t(n_)) + 1;
+    if (cap <= temp_items_) return;
+    const int c = int(cap);
+    std::size_t b[5] = {0, 0, 0, 0, 0};
+    yield_accept_sum_.resize(1);
+    INC_CUDA(cub::DeviceReduce::Reduce(nullptr, b[0], yield_accept_.data(), yield_accept_sum_.data(), c, AddInt2(),
+                                       make_int2(0, 0)));
+    INC_CUDA(cub::DeviceScan::ExclusiveSum(nullptr, b[1], accept_i32_.data(), rank_.data(), c));
+    INC_CUDA(cub::DeviceSelect::Flagged(nullptr, b[2], thrust::counting_iterator<std::int32_t>(0), accept_.data(),
+                                        list_.data(), counts_.data(), c));
+    INC_CUDA(cub::DeviceScan::ExclusiveScan(nullptr, b[3], fan_counts_.data(), fan_off_.data(), tear::AddFanCounts(),
+                                            tear::FanCounts(), c));
+    INC_CUDA(cub::DeviceScan::ExclusiveSum(nullptr, b[4], pt_count_.data(), pt_off_.data(), c));
+    temp_.resize(std::max<std::size_t>(*std::max_element(b, b + 5), 1));
+    temp_items_ = cap;
+  }
+
   tear::SheetView<T> sheetView() {
     const PbdDeviceParticles<T> d = patch_->deviceParticles();
     tear::SheetView<T> v;
@@ -542,13 +560,10 @@ class TearResident {
       rowCountKernel<<<gridFor(nhz), kBlock>>>(tris_.data(), nh, pt_count_.data());
       INC_CUDA_LAUNCH("tear corner counts");
     }
-    std::size_t b1 = 0, b2 = 0;
-    INC_CUDA(cub::DeviceScan::ExclusiveSum(nullptr, b1, pt_count_.data(), pt_off_.data(), n + 1));
     fan_counts_.resize(nz + 1);
     fan_off_.resize(nz + 1);
-    INC_CUDA(cub::DeviceScan::ExclusiveScan(nullptr, b2, fan_counts_.data(), fan_off_.data(), tear::AddFanCounts(),
-                                            tear::FanCounts(), n + 1));
-    temp_.resize(std::max({b1, b2, std::size_t(1)}));
+    ensureTemp();  // sized for the particle capacity, which appendParticles kept above n
+    std::size_t b1 = temp_.capacity(), b2 = temp_.capacity();
     INC_CUDA(cub::DeviceScan::ExclusiveSum(temp_.data(), b1, pt_count_.data(), pt_off_.data(), n + 1));
     if (nh > 0) {
       rowScatterKernel<<<gridFor(nhz), kBlock>>>(tris_.data(), nh, 3, pt_off_.data(), pt_count_.data(), pt_tris_.data());
@@ -573,7 +588,7 @@ class TearResident {
     if (bending_) bend = patch_->reserveBlock(1, std::max<std::size_t>(nhz / 2, 1));
     // Synchronisation 2: the totals size the partner list and the PBD blocks' launches.
     tear::FanCounts total;
-    INC_CUDA(cudaMemcpy(&total, fan_off_.data() + n, sizeof(total), cudaMemcpyDeviceToHost));
+    staging_.download(&total, fan_off_.data() + n, 1, cudaStreamLegacy);
     const int ne = total.upper, nb = total.bend_upper;
     if (total.partners != 2 * ne)
       throw InputError("tearing", "topology", "device rebuild: inconsistent counts (a degenerate or duplicated triangle)");
@@ -621,7 +636,8 @@ class TearResident {
         rowCountKernel<<<gridFor(std::size_t(bs)), kBlock>>>(bend.ids, bs, bend_count_.data());
         INC_CUDA_LAUNCH("tear bending slot counts");
       }
-      // The same n + 1 int scan as step 1's (temp_ holds at least b1 bytes).
+      // The same n + 1 int scan as step 1's.
+      b1 = temp_.capacity();
       INC_CUDA(cub::DeviceScan::ExclusiveSum(temp_.data(), b1, bend_count_.data(), inc_b.particle_offsets, n + 1));
       if (bs > 0) {
         rowScatterKernel<<<gridFor(std::size_t(bs)), kBlock>>>(bend.ids, bs, 1, inc_b.particle_offsets, bend_count_.data(),
@@ -740,15 +756,17 @@ class TearResident {
   int n_ = 0, nt_ = 0;
   DeviceBuffer<std::uint8_t> fixed_, yield_, accept_;
   DeviceBuffer<T> k_, tau_, t_pred_;
-  DeviceBuffer<Vec3<T>> dir_, gather_out_;
-  DeviceBuffer<std::int32_t> tris_, pe_off_, pe_partner_, pt_off_, pt_tris_, yield_i32_, accept_i32_, rank_, partner_,
-      ids_, list_, c_tri_, h_opp_, h_opp_out_, head_, bend_, e_idx_, b_idx_, edge_a_, edge_b_, gather_ids_, pt_count_;
+  DeviceBuffer<Vec3<T>> dir_;
+  DeviceBuffer<std::int32_t> tris_, pe_off_, pe_partner_, pt_off_, pt_tris_, accept_i32_, rank_, partner_, list_, c_tri_, h_opp_, h_opp_out_, head_, bend_, e_idx_, b_idx_, edge_a_, edge_b_, pt_count_;
   DeviceBuffer<tear::FanCounts> fan_counts_, fan_off_;
   DeviceBuffer<std::int32_t> bend_count_;
   DeviceBuffer<std::uint32_t> c_key_, c_key_out_;
   DeviceBuffer<std::uint64_t> h_key_, h_key_out_, p_key_, p_key_out_;
   DeviceBuffer<int> counts_, moved_, backed_;
   DeviceBuffer<unsigned char> temp_;
+  DeviceBuffer<int2> yield_accept_, yield_accept_sum_;
+  std::size_t temp_items_ = 0;  // the item count temp_ was sized for (ensureTemp)
+  PinnedStaging staging_;  // the two count read-backs of a tearing step
 };
 
 template <typename T>
@@ -772,9 +790,6 @@ class TearStepCuda final : public TearStepBackend<T> {
     return res_.step(p, step, st, profile);
   }
   std::size_t residentSize() const override { return resident_ok_ ? res_.size() : 0; }
-  void gatherPositions(const std::vector<std::int32_t>& ids, std::vector<Vec3<T>>& out) override {
-    res_.gather(ids, out);
-  }
   void download(TearSheet<T>& s, bool full) override {
     if (resident_ok_) res_.download(s, full);
   }

@@ -609,6 +609,40 @@ TEST(PbdSolver, BadFrameInputsAreInputErrors) {
   EXPECT_THROW(be->advanceFrame(p, in), InputError);
 }
 
+// kinematic_from_positions: the grasped particles start each frame where they are, the same frames bit for bit as
+// passing those positions as kinematic_from; a from list beside the flag is refused.
+TEST(PbdSolver, KinematicStartFromPositionsEqualsExplicitStart) {
+  auto a = cpu::makePbdCpuBackend<double>(), b = cpu::makePbdCpuBackend<double>();
+  const PbdModel<double> m = test::makeHangingChain<double>(6, 0.1, 0.01, 0.0);
+  a->setModel(m);
+  b->setModel(m);
+  PbdStepParams<double> p;
+  PbdState<double> sa, sb;
+  for (int f = 0; f < 5; ++f) {
+    a->getState(sa);
+    PbdFrameInput<double> ia, ib;
+    ia.kinematic_ids = ib.kinematic_ids = {5, 2};
+    ia.kinematic_to = ib.kinematic_to = {Vec3d(0.01 * f, 0, -0.5), Vec3d(0, 0.02 * f, -0.2)};
+    ia.kinematic_from = {sa.positions[5], sa.positions[2]};
+    ib.kinematic_from_positions = true;
+    a->advanceFrame(p, ia);
+    b->advanceFrame(p, ib);
+  }
+  a->getState(sa);
+  b->getState(sb);
+  for (std::size_t i = 0; i < sa.positions.size(); ++i) {
+    EXPECT_EQ(sa.positions[i].x, sb.positions[i].x) << i;
+    EXPECT_EQ(sa.positions[i].y, sb.positions[i].y) << i;
+    EXPECT_EQ(sa.positions[i].z, sb.positions[i].z) << i;
+  }
+  EXPECT_NEAR(sb.positions[5].x, 0.04, 1e-12);  // the last frame ends on its target
+  PbdFrameInput<double> bad;
+  bad.kinematic_ids = {5};
+  bad.kinematic_to = bad.kinematic_from = {Vec3d(0, 0, -0.5)};
+  bad.kinematic_from_positions = true;
+  EXPECT_THROW(b->advanceFrame(p, bad), InputError);
+}
+
 // A grasp attachment with compliance alpha holds a hanging particle of mass m at alpha m g below its target
 // (XPBD static balance C = alpha F); alpha = 0 holds it on the target.
 TEST(PbdSolver, AttachmentSagsByComplianceTimesWeight) {
