@@ -158,19 +158,39 @@ __global__ void csrFromSorted64Kernel(int n, const std::uint64_t* sorted, int co
 // reference). A particle -> items CSR from the items' particles key[0 .. m) (the corners' vertices, or the bending
 // slots' particles): counts by integer atomics (exact, so deterministic), a scan, placement of item / per through
 // atomic cursors (any order within a row: the triangle of a corner, per = 3; the slot itself, per = 1), then
-// sortRowsKernel puts each row in the one ascending order.
+// sortRowsKernel puts each row in the one ascending order. Neighbouring items often share a particle (a bending
+// constraint's wing is the next one's upper end; neighbouring triangles share corners), so the lanes of a warp
+// with the same particle make one atomic together (about half as many on the leg sheet's bending slots).
+__device__ __forceinline__ unsigned keyPeers(unsigned lanes, std::int32_t key, int& leader, int& rank) {
+  const unsigned peers = __match_any_sync(lanes, key);
+  const int lane = int(threadIdx.x) & 31;
+  leader = __ffs(int(peers)) - 1;
+  rank = __popc(peers & ((1u << lane) - 1u));
+  return peers;
+}
+
 __global__ void rowCountKernel(const std::int32_t* key, int m, std::int32_t* count) {
   const int h = blockIdx.x * blockDim.x + threadIdx.x;
+  const unsigned lanes = __ballot_sync(0xffffffffu, h < m);
   if (h >= m) return;
-  atomicAdd(count + key[h], 1);
+  const std::int32_t p = key[h];
+  int leader = 0, rank = 0;
+  const unsigned peers = keyPeers(lanes, p, leader, rank);
+  if (rank == 0) atomicAdd(count + p, __popc(peers));
 }
 
 __global__ void rowScatterKernel(const std::int32_t* key, int m, int per, const std::int32_t* off, std::int32_t* count,
                                  std::int32_t* rows) {
   const int h = blockIdx.x * blockDim.x + threadIdx.x;
+  const unsigned lanes = __ballot_sync(0xffffffffu, h < m);
   if (h >= m) return;
   const std::int32_t p = key[h];
-  rows[off[p] + atomicSub(count + p, 1) - 1] = h / per;
+  int leader = 0, rank = 0;
+  const unsigned peers = keyPeers(lanes, p, leader, rank);
+  int top = 0;  // the row's free end before this group: its members take top - 1, top - 2, ...
+  if (rank == 0) top = atomicSub(count + p, __popc(peers));
+  top = __shfl_sync(peers, top, leader);
+  rows[off[p] + top - rank - 1] = h / per;
 }
 
 // The block's rows are one contiguous range: loaded into shared memory with coalesced loads, sorted there per
@@ -202,14 +222,60 @@ __global__ void fanCountsKernel(tear::Fan f, int n, tear::FanCounts* counts) {
   counts[p] = p < n ? tear::fanCounts(f, p) : tear::FanCounts();
 }
 
-// Five blocks per SM (<= 48 registers): the ~150k threads of the leg sheet in one wave (56 registers uncapped left
-// four blocks per SM, 1.13 waves).
+// Per particle p <= n: offsets; p < n: writeFanEdges. A block's particles write contiguous ranges of the partner
+// rows, the edges and the bending constraints, each thread a few entries of each: stored directly, every store
+// instruction of a warp touched ~32 scattered sectors (the pass was bound by those writes, 56-58 us on the 150k
+// sheet). So a block stages its ranges in shared memory and stores them coalesced; the constant compliances are
+// filled in the same loops. A block whose ranges exceed the staging (a very large fan) writes directly.
+// 128 threads and <= 48 registers: nine blocks per SM, the sheet's ~150k threads in one wave.
+constexpr int kFanBlock = 128;
+constexpr int kStagedPartners = 8 * kFanBlock, kStagedEdges = 4 * kFanBlock, kStagedBends = 4 * kFanBlock;
 template <typename T>
-__global__ void __launch_bounds__(kBlock, 5) fanEdgesKernel(tear::Fan f, tear::FanOutputs<T> o, int n) {
-  const int p = blockIdx.x * blockDim.x + threadIdx.x;
-  if (p > n) return;
-  tear::writeFanOffsets(o, p);
-  if (p < n) tear::writeFanEdges(f, o, p);
+__global__ void __launch_bounds__(kFanBlock, 9) fanEdgesKernel(tear::Fan f, tear::FanOutputs<T> o, int n) {
+  __shared__ std::int32_t s_partner[kStagedPartners], s_slot[kStagedPartners];
+  __shared__ std::int32_t s_dist_ids[2 * kStagedEdges], s_bend_ids[4 * kStagedBends];
+  __shared__ T s_dist_rest[kStagedEdges], s_bend_rest[kStagedBends];
+  const int p0 = blockIdx.x * kFanBlock, p = p0 + int(threadIdx.x);
+  if (p <= n) tear::writeFanOffsets(o, p);
+  if (p0 >= n) return;  // the whole block: only the totals' offsets
+  const int p1 = min(p0 + kFanBlock, n);
+  const tear::FanCounts lo = o.off[p0], hi = o.off[p1];
+  const int np = hi.partners - lo.partners, ne = hi.upper - lo.upper, nb = hi.bend_upper - lo.bend_upper;
+  const bool staged = np <= kStagedPartners && ne <= kStagedEdges && nb <= kStagedBends;  // uniform in the block
+  tear::FanOutputs<T> so = o;
+  if (staged) {
+    so.pe_partner = s_partner;
+    so.dist_particle_slots = s_slot;
+    so.partner_base = lo.partners;
+    so.dist_ids = s_dist_ids;
+    so.dist_rest = s_dist_rest;
+    so.dist_compliance = nullptr;
+    so.edge_base = lo.upper;
+    so.bend_ids = o.bend_ids ? s_bend_ids : nullptr;
+    so.bend_rest = s_bend_rest;
+    so.bend_compliance = nullptr;
+    so.bend_base = lo.bend_upper;
+  }
+  if (p < n) tear::writeFanEdges(f, so, p);
+  if (!staged) return;
+  __syncthreads();
+  const int t = int(threadIdx.x);
+  // The slots' lower parts (not written here) are written by lowerDistanceSlotsKernel afterwards.
+  for (int k = t; k < np; k += kFanBlock) {
+    o.pe_partner[lo.partners + k] = s_partner[k];
+    o.dist_particle_slots[lo.partners + k] = s_slot[k];
+  }
+  for (int k = t; k < 2 * ne; k += kFanBlock) o.dist_ids[2 * std::int64_t(lo.upper) + k] = s_dist_ids[k];
+  for (int k = t; k < ne; k += kFanBlock) {
+    o.dist_rest[lo.upper + k] = s_dist_rest[k];
+    o.dist_compliance[lo.upper + k] = o.stretch_compliance;
+  }
+  if (!o.bend_ids) return;
+  for (int k = t; k < 4 * nb; k += kFanBlock) o.bend_ids[4 * std::int64_t(lo.bend_upper) + k] = s_bend_ids[k];
+  for (int k = t; k < nb; k += kFanBlock) {
+    o.bend_rest[lo.bend_upper + k] = s_bend_rest[k];
+    o.bend_compliance[lo.bend_upper + k] = o.bending_compliance;
+  }
 }
 
 template <typename T>
@@ -619,7 +685,7 @@ class TearResident {
       o.bend_particle_offsets = inc_b.particle_offsets;
       o.bend_particle_slots = inc_b.particle_slots;
     }
-    fanEdgesKernel<T><<<gridFor(nz + 1), kBlock>>>(fan, o, n);
+    fanEdgesKernel<T><<<unsigned((nz + 1 + kFanBlock - 1) / kFanBlock), kFanBlock>>>(fan, o, n);
     INC_CUDA_LAUNCH("tear fan edges");
     stage("rebuild_adjacency");
     // 4: the rest of the distance rows (per edge) and the bending rows (from the bending constraints, as the

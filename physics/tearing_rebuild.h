@@ -82,14 +82,14 @@ INC_HD void writeEdgeConstraint(std::int32_t a, std::int32_t b, std::int32_t w0,
   dist_ids[2 * e] = a;
   dist_ids[2 * e + 1] = b;
   dist_rest[e] = norm(ra - rb);
-  dist_compliance[e] = stretch_compliance;
+  if (dist_compliance) dist_compliance[e] = stretch_compliance;  // null: the caller fills the constant itself
   if (!bend) return;
   bend_ids[4 * c] = a;
   bend_ids[4 * c + 1] = b;
   bend_ids[4 * c + 2] = p2;
   bend_ids[4 * c + 3] = p3;
   bend_rest[c] = pbd::dihedralAngle(ra, rb, r2, r3);
-  bend_compliance[c] = bending_compliance;
+  if (bend_compliance) bend_compliance[c] = bending_compliance;
 }
 
 template <typename T>
@@ -392,6 +392,10 @@ struct FanOutputs {
   // rebuildTopology + buildTearPbdModel).
   std::int32_t* bend_particle_offsets = nullptr;  // n + 1
   std::int32_t* bend_particle_slots = nullptr;    // 4 per bending constraint
+  // writeFanEdges stores partner-indexed element k (pe_partner, dist_particle_slots) at k - partner_base, edge e
+  // at e - edge_base and bending constraint c at c - bend_base (the values stay global numbers): 0 for the whole
+  // arrays; a device block staging its particles' contiguous ranges in shared memory sets its first indices.
+  std::int64_t partner_base = 0, edge_base = 0, bend_base = 0;
 };
 
 // Offsets of particle p = 0 .. n (p == n: the totals) into the CSR arrays.
@@ -409,7 +413,7 @@ INC_HD void writeFanOffsets(const FanOutputs<T>& o, std::int32_t p) {
 template <typename T>
 INC_HD void writeFanEdges(const Fan& f, const FanOutputs<T>& o, std::int32_t p, int fan_cache = kFanPairs) {
   const FanCounts &b = o.off[p], &e = o.off[p + 1];
-  std::int32_t* const out_row = o.pe_partner + b.partners;
+  std::int32_t* const out_row = o.pe_partner + (b.partners - o.partner_base);
   const int np = e.partners - b.partners, nup = e.upper - b.upper, nlow = np - nup;
   FanPairs fp;
   const bool pairs = fp.load(f, p, fan_cache);
@@ -442,11 +446,11 @@ INC_HD void writeFanEdges(const Fan& f, const FanOutputs<T>& o, std::int32_t p, 
     const std::int32_t q = out_row[nlow + k], edge = b.upper + k;
     std::int32_t p2 = -1, p3 = -1;
     const bool bend = pairs ? fp.wings(q, p2, p3) : bendingWings(FanRow(f, p), q, p2, p3);
-    writeEdgeConstraint<T>(p, q, p2, p3, edge, bend ? c : -1, o.rest, o.stretch_compliance, o.bending_compliance,
-                           o.edge_a, o.edge_b, o.dist_ids, o.dist_rest, o.dist_compliance, o.bend_ids, o.bend_rest,
-                           o.bend_compliance);
+    writeEdgeConstraint<T>(p, q, p2, p3, edge - o.edge_base, bend ? c - o.bend_base : -1, o.rest, o.stretch_compliance,
+                           o.bending_compliance, o.edge_a, o.edge_b, o.dist_ids, o.dist_rest, o.dist_compliance,
+                           o.bend_ids, o.bend_rest, o.bend_compliance);
     c += bend ? 1 : 0;
-    o.dist_particle_slots[b.partners + nlow + k] = 2 * edge;
+    o.dist_particle_slots[b.partners - o.partner_base + nlow + k] = 2 * edge;
   }
 }
 
