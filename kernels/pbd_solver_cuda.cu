@@ -442,28 +442,20 @@ __global__ void zeroKinematicKernel(int k, T* w, const std::int32_t* ids) {
   w[ids[q]] = T(0);
 }
 
+// appendParticles in one launch: inverse masses of all n1 particles (the split ones changed mass), and the
+// appended ones [n0, n1) start with no radius, no rotation and inactive.
 template <typename T>
-__global__ void invMassKernel(int n, const T* mass, const std::uint8_t* fixed, T* inv_mass) {
+__global__ void appendParticlesKernel(int n0, int n1, const T* mass, const std::uint8_t* fixed, T* inv_mass, T* rest_r,
+                                      T* r, T* r_next, pbd::Quat<T>* rot, std::uint8_t* active) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i >= n) return;
-  inv_mass[i] = fixed[i] ? T(0) : T(1) / mass[i];
-}
-
-template <typename T>
-__global__ void initAppendedKernel(int n0, int n1, T* rest_r, T* r, T* r_next, pbd::Quat<T>* rot, std::uint8_t* active) {
-  const int i = n0 + blockIdx.x * blockDim.x + threadIdx.x;
   if (i >= n1) return;
+  inv_mass[i] = fixed[i] ? T(0) : T(1) / mass[i];
+  if (i < n0) return;
   rest_r[i] = T(0);
   r[i] = T(0);
   r_next[i] = T(0);
   rot[i] = pbd::Quat<T>{};
   active[i] = 0;
-}
-
-__global__ void blockOffsetsKernel(int count, int arity, std::int32_t* offsets) {
-  const int c = blockIdx.x * blockDim.x + threadIdx.x;
-  if (c > count) return;
-  offsets[c] = arity * c;
 }
 
 __global__ void slotIotaKernel(int slots, const std::int32_t* ids, std::uint32_t* keys, std::int32_t* vals) {
@@ -480,13 +472,19 @@ __global__ void csrOffsetsKernel(int n, const std::uint32_t* sorted, int slots, 
   offsets[p] = std::int32_t(tear::lowerBound<std::uint32_t>(sorted, slots, std::uint32_t(p)));
 }
 
+// A patched block's derived arrays in one launch (after its particle -> slot CSR): constraint offsets (count + 1),
+// Jacobi scales and zeroed multipliers. Not slot_corr: every Jacobi projection writes all of its block's slots
+// before the gather reads them.
 template <typename T>
-__global__ void jacobiScaleKernel(int count, int arity, const std::int32_t* ids, const std::int32_t* particle_offsets,
-                                  const T* inv_mass, T* scale) {
+__global__ void commitBlockKernel(int count, int arity, const std::int32_t* ids, const std::int32_t* particle_offsets,
+                                  const T* inv_mass, std::int32_t* offsets, T* scale, Vec3<T>* lambda) {
   const int c = blockIdx.x * blockDim.x + threadIdx.x;
-  if (c >= count) return;
+  if (c > count) return;
+  offsets[c] = arity * c;
+  if (c == count) return;
   const T sc = tear::jacobiScaleOf(ids, arity, c, particle_offsets, inv_mass);
   for (int k = 0; k < arity; ++k) scale[arity * c + k] = sc;
+  lambda[c] = Vec3<T>();
 }
 
 inline int blockArity(PbdConstraintKind k) {
@@ -923,15 +921,11 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     for (auto* b : {&masses_, &inv_mass_, &w_, &rest_radii_, &radii_, &radii_next_}) b->resize(m);
     rotations_.resize(m);
     active_.resize(m);
-    if (n_new > n_) {
-      initAppendedKernel<T><<<blocksFor(n_new - n_), kThreads, 0, stream_>>>(n_, n_new, rest_radii_.data(), radii_.data(),
-                                                                             radii_next_.data(), rotations_.data(),
-                                                                             active_.data());
-      INC_CUDA_LAUNCH("pbd patch new particles");
-    }
     if (n_new > 0) {
-      invMassKernel<T><<<blocksFor(n_new), kThreads, 0, stream_>>>(n_new, masses_.data(), fixed_dev, inv_mass_.data());
-      INC_CUDA_LAUNCH("pbd patch inverse masses");
+      appendParticlesKernel<T><<<blocksFor(n_new), kThreads, 0, stream_>>>(
+          n_, n_new, masses_.data(), fixed_dev, inv_mass_.data(), rest_radii_.data(), radii_.data(), radii_next_.data(),
+          rotations_.data(), active_.data());
+      INC_CUDA_LAUNCH("pbd patch particles");
     }
     host_rest_radii_.resize(m, T(0));
     n_ = n_new;
@@ -1072,16 +1066,11 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     d.slot_corr.resize(slots);
     d.particle_offsets.resize(std::size_t(n_) + 1);
     d.count = count;
-    blockOffsetsKernel<<<blocksFor(count + 1), kThreads, 0, stream_>>>(count, a, d.offsets.data());
-    INC_CUDA_LAUNCH("pbd patch offsets");
     if (!caller_csr) sortIncidence(d, slots);
-    if (count > 0) {
-      jacobiScaleKernel<T><<<blocksFor(count), kThreads, 0, stream_>>>(count, a, d.ids.data(), d.particle_offsets.data(),
-                                                                       inv_mass_.data(), d.jacobi_scale.data());
-      INC_CUDA_LAUNCH("pbd patch jacobi scales");
-      // Not slot_corr: every Jacobi projection writes all of its block's slots before the gather reads them.
-      INC_CUDA(cudaMemsetAsync(d.lambda.data(), 0, d.lambda.bytes(), stream_));
-    }
+    commitBlockKernel<T><<<blocksFor(count + 1), kThreads, 0, stream_>>>(count, a, d.ids.data(), d.particle_offsets.data(),
+                                                                         inv_mass_.data(), d.offsets.data(),
+                                                                         d.jacobi_scale.data(), d.lambda.data());
+    INC_CUDA_LAUNCH("pbd patch block");
     d.order.resize(0);
     d.color_offsets.assign(1, 0);
     // The summary's reduction partials: room for every block (a block that was empty at setModel may not be).

@@ -2,7 +2,6 @@
 #include "kernels/tearing_cuda.h"
 
 #include <cub/cub.cuh>
-#include <thrust/iterator/counting_iterator.h>
 
 #include <algorithm>
 #include <chrono>
@@ -59,25 +58,31 @@ __global__ void iotaKernel(std::int32_t* out, int n) {
   if (i < n) out[i] = i;
 }
 
-// Over the compacted list of accepted particles only.
+// Over the compacted list of accepted particles (list set: thread k < count splits list[k]), or over all particles
+// (list null, count = n: thread i splits particle i when accepted; no compaction needed). moved / backed (optional):
+// per thread.
 template <typename T>
-__global__ void splitKernel(tear::SheetView<T> s, const std::int32_t* list, int count, const std::int32_t* rank, int n,
-                            const std::int32_t* partner, const Vec3<T>* dir, const T* t_pred, bool debris, T range,
-                            T t_lo, T t_hi, T min_ratio, std::uint32_t seed, std::uint32_t step, int* moved,
-                            int* backed) {
+__global__ void splitKernel(tear::SheetView<T> s, const std::int32_t* list, int count, const std::uint8_t* accept,
+                            const std::int32_t* rank, int n, const std::int32_t* partner, const Vec3<T>* dir,
+                            const T* t_pred, bool debris, T range, T t_lo, T t_hi, T min_ratio, std::uint32_t seed,
+                            std::uint32_t step, int* moved, int* backed) {
   const int k = blockIdx.x * blockDim.x + threadIdx.x;
   if (k >= count) return;
-  const std::int32_t i = list[k];
+  const std::int32_t i = list ? list[k] : k;
+  if (!list && !accept[i]) return;
   const tear::SplitResult r = tear::splitParticle(s, i, std::size_t(n) + std::size_t(rank[i]), partner[i], dir[i],
                                                   t_pred[i], debris, range, t_lo, t_hi, min_ratio, seed, step);
-  moved[k] = r.moved_triangles;
-  backed[k] = r.backed_off;
+  if (moved) moved[k] = r.moved_triangles;
+  if (backed) backed[k] = r.backed_off;
 }
 
+// Triangle t < nt rebuilt; threads g < zero_n also clear zero_counts (the resident rebuild's particle -> triangle
+// counts, accumulated next: one launch fewer than a memset).
 template <typename T>
 __global__ void triangleKernel(tear::SheetView<T> s, int nt, const std::uint8_t* accept, const Vec3<T>* dir,
-                               const std::int32_t* rank, int n) {
+                               const std::int32_t* rank, int n, std::int32_t* zero_counts = nullptr, int zero_n = 0) {
   const int t = blockIdx.x * blockDim.x + threadIdx.x;
+  if (t < zero_n) zero_counts[t] = 0;
   if (t >= nt) return;
   tear::rebuildTriangle(s, t, accept, dir, rank, n);
 }
@@ -169,14 +174,17 @@ __device__ __forceinline__ unsigned keyPeers(unsigned lanes, std::int32_t key, i
   return peers;
 }
 
-__global__ void rowCountKernel(const std::int32_t* key, int m, std::int32_t* count) {
-  const int h = blockIdx.x * blockDim.x + threadIdx.x;
-  const unsigned lanes = __ballot_sync(0xffffffffu, h < m);
-  if (h >= m) return;
-  const std::int32_t p = key[h];
+// One item of particle p counted; lanes: the warp's lanes that count (each calls this once).
+__device__ __forceinline__ void countRowItem(unsigned lanes, std::int32_t p, std::int32_t* count) {
   int leader = 0, rank = 0;
   const unsigned peers = keyPeers(lanes, p, leader, rank);
   if (rank == 0) atomicAdd(count + p, __popc(peers));
+}
+
+__global__ void rowCountKernel(const std::int32_t* key, int m, std::int32_t* count) {
+  const int h = blockIdx.x * blockDim.x + threadIdx.x;
+  const unsigned lanes = __ballot_sync(0xffffffffu, h < m);
+  if (h < m) countRowItem(lanes, key[h], count);
 }
 
 __global__ void rowScatterKernel(const std::int32_t* key, int m, int per, const std::int32_t* off, std::int32_t* count,
@@ -231,12 +239,16 @@ __global__ void fanCountsKernel(tear::Fan f, int n, tear::FanCounts* counts) {
 constexpr int kFanBlock = 128;
 constexpr int kStagedPartners = 8 * kFanBlock, kStagedEdges = 4 * kFanBlock, kStagedBends = 4 * kFanBlock;
 template <typename T>
-__global__ void __launch_bounds__(kFanBlock, 9) fanEdgesKernel(tear::Fan f, tear::FanOutputs<T> o, int n) {
+__global__ void __launch_bounds__(kFanBlock, 9) fanEdgesKernel(tear::Fan f, tear::FanOutputs<T> o, int n,
+                                                               std::int32_t* zero_counts) {
   __shared__ std::int32_t s_partner[kStagedPartners], s_slot[kStagedPartners];
   __shared__ std::int32_t s_dist_ids[2 * kStagedEdges], s_bend_ids[4 * kStagedBends];
   __shared__ T s_dist_rest[kStagedEdges], s_bend_rest[kStagedBends];
   const int p0 = blockIdx.x * kFanBlock, p = p0 + int(threadIdx.x);
-  if (p <= n) tear::writeFanOffsets(o, p);
+  if (p <= n) {
+    tear::writeFanOffsets(o, p);
+    if (zero_counts) zero_counts[p] = 0;  // the bending rows' counts, accumulated next (a memset fewer)
+  }
   if (p0 >= n) return;  // the whole block: only the totals' offsets
   const int p1 = min(p0 + kFanBlock, n);
   const tear::FanCounts lo = o.off[p0], hi = o.off[p1];
@@ -260,7 +272,7 @@ __global__ void __launch_bounds__(kFanBlock, 9) fanEdgesKernel(tear::Fan f, tear
   if (!staged) return;
   __syncthreads();
   const int t = int(threadIdx.x);
-  // The slots' lower parts (not written here) are written by lowerDistanceSlotsKernel afterwards.
+  // The slots' lower parts (not written here) are written by lowerSlotsAndCountsKernel afterwards.
   for (int k = t; k < np; k += kFanBlock) {
     o.pe_partner[lo.partners + k] = s_partner[k];
     o.dist_particle_slots[lo.partners + k] = s_slot[k];
@@ -278,10 +290,16 @@ __global__ void __launch_bounds__(kFanBlock, 9) fanEdgesKernel(tear::Fan f, tear
   }
 }
 
+// After writeFanEdges, in one launch: thread e < ne writes edge e's lower distance slot (writeLowerDistanceSlot);
+// thread ne + h, h < m, counts bending slot h for its particle key[h] (as rowCountKernel).
 template <typename T>
-__global__ void lowerDistanceSlotsKernel(tear::FanOutputs<T> o, int ne) {
-  const int e = blockIdx.x * blockDim.x + threadIdx.x;
-  if (e < ne) tear::writeLowerDistanceSlot(o, e);
+__global__ void lowerSlotsAndCountsKernel(tear::FanOutputs<T> o, int ne, const std::int32_t* key, int m,
+                                          std::int32_t* count) {
+  const int g = blockIdx.x * blockDim.x + threadIdx.x, h = g - ne;
+  const bool counting = h >= 0 && h < m;
+  const unsigned lanes = __ballot_sync(0xffffffffu, counting);  // every lane of the warp reaches this
+  if (g < ne) tear::writeLowerDistanceSlot(o, g);
+  if (counting) countRowItem(lanes, key[h], count);
 }
 
 template <typename T>
@@ -371,8 +389,8 @@ class TearCudaWorkspace {
     moved_.resize(std::size_t(splits));
     backed_.resize(std::size_t(splits));
     const bool debris = p.criterion != TearCriterion::Threshold;
-    splitKernel<T><<<gridFor(std::size_t(splits)), kBlock>>>(view, list_.data(), splits, rank_.data(), ni,
-                                                              partner_.data(), dir_.data(), t_pred_.data(), debris,
+    splitKernel<T><<<gridFor(std::size_t(splits)), kBlock>>>(view, list_.data(), splits, accept_.data(), rank_.data(),
+                                                              ni, partner_.data(), dir_.data(), t_pred_.data(), debris,
                                                               p.random_range, p.t_lo, p.t_hi, p.min_area_ratio, p.seed,
                                                               s.step, moved_.data(), backed_.data());
     INC_CUDA_LAUNCH("tear split");
@@ -478,7 +496,6 @@ class TearResident {
     partner_.resize(nz);
     dir_.resize(nz);
     t_pred_.resize(nz);
-    list_.resize(nz);
     ensureTemp();
     tear::SheetView<T> view = sheetView();
     detectKernel<T><<<gridFor(nz), kBlock>>>(view, n, int(p.criterion), p.break_strain, yield_.data(), partner_.data(),
@@ -500,12 +517,9 @@ class TearResident {
     st.deferred += cnt.x - splits;
     stage("tear_detect");
     if (splits == 0) return 0;
-    // rank[i] = accepted particles before i (the new particle's index offset); list = the accepted ids, ascending.
+    // rank[i] = accepted particles before i: the new particle's index offset.
     bytes = temp_.capacity();
     INC_CUDA(cub::DeviceScan::ExclusiveSum(temp_.data(), bytes, accept_i32_.data(), rank_.data(), n));
-    bytes = temp_.capacity();
-    INC_CUDA(cub::DeviceSelect::Flagged(temp_.data(), bytes, thrust::counting_iterator<std::int32_t>(0), accept_.data(),
-                                        list_.data(), counts_.data(), n));
 
     const int m = n + splits;
     patch_->reserveParticles(std::size_t(m));  // reallocates (and synchronises) only beyond the capacity
@@ -516,18 +530,19 @@ class TearResident {
     k_.resize(std::size_t(m));
     tau_.resize(std::size_t(m));
     view = sheetView();  // pointers may have moved
-    moved_.resize(std::size_t(splits));
-    backed_.resize(std::size_t(splits));
     const bool debris = p.criterion != TearCriterion::Threshold;
-    splitKernel<T><<<gridFor(std::size_t(splits)), kBlock>>>(view, list_.data(), splits, rank_.data(), n,
-                                                              partner_.data(), dir_.data(), t_pred_.data(), debris,
-                                                              p.random_range, p.t_lo, p.t_hi, p.min_area_ratio, p.seed,
-                                                              step, moved_.data(), backed_.data());
+    // Over all particles: no compaction of the accepted ones (a selection's dispatch cost more host time than
+    // the threads that return at once).
+    splitKernel<T><<<gridFor(nz), kBlock>>>(view, nullptr, n, accept_.data(), rank_.data(), n, partner_.data(),
+                                            dir_.data(), t_pred_.data(), debris, p.random_range, p.t_lo, p.t_hi,
+                                            p.min_area_ratio, p.seed, step, nullptr, nullptr);
     INC_CUDA_LAUNCH("tear split");
-    if (nt_ > 0) {
-      triangleKernel<T><<<gridFor(std::size_t(nt_)), kBlock>>>(view, nt_, accept_.data(), dir_.data(), rank_.data(), n);
-      INC_CUDA_LAUNCH("tear triangles");
-    }
+    // The triangles, and the first rebuild pass's counts cleared (m + 1 entries: the per-particle rebuild).
+    const int zero_n = sorted_ ? 0 : m + 1;
+    pt_count_.resize(std::size_t(m) + 1);
+    triangleKernel<T><<<gridFor(std::size_t(std::max(nt_, zero_n))), kBlock>>>(view, nt_, accept_.data(), dir_.data(),
+                                                                                rank_.data(), n, pt_count_.data(), zero_n);
+    INC_CUDA_LAUNCH("tear triangles");
     stage("tear_split");
     const auto r0 = Clock::now();
     patch_->appendParticles(m, fixed_.data());  // new particles, inverse masses of the split ones
@@ -564,24 +579,22 @@ class TearResident {
   }
 
  private:
-  // CUB's scratch for every scan, selection and reduction of a step, sized once for the particle capacity (each
+  // CUB's scratch for every scan and reduction of a step, sized once for the particle capacity (each
   // algorithm's need grows with the item count, so the capacity's covers every smaller call): a size query is a
   // host-side dispatch as costly as the call itself, and a step made ten of them.
   void ensureTemp() {
     const std::size_t cap = std::max<std::size_t>(patch_->deviceParticles().capacity, std::size_t(n_)) + 1;
     if (cap <= temp_items_) return;
     const int c = int(cap);
-    std::size_t b[5] = {0, 0, 0, 0, 0};
+    std::size_t b[4] = {0, 0, 0, 0};
     yield_accept_sum_.resize(1);
     INC_CUDA(cub::DeviceReduce::Reduce(nullptr, b[0], yield_accept_.data(), yield_accept_sum_.data(), c, AddInt2(),
                                        make_int2(0, 0)));
     INC_CUDA(cub::DeviceScan::ExclusiveSum(nullptr, b[1], accept_i32_.data(), rank_.data(), c));
-    INC_CUDA(cub::DeviceSelect::Flagged(nullptr, b[2], thrust::counting_iterator<std::int32_t>(0), accept_.data(),
-                                        list_.data(), counts_.data(), c));
-    INC_CUDA(cub::DeviceScan::ExclusiveScan(nullptr, b[3], fan_counts_.data(), fan_off_.data(), tear::AddFanCounts(),
+    INC_CUDA(cub::DeviceScan::ExclusiveScan(nullptr, b[2], fan_counts_.data(), fan_off_.data(), tear::AddFanCounts(),
                                             tear::FanCounts(), c));
-    INC_CUDA(cub::DeviceScan::ExclusiveSum(nullptr, b[4], pt_count_.data(), pt_off_.data(), c));
-    temp_.resize(std::max<std::size_t>(*std::max_element(b, b + 5), 1));
+    INC_CUDA(cub::DeviceScan::ExclusiveSum(nullptr, b[3], pt_count_.data(), pt_off_.data(), c));
+    temp_.resize(std::max<std::size_t>(*std::max_element(b, b + 4), 1));
     temp_items_ = cap;
   }
 
@@ -618,10 +631,9 @@ class TearResident {
     const int n = n_, nh = 3 * nt_;
     const std::size_t nz = std::size_t(n), nhz = std::size_t(std::max(nh, 1));
     // 1: particle -> triangles: counts, exclusive scan over n + 1 (entry n = nh), scatter, rows sorted.
-    pt_count_.resize(nz + 1);
+    pt_count_.resize(nz + 1);  // cleared by the step's triangle kernel
     pt_off_.resize(nz + 1);
     pt_tris_.resize(std::size_t(nh));
-    INC_CUDA(cudaMemsetAsync(pt_count_.data(), 0, pt_count_.bytes()));
     if (nh > 0) {
       rowCountKernel<<<gridFor(nhz), kBlock>>>(tris_.data(), nh, pt_count_.data());
       INC_CUDA_LAUNCH("tear corner counts");
@@ -685,23 +697,22 @@ class TearResident {
       o.bend_particle_offsets = inc_b.particle_offsets;
       o.bend_particle_slots = inc_b.particle_slots;
     }
-    fanEdgesKernel<T><<<unsigned((nz + 1 + kFanBlock - 1) / kFanBlock), kFanBlock>>>(fan, o, n);
+    if (bending_) bend_count_.resize(nz + 1);
+    fanEdgesKernel<T><<<unsigned((nz + 1 + kFanBlock - 1) / kFanBlock), kFanBlock>>>(fan, o, n,
+                                                                                   bending_ ? bend_count_.data() : nullptr);
     INC_CUDA_LAUNCH("tear fan edges");
     stage("rebuild_adjacency");
     // 4: the rest of the distance rows (per edge) and the bending rows (from the bending constraints, as the
     // corners' rows); 5: offsets, Jacobi scales, multipliers.
-    if (ne > 0) {
-      lowerDistanceSlotsKernel<T><<<gridFor(std::size_t(ne)), kBlock>>>(o, ne);
-      INC_CUDA_LAUNCH("tear lower distance slots");
+    // The bending rows' counts were cleared by fanEdgesKernel; the lower distance slots and the slot counts in one
+    // launch.
+    const int bs = bending_ ? 4 * nb : 0;
+    if (ne + bs > 0) {
+      lowerSlotsAndCountsKernel<T><<<gridFor(std::size_t(ne) + std::size_t(bs)), kBlock>>>(o, ne, bend.ids, bs,
+                                                                                            bend_count_.data());
+      INC_CUDA_LAUNCH("tear lower distance slots and bending slot counts");
     }
     if (bending_) {
-      const int bs = 4 * nb;
-      bend_count_.resize(nz + 1);
-      INC_CUDA(cudaMemsetAsync(bend_count_.data(), 0, bend_count_.bytes()));
-      if (bs > 0) {
-        rowCountKernel<<<gridFor(std::size_t(bs)), kBlock>>>(bend.ids, bs, bend_count_.data());
-        INC_CUDA_LAUNCH("tear bending slot counts");
-      }
       // The same n + 1 int scan as step 1's.
       b1 = temp_.capacity();
       INC_CUDA(cub::DeviceScan::ExclusiveSum(temp_.data(), b1, bend_count_.data(), inc_b.particle_offsets, n + 1));
@@ -823,12 +834,13 @@ class TearResident {
   DeviceBuffer<std::uint8_t> fixed_, yield_, accept_;
   DeviceBuffer<T> k_, tau_, t_pred_;
   DeviceBuffer<Vec3<T>> dir_;
-  DeviceBuffer<std::int32_t> tris_, pe_off_, pe_partner_, pt_off_, pt_tris_, accept_i32_, rank_, partner_, list_, c_tri_, h_opp_, h_opp_out_, head_, bend_, e_idx_, b_idx_, edge_a_, edge_b_, pt_count_;
+  DeviceBuffer<std::int32_t> tris_, pe_off_, pe_partner_, pt_off_, pt_tris_, accept_i32_, rank_, partner_, c_tri_,
+      h_opp_, h_opp_out_, head_, bend_, e_idx_, b_idx_, edge_a_, edge_b_, pt_count_;
   DeviceBuffer<tear::FanCounts> fan_counts_, fan_off_;
   DeviceBuffer<std::int32_t> bend_count_;
   DeviceBuffer<std::uint32_t> c_key_, c_key_out_;
   DeviceBuffer<std::uint64_t> h_key_, h_key_out_, p_key_, p_key_out_;
-  DeviceBuffer<int> counts_, moved_, backed_;
+  DeviceBuffer<int> counts_;
   DeviceBuffer<unsigned char> temp_;
   DeviceBuffer<int2> yield_accept_, yield_accept_sum_;
   std::size_t temp_items_ = 0;  // the item count temp_ was sized for (ensureTemp)
