@@ -235,7 +235,8 @@ __global__ void fanCountsKernel(tear::Fan f, int n, tear::FanCounts* counts) {
 // instruction of a warp touched ~32 scattered sectors (the pass was bound by those writes, 56-58 us on the 150k
 // sheet). So a block stages its ranges in shared memory and stores them coalesced; the constant compliances are
 // filled in the same loops. A block whose ranges exceed the staging (a very large fan) writes directly.
-// 128 threads and <= 48 registers: nine blocks per SM, the sheet's ~150k threads in one wave.
+// Blocks of 128 threads, nine per SM (<= 56 registers, 24 KB of staging each in float): the sheet's ~150k threads
+// in one wave.
 constexpr int kFanBlock = 128;
 constexpr int kStagedPartners = 8 * kFanBlock, kStagedEdges = 4 * kFanBlock, kStagedBends = 4 * kFanBlock;
 template <typename T>
