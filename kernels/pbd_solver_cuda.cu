@@ -190,12 +190,11 @@ __global__ void projectColorKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx
 // Distance, bending and tet-volume blocks through their specialised kernel, other kinds through the generic ones.
 // Jacobi (order == nullptr): `count` sizes the grid; in a patched model it is a bucket (PbdCudaBackend::gridCount)
 // and *live_count the constraint count, read on the device so that a captured frame stays valid when a patch
-// changes it. A colour (order set): its `count` constraints.
+// changes it. A colour (order set, live_count null): its `count` constraints.
 template <typename T>
 void launchProjection(const pbd::BlockView<T>& b, const pbd::SolveContext<T>& ctx, const std::int32_t* order, int count,
                       const int* live_count, cudaStream_t stream) {
   const unsigned blocks = unsigned((count + kThreads - 1) / kThreads);
-  if (order) live_count = nullptr;
   if (ctx.jacobi && !order) {
     switch (b.kind) {
       case pbd::kDistance:
@@ -1358,10 +1357,15 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     return std::min(capacityOf(b), std::size_t(gridCount(int(b.size())))) * sizeof(U);
   }
 
+  // Whether the frame runs as one thread-block cluster launch (kernels/pbd_cluster_frame.cuh).
+  bool clusterFrame(const PbdStepParams<T>& p) const {
+    return !profile_ && cluster_ok_ && !patched_ && p.solver == PbdSolverKind::Jacobi && n_ <= p.cluster_max_particles;
+  }
+
   // Whether the frame is one kernel (fused or cluster), which takes the counts as arguments.
   bool singleKernelFrame(const PbdStepParams<T>& p) const {
     const bool jacobi = p.solver == PbdSolverKind::Jacobi;
-    const bool cluster = !profile_ && cluster_ok_ && !patched_ && jacobi && n_ <= p.cluster_max_particles;
+    const bool cluster = clusterFrame(p);
     // The single-block frame beats per-block launches for Gauss-Seidel up to thousands of spheres (one launch
     // instead of one per colour) but for Jacobi only up to a few hundred (H100: 1008 spheres 0.23 ms per
     // iteration fused against 0.029 ms on launches), whatever fused_max_particles asks.
@@ -1386,7 +1390,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     ctx.omega = p.jacobi_omega;
     ctx.rotation_iterations = p.rotation_iterations;
 
-    const bool cluster = !profile_ && cluster_ok_ && !patched_ && ctx.jacobi && n_ <= p.cluster_max_particles;
+    const bool cluster = clusterFrame(p);
     const bool fused = singleKernelFrame(p);
     last_path_ = cluster ? "cluster" : fused ? "fused" : "launches";
     if (fused) {

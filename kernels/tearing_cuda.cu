@@ -541,9 +541,11 @@ class TearResident {
     // The triangles, and the first rebuild pass's counts cleared (m + 1 entries: the per-particle rebuild).
     const int zero_n = sorted_ ? 0 : m + 1;
     pt_count_.resize(std::size_t(m) + 1);
-    triangleKernel<T><<<gridFor(std::size_t(std::max(nt_, zero_n))), kBlock>>>(view, nt_, accept_.data(), dir_.data(),
-                                                                                rank_.data(), n, pt_count_.data(), zero_n);
-    INC_CUDA_LAUNCH("tear triangles");
+    if (std::max(nt_, zero_n) > 0) {
+      triangleKernel<T><<<gridFor(std::size_t(std::max(nt_, zero_n))), kBlock>>>(view, nt_, accept_.data(), dir_.data(),
+                                                                                  rank_.data(), n, pt_count_.data(), zero_n);
+      INC_CUDA_LAUNCH("tear triangles");
+    }
     stage("tear_split");
     const auto r0 = Clock::now();
     patch_->appendParticles(m, fixed_.data());  // new particles, inverse masses of the split ones

@@ -315,8 +315,8 @@ INC_HD bool bendingWings(const FanRow& r, std::int32_t b, std::int32_t& p2, std:
 // Per-particle counts; their exclusive scan numbers everything: partners (pe_offsets, and the distance block's
 // particle -> slot offsets, since a particle's distance slots are its bonds), upper partners (edges (p, b),
 // b > p: the edge numbers in (a, b) order) and bending constraints on those edges (bending numbers in edge
-// order). The bending block's particle -> slot offsets are counted from its constraints once they exist
-// (countBendingSlot): a particle's wing slots would need the fans of its opposite edges' ends.
+// order). The bending block's particle -> slot offsets are counted from its constraints once they exist (see
+// FanOutputs::bend_particle_offsets): a particle's wing slots would need the fans of its opposite edges' ends.
 struct FanCounts {
   std::int32_t partners = 0, upper = 0, bend_upper = 0;
 };
