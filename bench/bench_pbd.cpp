@@ -124,11 +124,24 @@ std::chrono::steady_clock::time_point g_deadline = std::chrono::steady_clock::ti
 int g_skipped = 0;
 bool pastDeadline() { return std::chrono::steady_clock::now() > g_deadline; }
 
+// A solver as the tables name it: Jacobi with Chebyshev acceleration (rho > 0) is its own row.
+struct Solve {
+  PbdSolverKind kind = PbdSolverKind::Jacobi;
+  double rho = 0;  // PbdStepParams::chebyshev_rho
+  std::string name() const {
+    if (kind == PbdSolverKind::GaussSeidel) return "gauss_seidel";
+    if (!(rho > 0)) return "jacobi";
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "jacobi_ch%.2f", rho);
+    return buf;
+  }
+};
+
 // Frame time: CUDA events (the backend's "frame" stage) on the GPU, wall clock on the CPU; median of up to
 // `repeats` frames (fewer when a point's time budget runs out) after up to 3 warm-up frames (graph capture,
 // first touch). --profile: one more frame with per-stage CUDA events (no graph, no fusion) gives the stage split.
 template <typename T>
-Row timeFrames(BackendKind kind, PbdSolverKind solver, std::int64_t n, int iterations, int substeps, int repeats,
+Row timeFrames(BackendKind kind, Solve solver, std::int64_t n, int iterations, int substeps, int repeats,
                int fused_max = 4096, int cluster_max = PbdStepParams<float>{}.cluster_max_particles) {
   bench::HostPeak host;
   host.reset();
@@ -138,7 +151,8 @@ Row timeFrames(BackendKind kind, PbdSolverKind solver, std::int64_t n, int itera
   auto be = makePbdBackend<T>(kind);
   be->setModel(m);
   PbdStepParams<T> p;
-  p.solver = solver;
+  p.solver = solver.kind;
+  p.chebyshev_rho = T(solver.rho);
   p.iterations = iterations;
   p.substeps = substeps;
   p.volume_influence = T(2 * kSpacing);
@@ -167,7 +181,7 @@ Row timeFrames(BackendKind kind, PbdSolverKind solver, std::int64_t n, int itera
   r.table = "scaling";
   r.backend = backendName(be->kind());
   r.precision = sizeof(T) == 4 ? "float32" : "float64";
-  r.solver = solver == PbdSolverKind::Jacobi ? "jacobi" : "gauss_seidel";
+  r.solver = solver.name();
   if (be->kind() == BackendKind::Cuda) r.path = st.path;
   r.spheres = std::int64_t(m.size());
   r.constraints = solvedConstraints(m);
@@ -177,7 +191,7 @@ Row timeFrames(BackendKind kind, PbdSolverKind solver, std::int64_t n, int itera
   r.ms_frame = median(ms);
   r.ms_min = *std::min_element(ms.begin(), ms.end());
   r.ms_max = *std::max_element(ms.begin(), ms.end());
-  r.mbytes_frame = frameBytes(m, iterations, substeps, solver == PbdSolverKind::Jacobi) / 1e6;
+  r.mbytes_frame = frameBytes(m, iterations, substeps, solver.kind == PbdSolverKind::Jacobi) / 1e6;
   r.gbytes_per_s = r.mbytes_frame * 1e6 / (r.ms_frame * 1e-3) / 1e9;
   r.host_peak_mib = host.mib();
   r.device_peak_mib = bench::deviceUsedMiB(be->kind()) - dev0;
@@ -204,14 +218,15 @@ Row timeFrames(BackendKind kind, PbdSolverKind solver, std::int64_t n, int itera
 // Speed/accuracy: mean tip deflection after `frames` frames of sagging, against a 200-iteration
 // Gauss-Seidel reference run.
 template <typename T>
-double tipDeflection(BackendKind kind, PbdSolverKind solver, std::int64_t n, int iterations, int substeps, int frames,
+double tipDeflection(BackendKind kind, Solve solver, std::int64_t n, int iterations, int substeps, int frames,
                      PbdFrameStats& st) {
   Vec3d size;
   const PbdModel<T> m = blockModel<T>(n, size);
   auto be = makePbdBackend<T>(kind);
   be->setModel(m);
   PbdStepParams<T> p;
-  p.solver = solver;
+  p.solver = solver.kind;
+  p.chebyshev_rho = T(solver.rho);
   p.iterations = iterations;
   p.substeps = substeps;
   p.damping = T(5);
@@ -252,6 +267,8 @@ int main(int argc, char** argv) {
   int iterations = 10, substeps = 4, repeats = 20, fused_max = 4096,
       cluster_max = PbdStepParams<float>{}.cluster_max_particles;
   bool quick = false;
+  double chebyshev_rho = 0;
+  std::vector<double> accuracy_rhos{0.5, 0.9};
   app.add_option("--backend", backend, "auto (CPU and, when present, CUDA) | cpu | cuda");
   app.add_option("--precision", precision, "float32 | float64");
   app.add_option("--min", min_n, "smallest sphere count");
@@ -264,6 +281,10 @@ int main(int argc, char** argv) {
   app.add_option("--fused-max", fused_max, "CUDA: largest sphere count run by the fused single-block kernel (0: never; Jacobi: at most 256)");
   app.add_option("--cluster-max", cluster_max,
                  "CUDA, Jacobi: largest sphere count run by the thread-block cluster frame kernel (0: never)");
+  app.add_option("--chebyshev-rho", chebyshev_rho,
+                 "Jacobi rows of the scaling table: Chebyshev acceleration with this spectral-radius estimate (0: off)");
+  app.add_option("--accuracy-rhos", accuracy_rhos,
+                 "the accuracy table's Chebyshev-accelerated Jacobi rows, one per estimate (empty: none)");
   app.add_option("--csv", csv, "write every row to this CSV file");
   app.add_flag("--quick", quick, "short run: up to 10^4 spheres, 5 repeats");
   double budget_s = 130.0;
@@ -311,7 +332,7 @@ int main(int argc, char** argv) {
     for (BackendKind k : kinds)
       for (std::int64_t n : sizes) {
         if (k == BackendKind::Cpu && n > cpu_max) continue;
-        for (PbdSolverKind s : {PbdSolverKind::Jacobi, PbdSolverKind::GaussSeidel}) {
+        for (Solve s : {Solve{PbdSolverKind::Jacobi, chebyshev_rho}, Solve{PbdSolverKind::GaussSeidel, 0.0}}) {
           if (pastDeadline()) {
             ++g_skipped;
             continue;
@@ -341,10 +362,14 @@ int main(int argc, char** argv) {
         continue;
       }
       PbdFrameStats st;
-      const double ref = f64 ? tipDeflection<double>(k, PbdSolverKind::GaussSeidel, accuracy_n, 200, substeps, frames, st)
-                             : tipDeflection<float>(k, PbdSolverKind::GaussSeidel, accuracy_n, 200, substeps, frames, st);
-      for (PbdSolverKind s : {PbdSolverKind::Jacobi, PbdSolverKind::GaussSeidel})
-        for (int it : {1, 2, 5, 10, 20, 50}) {
+      const Solve gs{PbdSolverKind::GaussSeidel, 0.0};
+      std::vector<Solve> solves{Solve{PbdSolverKind::Jacobi, 0.0}};
+      for (double rho : accuracy_rhos) solves.push_back(Solve{PbdSolverKind::Jacobi, rho});
+      solves.push_back(gs);
+      const double ref = f64 ? tipDeflection<double>(k, gs, accuracy_n, 200, substeps, frames, st)
+                             : tipDeflection<float>(k, gs, accuracy_n, 200, substeps, frames, st);
+      for (const Solve& s : solves)
+        for (int it : {1, 2, 3, 4, 5, 10, 20, 50}) {
           if (pastDeadline()) {
             ++g_skipped;
             continue;

@@ -541,6 +541,7 @@ class PbdCpuBackend final : public PbdBackend<T> {
       for (std::size_t k = 0; k < in.kinematic_ids.size(); ++k) kinematic_from_[k] = state_.positions[in.kinematic_ids[k]];
     }
     attach_lambda_.assign(in.attach_ids.size(), Vec3<T>());
+    if (p.chebyshev_rho > T(0)) sizeChebyshev(in.attach_ids.size());
 
     pbd::SolveContext<T> ctx;
     ctx.x = state_.positions.data();
@@ -608,6 +609,8 @@ class PbdCpuBackend final : public PbdBackend<T> {
     Clock::time_point t0;
 
     const std::vector<Vec3<T>>& kin_from = in.kinematic_from_positions ? kinematic_from_ : in.kinematic_from;
+    const bool cheb = p.chebyshev_rho > T(0);
+    T cheb_weight = T(1);  // every thread walks the same weights (pbd::chebyshevIteration)
     for (int s = 0; s < p.substeps; ++s) {
       const T t_end = T(s + 1) / T(p.substeps);
       if (lead) t0 = Clock::now();
@@ -622,6 +625,7 @@ class PbdCpuBackend final : public PbdBackend<T> {
         std::fill(l.begin() + t.begin(m), l.begin() + t.end(m), Vec3<T>());
       }
       std::fill(attach_lambda_.begin() + t.begin(na), attach_lambda_.begin() + t.end(na), Vec3<T>());
+      if (cheb) startChebyshev(t, ni);
       t.barrier();
       if (lead) tm.predict += msSince(t0);
 
@@ -673,10 +677,22 @@ class PbdCpuBackend final : public PbdBackend<T> {
           tm.constraints += msSince(t0);
           t0 = Clock::now();
         }
-        for (std::int64_t i = t.begin(ni), i1 = t.end(ni); i < i1; ++i)
-          if (w_[i] > T(0))
+        // Chebyshev: every projection of the iteration is done (the gather's or the attachments' barrier), so the
+        // multipliers are blended here, and each position before its contacts (as the CUDA contact kernels do).
+        const pbd::ChebyshevMode mode =
+            cheb ? pbd::chebyshevIteration(it, p.iterations, p.chebyshev_rho, cheb_weight) : pbd::ChebyshevMode::Off;
+        if (mode != pbd::ChebyshevMode::Off) blendMultipliers(t, na, cheb_weight, mode);
+        for (std::int64_t i = t.begin(ni), i1 = t.end(ni); i < i1; ++i) {
+          const bool movable = w_[i] > T(0);
+          if (mode != pbd::ChebyshevMode::Off)
+            x[i] = pbd::chebyshevStep(x[i], cheb_.x1[i], cheb_.x2[i], cheb_weight, mode, movable);
+          const Vec3<T> free = x[i];
+          if (movable)
             x[i] = pbd::resolveContacts(x[i], r[i], model_.planes.data(), int(model_.planes.size()), model_.boxes.data(),
                                         int(model_.boxes.size()), in.tools_from.data(), in.tools_to.data(), nt, t_end);
+          if (mode != pbd::ChebyshevMode::Off)
+            pbd::chebyshevRecord(x[i], cheb_.x1[i], cheb_.x2[i], mode, !pbd::sameVec(x[i], free));
+        }
         // The next iteration's projections read every particle.
         if (it + 1 < p.iterations) t.barrier();
         if (lead) tm.collisions += msSince(t0);
@@ -712,6 +728,40 @@ class PbdCpuBackend final : public PbdBackend<T> {
         residual_[off + std::size_t(c)] = double(pbd::distanceResidual(view, int(c), x, p.xpbd, dt));
       off += std::size_t(view.count);
     }
+  }
+
+  // Chebyshev iterates (positions, every block's multipliers, the attachments'), sized for this frame.
+  void sizeChebyshev(std::size_t attachments) {
+    cheb_.x1.resize(model_.size());
+    cheb_.x2.resize(model_.size());
+    cheb_.l1.resize(lambda_.size());
+    cheb_.l2.resize(lambda_.size());
+    for (std::size_t b = 0; b < lambda_.size(); ++b) {
+      cheb_.l1[b].resize(lambda_[b].size());
+      cheb_.l2[b].resize(lambda_[b].size());
+    }
+    cheb_.a1.resize(attachments);
+    cheb_.a2.resize(attachments);
+  }
+
+  // Substep start, after the prediction: the iterate one back is the predicted position (the multipliers' is
+  // zero, which pbd::chebyshevMultiplier knows).
+  void startChebyshev(const Team& t, std::int64_t ni) {
+    const Vec3<T>* x = state_.positions.data();
+    for (std::int64_t i = t.begin(ni), i1 = t.end(ni); i < i1; ++i) cheb_.x1[i] = x[i];
+  }
+
+  // Every multiplier's Chebyshev step; each thread its own range of each array (the projections are done).
+  void blendMultipliers(const Team& t, std::int64_t na, T weight, pbd::ChebyshevMode mode) {
+    for (std::size_t b = 0; b < lambda_.size(); ++b) {
+      if (!model_.blocks[b].solve) continue;
+      Vec3<T>* l = lambda_[b].data();
+      const std::int64_t m = std::int64_t(lambda_[b].size());
+      for (std::int64_t k = t.begin(m), k1 = t.end(m); k < k1; ++k)
+        pbd::chebyshevMultiplier(l[k], cheb_.l1[b][k], cheb_.l2[b][k], weight, mode);
+    }
+    for (std::int64_t k = t.begin(na), k1 = t.end(na); k < k1; ++k)
+      pbd::chebyshevMultiplier(attach_lambda_[k], cheb_.a1[k], cheb_.a2[k], weight, mode);
   }
 
   // Frame summary on the calling thread, after the team: residuals in constraint order, the first non-finite
@@ -850,6 +900,11 @@ class PbdCpuBackend final : public PbdBackend<T> {
   std::vector<std::vector<Vec3<T>>> slot_corr_;
   std::vector<std::vector<T>> alpha_tilde_;  // per block and multiplier: compliance / dt^2 of this frame
   std::vector<Vec3<T>> attach_lambda_;
+  struct {
+    std::vector<Vec3<T>> x1, x2;                   // positions one and two iterations back
+    std::vector<std::vector<Vec3<T>>> l1, l2;      // per block: multipliers one and two back
+    std::vector<Vec3<T>> a1, a2;                   // attachment multipliers one and two back
+  } cheb_;                                         // Chebyshev iterates (PbdStepParams::chebyshev_rho > 0)
   std::vector<pbd::BlockView<T>> views_;
   std::vector<double> residual_;             // per solved distance constraint, this frame
   std::int64_t solved_slots_ = 0;            // constraint slots of the solved blocks (one iteration's work)

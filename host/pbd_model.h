@@ -11,6 +11,7 @@
 #include "host/graph_coloring.h"
 #include "host/input_error.h"
 #include "host/simulation_model.h"
+#include "physics/pbd_chebyshev.h"
 #include "physics/pbd_collision.h"
 #include "physics/pbd_rotation.h"
 #include "physics/vec3.h"
@@ -84,6 +85,8 @@ struct PbdStepParams {
   bool xpbd = true;             // false: plain PBD, block stiffness k per projection, no multipliers
   PbdSolverKind solver = PbdSolverKind::Jacobi;
   T jacobi_omega = T(1.5);      // over-relaxation of the averaged Jacobi step, (0, 2)
+  T chebyshev_rho = T(0);       // Jacobi: Chebyshev semi-iterative acceleration with this spectral-radius estimate,
+                                // [0, 0.9]; 0 off (physics/pbd_chebyshev.h, docs/pbd.md)
   Vec3<T> gravity{T(0), T(0), T(-9.81)};  // m/s^2
   T damping = T(1);             // 1/s, velocities scaled by exp(-damping dt) each substep
   int rotation_iterations = 4;  // polar-decomposition steps per cluster per projection (warm-started)
@@ -165,6 +168,10 @@ inline void validateFrameInput(std::size_t n, const PbdStepParams<T>& p, const P
   if (p.substeps < 1) throw InputError(f, "substeps", "must be >= 1");
   if (p.iterations < 1) throw InputError(f, "iterations", "must be >= 1");
   if (!(p.jacobi_omega > T(0) && p.jacobi_omega < T(2))) throw InputError(f, "jacobi_omega", "must be in (0, 2)");
+  if (!(p.chebyshev_rho >= T(0) && p.chebyshev_rho <= T(pbd::kChebyshevMaxRho)))
+    throw InputError(f, "chebyshev_rho", "must be in [0, 0.9] (larger estimates gained energy or diverged in our tests)");
+  if (p.chebyshev_rho > T(0) && p.solver != PbdSolverKind::Jacobi)
+    throw InputError(f, "chebyshev_rho", "accelerates the Jacobi solver only: use 0 with Gauss-Seidel");
   if (!(p.damping >= T(0))) throw InputError(f, "damping", "must be >= 0");
   if (!(p.max_radius_growth >= T(1))) throw InputError(f, "max_radius_growth", "must be >= 1");
   if (in.kinematic_from_positions && !in.kinematic_from.empty())

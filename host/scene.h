@@ -52,6 +52,7 @@ struct PbdSpec {
   int iterations = 10;              // >= 1
   bool xpbd = true;                 // false: plain PBD (stiffness depends on iterations/dt)
   std::string solver = "jacobi";    // "jacobi" | "gauss_seidel"
+  double chebyshev_rho = 0.0;       // Jacobi: Chebyshev acceleration's spectral-radius estimate, [0, 0.9]; 0 off
   double stretch_compliance = 0.0;  // m/N (XPBD alpha), >= 0
   double laplacian_compliance = 0.0;
   bool volume_preservation = true;

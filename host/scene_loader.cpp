@@ -17,6 +17,7 @@
 #include "host/input_error.h"
 #include "host/mesh.h"
 #include "host/scene_json.h"
+#include "physics/pbd_chebyshev.h"
 
 namespace inc {
 
@@ -223,11 +224,16 @@ PbdSpec readPbd(const ObjectReader& top) {
   PbdSpec p;
   if (!top.has("pbd")) return p;
   const ObjectReader r = top.object("pbd");
-  r.allowOnly({"iterations", "xpbd", "solver", "stretch_compliance", "laplacian_compliance", "volume_preservation",
-               "target_spheres"});
+  r.allowOnly({"iterations", "xpbd", "solver", "chebyshev_rho", "stretch_compliance", "laplacian_compliance",
+               "volume_preservation", "target_spheres"});
   p.iterations = intAtLeast(r, "iterations", p.iterations, 1);
   p.xpbd = r.boolean("xpbd", p.xpbd);
   p.solver = r.choice("solver", p.solver, {"jacobi", "gauss_seidel"});
+  p.chebyshev_rho = r.number("chebyshev_rho", p.chebyshev_rho);
+  if (!(p.chebyshev_rho >= 0 && p.chebyshev_rho <= pbd::kChebyshevMaxRho))
+    r.fail("chebyshev_rho", "must be in [0, " + formatNumber(pbd::kChebyshevMaxRho) + "]" + got(p.chebyshev_rho));
+  if (p.chebyshev_rho > 0 && p.solver != "jacobi")
+    r.fail("chebyshev_rho", "accelerates the Jacobi solver only (pbd.solver is \"" + p.solver + "\"): use 0");
   p.stretch_compliance = nonNegative(r, "stretch_compliance", p.stretch_compliance);
   p.laplacian_compliance = nonNegative(r, "laplacian_compliance", p.laplacian_compliance);
   p.volume_preservation = r.boolean("volume_preservation", p.volume_preservation);
@@ -546,6 +552,7 @@ std::string sceneToJson(const Scene& s) {
   j["pbd"] = J{{"iterations", s.pbd.iterations},
                {"xpbd", s.pbd.xpbd},
                {"solver", s.pbd.solver},
+               {"chebyshev_rho", s.pbd.chebyshev_rho},
                {"stretch_compliance", s.pbd.stretch_compliance},
                {"laplacian_compliance", s.pbd.laplacian_compliance},
                {"volume_preservation", s.pbd.volume_preservation},

@@ -108,6 +108,8 @@ TearingSceneSetup tearingSetupFromScene(const Scene& scene) {
   s.model.bending_compliance = 10.0;
   s.damping = scene.material.damping;
   s.iterations = scene.pbd.iterations;
+  if (scene.pbd.chebyshev_rho > 0)  // the tearing solve patches its model on the device, which the acceleration does not support
+    throw InputError(f, "pbd.chebyshev_rho", "not supported by the tearing model (its solve is patched as it tears): use 0");
   s.xpbd = scene.pbd.xpbd;
   s.solver = scene.pbd.solver;
   for (std::size_t t = 0; t < scene.tools.size(); ++t)

@@ -20,6 +20,7 @@
 #include "kernels/device_grow.h"
 #include "kernels/pbd_device_cuda.h"
 #include "kernels/pbd_frame_data.cuh"
+#include "kernels/pbd_chebyshev_args.cuh"
 #include "kernels/pbd_cluster_frame.cuh"
 #include "kernels/pbd_group_projection.cuh"
 #include "physics/pbd_block.h"
@@ -75,10 +76,11 @@ __device__ __forceinline__ int liveCount(const int* live, int count) { return li
 
 template <typename T>
 __global__ void predictKernel(int n, const int* live_n, Vec3<T>* x, Vec3<T>* v, Vec3<T>* x_prev, const T* w, Vec3<T> g, T damp,
-                              T dt) {
+                              T dt, Vec3<T>* cheb_x1) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i >= liveCount(live_n, n)) return;
   pbd::predictParticle(x[i], v[i], x_prev[i], w[i], g, damp, dt);
+  if (cheb_x1) cheb_x1[i] = x[i];  // Chebyshev: the substep's first iterate
 }
 
 template <typename T>
@@ -277,25 +279,40 @@ __global__ void rotationKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx, co
 template <typename T>
 __global__ void contactKernel(int n, const int* live_n, Vec3<T>* x, const T* r, const T* w, const pbd::PlaneCollider<T>* planes,
                               int np, const pbd::BoxCollider<T>* boxes, int nb, const pbd::CapsuleCollider<T>* tools_from,
-                              const pbd::CapsuleCollider<T>* tools_to, int nt, T t) {
+                              const pbd::CapsuleCollider<T>* tools_to, int nt, T t, ChebyshevArgs<T> ch) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i >= liveCount(live_n, n) || !(w[i] > T(0))) return;
-  x[i] = pbd::resolveContacts(x[i], r[i], planes, np, boxes, nb, tools_from, tools_to, nt, t);
+  if (i < liveCount(live_n, n)) {
+    const bool movable = w[i] > T(0);
+    Vec3<T> xi = x[i];
+    if (ch.mode != pbd::ChebyshevMode::Off) xi = pbd::chebyshevStep(xi, ch.x1[i], ch.x2[i], ch.weight, ch.mode, movable);
+    const Vec3<T> free = xi;
+    if (movable) xi = pbd::resolveContacts(xi, r[i], planes, np, boxes, nb, tools_from, tools_to, nt, t);
+    if (ch.mode != pbd::ChebyshevMode::Off) pbd::chebyshevRecord(xi, ch.x1[i], ch.x2[i], ch.mode, !pbd::sameVec(xi, free));
+    x[i] = xi;
+  }
+  chebyshevMultipliers(ch);
 }
 
 // The last Jacobi block's gather and then the iteration's contacts, per particle in one pass: a particle's contact
 // reads only its own gathered position, so this is the two kernels' result (the same operations on each particle
-// in the same order) without the second pass over the positions and its launch.
+// in the same order) without the second pass over the positions and its launch. Both contact kernels take the
+// iteration's Chebyshev step (positions before their contacts, as the CPU's contact phase does, and every multiplier).
 template <typename T>
 __global__ void gatherContactKernel(int n, const int* live_n, pbd::BlockView<T> b, Vec3<T>* x, const T* r, const T* w,
                                     const pbd::PlaneCollider<T>* planes, int np, const pbd::BoxCollider<T>* boxes,
                                     int nb, const pbd::CapsuleCollider<T>* tools_from,
-                                    const pbd::CapsuleCollider<T>* tools_to, int nt, T t) {
+                                    const pbd::CapsuleCollider<T>* tools_to, int nt, T t, ChebyshevArgs<T> ch) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i >= liveCount(live_n, n)) return;
-  Vec3<T> xi = x[i] + gatherSum(b, i);
-  if (w[i] > T(0)) xi = pbd::resolveContacts(xi, r[i], planes, np, boxes, nb, tools_from, tools_to, nt, t);
-  x[i] = xi;
+  if (i < liveCount(live_n, n)) {
+    const bool movable = w[i] > T(0);
+    Vec3<T> xi = x[i] + gatherSum(b, i);
+    if (ch.mode != pbd::ChebyshevMode::Off) xi = pbd::chebyshevStep(xi, ch.x1[i], ch.x2[i], ch.weight, ch.mode, movable);
+    const Vec3<T> free = xi;
+    if (movable) xi = pbd::resolveContacts(xi, r[i], planes, np, boxes, nb, tools_from, tools_to, nt, t);
+    if (ch.mode != pbd::ChebyshevMode::Off) pbd::chebyshevRecord(xi, ch.x1[i], ch.x2[i], ch.mode, !pbd::sameVec(xi, free));
+    x[i] = xi;
+  }
+  chebyshevMultipliers(ch);
 }
 
 template <typename T>
@@ -609,6 +626,7 @@ struct DeviceBlock {
   DeviceBuffer<std::int32_t> offsets, ids, particle_offsets, particle_slots, order;
   DeviceBuffer<T> rest, compliance, jacobi_scale;
   DeviceBuffer<Vec3<T>> rest_vec, lambda, slot_corr;
+  DeviceBuffer<Vec3<T>> cheb1, cheb2;       // Chebyshev: multipliers one and two iterations back (sized on demand)
   std::vector<std::int32_t> color_offsets;  // host: launch ranges
   DeviceBuffer<std::int32_t> color_offsets_dev;  // the same, for the fused small-model kernel
 };
@@ -638,7 +656,7 @@ bool sameKey(const GraphKey<T>& a, const GraphKey<T>& b) {
          x.volume_influence == y.volume_influence && x.max_radius_growth == y.max_radius_growth &&
          x.volume_passes == y.volume_passes && x.bisection_steps == y.bisection_steps &&
          x.fused_max_particles == y.fused_max_particles && x.cluster_max_particles == y.cluster_max_particles &&
-         x.cluster_ctas == y.cluster_ctas &&
+         x.cluster_ctas == y.cluster_ctas && x.chebyshev_rho == y.chebyshev_rho &&
          a.kinematic == b.kinematic &&
          a.tools == b.tools && a.attached == b.attached && std::equal(a.ptrs, a.ptrs + 11, b.ptrs) &&
          a.n == b.n && std::equal(a.counts, a.counts + kMaxLiveBlocks, b.counts) && a.patched == b.patched &&
@@ -790,6 +808,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
       throw InputError("pbd frame", "solver", "the model was patched on the device (no colouring): use the Jacobi solver");
     if (!jacobi && !has_coloring_)
       throw InputError("pbd frame", "solver", "the model was built without a colouring (Jacobi only): use the Jacobi solver");
+    if (p.chebyshev_rho > T(0)) ensureChebyshev();
     if (!jacobi)
       for (const DeviceBlock<T>& d : blocks_)
         if (d.solve) st.colors += int(d.color_offsets.size()) - 1;
@@ -1308,6 +1327,50 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     n_tools_ = int(in.tools_from.size());
   }
 
+  // Chebyshev iterates sized for the model and this frame's attachments; a reallocation bumps topo_version_ (the
+  // captured frame holds the pointers).
+  void ensureChebyshev() {
+    if (patched_)
+      throw InputError("pbd frame", "chebyshev_rho", "not supported on a model patched on the device (tearing): use 0");
+    if (int(blocks_.size()) + 1 > kMaxChebyshevLists)
+      throw InputError("pbd frame", "chebyshev_rho", "supported for up to " + std::to_string(kMaxChebyshevLists - 1) +
+                                                         " constraint blocks, the model has " + std::to_string(blocks_.size()));
+    bool moved = false;
+    const auto fit = [&](DeviceBuffer<Vec3<T>>& b, std::size_t n) {
+      const void* before = b.data();
+      b.resize(n);
+      moved |= b.data() != before;
+    };
+    fit(cheb_x1_, std::size_t(n_));
+    fit(cheb_x2_, std::size_t(n_));
+    for (DeviceBlock<T>& d : blocks_) {
+      fit(d.cheb1, d.lambda.size());
+      fit(d.cheb2, d.lambda.size());
+    }
+    fit(cheb_a1_, std::size_t(n_att_));
+    fit(cheb_a2_, std::size_t(n_att_));
+    if (moved) ++topo_version_;
+  }
+
+  // The frame's Chebyshev views: positions, then the solved blocks' multipliers and the attachments' as flat lists.
+  ChebyshevArgs<T> chebyshevArgs() {
+    ChebyshevArgs<T> a;
+    a.x1 = cheb_x1_.data();
+    a.x2 = cheb_x2_.data();
+    const auto add = [&](Vec3<T>* lambda, Vec3<T>* l1, Vec3<T>* l2, std::size_t count) {
+      if (count == 0) return;
+      a.lambda[a.lists] = lambda;
+      a.l1[a.lists] = l1;
+      a.l2[a.lists] = l2;
+      a.total += int(count);
+      a.end[a.lists++] = a.total;
+    };
+    for (DeviceBlock<T>& d : blocks_)
+      if (d.solve) add(d.lambda.data(), d.cheb1.data(), d.cheb2.data(), d.lambda.size());
+    add(att_lambda_.data(), cheb_a1_.data(), cheb_a2_.data(), std::size_t(n_att_));
+    return a;
+  }
+
   pbd::BlockView<T> view(DeviceBlock<T>& d) {
     pbd::BlockView<T> b;
     b.kind = int(d.kind);
@@ -1359,7 +1422,8 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
 
   // Whether the frame runs as one thread-block cluster launch (kernels/pbd_cluster_frame.cuh).
   bool clusterFrame(const PbdStepParams<T>& p) const {
-    return !profile_ && cluster_ok_ && !patched_ && p.solver == PbdSolverKind::Jacobi && n_ <= p.cluster_max_particles;
+    return !profile_ && cluster_ok_ && !patched_ && p.solver == PbdSolverKind::Jacobi && n_ <= p.cluster_max_particles &&
+           !(p.chebyshev_rho > T(0));
   }
 
   // Whether the frame is one kernel (fused or cluster), which takes the counts as arguments.
@@ -1370,7 +1434,9 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     // instead of one per colour) but for Jacobi only up to a few hundred (H100: 1008 spheres 0.23 ms per
     // iteration fused against 0.029 ms on launches), whatever fused_max_particles asks.
     const int fused_limit = jacobi ? std::min(p.fused_max_particles, kFusedJacobiMaxParticles) : p.fused_max_particles;
-    return cluster || (!profile_ && n_ > 0 && n_ <= fused_limit && int(blocks_.size()) <= kMaxFusedBlocks);
+    // Chebyshev acceleration runs on per-block launches only (the whole-frame kernels do not carry its iterates).
+    return cluster || (!profile_ && n_ > 0 && n_ <= fused_limit && int(blocks_.size()) <= kMaxFusedBlocks &&
+                       !(p.chebyshev_rho > T(0)));
   }
 
   // Enqueues one whole frame on stream_ (captured into a graph, or run directly). No host synchronisation.
@@ -1444,12 +1510,14 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
         INC_CUDA_LAUNCH("pbd fused frame");
       }
     }
+    const bool cheb = !fused && p.chebyshev_rho > T(0);
+    ChebyshevArgs<T> ch = cheb ? chebyshevArgs() : ChebyshevArgs<T>();
     for (int s = 0; s < (fused ? 0 : p.substeps); ++s) {
       const T t_end = T(s + 1) / T(p.substeps);
       std::size_t ev = stageBegin();
       if (n_ > 0) {
         predictKernel<T><<<gn, kThreads, 0, stream_>>>(n_, live_n, x_.data(), v_.data(), x_prev_.data(), w_.data(), p.gravity,
-                                                       damp, dt);
+                                                       damp, dt, cheb ? cheb_x1_.data() : nullptr);
         INC_CUDA_LAUNCH("pbd predict");
       }
       if (n_kin_ > 0) {
@@ -1469,6 +1537,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
         if (blocks_[bi].solve && blocks_[bi].count > 0) last_solved = int(bi);
       const bool fuse_contacts = ctx.jacobi && !profile_ && n_att_ == 0 && last_solved >= 0 && n_ > 0;
       for (int it = 0; it < p.iterations; ++it) {
+        if (cheb) ch.mode = pbd::chebyshevIteration(it, p.iterations, p.chebyshev_rho, ch.weight);
         for (std::size_t bi = 0; bi < blocks_.size(); ++bi) {
           DeviceBlock<T>& d = blocks_[bi];
           if (!d.solve || d.count == 0) continue;
@@ -1485,7 +1554,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
             if (fuse_contacts && int(bi) == last_solved) {
               gatherContactKernel<T><<<gn, kThreads, 0, stream_>>>(n_, live_n, b, x_.data(), radii_.data(), w_.data(),
                                                                    planes_.data(), n_planes_, boxes_.data(), n_boxes_,
-                                                                   tools_from_.data(), tools_to_.data(), n_tools_, t_end);
+                                                                   tools_from_.data(), tools_to_.data(), n_tools_, t_end, ch);
               INC_CUDA_LAUNCH("pbd gather + contacts");
             } else {
               gatherKernel<T><<<gn, kThreads, 0, stream_>>>(n_, live_n, b, x_.data());
@@ -1518,7 +1587,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
         if (n_ > 0 && !fuse_contacts) {
           contactKernel<T><<<gn, kThreads, 0, stream_>>>(n_, live_n, x_.data(), radii_.data(), w_.data(), planes_.data(),
                                                          n_planes_, boxes_.data(), n_boxes_, tools_from_.data(),
-                                                         tools_to_.data(), n_tools_, t_end);
+                                                         tools_to_.data(), n_tools_, t_end, ch);
           INC_CUDA_LAUNCH("pbd contacts");
         }
         stageEnd(2, ev);
@@ -1629,6 +1698,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
   BulkUpload bulk_;  // setModel's uploads
   GraphKey<T> graph_key_;
   bool has_coloring_ = true;  // Gauss-Seidel needs every solved block coloured (pbdModelHasColoring)
+  DeviceBuffer<Vec3<T>> cheb_x1_, cheb_x2_, cheb_a1_, cheb_a2_;  // Chebyshev: positions, attachment multipliers
   std::uint64_t topo_version_ = 0;  // bumped by a new model and by a reallocation: the captured graph holds pointers
   DeviceBuffer<int> live_;          // the counts the frame's kernels read (uploadLive)
   std::vector<std::int32_t> kin_ids_host_;  // what kin_ids_ holds

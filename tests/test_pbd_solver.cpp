@@ -451,7 +451,10 @@ TEST(PbdSolver, MetaballVolumePreservationKeepsSqueezedUnionVolume) {
 TEST(PbdSolver, CpuFrameIsIndependentOfThreadCount) {
   const PbdModel<float> m = test::makeLatticeBeam<float>(0.06, 0.02, 0.02, 0.005, 5.0e3, true, 16);
   ASSERT_GT(m.size(), 300u);  // ~9,000 constraint slots: above the CPU backend's team threshold
-  for (PbdSolverKind solver : {PbdSolverKind::Jacobi, PbdSolverKind::GaussSeidel}) {
+  // Jacobi, Jacobi with Chebyshev acceleration (each thread blends its own ranges of positions and multipliers),
+  // Gauss-Seidel.
+  for (int variant = 0; variant < 3; ++variant) {
+    const PbdSolverKind solver = variant == 2 ? PbdSolverKind::GaussSeidel : PbdSolverKind::Jacobi;
     auto run = [&](int threads) {
       const int old = omp_get_max_threads();
       omp_set_num_threads(threads);
@@ -459,6 +462,7 @@ TEST(PbdSolver, CpuFrameIsIndependentOfThreadCount) {
       be->setModel(m);
       PbdStepParams<float> p;
       p.solver = solver;
+      p.chebyshev_rho = variant == 1 ? 0.9f : 0.0f;
       p.iterations = 4;
       p.volume_influence = 0.01f;
       int team_frames = 0;
@@ -496,7 +500,7 @@ TEST(PbdSolver, CpuFrameIsIndependentOfThreadCount) {
       PbdState<float> s;
       be->getState(s);
       std::printf("%s, %d thread(s): %d of 8 frames on a team\n",
-                  solver == PbdSolverKind::Jacobi ? "jacobi" : "gauss-seidel", threads, team_frames);
+                  variant == 0 ? "jacobi" : variant == 1 ? "jacobi + chebyshev" : "gauss-seidel", threads, team_frames);
       return s;
     };
     const PbdState<float> a = run(1), b = run(2), c = run(3);

@@ -86,6 +86,7 @@ void expectSceneEq(const Scene& a, const Scene& b) {
   EXPECT_EQ(a.pbd.iterations, b.pbd.iterations);
   EXPECT_EQ(a.pbd.xpbd, b.pbd.xpbd);
   EXPECT_EQ(a.pbd.solver, b.pbd.solver);
+  EXPECT_EQ(a.pbd.chebyshev_rho, b.pbd.chebyshev_rho);
   EXPECT_EQ(a.pbd.stretch_compliance, b.pbd.stretch_compliance);
   EXPECT_EQ(a.pbd.laplacian_compliance, b.pbd.laplacian_compliance);
   EXPECT_EQ(a.pbd.volume_preservation, b.pbd.volume_preservation);
@@ -302,6 +303,18 @@ TEST(SceneLoaderJson, NanLiteralIsRejected) {
 TEST(SceneLoaderJson, InfinityLiteralIsRejected) {
   expectError(R"({"geometry": {"kind": "box"}, "models": {"mls": true}, "duration_s": -Infinity})", "duration_s",
               "not JSON numbers");
+}
+
+// pbd.chebyshev_rho: [0, 0.9], Jacobi only; an accepted value is read.
+TEST(SceneLoaderJson, ChebyshevRhoRangeAndSolver) {
+  expectErrorAt("/pbd/chebyshev_rho", 0.95, "pbd.chebyshev_rho", "must be in [0, 0.9]");
+  expectErrorAt("/pbd/chebyshev_rho", -0.1, "pbd.chebyshev_rho", "must be in [0, 0.9]");
+  expectError(R"({"geometry": {"kind": "box"}, "models": {"mls": true},
+                  "pbd": {"solver": "gauss_seidel", "chebyshev_rho": 0.5}})",
+              "pbd.chebyshev_rho", "accelerates the Jacobi solver only");
+  const Scene s = parseScene(R"({"geometry": {"kind": "box"}, "models": {"mls": true}, "pbd": {"chebyshev_rho": 0.9}})",
+                             kLabel, ".");
+  EXPECT_EQ(s.pbd.chebyshev_rho, 0.9);
 }
 
 TEST(SceneLoaderJson, OverflowingNumberIsRejected) {

@@ -28,7 +28,7 @@ PbdModel<T> parityModel() {
 }
 
 template <typename T>
-PbdFrameInput<T> parityInput(const PbdModel<T>& m, int frame) {
+PbdFrameInput<T> parityInput(const PbdModel<T>& m, int frame, bool attachments = true) {
   PbdFrameInput<T> in;
   const T t0 = T(frame) / T(100), t1 = T(frame + 1) / T(100);
   pbd::CapsuleCollider<T> a, b;
@@ -39,7 +39,7 @@ PbdFrameInput<T> parityInput(const PbdModel<T>& m, int frame) {
   b.b = Vec3<T>(T(0.03), T(0.03), T(0.035) - T(0.01) * t1);
   in.tools_from.push_back(a);
   in.tools_to.push_back(b);
-  for (std::size_t i = 0; i < m.size(); ++i)
+  for (std::size_t i = 0; i < m.size() && attachments; ++i)
     if (m.rest_positions[i].x > T(0.055)) {
       in.attach_ids.push_back(std::int32_t(i));
       in.attach_from.push_back(m.rest_positions[i] + Vec3<T>(T(0), T(0), T(0.01) * t0));
@@ -53,7 +53,7 @@ PbdFrameInput<T> parityInput(const PbdModel<T>& m, int frame) {
 // cluster frame's CTA count (0: as the model needs).
 template <typename T>
 void runParity(PbdSolverKind solver, double pos_tol_m, double radius_tol_m, int fused_max = 4096,
-               int cluster_max = 8192, int cluster_ctas = 0) {
+               int cluster_max = 8192, int cluster_ctas = 0, double chebyshev_rho = 0, bool attachments = true) {
   const PbdModel<T> m = parityModel<T>();
   auto cpu = cpu::makePbdCpuBackend<T>();
   auto gpu = cuda::makePbdCudaBackend<T>();
@@ -67,9 +67,10 @@ void runParity(PbdSolverKind solver, double pos_tol_m, double radius_tol_m, int 
   p.fused_max_particles = fused_max;
   p.cluster_max_particles = cluster_max;
   p.cluster_ctas = cluster_ctas;
+  p.chebyshev_rho = T(chebyshev_rho);
   PbdFrameStats sc, sg;
   for (int f = 0; f < 100; ++f) {
-    const PbdFrameInput<T> in = parityInput(m, f);
+    const PbdFrameInput<T> in = parityInput(m, f, attachments);
     sc = cpu->advanceFrame(p, in);
     sg = gpu->advanceFrame(p, in);
   }
@@ -141,6 +142,19 @@ TEST(PbdGpu, ClusterFrameMatchesCpuAfter100Frames) {
   for (int ctas : {16, 5, 1}) {
     runParity<double>(PbdSolverKind::Jacobi, 1e-9, 1e-9, 0, 8192, ctas);
     runParity<float>(PbdSolverKind::Jacobi, 2e-5, 2e-5, 0, 8192, ctas);
+  }
+}
+
+// Chebyshev-accelerated Jacobi (per-block launches; the whole-frame kernels are not used with it): the positions are
+// blended in the contact kernel (with attachments) or in the last gather's (without), the multipliers in the same
+// launch. The same tolerances as plain Jacobi.
+TEST(PbdGpu, ChebyshevJacobiMatchesCpuAfter100Frames) {
+  if (!haveDevice()) {
+    GTEST_SKIP() << "no CUDA device";
+  }
+  for (bool attachments : {true, false}) {
+    runParity<double>(PbdSolverKind::Jacobi, 1e-9, 1e-9, 4096, 8192, 0, 0.9, attachments);
+    runParity<float>(PbdSolverKind::Jacobi, 2e-5, 2e-5, 4096, 8192, 0, 0.9, attachments);
   }
 }
 
