@@ -43,8 +43,13 @@ double pbdStages(const FrameReport& r) {  // everything that is not a cut / MLS 
   return ms;
 }
 
+// --pbd-iterations / --chebyshev-rho: the PBD iterations per substep and, for Jacobi, the Chebyshev estimate.
+int g_pbd_iterations = 10;
+double g_chebyshev_rho = 0;
+
 struct Row {
   std::string kind, backend, solver;
+  int pbd_iterations = 0;
   int target = 0, spheres = 0, nodal_points = 0, interface = 0, spheres_after = 0, mls_substeps = 0;
   double cut_length_m = 0;
   double ms_deform = 0, ms_cutting = 0, ms_mls = 0, ms_exchange = 0, ms_pbd = 0, ms_convert = 0;
@@ -66,8 +71,9 @@ Scene liverScene(int target, double length_m, double leave_s, int samples, const
   s.models.pbd_metaballs = true;
   s.models.cutting = true;
   s.solver.substeps = 4;
-  s.pbd.iterations = 10;
+  s.pbd.iterations = g_pbd_iterations;
   s.pbd.solver = pbd_solver;
+  s.pbd.chebyshev_rho = pbd_solver == "jacobi" ? g_chebyshev_rho : 0.0;  // the acceleration is Jacobi's
   s.cutting.samples_per_diameter = samples;
   s.fixed = {{Vec3d(-0.1, -0.07, -0.04), Vec3d(0.1, 0.07, -0.02)}};
   ToolSpec t;
@@ -109,6 +115,12 @@ Row runCase(const std::string& kind, BackendKind backend, int target, double len
   const double leave = 0.5;
   r.solver = solverFor(pbd_solver, backend);
   const Scene scene = liverScene(target, length_m, leave, samples, r.solver);
+  r.pbd_iterations = scene.pbd.iterations;
+  if (scene.pbd.chebyshev_rho > 0) {
+    char label[32];
+    std::snprintf(label, sizeof label, "jacobi_ch%.2f", scene.pbd.chebyshev_rho);
+    r.solver = label;
+  }
   std::map<std::string, std::vector<double>> stage_ms;
   auto sim = makeDissectionSimulation(scene, backend, Precision::Float32);
   r.spheres = int(sim->particleCount());
@@ -184,6 +196,9 @@ int main(int argc, char** argv) {
   app.add_option("--csv", csv, "write the rows as CSV here");
   app.add_option("--pbd-solver", pbd_solver, "auto (Gauss-Seidel on the CPU, Jacobi on CUDA) | jacobi | gauss_seidel")
       ->check(CLI::IsMember({"auto", "jacobi", "gauss_seidel"}));
+  app.add_option("--pbd-iterations", g_pbd_iterations, "PBD iterations per substep (the scene's pbd.iterations)");
+  app.add_option("--chebyshev-rho", g_chebyshev_rho,
+                 "Jacobi PBD: Chebyshev acceleration with this spectral-radius estimate, [0, 0.9] (pbd.chebyshev_rho)");
   app.add_flag("--stages", stages, "print the median of every stage of the cutting frames");
   app.add_flag("--quick", quick, "a short run: size 500, lengths 0.06,0.24");
   app.add_flag("--portable-pair-sums", portable, "CPU MLS: the portable pair loops even where the CPU has AVX2 (same bits)");
@@ -239,12 +254,13 @@ int main(int argc, char** argv) {
       std::ofstream f(csv);
       if (!f) throw InputError(csv, "--csv", "cannot write");
       f << "case,backend,target,spheres,cut_length_m,nodal_points,interface_spheres,mls_substeps,ms_deform,ms_cutting,"
-           "ms_mls,ms_exchange,ms_pbd,ms_convert,ms_repack,ms_apply_frame,ms_after,spheres_after,pbd_solver\n";
+           "ms_mls,ms_exchange,ms_pbd,ms_convert,ms_repack,ms_apply_frame,ms_after,spheres_after,pbd_solver,pbd_iterations\n";
       for (const Row& r : rows)
         f << r.kind << ',' << r.backend << ',' << r.target << ',' << r.spheres << ',' << r.cut_length_m << ','
           << r.nodal_points << ',' << r.interface << ',' << r.mls_substeps << ',' << r.ms_deform << ',' << r.ms_cutting
           << ',' << r.ms_mls << ',' << r.ms_exchange << ',' << r.ms_pbd << ',' << r.ms_convert << ',' << r.ms_repack
-          << ',' << r.ms_apply_frame << ',' << r.ms_after << ',' << r.spheres_after << ',' << r.solver << '\n';
+          << ',' << r.ms_apply_frame << ',' << r.ms_after << ',' << r.spheres_after << ',' << r.solver << ','
+          << r.pbd_iterations << '\n';
     }
     if (rows.empty()) {
       std::printf("bench_cutting: no rows (sizes above the limits or no device)\n");
