@@ -95,6 +95,14 @@ TEST(TearingSimulation, BadScenesRefused) {
   s = sheetScene();
   s.tools[0].kind = "probe";
   EXPECT_THROW(makeTearingSimulation(s, BackendKind::Cpu, Precision::Float32), InputError);
+  s = sheetScene();  // the tearing solve is patched on the device, which Chebyshev acceleration does not support
+  s.pbd.chebyshev_rho = 0.5;
+  try {
+    makeTearingSimulation(s, BackendKind::Cpu, Precision::Float32);
+    ADD_FAILURE() << "chebyshev_rho accepted by the tearing model";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.key(), "pbd.chebyshev_rho");
+  }
 }
 
 TEST(TearingSimulation, TearingSectionSetsCriterionMaterialAndRegions) {
