@@ -153,6 +153,21 @@ std::vector<TradeoffSetting> tradeoffSettings(const Scene& base, const std::stri
       s.solver.substeps = sub;
       add("substeps", std::to_string(sub), s);
     }
+    // Solver: the other projection order, and Jacobi with Chebyshev acceleration (docs/pbd.md) at the scene's
+    // iterations, so a user sees what the acceleration buys on their own organ.
+    if (!quick) {
+      Scene s = base;
+      s.pbd.solver = base.pbd.solver == "jacobi" ? "gauss_seidel" : "jacobi";
+      s.pbd.chebyshev_rho = 0;
+      add("solver", s.pbd.solver, s);
+    }
+    for (double rho : quick ? std::vector<double>{0.9} : std::vector<double>{0.5, 0.9}) {
+      if (base.pbd.solver == "jacobi" && rho == base.pbd.chebyshev_rho) continue;
+      Scene s = base;
+      s.pbd.solver = "jacobi";
+      s.pbd.chebyshev_rho = rho;
+      add("chebyshev_rho", fmt(rho) + (base.pbd.solver == "jacobi" ? "" : " (jacobi)"), s);
+    }
     // Sphere count. A lattice organ (pbd.target_spheres = 0) changes it through the lattice spacing and, as a
     // second knob, through the packer at a fraction of its lattice count; a packed organ through the packer
     // only (its spheres do not depend on geometry.spacing).

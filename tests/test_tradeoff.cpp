@@ -277,6 +277,20 @@ TEST(Tradeoff, SphereCountKnobsOfLatticeAndPackedOrgans) {
   EXPECT_EQ(ref.pbd.iterations, 40);
   EXPECT_EQ(ref.solver.substeps, 16);
   EXPECT_EQ(knobs(tradeoffSettings(p, "pbd", true), "target_spheres"), (std::vector<std::string>{"200"}));
+  // The solver knobs: the other order, and Jacobi with Chebyshev acceleration (a Gauss-Seidel scene says so).
+  EXPECT_EQ(knobs(lattice, "solver"), (std::vector<std::string>{"gauss_seidel"}));
+  EXPECT_EQ(knobs(lattice, "chebyshev_rho"), (std::vector<std::string>{"0.5", "0.9"}));
+  Scene g = s;
+  g.pbd.solver = "gauss_seidel";
+  int accelerated = 0;
+  for (const TradeoffSetting& x : tradeoffSettings(g, "pbd", true))
+    if (x.knob == "chebyshev_rho") {
+      ++accelerated;
+      EXPECT_EQ(x.value, "0.9 (jacobi)");
+      EXPECT_EQ(x.scene.pbd.solver, "jacobi");
+      EXPECT_EQ(x.scene.pbd.chebyshev_rho, 0.9);
+    }
+  EXPECT_EQ(accelerated, 1);
 }
 
 TEST(Tradeoff, ARowSaysWhenNoParticleIsHeldByTheFixedBoxes) {
