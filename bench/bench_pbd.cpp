@@ -121,7 +121,6 @@ double median(std::vector<double> v) {
 double g_row_seconds = 2.0;
 bool g_profile = false;
 double g_jacobi_omega = PbdStepParams<double>{}.jacobi_omega;
-bool g_no_pdl = false;
 std::chrono::steady_clock::time_point g_deadline = std::chrono::steady_clock::time_point::max();
 int g_skipped = 0;
 bool pastDeadline() { return std::chrono::steady_clock::now() > g_deadline; }
@@ -156,7 +155,6 @@ Row timeFrames(BackendKind kind, Solve solver, std::int64_t n, int iterations, i
   p.solver = solver.kind;
   p.chebyshev_rho = T(solver.rho);
   p.jacobi_omega = T(g_jacobi_omega);
-  p.use_pdl = !g_no_pdl;
   p.iterations = iterations;
   p.substeps = substeps;
   p.volume_influence = T(2 * kSpacing);
@@ -232,7 +230,6 @@ double tipDeflection(BackendKind kind, Solve solver, std::int64_t n, int iterati
   p.solver = solver.kind;
   p.chebyshev_rho = T(solver.rho);
   p.jacobi_omega = T(g_jacobi_omega);
-  p.use_pdl = !g_no_pdl;
   p.iterations = iterations;
   p.substeps = substeps;
   p.damping = T(5);
@@ -291,7 +288,6 @@ int main(int argc, char** argv) {
                  "Jacobi rows of the scaling table: Chebyshev acceleration with this spectral-radius estimate (0: off)");
   app.add_option("--accuracy-rhos", accuracy_rhos,
                  "the accuracy table's Chebyshev-accelerated Jacobi rows, one per estimate (empty: none)");
-  app.add_flag("--no-pdl", g_no_pdl, "CUDA: launch the frame's kernels without programmatic dependent launches");
   app.add_option("--jacobi-omega", g_jacobi_omega, "over-relaxation of the averaged Jacobi step, (0, 2)");
   app.add_option("--csv", csv, "write every row to this CSV file");
   app.add_flag("--quick", quick, "short run: up to 10^4 spheres, 5 repeats");

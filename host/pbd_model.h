@@ -96,7 +96,6 @@ struct PbdStepParams {
   int volume_passes = 3;        // Jacobi passes of the radius solve per frame
   int bisection_steps = 12;
   bool use_graph = true;        // CUDA backend: capture the frame in a CUDA graph
-  bool use_pdl = true;          // CUDA backend, sm_90+: programmatic dependent launches between the frame's kernels
   bool profile_stages = false;  // CUDA backend: time each stage with events (no graph, no fusion)
   int fused_max_particles = 4096; // CUDA backend: models up to this size run all substeps and iterations in one
                                   // single-block kernel (no launch per colour/block); 0 disables; Jacobi models

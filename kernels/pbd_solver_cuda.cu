@@ -21,7 +21,6 @@
 #include "kernels/pbd_device_cuda.h"
 #include "kernels/pbd_frame_data.cuh"
 #include "kernels/pbd_chebyshev_args.cuh"
-#include "kernels/pdl_launch.cuh"
 #include "kernels/pbd_cluster_frame.cuh"
 #include "kernels/pbd_group_projection.cuh"
 #include "physics/pbd_block.h"
@@ -78,7 +77,6 @@ __device__ __forceinline__ int liveCount(const int* live, int count) { return li
 template <typename T>
 __global__ void predictKernel(int n, const int* live_n, Vec3<T>* x, Vec3<T>* v, Vec3<T>* x_prev, const T* w, Vec3<T> g, T damp,
                               T dt, Vec3<T>* cheb_x1) {
-  pdlEnter();
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i >= liveCount(live_n, n)) return;
   pbd::predictParticle(x[i], v[i], x_prev[i], w[i], g, damp, dt);
@@ -88,7 +86,6 @@ __global__ void predictKernel(int n, const int* live_n, Vec3<T>* x, Vec3<T>* v, 
 template <typename T>
 __global__ void kinematicKernel(int k, Vec3<T>* x, const std::int32_t* ids, const Vec3<T>* from, const Vec3<T>* to,
                                 T t) {
-  pdlEnter();
   const int q = blockIdx.x * blockDim.x + threadIdx.x;
   if (q >= k) return;
   x[ids[q]] = pbd::lerp(from[q], to[q], t);
@@ -103,7 +100,6 @@ __global__ void gatherKinematicKernel(int k, const Vec3<T>* x, const std::int32_
 template <typename T>
 __global__ void attachKernel(int k, Vec3<T>* x, const T* w, const std::int32_t* ids, const Vec3<T>* from,
                              const Vec3<T>* to, const T* compliance, Vec3<T>* lambda, bool xpbd, T dt, T t) {
-  pdlEnter();
   const int q = blockIdx.x * blockDim.x + threadIdx.x;
   if (q >= k) return;
   const std::int32_t id = ids[q];
@@ -125,7 +121,6 @@ __global__ void projectAllKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx, 
 constexpr int kFourParticleMinBlocks = 12;
 template <typename T, int Kind, int MinBlocks = 1>
 __global__ void __launch_bounds__(kThreads, MinBlocks) projectKindKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx, const std::int32_t* order, int count, const int* live_count) {
-  pdlEnter();
   const int q = blockIdx.x * blockDim.x + threadIdx.x;
   count = liveCount(live_count, count);
   if (q >= count) return;
@@ -150,7 +145,6 @@ constexpr int kStagedBendingMinBlocks = 10;
 constexpr int kStagedDistanceMinBlocks = 16;
 template <typename T, int Kind, int MinBlocks = 1>
 __global__ void __launch_bounds__(kThreads, MinBlocks) projectKindStagedKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx, int count, const int* live_count) {
-  pdlEnter();
   count = liveCount(live_count, count);
   constexpr int A = Kind == pbd::kDistance ? 2 : 4;
   // Raw bytes: a __shared__ array may not have a constructor (Vec3 zero-initialises).
@@ -201,39 +195,31 @@ __global__ void projectColorKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx
 // changes it. A colour (order set, live_count null): its `count` constraints.
 template <typename T>
 void launchProjection(const pbd::BlockView<T>& b, const pbd::SolveContext<T>& ctx, const std::int32_t* order, int count,
-                      const int* live_count, cudaStream_t stream, bool pdl = false) {
+                      const int* live_count, cudaStream_t stream) {
   const unsigned blocks = unsigned((count + kThreads - 1) / kThreads);
   if (ctx.jacobi && !order) {
     switch (b.kind) {
       case pbd::kDistance:
-        launchPdl(pdl, projectKindStagedKernel<T, pbd::kDistance, kStagedDistanceMinBlocks>, blocks, kThreads, stream, b, ctx,
-                  count, live_count);
+        projectKindStagedKernel<T, pbd::kDistance, kStagedDistanceMinBlocks><<<blocks, kThreads, 0, stream>>>(b, ctx, count, live_count);
         return;
       case pbd::kBending:
-        launchPdl(pdl, projectKindStagedKernel<T, pbd::kBending, kStagedBendingMinBlocks>, blocks, kThreads, stream, b, ctx,
-                  count, live_count);
+        projectKindStagedKernel<T, pbd::kBending, kStagedBendingMinBlocks><<<blocks, kThreads, 0, stream>>>(b, ctx, count, live_count);
         return;
       case pbd::kTetVolume:
-        launchPdl(pdl, projectKindStagedKernel<T, pbd::kTetVolume, kFourParticleMinBlocks>, blocks, kThreads, stream, b, ctx,
-                  count, live_count);
+        projectKindStagedKernel<T, pbd::kTetVolume, kFourParticleMinBlocks><<<blocks, kThreads, 0, stream>>>(b, ctx, count, live_count);
         return;
       default: break;
     }
   }
   switch (b.kind) {
-    case pbd::kDistance:
-      launchPdl(pdl, projectKindKernel<T, pbd::kDistance>, blocks, kThreads, stream, b, ctx, order, count, live_count);
-      break;
+    case pbd::kDistance: projectKindKernel<T, pbd::kDistance><<<blocks, kThreads, 0, stream>>>(b, ctx, order, count, live_count); break;
     case pbd::kBending:
-      launchPdl(pdl, projectKindKernel<T, pbd::kBending, kFourParticleMinBlocks>, blocks, kThreads, stream, b, ctx, order,
-                count, live_count);
+      projectKindKernel<T, pbd::kBending, kFourParticleMinBlocks><<<blocks, kThreads, 0, stream>>>(b, ctx, order, count, live_count);
       break;
     case pbd::kTetVolume:
-      launchPdl(pdl, projectKindKernel<T, pbd::kTetVolume, kFourParticleMinBlocks>, blocks, kThreads, stream, b, ctx, order,
-                count, live_count);
+      projectKindKernel<T, pbd::kTetVolume, kFourParticleMinBlocks><<<blocks, kThreads, 0, stream>>>(b, ctx, order, count, live_count);
       break;
     default:
-      // The generic kernels do not start with pdlEnter: launched plainly.
       if (order)
         projectColorKernel<T><<<blocks, kThreads, 0, stream>>>(b, ctx, order, count);
       else
@@ -246,7 +232,6 @@ void launchProjection(const pbd::BlockView<T>& b, const pbd::SolveContext<T>& ct
 template <typename T>
 __global__ void projectGroupKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx, const std::int32_t* order, int count,
                                    const int* live_count) {
-  pdlEnter();
   const long long g = (long long)blockIdx.x * blockDim.x + threadIdx.x;
   count = liveCount(live_count, count);
   const int q = int(g / pbdgroup::kGroup);
@@ -279,7 +264,6 @@ __device__ __forceinline__ Vec3<T> gatherSum(const pbd::BlockView<T>& b, int i) 
 
 template <typename T>
 __global__ void gatherKernel(int n, const int* live_n, pbd::BlockView<T> b, Vec3<T>* x) {
-  pdlEnter();
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i >= liveCount(live_n, n)) return;
   x[i] += gatherSum(b, i);
@@ -296,7 +280,6 @@ template <typename T>
 __global__ void contactKernel(int n, const int* live_n, Vec3<T>* x, const T* r, const T* w, const pbd::PlaneCollider<T>* planes,
                               int np, const pbd::BoxCollider<T>* boxes, int nb, const pbd::CapsuleCollider<T>* tools_from,
                               const pbd::CapsuleCollider<T>* tools_to, int nt, T t, ChebyshevArgs<T> ch) {
-  pdlEnter();
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i < liveCount(live_n, n)) {
     const bool movable = w[i] > T(0);
@@ -319,7 +302,6 @@ __global__ void gatherContactKernel(int n, const int* live_n, pbd::BlockView<T> 
                                     const pbd::PlaneCollider<T>* planes, int np, const pbd::BoxCollider<T>* boxes,
                                     int nb, const pbd::CapsuleCollider<T>* tools_from,
                                     const pbd::CapsuleCollider<T>* tools_to, int nt, T t, ChebyshevArgs<T> ch) {
-  pdlEnter();
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i < liveCount(live_n, n)) {
     const bool movable = w[i] > T(0);
@@ -335,7 +317,6 @@ __global__ void gatherContactKernel(int n, const int* live_n, pbd::BlockView<T> 
 
 template <typename T>
 __global__ void velocityKernel(int n, const int* live_n, const Vec3<T>* x, const Vec3<T>* x_prev, Vec3<T>* v, T inv_dt) {
-  pdlEnter();
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i >= liveCount(live_n, n)) return;
   v[i] = (x[i] - x_prev[i]) * inv_dt;
@@ -675,7 +656,7 @@ bool sameKey(const GraphKey<T>& a, const GraphKey<T>& b) {
          x.volume_influence == y.volume_influence && x.max_radius_growth == y.max_radius_growth &&
          x.volume_passes == y.volume_passes && x.bisection_steps == y.bisection_steps &&
          x.fused_max_particles == y.fused_max_particles && x.cluster_max_particles == y.cluster_max_particles &&
-         x.cluster_ctas == y.cluster_ctas && x.chebyshev_rho == y.chebyshev_rho && x.use_pdl == y.use_pdl &&
+         x.cluster_ctas == y.cluster_ctas && x.chebyshev_rho == y.chebyshev_rho &&
          a.kinematic == b.kinematic &&
          a.tools == b.tools && a.attached == b.attached && std::equal(a.ptrs, a.ptrs + 11, b.ptrs) &&
          a.n == b.n && std::equal(a.counts, a.counts + kMaxLiveBlocks, b.counts) && a.patched == b.patched &&
@@ -690,10 +671,6 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
   PbdCudaBackend() {
     INC_CUDA(cudaStreamCreate(&stream_));
     live_.resize(1 + kMaxLiveBlocks);  // one allocation for the backend's life: captured frames hold its address
-    int dev = 0, major = 0;
-    INC_CUDA(cudaGetDevice(&dev));
-    INC_CUDA(cudaDeviceGetAttribute(&major, cudaDevAttrComputeCapabilityMajor, dev));
-    pdl_capable_ = major >= 9;  // griddepcontrol needs sm_90
   }
   ~PbdCudaBackend() override {
     destroyGraph();
@@ -1538,38 +1515,23 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     // The contact kernels step every multiplier too: one thread each (a grid over the particles alone left each
     // thread a serial loop of ~10 dependent loads on the liver-sized model, +10 us per iteration on the H100).
     const unsigned gcont = cheb ? std::max(gn, blocksFor(ch.total)) : gn;
-    // Programmatic dependent launches between consecutive kernels of the substep loop (kernels/pdl_launch.cuh): a
-    // kernel right after a memset or an event is launched plainly.
-    const bool pdl = p.use_pdl && pdl_capable_ && !profile_;
-    bool after_kernel = false;
-    const auto pdlNext = [&] {
-      const bool r = pdl && after_kernel;
-      after_kernel = true;
-      return r;
-    };
     for (int s = 0; s < (fused ? 0 : p.substeps); ++s) {
       const T t_end = T(s + 1) / T(p.substeps);
       std::size_t ev = stageBegin();
-      // The multipliers are cleared first, so that the kernels from the prediction on follow each other.
-      for (DeviceBlock<T>& d : blocks_)
-        if (d.lambda.size()) {
-          INC_CUDA(cudaMemsetAsync(d.lambda.data(), 0, bucketBytes(d.lambda), stream_));
-          after_kernel = false;
-        }
-      if (n_att_ > 0) {
-        INC_CUDA(cudaMemsetAsync(att_lambda_.data(), 0, att_lambda_.bytes(), stream_));
-        after_kernel = false;
-      }
       if (n_ > 0) {
-        launchPdl(pdlNext(), predictKernel<T>, gn, kThreads, stream_, n_, live_n, x_.data(), v_.data(), x_prev_.data(),
-                  w_.data(), p.gravity, damp, dt, cheb ? cheb_x1_.data() : nullptr);
+        predictKernel<T><<<gn, kThreads, 0, stream_>>>(n_, live_n, x_.data(), v_.data(), x_prev_.data(), w_.data(), p.gravity,
+                                                       damp, dt, cheb ? cheb_x1_.data() : nullptr);
         INC_CUDA_LAUNCH("pbd predict");
       }
       if (n_kin_ > 0) {
-        launchPdl(pdlNext(), kinematicKernel<T>, blocksFor(n_kin_), kThreads, stream_, n_kin_, x_.data(),
-                  kin_ids_.data(), kin_from_.data(), kin_to_.data(), t_end);
+        kinematicKernel<T><<<blocksFor(n_kin_), kThreads, 0, stream_>>>(n_kin_, x_.data(), kin_ids_.data(),
+                                                                        kin_from_.data(), kin_to_.data(), t_end);
         INC_CUDA_LAUNCH("pbd kinematic");
       }
+      for (DeviceBlock<T>& d : blocks_)
+        if (d.lambda.size())
+          INC_CUDA(cudaMemsetAsync(d.lambda.data(), 0, bucketBytes(d.lambda), stream_));
+      if (n_att_ > 0) INC_CUDA(cudaMemsetAsync(att_lambda_.data(), 0, att_lambda_.bytes(), stream_));
       stageEnd(0, ev);
 
       // Jacobi without attachments: the iteration's contacts ride on the last block's gather (gatherContactKernel).
@@ -1588,20 +1550,17 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
           if (ctx.jacobi) {
             const int gc = gridCount(d.count);
             if (pbdgroup::usesGroup(b.kind))
-              launchPdl(pdlNext(), projectGroupKernel<T>, groupBlocksFor(gc), kThreads, stream_, b, ctx,
-                        (const std::int32_t*)nullptr, gc, live_count);
+              projectGroupKernel<T><<<groupBlocksFor(gc), kThreads, 0, stream_>>>(b, ctx, nullptr, gc, live_count);
             else
-              launchProjection(b, ctx, nullptr, gc, live_count, stream_, pdlNext());
+              launchProjection(b, ctx, nullptr, gc, live_count, stream_);
             INC_CUDA_LAUNCH("pbd project (jacobi)");
             if (fuse_contacts && int(bi) == last_solved) {
-              launchPdl(pdlNext(), gatherContactKernel<T>, gcont, kThreads, stream_, n_, live_n, b, x_.data(),
-                        (const T*)radii_.data(), (const T*)w_.data(), (const pbd::PlaneCollider<T>*)planes_.data(),
-                        n_planes_, (const pbd::BoxCollider<T>*)boxes_.data(), n_boxes_,
-                        (const pbd::CapsuleCollider<T>*)tools_from_.data(), (const pbd::CapsuleCollider<T>*)tools_to_.data(),
-                        n_tools_, t_end, ch);
+              gatherContactKernel<T><<<gcont, kThreads, 0, stream_>>>(n_, live_n, b, x_.data(), radii_.data(), w_.data(),
+                                                                   planes_.data(), n_planes_, boxes_.data(), n_boxes_,
+                                                                   tools_from_.data(), tools_to_.data(), n_tools_, t_end, ch);
               INC_CUDA_LAUNCH("pbd gather + contacts");
             } else {
-              launchPdl(pdlNext(), gatherKernel<T>, gn, kThreads, stream_, n_, live_n, b, x_.data());
+              gatherKernel<T><<<gn, kThreads, 0, stream_>>>(n_, live_n, b, x_.data());
               INC_CUDA_LAUNCH("pbd gather");
             }
           } else {
@@ -1612,35 +1571,33 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
                 projectGroupKernel<T><<<groupBlocksFor(cnt), kThreads, 0, stream_>>>(b, ctx, d.order.data() + c0, cnt,
                                                                                      nullptr);
               else
-                launchProjection(b, ctx, d.order.data() + c0, cnt, nullptr, stream_, false);
+                launchProjection(b, ctx, d.order.data() + c0, cnt, nullptr, stream_);
               INC_CUDA_LAUNCH("pbd project (colour)");
-              after_kernel = false;  // Gauss-Seidel's colours are launched plainly
             }
           }
           stageEnd(5 + int(bi), ev);
         }
         ev = stageBegin();
         if (n_att_ > 0) {
-          launchPdl(pdlNext(), attachKernel<T>, blocksFor(n_att_), kThreads, stream_, n_att_, x_.data(),
-                    (const T*)w_.data(), (const std::int32_t*)att_ids_.data(), (const Vec3<T>*)att_from_.data(),
-                    (const Vec3<T>*)att_to_.data(), (const T*)att_comp_.data(), att_lambda_.data(), bool(p.xpbd), dt, t_end);
+          attachKernel<T><<<blocksFor(n_att_), kThreads, 0, stream_>>>(n_att_, x_.data(), w_.data(), att_ids_.data(),
+                                                                       att_from_.data(), att_to_.data(),
+                                                                       att_comp_.data(), att_lambda_.data(), p.xpbd,
+                                                                       dt, t_end);
           INC_CUDA_LAUNCH("pbd attachments");
         }
         stageEnd(1, ev);
         ev = stageBegin();
         if (n_ > 0 && !fuse_contacts) {
-          launchPdl(pdlNext(), contactKernel<T>, gcont, kThreads, stream_, n_, live_n, x_.data(), (const T*)radii_.data(),
-                    (const T*)w_.data(), (const pbd::PlaneCollider<T>*)planes_.data(), n_planes_,
-                    (const pbd::BoxCollider<T>*)boxes_.data(), n_boxes_, (const pbd::CapsuleCollider<T>*)tools_from_.data(),
-                    (const pbd::CapsuleCollider<T>*)tools_to_.data(), n_tools_, t_end, ch);
+          contactKernel<T><<<gcont, kThreads, 0, stream_>>>(n_, live_n, x_.data(), radii_.data(), w_.data(), planes_.data(),
+                                                         n_planes_, boxes_.data(), n_boxes_, tools_from_.data(),
+                                                         tools_to_.data(), n_tools_, t_end, ch);
           INC_CUDA_LAUNCH("pbd contacts");
         }
         stageEnd(2, ev);
       }
       ev = stageBegin();
       if (n_ > 0) {
-        launchPdl(pdlNext(), velocityKernel<T>, gn, kThreads, stream_, n_, live_n, (const Vec3<T>*)x_.data(),
-                  (const Vec3<T>*)x_prev_.data(), v_.data(), T(1) / dt);
+        velocityKernel<T><<<gn, kThreads, 0, stream_>>>(n_, live_n, x_.data(), x_prev_.data(), v_.data(), T(1) / dt);
         INC_CUDA_LAUNCH("pbd velocities");
       }
       stageEnd(3, ev);
@@ -1785,7 +1742,6 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
   std::vector<DeviceBuffer<std::int32_t>> cluster_home_;  // ClusterSplit::slot_home, per block
   DeviceBuffer<long long> cluster_profile_;  // INCISION_PBD_CLUSTER_PROFILE: cycles per phase kind and CTA
   int cluster_planned_for_ = -1;            // the cluster_ctas the current plan was made for (-1: none)
-  bool pdl_capable_ = false;                // programmatic dependent launches (sm_90+)
   bool cluster_ok_ = false;                 // the cluster frame can run this model (planCluster)
   ClusterSplit cluster_split_;
   std::size_t cluster_bytes_ = 0;
