@@ -121,6 +121,7 @@ double median(std::vector<double> v) {
 double g_row_seconds = 2.0;
 bool g_profile = false;
 double g_jacobi_omega = PbdStepParams<double>{}.jacobi_omega;
+int g_rotation_iterations = PbdStepParams<double>{}.rotation_iterations;
 std::chrono::steady_clock::time_point g_deadline = std::chrono::steady_clock::time_point::max();
 int g_skipped = 0;
 bool pastDeadline() { return std::chrono::steady_clock::now() > g_deadline; }
@@ -155,6 +156,7 @@ Row timeFrames(BackendKind kind, Solve solver, std::int64_t n, int iterations, i
   p.solver = solver.kind;
   p.chebyshev_rho = T(solver.rho);
   p.jacobi_omega = T(g_jacobi_omega);
+  p.rotation_iterations = g_rotation_iterations;
   p.iterations = iterations;
   p.substeps = substeps;
   p.volume_influence = T(2 * kSpacing);
@@ -230,6 +232,7 @@ double tipDeflection(BackendKind kind, Solve solver, std::int64_t n, int iterati
   p.solver = solver.kind;
   p.chebyshev_rho = T(solver.rho);
   p.jacobi_omega = T(g_jacobi_omega);
+  p.rotation_iterations = g_rotation_iterations;
   p.iterations = iterations;
   p.substeps = substeps;
   p.damping = T(5);
@@ -271,6 +274,7 @@ int main(int argc, char** argv) {
       cluster_max = PbdStepParams<float>{}.cluster_max_particles;
   bool quick = false;
   double chebyshev_rho = 0;
+  bool jacobi_only = false;
   std::vector<double> accuracy_rhos{0.5, 0.9};
   app.add_option("--backend", backend, "auto (CPU and, when present, CUDA) | cpu | cuda");
   app.add_option("--precision", precision, "float32 | float64");
@@ -284,10 +288,13 @@ int main(int argc, char** argv) {
   app.add_option("--fused-max", fused_max, "CUDA: largest sphere count run by the fused single-block kernel (0: never; Jacobi: at most 256)");
   app.add_option("--cluster-max", cluster_max,
                  "CUDA, Jacobi: largest sphere count run by the thread-block cluster frame kernel (0: never)");
+  app.add_flag("--jacobi-only", jacobi_only, "scaling table: Jacobi rows only (no Gauss-Seidel)");
   app.add_option("--chebyshev-rho", chebyshev_rho,
                  "Jacobi rows of the scaling table: Chebyshev acceleration with this spectral-radius estimate (0: off)");
   app.add_option("--accuracy-rhos", accuracy_rhos,
                  "the accuracy table's Chebyshev-accelerated Jacobi rows, one per estimate (empty: none)");
+  app.add_option("--rotation-iterations", g_rotation_iterations,
+                 "polar-decomposition steps per shape-matching cluster per projection (warm-started)");
   app.add_option("--jacobi-omega", g_jacobi_omega, "over-relaxation of the averaged Jacobi step, (0, 2)");
   app.add_option("--csv", csv, "write every row to this CSV file");
   app.add_flag("--quick", quick, "short run: up to 10^4 spheres, 5 repeats");
@@ -337,6 +344,7 @@ int main(int argc, char** argv) {
       for (std::int64_t n : sizes) {
         if (k == BackendKind::Cpu && n > cpu_max) continue;
         for (Solve s : {Solve{PbdSolverKind::Jacobi, chebyshev_rho}, Solve{PbdSolverKind::GaussSeidel, 0.0}}) {
+          if (jacobi_only && s.kind == PbdSolverKind::GaussSeidel) continue;
           if (pastDeadline()) {
             ++g_skipped;
             continue;
