@@ -682,17 +682,14 @@ class PbdCpuBackend final : public PbdBackend<T> {
         const pbd::ChebyshevMode mode =
             cheb ? pbd::chebyshevIteration(it, p.iterations, p.chebyshev_rho, cheb_weight) : pbd::ChebyshevMode::Off;
         if (mode != pbd::ChebyshevMode::Off) blendMultipliers(t, na, cheb_weight, mode);
-        for (std::int64_t i = t.begin(ni), i1 = t.end(ni); i < i1; ++i) {
-          const bool movable = w_[i] > T(0);
-          if (mode != pbd::ChebyshevMode::Off)
-            x[i] = pbd::chebyshevStep(x[i], cheb_.x1[i], cheb_.x2[i], cheb_weight, mode, movable);
-          const Vec3<T> free = x[i];
-          if (movable)
-            x[i] = pbd::resolveContacts(x[i], r[i], model_.planes.data(), int(model_.planes.size()), model_.boxes.data(),
-                                        int(model_.boxes.size()), in.tools_from.data(), in.tools_to.data(), nt, t_end);
-          if (mode != pbd::ChebyshevMode::Off)
-            pbd::chebyshevRecord(x[i], cheb_.x1[i], cheb_.x2[i], mode, !pbd::sameVec(x[i], free));
-        }
+        const bool on = mode != pbd::ChebyshevMode::Off;
+        for (std::int64_t i = t.begin(ni), i1 = t.end(ni); i < i1; ++i)
+          x[i] = pbd::endIteration(x[i], w_[i] > T(0), on ? &cheb_.x1[i] : nullptr, on ? &cheb_.x2[i] : nullptr,
+                                   cheb_weight, mode, [&](const Vec3<T>& q) {
+                                     return pbd::resolveContacts(q, r[i], model_.planes.data(), int(model_.planes.size()),
+                                                                 model_.boxes.data(), int(model_.boxes.size()),
+                                                                 in.tools_from.data(), in.tools_to.data(), nt, t_end);
+                                   });
         // The next iteration's projections read every particle.
         if (it + 1 < p.iterations) t.barrier();
         if (lead) tm.collisions += msSince(t0);

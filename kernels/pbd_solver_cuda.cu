@@ -276,20 +276,26 @@ __global__ void rotationKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx, co
   pbd::updateClusterRotation(b, c, ctx);
 }
 
+// A particle's end of an iteration (pbd::endIteration): the Chebyshev step, the contacts, the record.
+template <typename T>
+__device__ __forceinline__ Vec3<T> endIterationAt(int i, Vec3<T> xi, const T* r, const T* w, const pbd::PlaneCollider<T>* planes,
+                                                  int np, const pbd::BoxCollider<T>* boxes, int nb,
+                                                  const pbd::CapsuleCollider<T>* tools_from,
+                                                  const pbd::CapsuleCollider<T>* tools_to, int nt, T t,
+                                                  const ChebyshevArgs<T>& ch) {
+  const bool on = ch.mode != pbd::ChebyshevMode::Off;
+  return pbd::endIteration(xi, w[i] > T(0), on ? ch.x1 + i : nullptr, on ? ch.x2 + i : nullptr, ch.weight, ch.mode,
+                           [&](const Vec3<T>& p) {
+                             return pbd::resolveContacts(p, r[i], planes, np, boxes, nb, tools_from, tools_to, nt, t);
+                           });
+}
+
 template <typename T>
 __global__ void contactKernel(int n, const int* live_n, Vec3<T>* x, const T* r, const T* w, const pbd::PlaneCollider<T>* planes,
                               int np, const pbd::BoxCollider<T>* boxes, int nb, const pbd::CapsuleCollider<T>* tools_from,
                               const pbd::CapsuleCollider<T>* tools_to, int nt, T t, ChebyshevArgs<T> ch) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i < liveCount(live_n, n)) {
-    const bool movable = w[i] > T(0);
-    Vec3<T> xi = x[i];
-    if (ch.mode != pbd::ChebyshevMode::Off) xi = pbd::chebyshevStep(xi, ch.x1[i], ch.x2[i], ch.weight, ch.mode, movable);
-    const Vec3<T> free = xi;
-    if (movable) xi = pbd::resolveContacts(xi, r[i], planes, np, boxes, nb, tools_from, tools_to, nt, t);
-    if (ch.mode != pbd::ChebyshevMode::Off) pbd::chebyshevRecord(xi, ch.x1[i], ch.x2[i], ch.mode, !pbd::sameVec(xi, free));
-    x[i] = xi;
-  }
+  if (i < liveCount(live_n, n)) x[i] = endIterationAt(i, x[i], r, w, planes, np, boxes, nb, tools_from, tools_to, nt, t, ch);
   chebyshevMultipliers(ch);
 }
 
@@ -303,15 +309,8 @@ __global__ void gatherContactKernel(int n, const int* live_n, pbd::BlockView<T> 
                                     int nb, const pbd::CapsuleCollider<T>* tools_from,
                                     const pbd::CapsuleCollider<T>* tools_to, int nt, T t, ChebyshevArgs<T> ch) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i < liveCount(live_n, n)) {
-    const bool movable = w[i] > T(0);
-    Vec3<T> xi = x[i] + gatherSum(b, i);
-    if (ch.mode != pbd::ChebyshevMode::Off) xi = pbd::chebyshevStep(xi, ch.x1[i], ch.x2[i], ch.weight, ch.mode, movable);
-    const Vec3<T> free = xi;
-    if (movable) xi = pbd::resolveContacts(xi, r[i], planes, np, boxes, nb, tools_from, tools_to, nt, t);
-    if (ch.mode != pbd::ChebyshevMode::Off) pbd::chebyshevRecord(xi, ch.x1[i], ch.x2[i], ch.mode, !pbd::sameVec(xi, free));
-    x[i] = xi;
-  }
+  if (i < liveCount(live_n, n))
+    x[i] = endIterationAt(i, x[i] + gatherSum(b, i), r, w, planes, np, boxes, nb, tools_from, tools_to, nt, t, ch);
   chebyshevMultipliers(ch);
 }
 

@@ -74,6 +74,18 @@ INC_HD void chebyshevRecord(const V& value, V& one_back, V& two_back, ChebyshevM
   if (contact) two_back = value;
 }
 
+// A particle's end of a Jacobi iteration, the same on both backends: its Chebyshev step (none when `mode` is Off;
+// the iterates may then be null), then `contacts` (movable particles only), then the record (a contact restarts).
+template <typename T, class Contacts>
+INC_HD Vec3<T> endIteration(Vec3<T> x, bool movable, Vec3<T>* one_back, Vec3<T>* two_back, T weight, ChebyshevMode mode,
+                            const Contacts& contacts) {
+  if (mode != ChebyshevMode::Off) x = chebyshevStep(x, *one_back, *two_back, weight, mode, movable);
+  const Vec3<T> free = x;
+  if (movable) x = contacts(x);
+  if (mode != ChebyshevMode::Off) chebyshevRecord(x, *one_back, *two_back, mode, !sameVec(x, free));
+  return x;
+}
+
 // A multiplier's whole step (blend, shift, record). Every multiplier starts a substep at zero, so the first
 // iteration's two-back value is zero and no one-back array needs clearing at the substep's start.
 template <typename T>

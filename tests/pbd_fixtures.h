@@ -58,6 +58,19 @@ PbdModel<T> makeLatticeBeam(double length, double width, double height, double s
   return buildMetaballPbdModel<T>(mb, opt);
 }
 
+// Mean downward displacement (m) of the particles whose rest x lies beyond `tip_x` (a beam's free end).
+template <typename T>
+double meanTipSag(const PbdModel<T>& m, const PbdState<T>& s, double tip_x) {
+  double tip = 0;
+  int cnt = 0;
+  for (std::size_t i = 0; i < m.size(); ++i)
+    if (double(m.rest_positions[i].x) > tip_x) {
+      tip += double(m.rest_positions[i].z - s.positions[i].z);
+      ++cnt;
+    }
+  return cnt > 0 ? tip / cnt : 0.0;
+}
+
 template <typename T>
 PbdFrameStats runFrames(PbdBackend<T>& backend, const PbdStepParams<T>& p, int frames,
                         const PbdFrameInput<T>& in = PbdFrameInput<T>()) {

@@ -13,6 +13,7 @@
 #include <set>
 
 #include "cpu_fallback/pbd_solver_cpu.h"
+#include "pbd_drop_check.h"
 #include "pbd_fixtures.h"
 #include "physics/pbd_constraints.h"
 
@@ -103,20 +104,7 @@ double settledBeamDeflection(PbdSolverKind solver, int substeps, int iterations,
   test::runFrames(*be, p, 120);
   PbdState<double> st;
   be->getState(st);
-  double tip = 0;
-  int cnt = 0;
-  for (std::size_t i = 0; i < m.size(); ++i)
-    if (m.rest_positions[i].x > L - 0.5 * s) {
-      tip += m.rest_positions[i].z - st.positions[i].z;
-      ++cnt;
-    }
-  return tip / cnt;
-}
-
-double kineticEnergy(const PbdModel<double>& m, const PbdState<double>& s) {
-  double e = 0;
-  for (std::size_t i = 0; i < m.size(); ++i) e += 0.5 * m.masses[i] * norm2(s.velocities[i]);
-  return e;
+  return test::meanTipSag(m, st, L - 0.5 * s);
 }
 
 Vec3d momentum(const PbdModel<double>& m, const PbdState<double>& s) {
@@ -224,37 +212,16 @@ TEST(PbdSolver, InternalConstraintsConserveMomentum) {
 // (0.1 s, one substep, 3 iterations) or normal step stays finite, above the ground (within 1 um), and ends
 // with less kinetic energy than the potential energy it had to lose.
 TEST(PbdSolver, NoExplosionAtExtremeComplianceAndTimeStep) {
-  const MetaballModel mb = makeLatticeMetaballs(Vec3d(0, 0, 0.02), Vec3d(0.03, 0.03, 0.05), 0.01, 0.75, 1000.0);
-  for (double youngs : {1.0e12, 1.0e-3}) {
-    for (double frame_dt : {0.1, 1.0 / 60.0}) {
+  for (double youngs : {1.0e12, 1.0e-3})
+    for (double frame_dt : {0.1, 1.0 / 60.0})
       for (PbdSolverKind solver : {PbdSolverKind::GaussSeidel, PbdSolverKind::Jacobi}) {
-        MetaballPbdOptions opt;
-        opt.youngs_modulus = youngs;
-        opt.volume_samples = 0;  // radii fixed: the ground test below uses the radii the contacts saw
-        PbdModel<double> m = buildMetaballPbdModel<double>(mb, opt);
-        pbd::PlaneCollider<double> ground;
-        m.planes.push_back(ground);
-        double pe = 0;
-        for (std::size_t i = 0; i < m.size(); ++i) pe += m.masses[i] * kG * m.rest_positions[i].z;
-        auto be = cpu::makePbdCpuBackend<double>();
-        be->setModel(m);
         PbdStepParams<double> p;
         p.frame_dt = frame_dt;
         p.substeps = 1;
         p.iterations = 3;
         p.solver = solver;
-        p.volume_preservation = false;
-        PbdFrameStats st = test::runFrames(*be, p, 40);
-        PbdState<double> s;
-        be->getState(s);
-        ASSERT_TRUE(st.finite) << "E " << youngs << " dt " << frame_dt;
-        double zmin = 1e9;
-        for (std::size_t i = 0; i < m.size(); ++i) zmin = std::min(zmin, s.positions[i].z - s.radii[i]);
-        EXPECT_GT(zmin, -1e-6) << "E " << youngs << " dt " << frame_dt;
-        EXPECT_LT(kineticEnergy(m, s), pe) << "E " << youngs << " dt " << frame_dt;
+        test::expectDropStaysBounded(youngs, p, "E " + std::to_string(youngs) + " dt " + std::to_string(frame_dt));
       }
-    }
-  }
 }
 
 namespace {
