@@ -100,7 +100,7 @@ class DissectionSimulation final : public SimulationModel {
                                          std::to_string(strokes_[k - 1].end) + " s: strokes must not overlap");
     params_.solver = parsePbdSolver(scene.pbd.solver, f, "pbd.solver");
     params_.iterations = scene.pbd.iterations;
-    params_.chebyshev_rho = T(scene.pbd.chebyshev_rho);
+    params_.chebyshev_rho = T(checkChebyshevRho(scene.pbd.chebyshev_rho, params_.solver, f, "pbd.chebyshev_rho"));
     // CUDA single-block fused frame: measured on an H100 (docs/BENCHMARKS.md) it beats per-phase launches for
     // Gauss-Seidel up to thousands of spheres, but for Jacobi only below ~300 spheres; on sm_90 Jacobi models of up
     // to cluster_max_particles run the thread-block cluster frame instead (faster still, docs/pbd.md).

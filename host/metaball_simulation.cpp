@@ -86,7 +86,7 @@ class MetaballSimulation final : public SimulationModel {
     if (!(scene.material.damping >= 0)) throw InputError(f, "material.damping_per_s", "must be >= 0");
     params_.solver = parsePbdSolver(scene.pbd.solver, f, "pbd.solver");
     params_.iterations = scene.pbd.iterations;
-    params_.chebyshev_rho = T(scene.pbd.chebyshev_rho);
+    params_.chebyshev_rho = T(checkChebyshevRho(scene.pbd.chebyshev_rho, params_.solver, f, "pbd.chebyshev_rho"));
     // CUDA single-block fused frame: measured on an H100 (docs/BENCHMARKS.md) it beats per-phase launches for
     // Gauss-Seidel up to thousands of spheres, but for Jacobi only below ~300 spheres; on sm_90 Jacobi models of up
     // to cluster_max_particles run the thread-block cluster frame instead (faster still, docs/pbd.md).

@@ -28,6 +28,15 @@ PbdSolverKind parsePbdSolver(const std::string& text, const std::string& file, c
   throw InputError(file, key, "unknown PBD solver '" + text + "' (expected jacobi or gauss_seidel)");
 }
 
+double checkChebyshevRho(double rho, PbdSolverKind solver, const std::string& file, const std::string& key) {
+  if (!(rho >= 0 && rho <= pbd::kChebyshevMaxRho))
+    throw InputError(file, key, "must be in [0, 0.9] (larger estimates gained energy or diverged in our tests; got " +
+                                    std::to_string(rho) + ")");
+  if (rho > 0 && solver != PbdSolverKind::Jacobi)
+    throw InputError(file, key, "accelerates the Jacobi solver only: use 0 with gauss_seidel");
+  return rho;
+}
+
 namespace {
 const char* kFile = "pbd model";
 

@@ -24,6 +24,9 @@ enum class PbdSolverKind : int { Jacobi = 0, GaussSeidel = 1 };
 const char* pbdConstraintKindName(PbdConstraintKind k);
 // "jacobi" | "gauss_seidel"; throws InputError naming `key` otherwise.
 PbdSolverKind parsePbdSolver(const std::string& text, const std::string& file, const std::string& key);
+// The Chebyshev estimate's rule (physics/pbd_chebyshev.h): in [0, kChebyshevMaxRho], and 0 unless the solver is
+// Jacobi. Returns rho; throws InputError(file, key, reason) otherwise.
+double checkChebyshevRho(double rho, PbdSolverKind solver, const std::string& file, const std::string& key);
 
 // One kind of constraint. Constraint c touches particles ids[offsets[c] .. offsets[c+1]) (a "slot" is an index
 // into ids). Distance: 2 ids; Bending: 4 (edge p0-p1, wings p2, p3); TetVolume: 4; Laplacian: centre then its
@@ -168,10 +171,7 @@ inline void validateFrameInput(std::size_t n, const PbdStepParams<T>& p, const P
   if (p.substeps < 1) throw InputError(f, "substeps", "must be >= 1");
   if (p.iterations < 1) throw InputError(f, "iterations", "must be >= 1");
   if (!(p.jacobi_omega > T(0) && p.jacobi_omega < T(2))) throw InputError(f, "jacobi_omega", "must be in (0, 2)");
-  if (!(p.chebyshev_rho >= T(0) && p.chebyshev_rho <= T(pbd::kChebyshevMaxRho)))
-    throw InputError(f, "chebyshev_rho", "must be in [0, 0.9] (larger estimates gained energy or diverged in our tests)");
-  if (p.chebyshev_rho > T(0) && p.solver != PbdSolverKind::Jacobi)
-    throw InputError(f, "chebyshev_rho", "accelerates the Jacobi solver only: use 0 with Gauss-Seidel");
+  checkChebyshevRho(double(p.chebyshev_rho), p.solver, f, "chebyshev_rho");
   if (!(p.damping >= T(0))) throw InputError(f, "damping", "must be >= 0");
   if (!(p.max_radius_growth >= T(1))) throw InputError(f, "max_radius_growth", "must be >= 1");
   if (in.kinematic_from_positions && !in.kinematic_from.empty())

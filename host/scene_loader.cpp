@@ -17,7 +17,7 @@
 #include "host/input_error.h"
 #include "host/mesh.h"
 #include "host/scene_json.h"
-#include "physics/pbd_chebyshev.h"
+#include "host/pbd_model.h"
 
 namespace inc {
 
@@ -230,10 +230,11 @@ PbdSpec readPbd(const ObjectReader& top) {
   p.xpbd = r.boolean("xpbd", p.xpbd);
   p.solver = r.choice("solver", p.solver, {"jacobi", "gauss_seidel"});
   p.chebyshev_rho = r.number("chebyshev_rho", p.chebyshev_rho);
-  if (!(p.chebyshev_rho >= 0 && p.chebyshev_rho <= pbd::kChebyshevMaxRho))
-    r.fail("chebyshev_rho", "must be in [0, " + formatNumber(pbd::kChebyshevMaxRho) + "]" + got(p.chebyshev_rho));
-  if (p.chebyshev_rho > 0 && p.solver != "jacobi")
-    r.fail("chebyshev_rho", "accelerates the Jacobi solver only (pbd.solver is \"" + p.solver + "\"): use 0");
+  try {  // the solver's own rule (host/pbd_model.h), reported at this key
+    checkChebyshevRho(p.chebyshev_rho, parsePbdSolver(p.solver, "", ""), "", "");
+  } catch (const InputError& e) {
+    r.fail("chebyshev_rho", e.reason());
+  }
   p.stretch_compliance = nonNegative(r, "stretch_compliance", p.stretch_compliance);
   p.laplacian_compliance = nonNegative(r, "laplacian_compliance", p.laplacian_compliance);
   p.volume_preservation = r.boolean("volume_preservation", p.volume_preservation);

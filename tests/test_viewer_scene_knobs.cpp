@@ -71,6 +71,32 @@ TEST(ViewerSceneKnobs, PanelsComeFromTheScene) {
   EXPECT_EQ(k[knobIndex(k, "backend")].group, "Solver");
 }
 
+// A PBD scene has the solver knobs; the Chebyshev estimate with Gauss-Seidel is refused by the model factory
+// (InputError naming pbd.chebyshev_rho), so the viewer's rebuild is undone; with Jacobi it builds.
+TEST(ViewerSceneKnobs, PbdSolverKnobsAndTheChebyshevRule) {
+  Scene s = smallBeam();
+  s.models.mls = false;
+  s.models.pbd_metaballs = true;
+  s.solver.substeps = 4;
+  s.solver.precision = Precision::Float32;
+  const SceneViewerSetup setup = makeSceneViewerSetup(s);
+  const auto& k = setup.knobs;
+  const std::size_t solver = knobIndex(k, "PBD solver"), rho = knobIndex(k, "PBD Chebyshev rho (Jacobi)");
+  ASSERT_LT(solver, k.size());
+  ASSERT_LT(rho, k.size());
+  EXPECT_DOUBLE_EQ(k[rho].max_value, 0.9);
+  k[rho].edit(0.9);
+  EXPECT_NO_THROW(setup.factory());
+  k[solver].edit(1.0);  // gauss_seidel
+  EXPECT_EQ(setup.scene->pbd.solver, "gauss_seidel");
+  try {
+    setup.factory();
+    ADD_FAILURE() << "Chebyshev with Gauss-Seidel built";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.key(), "pbd.chebyshev_rho");
+  }
+}
+
 // Doubling E through the UI's path halves the small-deflection tip sag (Euler-Bernoulli: delta = q L^4 / 8 E I,
 // proportional to 1 / E). Tolerance 2 % (measured 0.08 %): gravity is reduced to 2 m/s^2 so that the sag is 2 % of the length
 // at E = 2e5 Pa (geometric nonlinearity well under the tolerance); both runs settle (damping 150 / s, 0.67 s: the slowest mode to e^-9).

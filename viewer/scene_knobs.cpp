@@ -46,9 +46,20 @@ SceneViewerSetup makeSceneViewerSetup(const Scene& scene_in, std::optional<Backe
   if (s.models.mls)
     knob("Material", "Poisson ratio", 0.0, 0.49, s.material.poisson_ratio, false, false,
          [sc](double v) { sc->material.poisson_ratio = v; });
-  if (s.models.pbd_metaballs || s.models.cutting)
+  if (s.models.pbd_metaballs || s.models.cutting) {
     knob("Solver", "PBD iterations", 1, 100, s.pbd.iterations, true, true,
          [sc](double v) { sc->pbd.iterations = int(std::lround(v)); });
+    ViewerKnob k;
+    k.group = "Solver";
+    k.label = "PBD solver";
+    k.choices = {"jacobi", "gauss_seidel"};
+    k.value = s.pbd.solver == "gauss_seidel" ? 1 : 0;
+    k.edit = [sc](double v) { sc->pbd.solver = v > 0.5 ? "gauss_seidel" : "jacobi"; };
+    out.knobs.push_back(std::move(k));
+    // Jacobi only: with Gauss-Seidel a non-zero value is refused (the rebuild is undone and says why).
+    knob("Solver", "PBD Chebyshev rho (Jacobi)", 0.0, 0.9, s.pbd.chebyshev_rho, false, false,
+         [sc](double v) { sc->pbd.chebyshev_rho = v; });
+  }
   knob("Solver", "substeps (0 = auto)", 0, 64, s.solver.substeps, false, true,
        [sc](double v) { sc->solver.substeps = int(std::lround(v)); });
   {
