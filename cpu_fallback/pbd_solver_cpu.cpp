@@ -681,8 +681,8 @@ class PbdCpuBackend final : public PbdBackend<T> {
         // multipliers are blended here, and each position before its contacts (as the CUDA contact kernels do).
         const pbd::ChebyshevMode mode =
             cheb ? pbd::chebyshevIteration(it, p.iterations, p.chebyshev_rho, cheb_weight) : pbd::ChebyshevMode::Off;
-        if (mode != pbd::ChebyshevMode::Off) blendMultipliers(t, na, cheb_weight, mode);
         const bool on = mode != pbd::ChebyshevMode::Off;
+        if (on) blendMultipliers(t, na, cheb_weight, mode);
         for (std::int64_t i = t.begin(ni), i1 = t.end(ni); i < i1; ++i)
           x[i] = pbd::endIteration(x[i], w_[i] > T(0), on ? &cheb_.x1[i] : nullptr, on ? &cheb_.x2[i] : nullptr,
                                    cheb_weight, mode, [&](const Vec3<T>& q) {

@@ -16,8 +16,8 @@
 #include "host/haptics/haptics_scene.h"
 #include "host/input_error.h"
 #include "host/mesh.h"
-#include "host/scene_json.h"
 #include "host/pbd_model.h"
+#include "host/scene_json.h"
 
 namespace inc {
 

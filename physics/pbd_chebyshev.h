@@ -45,30 +45,36 @@ INC_HD ChebyshevMode chebyshevIteration(int it, int iterations, T rho, T& weight
   return ChebyshevMode::Blend;
 }
 
-// One value's step (a particle's position before its contacts, or a multiplier): blends `hat` (this
-// iteration's plain Jacobi result) with the iterate two back when asked, and moves the one-back iterate into the
-// two-back slot. The caller records the new one-back iterate (chebyshevRecord) once the value is final (a
-// position after its contacts).
-template <typename V, typename T>
-INC_HD V chebyshevStep(const V& hat, const V& one_back, V& two_back, T weight, ChebyshevMode mode, bool movable) {
-  V out = hat;
-  if (mode == ChebyshevMode::Blend && movable) out = (hat - two_back) * weight + two_back;
+// The blend itself: `hat` (this iteration's plain Jacobi result) extrapolated from the iterate two back.
+template <typename T>
+INC_HD Vec3<T> chebyshevBlend(const Vec3<T>& hat, const Vec3<T>& two_back, T weight) {
+  return (hat - two_back) * weight + two_back;
+}
+
+// A position's step before its contacts: blended when asked (movable particles only), and the one-back iterate
+// moved into the two-back slot. chebyshevRecord records the new one-back iterate once the position is final.
+template <typename T>
+INC_HD Vec3<T> chebyshevStep(const Vec3<T>& hat, const Vec3<T>& one_back, Vec3<T>& two_back, T weight,
+                             ChebyshevMode mode, bool movable) {
+  Vec3<T> out = hat;
+  if (mode == ChebyshevMode::Blend && movable) out = chebyshevBlend(hat, two_back, weight);
   if (mode != ChebyshevMode::Off) two_back = one_back;
   return out;
 }
 
-// A particle that a contact moved restarts: its two-back iterate becomes the contact's result, so the next
-// iteration extrapolates only its own step, not the contact's push. A contact is an inequality whose
-// correction is not a step of the linear iteration the weights assume; extrapolating it (from the predicted
-// position below a floor, say) throws the particle off the surface (measured: kinetic energy above the block's
-// starting potential energy in a 0.1 s substep, rho 0.85-0.95).
 template <typename T>
 INC_HD bool sameVec(const Vec3<T>& a, const Vec3<T>& b) {
   return a.x == b.x && a.y == b.y && a.z == b.z;
 }
 
-template <typename V>
-INC_HD void chebyshevRecord(const V& value, V& one_back, V& two_back, ChebyshevMode mode, bool contact) {
+// Records a position's final value. A particle that a contact moved restarts: its two-back iterate becomes the
+// contact's result, so the next iteration extrapolates only its own step, not the contact's push. A contact is an
+// inequality whose correction is not a step of the linear iteration the weights assume; extrapolating it (from the
+// predicted position below a floor, say) throws the particle off the surface (measured: kinetic energy above the
+// block's starting potential energy in a 0.1 s substep, rho 0.85-0.95).
+template <typename T>
+INC_HD void chebyshevRecord(const Vec3<T>& value, Vec3<T>& one_back, Vec3<T>& two_back, ChebyshevMode mode,
+                            bool contact) {
   if (mode == ChebyshevMode::Off) return;
   one_back = value;
   if (contact) two_back = value;
@@ -91,7 +97,7 @@ INC_HD Vec3<T> endIteration(Vec3<T> x, bool movable, Vec3<T>* one_back, Vec3<T>*
 template <typename T>
 INC_HD void chebyshevMultiplier(Vec3<T>& lambda, Vec3<T>& one_back, Vec3<T>& two_back, T weight, ChebyshevMode mode) {
   if (mode == ChebyshevMode::Off) return;
-  if (mode == ChebyshevMode::Blend) lambda = (lambda - two_back) * weight + two_back;
+  if (mode == ChebyshevMode::Blend) lambda = chebyshevBlend(lambda, two_back, weight);
   two_back = mode == ChebyshevMode::Shift ? Vec3<T>() : one_back;
   one_back = lambda;
 }
