@@ -24,7 +24,7 @@ using namespace inc;
 namespace {
 
 struct Row {
-  std::string table, backend, precision, solver, path = "-";  // path (CUDA): cluster | fused | launches
+  std::string table, backend, precision, solver, path = "-";  // path (CUDA): cluster | grid | fused | launches
   std::int64_t spheres = 0, constraints = 0;
   int iterations = 0, substeps = 0, colors = 0;
   std::string stages;  // "name=ms ..." of the last timed frame
@@ -122,6 +122,7 @@ double g_row_seconds = 2.0;
 bool g_profile = false;
 double g_jacobi_omega = PbdStepParams<double>{}.jacobi_omega;
 int g_rotation_iterations = PbdStepParams<double>{}.rotation_iterations;
+bool g_no_graph = false;  // --no-graph
 std::chrono::steady_clock::time_point g_deadline = std::chrono::steady_clock::time_point::max();
 int g_skipped = 0;
 bool pastDeadline() { return std::chrono::steady_clock::now() > g_deadline; }
@@ -144,7 +145,8 @@ struct Solve {
 // first touch). --profile: one more frame with per-stage CUDA events (no graph, no fusion) gives the stage split.
 template <typename T>
 Row timeFrames(BackendKind kind, Solve solver, std::int64_t n, int iterations, int substeps, int repeats,
-               int fused_max = 4096, int cluster_max = PbdStepParams<float>{}.cluster_max_particles) {
+               int fused_max = 4096, int cluster_max = PbdStepParams<float>{}.cluster_max_particles,
+               int grid_max = PbdStepParams<float>{}.grid_max_particles) {
   bench::HostPeak host;
   host.reset();
   const double dev0 = bench::deviceUsedMiB(kind);
@@ -162,6 +164,8 @@ Row timeFrames(BackendKind kind, Solve solver, std::int64_t n, int iterations, i
   p.volume_influence = T(2 * kSpacing);
   p.fused_max_particles = fused_max;
   p.cluster_max_particles = cluster_max;
+  p.grid_max_particles = grid_max;
+  p.use_graph = !g_no_graph;
   const PbdFrameInput<T> in = probeInput<T>(size);
   PbdFrameStats st;
   const auto row_start = std::chrono::steady_clock::now();
@@ -271,7 +275,7 @@ int main(int argc, char** argv) {
   std::string backend = "auto", csv, precision = "float32";
   std::int64_t min_n = 100, max_n = 100000, cpu_max = 20000, accuracy_n = 570;
   int iterations = 10, substeps = 4, repeats = 20, fused_max = 4096,
-      cluster_max = PbdStepParams<float>{}.cluster_max_particles;
+      cluster_max = PbdStepParams<float>{}.cluster_max_particles, grid_max = PbdStepParams<float>{}.grid_max_particles;
   bool quick = false;
   double chebyshev_rho = 0;
   bool jacobi_only = false;
@@ -286,6 +290,8 @@ int main(int argc, char** argv) {
   app.add_option("--substeps", substeps, "substeps per 1/60 s frame");
   app.add_option("--repeats", repeats, "timed frames per point (median)");
   app.add_option("--fused-max", fused_max, "CUDA: largest sphere count run by the fused single-block kernel (0: never; Jacobi: at most 256)");
+  app.add_flag("--no-graph", g_no_graph, "CUDA: launch every frame directly (no CUDA graph), as a cut's rebuilt model is");
+  app.add_option("--grid-max", grid_max, "CUDA, Jacobi: largest sphere count run as one cooperative grid launch (0: never)");
   app.add_option("--cluster-max", cluster_max,
                  "CUDA, Jacobi: largest sphere count run by the thread-block cluster frame kernel (0: never)");
   app.add_flag("--jacobi-only", jacobi_only, "scaling table: Jacobi rows only (no Gauss-Seidel)");
@@ -349,13 +355,13 @@ int main(int argc, char** argv) {
             ++g_skipped;
             continue;
           }
-          const Row r = f64 ? timeFrames<double>(k, s, n, iterations, substeps, repeats, fused_max, cluster_max)
-                            : timeFrames<float>(k, s, n, iterations, substeps, repeats, fused_max, cluster_max);
+          const Row r = f64 ? timeFrames<double>(k, s, n, iterations, substeps, repeats, fused_max, cluster_max, grid_max)
+                            : timeFrames<float>(k, s, n, iterations, substeps, repeats, fused_max, cluster_max, grid_max);
           printRow(r);
           rows.push_back(r);
           if (k == BackendKind::Cuda && r.path != "launches" && !pastDeadline()) {  // the same on per-phase launches, for comparison
-            const Row u = f64 ? timeFrames<double>(k, s, n, iterations, substeps, repeats, 0, 0)
-                              : timeFrames<float>(k, s, n, iterations, substeps, repeats, 0, 0);
+            const Row u = f64 ? timeFrames<double>(k, s, n, iterations, substeps, repeats, 0, 0, 0)
+                              : timeFrames<float>(k, s, n, iterations, substeps, repeats, 0, 0, 0);
             printRow(u);
             rows.push_back(u);
           }
@@ -386,8 +392,8 @@ int main(int argc, char** argv) {
             ++g_skipped;
             continue;
           }
-          Row r = f64 ? timeFrames<double>(k, s, accuracy_n, it, substeps, std::max(3, repeats / 2), fused_max, cluster_max)
-                      : timeFrames<float>(k, s, accuracy_n, it, substeps, std::max(3, repeats / 2), fused_max, cluster_max);
+          Row r = f64 ? timeFrames<double>(k, s, accuracy_n, it, substeps, std::max(3, repeats / 2), fused_max, cluster_max, grid_max)
+                      : timeFrames<float>(k, s, accuracy_n, it, substeps, std::max(3, repeats / 2), fused_max, cluster_max, grid_max);
           r.table = "accuracy";
           r.deflection_m = f64 ? tipDeflection<double>(k, s, accuracy_n, it, substeps, frames, st)
                                : tipDeflection<float>(k, s, accuracy_n, it, substeps, frames, st);

@@ -108,6 +108,11 @@ struct PbdStepParams {
                                    // (sm_90+, the replica fits shared memory); 0 disables. Measured faster than
                                    // per-block launches up to ~250 spheres (docs/pbd.md)
   int cluster_ctas = 0;          // CUDA cluster frame: CTAs of the cluster (1..16); 0 picks as many as the model needs
+  int grid_max_particles = 2048; // CUDA backend, Jacobi: a frame launched directly (use_graph off, or the first frame
+                                 // of a new model) of a model up to this size (not on the cluster frame) runs as one
+                                 // cooperative grid launch (grid-wide barriers between phases instead of ~170 kernel
+                                 // launches; Chebyshev included); 0 disables. Measured faster up to ~1000
+                                 // spheres, slower from ~3000 on an H100 (docs/pbd.md)
 };
 
 // What the host prescribes for one frame: kinematic particles move linearly from `from` to `to` over the
@@ -138,7 +143,7 @@ struct PbdFrameStats {
   std::vector<StageTime> stages;
   double residual_max = 0.0;   // max |C + alpha~ lambda| over Distance constraints after the last substep (m)
   double residual_rms = 0.0;
-  std::string path;            // CUDA: the frame kernel that ran (cluster | fused | launches); empty on the CPU
+  std::string path;            // CUDA: the frame kernel that ran (cluster | grid | fused | launches); empty on the CPU
   int colors = 0;              // Gauss-Seidel: total colours over the solved blocks (0 for Jacobi)
   int iterations = 0;          // constraint iterations this frame (substeps * iterations)
   int volume_active = 0;       // spheres whose radius was solved this frame

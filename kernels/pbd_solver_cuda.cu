@@ -22,7 +22,9 @@
 #include "kernels/pbd_frame_data.cuh"
 #include "kernels/pbd_chebyshev_args.cuh"
 #include "kernels/pbd_cluster_frame.cuh"
+#include "kernels/pbd_grid_frame.cuh"
 #include "kernels/pbd_group_projection.cuh"
+#include "kernels/pbd_particle_ops.cuh"
 #include "physics/pbd_block.h"
 #include "physics/pbd_volume.h"
 #include "physics/tearing_rebuild.h"
@@ -241,27 +243,6 @@ __global__ void projectGroupKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx
 
 inline unsigned groupBlocksFor(std::int64_t n) { return blocksFor(n * pbdgroup::kGroup); }
 
-// Jacobi gather: each particle sums its own slots' corrections (no atomics, fixed order): pbd::gatherCorrection's
-// sum in its order, with the loads of four slots issued before their additions (the slots are scattered lines
-// in L2; one at a time, each addition waited for two dependent loads).
-template <typename T>
-__device__ __forceinline__ Vec3<T> gatherSum(const pbd::BlockView<T>& b, int i) {
-  const std::int32_t k1 = b.particle_offsets[i + 1];
-  std::int32_t k = b.particle_offsets[i];
-  Vec3<T> sum;
-  for (; k + 4 <= k1; k += 4) {
-    const std::int32_t s0 = b.particle_slots[k], s1 = b.particle_slots[k + 1], s2 = b.particle_slots[k + 2],
-                       s3 = b.particle_slots[k + 3];
-    const Vec3<T> d0 = b.slot_corr[s0], d1 = b.slot_corr[s1], d2 = b.slot_corr[s2], d3 = b.slot_corr[s3];
-    sum += d0;
-    sum += d1;
-    sum += d2;
-    sum += d3;
-  }
-  for (; k < k1; ++k) sum += b.slot_corr[b.particle_slots[k]];
-  return sum;
-}
-
 template <typename T>
 __global__ void gatherKernel(int n, const int* live_n, pbd::BlockView<T> b, Vec3<T>* x) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
@@ -274,20 +255,6 @@ __global__ void rotationKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx, co
   const int c = blockIdx.x * blockDim.x + threadIdx.x;
   if (c >= liveCount(live_count, b.count)) return;
   pbd::updateClusterRotation(b, c, ctx);
-}
-
-// A particle's end of an iteration (pbd::endIteration): the Chebyshev step, the contacts, the record.
-template <typename T>
-__device__ __forceinline__ Vec3<T> endIterationAt(int i, Vec3<T> xi, const T* r, const T* w, const pbd::PlaneCollider<T>* planes,
-                                                  int np, const pbd::BoxCollider<T>* boxes, int nb,
-                                                  const pbd::CapsuleCollider<T>* tools_from,
-                                                  const pbd::CapsuleCollider<T>* tools_to, int nt, T t,
-                                                  const ChebyshevArgs<T>& ch) {
-  const bool on = ch.mode != pbd::ChebyshevMode::Off;
-  return pbd::endIteration(xi, w[i] > T(0), on ? ch.x1 + i : nullptr, on ? ch.x2 + i : nullptr, ch.weight, ch.mode,
-                           [&](const Vec3<T>& p) {
-                             return pbd::resolveContacts(p, r[i], planes, np, boxes, nb, tools_from, tools_to, nt, t);
-                           });
 }
 
 template <typename T>
@@ -655,7 +622,8 @@ bool sameKey(const GraphKey<T>& a, const GraphKey<T>& b) {
          x.volume_influence == y.volume_influence && x.max_radius_growth == y.max_radius_growth &&
          x.volume_passes == y.volume_passes && x.bisection_steps == y.bisection_steps &&
          x.fused_max_particles == y.fused_max_particles && x.cluster_max_particles == y.cluster_max_particles &&
-         x.cluster_ctas == y.cluster_ctas && x.chebyshev_rho == y.chebyshev_rho &&
+         x.cluster_ctas == y.cluster_ctas && x.grid_max_particles == y.grid_max_particles &&
+         x.chebyshev_rho == y.chebyshev_rho &&
          a.kinematic == b.kinematic &&
          a.tools == b.tools && a.attached == b.attached && std::equal(a.ptrs, a.ptrs + 11, b.ptrs) &&
          a.n == b.n && std::equal(a.counts, a.counts + kMaxLiveBlocks, b.counts) && a.patched == b.patched &&
@@ -796,6 +764,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
 
   PbdFrameStats advanceFrame(const PbdStepParams<T>& p, const PbdFrameInput<T>& in) override {
     validateFrameInput(std::size_t(n_), p, in);
+    direct_frame_ = false;
     PbdFrameStats st;
     // Per-frame inputs (synchronous uploads: the previous frame has finished with these buffers).
     INC_CUDA(cudaStreamSynchronize(stream_));
@@ -807,13 +776,14 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
       throw InputError("pbd frame", "solver", "the model was patched on the device (no colouring): use the Jacobi solver");
     if (!jacobi && !has_coloring_)
       throw InputError("pbd frame", "solver", "the model was built without a colouring (Jacobi only): use the Jacobi solver");
-    if (p.chebyshev_rho > T(0)) ensureChebyshev();
+    if (p.chebyshev_rho > T(0)) ensureChebyshev(p);
     if (!jacobi)
       for (const DeviceBlock<T>& d : blocks_)
         if (d.solve) st.colors += int(d.color_offsets.size()) - 1;
     st.iterations = p.substeps * p.iterations;
     // The cluster frame's plan sets kernel attributes: outside any capture, before the frame is recorded.
     if (jacobi && !patched_ && n_ <= p.cluster_max_particles) planCluster(p.cluster_ctas);
+    if (jacobi && !patched_ && n_ <= p.grid_max_particles) planGrid();
 
     if (p.profile_stages) {
       profile_ = true;
@@ -867,7 +837,9 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
         const bool direct = stale && key.topo != last_direct_topo_;
         if (direct) last_direct_topo_ = key.topo;
         if (direct) {
+          direct_frame_ = true;
           recordFrame(p);
+          direct_frame_ = false;
         } else if (stale) {
           // After a patch the frame usually differs only in counts and pointers: updated in place.
           captureGraph(stream_, graph_exec_, [&] { recordFrame(p); });
@@ -875,7 +847,9 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
         }
         if (!direct) INC_CUDA(cudaGraphLaunch(graph_exec_, stream_));
       } else {
+        direct_frame_ = true;
         recordFrame(p);
+        direct_frame_ = false;
       }
       INC_CUDA(cudaEventRecord(events_[1], stream_));
       if (summaryDue()) {
@@ -1248,6 +1222,44 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     }
   }
 
+  // The grid frame's resident-grid limit (blocks of kGridFrameThreads that the device holds at once), asked once per
+  // backend outside any capture; 0 where the device has no cooperative launch.
+  void planGrid() {
+    if (grid_cap_ >= 0) return;
+    int dev = 0, coop = 0, sms = 0, per_sm = 0;
+    INC_CUDA(cudaGetDevice(&dev));
+    INC_CUDA(cudaDeviceGetAttribute(&coop, cudaDevAttrCooperativeLaunch, dev));
+    INC_CUDA(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, dev));
+    INC_CUDA(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&per_sm, gridFrameKernel<T>, kGridFrameThreads, 0));
+    grid_cap_ = coop ? per_sm * sms : 0;
+  }
+
+  // One cooperative launch of the whole frame: as many blocks as the widest phase wants (a cluster constraint's
+  // lanes, a scalar constraint's thread, a particle's, a multiplier's), at most the resident grid.
+  void launchGridFrame(const PbdStepParams<T>& p, const FusedFrame<T>& f) {
+    GridFrame<T> g;
+    g.f = f;
+    std::int64_t want = std::max<std::int64_t>({n_, n_att_, n_kin_});
+    for (std::size_t bi = 0; bi < blocks_.size(); ++bi) {
+      const DeviceBlock<T>& d = blocks_[bi];
+      if (!d.solve || d.count == 0) continue;
+      g.last_solved = int(bi);
+      const bool group = pbdgroup::usesGroup(int(d.kind));
+      want = std::max<std::int64_t>(want, group ? std::int64_t(d.count) * pbdgroup::kGroup : d.count);
+    }
+    if (p.chebyshev_rho > T(0)) {
+      g.ch = chebyshevArgs();
+      g.cheb_weights = cheb_weights_.data();
+      g.cheb_rho = p.chebyshev_rho;
+      want = std::max<std::int64_t>(want, g.ch.total);
+    }
+    const std::int64_t blocks = std::min<std::int64_t>(grid_cap_, (want + kGridFrameThreads - 1) / kGridFrameThreads);
+    void* args[] = {&g};
+    INC_CUDA(cudaLaunchCooperativeKernel(reinterpret_cast<const void*>(gridFrameKernel<T>), dim3(unsigned(std::max<std::int64_t>(1, blocks))),
+                                         dim3(kGridFrameThreads), args, 0, stream_));
+    INC_CUDA_LAUNCH("pbd grid frame");
+  }
+
   // Diagnostics (INCISION_PBD_CLUSTER_PROFILE set): microseconds per phase kind of the last cluster frame, as
   // CTA 0 and the slowest CTA saw them, on stderr.
   void printClusterProfile() {
@@ -1328,7 +1340,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
 
   // Chebyshev iterates sized for the model and this frame's attachments; a reallocation bumps topo_version_ (the
   // captured frame holds the pointers).
-  void ensureChebyshev() {
+  void ensureChebyshev(const PbdStepParams<T>& p) {
     if (patched_)
       throw InputError("pbd frame", "chebyshev_rho", "not supported on a model patched on the device (tearing): use 0");
     if (int(blocks_.size()) + 1 > kMaxChebyshevLists)
@@ -1348,6 +1360,20 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     }
     fit(cheb_a1_, std::size_t(n_att_));
     fit(cheb_a2_, std::size_t(n_att_));
+    // The grid frame reads each iteration's weight from the device: the host's recursion, whose bits the per-block
+    // launches pass as arguments (device code may contract its multiply-add differently).
+    std::vector<T> weights(std::size_t(p.iterations));
+    T wk = T(1);
+    for (int it = 0; it < p.iterations; ++it) {
+      pbd::chebyshevIteration(it, p.iterations, p.chebyshev_rho, wk);
+      weights[std::size_t(it)] = wk;
+    }
+    if (weights != cheb_weights_host_) {
+      const void* before = cheb_weights_.data();
+      cheb_weights_.upload(weights);
+      moved |= cheb_weights_.data() != before;
+      cheb_weights_host_ = weights;
+    }
     if (moved) ++topo_version_;
   }
 
@@ -1425,10 +1451,19 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
            !(p.chebyshev_rho > T(0));
   }
 
-  // Whether the frame is one kernel (fused or cluster), which takes the counts as arguments.
+  // Whether the frame runs as one cooperative grid launch (kernels/pbd_grid_frame.cuh): only a frame launched directly
+  // (no graph, or the first frame of a new model, as every cutting frame that converts spheres is). There one launch
+  // replaces ~170 whose host cost the frame would pay; replayed from a graph, the per-block launches were faster
+  // (H100, liver-sized block: 1.03 against 1.09 ms; docs/pbd.md).
+  bool gridFrame(const PbdStepParams<T>& p) const {
+    return direct_frame_ && !profile_ && grid_cap_ > 0 && !patched_ && p.solver == PbdSolverKind::Jacobi && n_ > 0 &&
+           n_ <= p.grid_max_particles && int(blocks_.size()) <= kMaxFusedBlocks && !clusterFrame(p);
+  }
+
+  // Whether the frame is one kernel (fused, cluster or grid), which takes the counts as arguments.
   bool singleKernelFrame(const PbdStepParams<T>& p) const {
     const bool jacobi = p.solver == PbdSolverKind::Jacobi;
-    const bool cluster = clusterFrame(p);
+    const bool cluster = clusterFrame(p) || gridFrame(p);
     // The single-block frame beats per-block launches for Gauss-Seidel up to thousands of spheres (one launch
     // instead of one per colour) but for Jacobi only up to a few hundred (H100: 1008 spheres 0.23 ms per
     // iteration fused against 0.029 ms on launches), whatever fused_max_particles asks.
@@ -1456,8 +1491,9 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     ctx.rotation_iterations = p.rotation_iterations;
 
     const bool cluster = clusterFrame(p);
+    const bool grid = gridFrame(p);
     const bool fused = singleKernelFrame(p);
-    last_path_ = cluster ? "cluster" : fused ? "fused" : "launches";
+    last_path_ = cluster ? "cluster" : grid ? "grid" : fused ? "fused" : "launches";
     if (fused) {
       FusedFrame<T> f;
       f.n = n_;
@@ -1500,7 +1536,9 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
       f.nb = n_boxes_;
       f.nt = n_tools_;
       f.staged = staged_;
-      if (cluster) {
+      if (grid) {
+        launchGridFrame(p, f);
+      } else if (cluster) {
         ClusterLaunch launch(cluster_split_.ctas, cluster_bytes_, stream_);
         INC_CUDA(cudaLaunchKernelEx(&launch.cfg, clusterFrameKernel<T>, f, cluster_split_));
         INC_CUDA_LAUNCH("pbd cluster frame");
@@ -1700,6 +1738,10 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
   BulkUpload bulk_;  // setModel's uploads
   GraphKey<T> graph_key_;
   bool has_coloring_ = true;  // Gauss-Seidel needs every solved block coloured (pbdModelHasColoring)
+  DeviceBuffer<T> cheb_weights_;           // the grid frame's per-iteration weights
+  std::vector<T> cheb_weights_host_;
+  int grid_cap_ = -1;                      // resident blocks of the grid frame (planGrid); -1 not asked yet
+  bool direct_frame_ = false;              // the frame being recorded is launched directly, not captured
   DeviceBuffer<Vec3<T>> cheb_x1_, cheb_x2_, cheb_a1_, cheb_a2_;  // Chebyshev: positions, attachment multipliers
   std::uint64_t topo_version_ = 0;  // bumped by a new model and by a reallocation: the captured graph holds pointers
   DeviceBuffer<int> live_;          // the counts the frame's kernels read (uploadLive)

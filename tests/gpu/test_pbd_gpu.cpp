@@ -49,11 +49,12 @@ PbdFrameInput<T> parityInput(const PbdModel<T>& m, int frame, bool attachments =
   return in;
 }
 
-// fused_max / cluster_max: the frame paths' size limits (0 switches a path off); cluster_ctas forces the
+// fused_max / cluster_max / grid_max: the frame paths' size limits (0 switches a path off); cluster_ctas forces the
 // cluster frame's CTA count (0: as the model needs).
 template <typename T>
 void runParity(PbdSolverKind solver, double pos_tol_m, double radius_tol_m, int fused_max = 4096,
-               int cluster_max = 8192, int cluster_ctas = 0, double chebyshev_rho = 0, bool attachments = true) {
+               int cluster_max = 8192, int cluster_ctas = 0, double chebyshev_rho = 0, bool attachments = true,
+               int grid_max = 0) {
   const PbdModel<T> m = parityModel<T>();
   auto cpu = cpu::makePbdCpuBackend<T>();
   auto gpu = cuda::makePbdCudaBackend<T>();
@@ -67,6 +68,8 @@ void runParity(PbdSolverKind solver, double pos_tol_m, double radius_tol_m, int 
   p.fused_max_particles = fused_max;
   p.cluster_max_particles = cluster_max;
   p.cluster_ctas = cluster_ctas;
+  p.grid_max_particles = grid_max;
+  p.use_graph = grid_max == 0;  // the grid frame runs only on frames launched directly
   p.chebyshev_rho = T(chebyshev_rho);
   PbdFrameStats sc, sg;
   for (int f = 0; f < 100; ++f) {
@@ -76,6 +79,9 @@ void runParity(PbdSolverKind solver, double pos_tol_m, double radius_tol_m, int 
   }
   ASSERT_TRUE(sc.finite);
   ASSERT_TRUE(sg.finite);
+  if (grid_max > 0) {
+    EXPECT_EQ(sg.path, "grid");
+  }
   PbdState<T> a, b;
   cpu->getState(a);
   gpu->getState(b);
@@ -145,7 +151,21 @@ TEST(PbdGpu, ClusterFrameMatchesCpuAfter100Frames) {
   }
 }
 
-// Chebyshev-accelerated Jacobi (per-block launches; the whole-frame kernels are not used with it): the positions are
+// The Jacobi frame as one cooperative grid launch (kernels/pbd_grid_frame.cuh), plain and Chebyshev-accelerated,
+// with attachments (separate attachment and contact phases) and without (contacts in the last gather). The same
+// tolerances as the per-block launches.
+TEST(PbdGpu, GridFrameMatchesCpuAfter100Frames) {
+  if (!haveDevice()) {
+    GTEST_SKIP() << "no CUDA device";
+  }
+  for (double rho : {0.0, 0.9})
+    for (bool attachments : {true, false}) {
+      runParity<double>(PbdSolverKind::Jacobi, 1e-9, 1e-9, 0, 0, 0, rho, attachments, 4096);
+      runParity<float>(PbdSolverKind::Jacobi, 2e-5, 2e-5, 0, 0, 0, rho, attachments, 4096);
+    }
+}
+
+// Chebyshev-accelerated Jacobi on per-block launches (the grid frame: GridFrameMatchesCpuAfter100Frames): the positions are
 // blended in the contact kernel (with attachments) or in the last gather's (without), the multipliers in the same
 // launch. The same tolerances as plain Jacobi.
 TEST(PbdGpu, ChebyshevJacobiMatchesCpuAfter100Frames) {
@@ -178,6 +198,7 @@ TEST(PbdGpu, FusedGraphDirectAndProfiledFramesAreIdentical) {
       p.profile_stages = mode == 2;
       p.fused_max_particles = mode == 0 ? 4096 : 0;  // mode 0: fused; 1: direct; 2: profiled; 3: graph
       p.cluster_max_particles = 0;                   // the cluster frame: ClusterFrameMatchesLaunches...
+      p.grid_max_particles = 0;                      // the grid frame: GridFrameMatchesLaunches...
       for (int f = 0; f < 20; ++f) {
         const PbdFrameStats st = gpu->advanceFrame(p, parityInput(m, f));
         ASSERT_TRUE(st.finite);
@@ -221,6 +242,7 @@ TEST(PbdGpu, KinematicStartFromDevicePositionsEqualsExplicitStart) {
   PbdStepParams<float> p;
   p.fused_max_particles = 0;
   p.cluster_max_particles = 0;
+  p.grid_max_particles = 0;
   std::vector<std::int32_t> ids;
   for (std::size_t i = 0; i < m.size(); ++i)
     if (m.rest_positions[i].x > 0.055f) ids.push_back(std::int32_t(i));
@@ -273,6 +295,7 @@ TEST(PbdGpu, ClusterFrameMatchesLaunchesOnLiverSizedModel) {
     p.volume_influence = 0.004f;
     p.fused_max_particles = 0;
     p.cluster_max_particles = mode == 0 ? 0 : 8192;
+    p.grid_max_particles = 0;
     for (int f = 0; f < 30; ++f) ASSERT_TRUE(gpu->advanceFrame(p, parityInput(m, f)).finite);
     gpu->getState(s[mode]);
   }
@@ -290,6 +313,57 @@ TEST(PbdGpu, ClusterFrameMatchesLaunchesOnLiverSizedModel) {
               disp);
   EXPECT_GT(disp, 1e-3);
   EXPECT_LT(dx, 1e-5);
+}
+
+// The same liver-sized model on the grid frame (frames launched directly) against the per-block launches, plain and Chebyshev-accelerated
+// Jacobi: the same physics calls, gather order and Chebyshev weights (the host's), compiled separately, so equal
+// within 1e-5 m after 30 frames of a probe pressing and a grasp lifting (float32); replays of the grid frame are
+// bitwise equal (no atomics; each phase's thread mapping is fixed by the launch).
+TEST(PbdGpu, GridFrameMatchesLaunchesOnLiverSizedModel) {
+  if (!haveDevice()) {
+    GTEST_SKIP() << "no CUDA device";
+  }
+  PbdModel<float> m = test::makeLatticeBeam<float>(0.06, 0.02, 0.02, 0.004, 2.0e4, true, 32);
+  ASSERT_EQ(m.size(), 576u);
+  pbd::PlaneCollider<float> ground;
+  ground.offset = -0.01f;
+  m.planes.push_back(ground);
+  for (float rho : {0.0f, 0.9f}) {
+    PbdState<float> s[3];
+    for (int mode = 0; mode < 3; ++mode) {  // 0: launches; 1, 2: grid frame
+      auto gpu = cuda::makePbdCudaBackend<float>();
+      gpu->setModel(m);
+      PbdStepParams<float> p;
+      p.solver = PbdSolverKind::Jacobi;
+      p.iterations = 10;
+      p.substeps = 4;
+      p.chebyshev_rho = rho;
+      p.volume_influence = 0.004f;
+      p.fused_max_particles = 0;
+      p.cluster_max_particles = 0;
+      p.grid_max_particles = mode == 0 ? 0 : 8192;
+      p.use_graph = false;  // every frame launched directly: the grid frame's case
+      for (int f = 0; f < 30; ++f) {
+        const PbdFrameStats st = gpu->advanceFrame(p, parityInput(m, f));
+        ASSERT_TRUE(st.finite);
+        ASSERT_EQ(st.path, mode == 0 ? "launches" : "grid");
+      }
+      gpu->getState(s[mode]);
+    }
+    double dx = 0, disp = 0;
+    for (std::size_t i = 0; i < m.size(); ++i) {
+      dx = std::max(dx, double(norm(s[0].positions[i] - s[1].positions[i])));
+      disp = std::max(disp, double(norm(s[0].positions[i] - m.rest_positions[i])));
+      EXPECT_EQ(s[1].positions[i].x, s[2].positions[i].x) << "sphere " << i;
+      EXPECT_EQ(s[1].positions[i].y, s[2].positions[i].y) << "sphere " << i;
+      EXPECT_EQ(s[1].positions[i].z, s[2].positions[i].z) << "sphere " << i;
+      EXPECT_NEAR(s[0].rotations[i].w, s[1].rotations[i].w, 1e-4f) << "sphere " << i;
+    }
+    std::printf("576 spheres, rho %.2f, grid frame vs launches after 30 frames: max |dx| %.3e m (max displacement %.3e m)\n",
+                double(rho), dx, disp);
+    EXPECT_GT(disp, 1e-3);
+    EXPECT_LT(dx, 1e-5);
+  }
 }
 
 #else
