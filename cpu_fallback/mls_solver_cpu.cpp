@@ -102,6 +102,8 @@ MlsView<T> MlsCpuSolver<T>::view() {
   if (!cg_rest_centre_.empty()) {
     s.coupling_group = particle_group_.data();
     s.coupling_force = cg_force_.data();
+    s.coupling_torque = cg_torque_.data();
+    s.coupling_centroid = cg_centroid_.data();
   }
   return s;
 }
@@ -119,6 +121,12 @@ CouplingView<T> MlsCpuSolver<T>::couplingView() {
   c.stiffness = cg_stiffness_.data();
   c.group_displacement = cg_displacement_.data();
   c.member_force = cg_force_.data();
+  c.member_rest = model_.rest.data();
+  c.rest_centroid = cg_centroid_.data();
+  c.rest_gram = cg_gram_.data();
+  c.inertia_inverse = cg_inertia_inverse_.data();
+  c.rotation = cg_rotation_.data();
+  c.member_torque = cg_torque_.data();
   return c;
 }
 
@@ -152,8 +160,15 @@ void MlsCpuSolver<T>::setCouplingGroups(const MlsCouplingGroups& g) {
     for (std::int32_t p = g.member_offsets[k]; p < g.member_offsets[k + 1]; ++p)
       particle_group_[std::size_t(g.members[std::size_t(p)])] = std::int32_t(k);
   if (g.size() == 0) particle_group_.clear();
+  const MlsCouplingFrames frames = mlsCouplingFrames(g, restPositions());
+  MlsCouplingFrameArrays<T> fa = mlsCouplingFrameArrays<T>(frames, model_.origin);
+  cg_centroid_ = std::move(fa.centroid);
+  cg_gram_ = std::move(fa.gram);
+  cg_inertia_inverse_ = std::move(fa.inertia_inverse);
+  cg_rotation_.assign(g.size(), pbd::Quat<T>());
+  cg_torque_.assign(g.size(), Mat3<T>());
   std::vector<double> mass(model_.mass.begin(), model_.mass.end());
-  setCouplingStableStep(mlsCouplingStableStep(g, mass));
+  setCouplingStableStep(mlsCouplingStableStep(g, mass, &frames));
   forces_valid_ = false;
 }
 
@@ -360,6 +375,7 @@ template <typename T>
 void MlsCpuSolver<T>::saveCheckpoint() {
   saved_u_ = state_.displacement;
   saved_v_ = state_.velocity;
+  saved_rotation_ = cg_rotation_;  // the groups' warm starts: a retried step repeats the same extraction
 }
 
 template <typename T>
@@ -367,6 +383,7 @@ void MlsCpuSolver<T>::restoreCheckpoint() {
   if (saved_u_.size() != size()) return;  // nothing saved yet
   state_.displacement = saved_u_;
   state_.velocity = saved_v_;
+  if (saved_rotation_.size() == cg_rotation_.size()) cg_rotation_ = saved_rotation_;
   forces_valid_ = false;
   forgetStiffening();
 }

@@ -65,6 +65,9 @@ class MlsCpuSolver final : public MlsSolver {
   std::vector<std::int32_t> cg_member_offsets_{0}, cg_members_, cg_spring_offsets_{0}, particle_group_;
   std::vector<Vec3<T>> cg_rest_centre_, cg_anchor_, cg_displacement_, cg_force_;
   std::vector<T> cg_rest_length_, cg_stiffness_;
+  std::vector<Vec3<T>> cg_centroid_;                    // rotation-aware eq. 13: rest frames (physics/cut_coupling.h)
+  std::vector<Mat3<T>> cg_gram_, cg_inertia_inverse_, cg_torque_;
+  std::vector<pbd::Quat<T>> cg_rotation_, saved_rotation_;
   std::vector<Vec3<T>> saved_u_, saved_v_;
   // forces_valid_: force, elastic_force_, stress moments, energies and stiffening_out_ belong to the current
   // displacement and anchors. coupling_stale_: only the anchors changed since (the elastic part is still valid).

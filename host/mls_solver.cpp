@@ -7,6 +7,8 @@
 #include <limits>
 #include <string>
 
+#include <Eigen/Dense>
+
 #include "cpu_fallback/mls_solver_cpu.h"
 #include "host/elapsed_ms.h"
 #include "physics/cut_coupling.h"
@@ -52,12 +54,56 @@ void validateMlsCouplingGroups(const MlsCouplingGroups& g, std::size_t particles
   }
 }
 
-double mlsCouplingStableStep(const MlsCouplingGroups& g, const std::vector<double>& mass) {
+MlsCouplingFrames mlsCouplingFrames(const MlsCouplingGroups& g, const std::vector<Vec3d>& rest) {
+  MlsCouplingFrames fr;
+  fr.centroid.resize(g.size());
+  fr.gram.resize(g.size());
+  fr.inertia_inverse.resize(g.size());
+  fr.min_inertia.assign(g.size(), 0.0);
+  for (std::size_t k = 0; k < g.size(); ++k) {
+    const std::int32_t b = g.member_offsets[k], e = g.member_offsets[k + 1];
+    Vec3d c;
+    for (std::int32_t p = b; p < e; ++p) c += rest[std::size_t(g.members[std::size_t(p)])];
+    c *= 1.0 / double(e - b);
+    Mat3d q2, j;
+    for (std::int32_t p = b; p < e; ++p) {
+      const Vec3d q = rest[std::size_t(g.members[std::size_t(p)])] - c;
+      q2 += outer(q, q);
+      j += Mat3d::diag(dot(q, q)) - outer(q, q);
+    }
+    fr.centroid[k] = c;
+    fr.gram[k] = q2;
+    if (e - b < 4) continue;
+    Eigen::Matrix3d jm;
+    for (int r = 0; r < 3; ++r)
+      for (int col = 0; col < 3; ++col) jm(r, col) = j.m[r][col];
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(jm);
+    const Eigen::Vector3d lam = eig.eigenvalues();  // ascending
+    if (!(lam(0) > kCouplingMinInertiaRatio * lam.sum())) continue;
+    const Eigen::Matrix3d inv = eig.eigenvectors() * lam.cwiseInverse().asDiagonal() * eig.eigenvectors().transpose();
+    for (int r = 0; r < 3; ++r)
+      for (int col = 0; col < 3; ++col) fr.inertia_inverse[k].m[r][col] = inv(r, col);
+    fr.min_inertia[k] = lam(0);
+  }
+  return fr;
+}
+
+double mlsCouplingStableStep(const MlsCouplingGroups& g, const std::vector<double>& mass, const MlsCouplingFrames* fr) {
   double omega = 0.0;
   for (std::size_t k = 0; k < g.size(); ++k) {
-    double m = 0.0;
-    for (std::int32_t p = g.member_offsets[k]; p < g.member_offsets[k + 1]; ++p) m += mass[std::size_t(g.members[std::size_t(p)])];
+    double m = 0.0, m_min = std::numeric_limits<double>::infinity();
+    for (std::int32_t p = g.member_offsets[k]; p < g.member_offsets[k + 1]; ++p) {
+      const double mi = mass[std::size_t(g.members[std::size_t(p)])];
+      m += mi;
+      m_min = std::min(m_min, mi);
+    }
     omega = std::max(omega, couplingGroupOmega(g.stiffnesses.data(), g.spring_offsets[k], g.spring_offsets[k + 1], m));
+    if (fr && fr->min_inertia[k] > 0.0 && m_min > 0.0) {
+      double ksum = 0.0;
+      for (std::int32_t s = g.spring_offsets[k]; s < g.spring_offsets[k + 1]; ++s) ksum += g.stiffnesses[std::size_t(s)];
+      const Vec3d arm = g.rest_centres[k] - fr->centroid[k];
+      omega = std::max(omega, std::sqrt(ksum * dot(arm, arm) / (m_min * fr->min_inertia[k])));
+    }
   }
   return omega > 0.0 ? 2.0 / omega : std::numeric_limits<double>::infinity();
 }

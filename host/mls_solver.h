@@ -62,9 +62,42 @@ struct MlsCouplingGroups {
 // particle in two groups, a group without members, or a non-finite / non-positive spring parameter.
 void validateMlsCouplingGroups(const MlsCouplingGroups& groups, std::size_t particles);
 
-// The explicit limit of the groups' rigid modes on their springs, min over groups of 2 / sqrt(sum k / m_group)
-// (s; m_group the sum of its members' masses, kg); infinity when no group has a spring.
-double mlsCouplingStableStep(const MlsCouplingGroups& groups, const std::vector<double>& masses);
+// The rest frames of the groups for the rotation-aware eq. 13 (physics/cut_coupling.h), from the particles' rest
+// positions: each group's member centroid Xbar (absolute, m), Q = sum q q^T and J = sum (|q|^2 I - q q^T) with
+// q = X_i - Xbar (m^2), J^-1, and J's smallest eigenvalue. A group of fewer than 4 members or whose members lie near
+// a line (smallest eigenvalue of J under kCouplingMinInertiaRatio of its trace) gets a zero J^-1: it follows the
+// plain mean (a rotation about the line would be undetermined, and its moment of inertia would set the step).
+constexpr double kCouplingMinInertiaRatio = 0.02;
+struct MlsCouplingFrames {
+  std::vector<Vec3d> centroid;
+  std::vector<Mat3d> gram, inertia_inverse;
+  std::vector<double> min_inertia;  // m^2; 0 where the group does not rotate
+};
+MlsCouplingFrames mlsCouplingFrames(const MlsCouplingGroups& groups, const std::vector<Vec3d>& rest_positions);
+
+// The frames as a solver stores them: precision T, centroids relative to the model origin.
+template <typename T>
+struct MlsCouplingFrameArrays {
+  std::vector<Vec3<T>> centroid;
+  std::vector<Mat3<T>> gram, inertia_inverse;
+};
+template <typename T>
+MlsCouplingFrameArrays<T> mlsCouplingFrameArrays(const MlsCouplingFrames& f, const Vec3d& origin) {
+  MlsCouplingFrameArrays<T> a;
+  for (std::size_t k = 0; k < f.centroid.size(); ++k) {
+    a.centroid.push_back(Vec3<T>(f.centroid[k] - origin));
+    a.gram.push_back(Mat3<T>(f.gram[k]));
+    a.inertia_inverse.push_back(Mat3<T>(f.inertia_inverse[k]));
+  }
+  return a;
+}
+
+// The explicit limit of the groups' rigid modes on their springs (s): min over groups of 2 / omega with omega^2 =
+// sum k / m_group (translation; m_group the sum of its members' masses, kg) and, for a rotating group, sum k |C_a -
+// Xbar|^2 / (m_min J_min) (rotation about the centroid: the springs' moment arm over the points' least moment of
+// inertia, m_min the lightest member); infinity when no group has a spring. `frames` null: translation only.
+double mlsCouplingStableStep(const MlsCouplingGroups& groups, const std::vector<double>& masses,
+                             const MlsCouplingFrames* frames = nullptr);
 
 // Upper bound on substeps per frame: beyond it a frame would take minutes; refused as bad input.
 constexpr std::int64_t kMlsMaxSubsteps = 10000000;

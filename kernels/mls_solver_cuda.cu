@@ -109,15 +109,19 @@ __global__ void forceDriftKernel(MlsView<T> s, T half_dt, T dt, int remaining) {
   mlsDriftPass(s, k, dt, remaining);
 }
 
-// Coupling groups (eqs. 11-13): a team per group adds its members' displacements, lane 0 adds its springs.
+// Coupling groups (eqs. 11-13): a team per group adds its members' sums (the displacements, and for a rotating
+// group sum u q^T), lane 0 finishes the group (its rotation, springs and shares).
 template <int L, typename T>
 __device__ void couplingTeam(const CouplingView<T>& c, const Vec3<T>* u, std::int64_t t) {
   const std::int64_t g = t / L;
   const int lane = int(t % L);
-  Vec3<T> sum;
-  if (g < c.groups) sum = couplingMemberSum(u, c.members, c.member_offsets[g], c.member_offsets[g + 1], lane, L);
-  teamSum<L>(sum);
-  if (g < c.groups && lane == 0) couplingGroupFinish(c, std::int32_t(g), sum);
+  CouplingSums<T> sums;
+  if (g < c.groups) sums = couplingMemberSums(c, u, std::int32_t(g), lane, L);
+  teamSum<L>(sums.u);
+  // Every lane of the warp, whatever its group: a warp holds several teams, and a full-mask shuffle that only some
+  // of them reach never completes (a non-rotating group adds zeros).
+  teamSum<L>(sums.uq);
+  if (g < c.groups && lane == 0) couplingGroupFinish(c, std::int32_t(g), sums);
 }
 
 template <typename T, int L>
@@ -488,8 +492,15 @@ class MlsCudaSolver final : public MlsSolver {
     bulk_.add(particle_group_, group);
     bulk_.zero(cg_displacement_, g.size());
     bulk_.zero(cg_force_, g.size());
+    const MlsCouplingFrames frames = mlsCouplingFrames(g, restPositions());
+    const MlsCouplingFrameArrays<T> fa = mlsCouplingFrameArrays<T>(frames, model_.origin);
+    bulk_.add(cg_centroid_, fa.centroid);
+    bulk_.add(cg_gram_, fa.gram);
+    bulk_.add(cg_inertia_inverse_, fa.inertia_inverse);
+    bulk_.add(cg_rotation_, std::vector<pbd::Quat<T>>(g.size()));
+    bulk_.zero(cg_torque_, g.size());
     bulk_.flush(stream_);
-    setCouplingStableStep(mlsCouplingStableStep(g, std::vector<double>(model_.mass.begin(), model_.mass.end())));
+    setCouplingStableStep(mlsCouplingStableStep(g, std::vector<double>(model_.mass.begin(), model_.mass.end()), &frames));
     forces_valid_ = false;
   }
   void setCouplingAnchors(const std::vector<Vec3d>& anchors) override {
@@ -513,12 +524,15 @@ class MlsCudaSolver final : public MlsSolver {
     saved_v_.resize(size());
     copy(saved_u_, u_);
     copy(saved_v_, v_);
+    saved_rotation_.resize(cg_rotation_.size());  // the groups' warm starts: a retried step repeats the same extraction
+    copy(saved_rotation_, cg_rotation_);
     has_checkpoint_ = true;
   }
   void restoreCheckpoint() override {
     if (!has_checkpoint_) return;
     copy(u_, saved_u_);
     copy(v_, saved_v_);
+    if (saved_rotation_.size() == cg_rotation_.size()) copy(cg_rotation_, saved_rotation_);
     forces_valid_ = false;
     forgetStiffening();
   }
@@ -533,6 +547,8 @@ class MlsCudaSolver final : public MlsSolver {
                      cg_members_.capacityBytes() + cg_spring_offsets_.capacityBytes() + particle_group_.capacityBytes() +
                      cg_rest_centre_.capacityBytes() + cg_anchor_.capacityBytes() + cg_displacement_.capacityBytes() +
                      cg_force_.capacityBytes() + cg_rest_length_.capacityBytes() + cg_stiffness_.capacityBytes() +
+                     cg_centroid_.capacityBytes() + cg_gram_.capacityBytes() + cg_inertia_inverse_.capacityBytes() +
+                     cg_torque_.capacityBytes() + cg_rotation_.capacityBytes() + saved_rotation_.capacityBytes() +
                      partials_.capacityBytes() + saved_u_.capacityBytes() + saved_v_.capacityBytes();
     m.host_bytes = model_.bytes();
     return m;
@@ -561,6 +577,8 @@ class MlsCudaSolver final : public MlsSolver {
     if (groups_ > 0) {
       v.coupling_group = particle_group_.data();
       v.coupling_force = cg_force_.data();
+      v.coupling_torque = cg_torque_.data();
+      v.coupling_centroid = cg_centroid_.data();
     }
     return v;
   }
@@ -577,6 +595,12 @@ class MlsCudaSolver final : public MlsSolver {
     c.stiffness = cg_stiffness_.data();
     c.group_displacement = cg_displacement_.data();
     c.member_force = cg_force_.data();
+    c.member_rest = rest_.data();
+    c.rest_centroid = cg_centroid_.data();
+    c.rest_gram = cg_gram_.data();
+    c.inertia_inverse = cg_inertia_inverse_.data();
+    c.rotation = cg_rotation_.data();
+    c.member_torque = cg_torque_.data();
     return c;
   }
   void couplingPass() {
@@ -718,7 +742,8 @@ class MlsCudaSolver final : public MlsSolver {
     const auto bits = [](const void* p) { return std::uint64_t(reinterpret_cast<std::uintptr_t>(p)); };
     return {std::uint64_t(n), dt_bits, std::uint64_t(model_.size()), std::uint64_t(groups_), bits(particle_group_.data()),
             bits(c.member_offsets), bits(c.members), bits(c.rest_centre), bits(c.spring_offsets), bits(c.anchor),
-            bits(c.rest_length), bits(c.stiffness), bits(c.group_displacement), bits(c.member_force)};
+            bits(c.rest_length), bits(c.stiffness), bits(c.group_displacement), bits(c.member_force),
+            bits(c.rest_centroid), bits(c.rest_gram), bits(c.inertia_inverse), bits(c.rotation), bits(c.member_torque)};
   }
 
   void ensureEvents(std::size_t count) {
@@ -744,7 +769,8 @@ class MlsCudaSolver final : public MlsSolver {
     out.resize(t.size());
     for (std::size_t i = 0; i < t.size(); ++i) out[i] = Vec3d(t[i]);
   }
-  void copy(DeviceBuffer<Vec3<T>>& dst, const DeviceBuffer<Vec3<T>>& src) {
+  template <typename E>
+  void copy(DeviceBuffer<E>& dst, const DeviceBuffer<E>& src) {
     if (src.size())
       INC_CUDA(cudaMemcpyAsync(dst.data(), src.data(), src.bytes(), cudaMemcpyDeviceToDevice, stream_));
   }
@@ -765,6 +791,9 @@ class MlsCudaSolver final : public MlsSolver {
   DeviceBuffer<std::int32_t> cg_member_offsets_, cg_members_, cg_spring_offsets_, particle_group_;
   DeviceBuffer<Vec3<T>> cg_rest_centre_, cg_anchor_, cg_displacement_, cg_force_;
   DeviceBuffer<T> cg_rest_length_, cg_stiffness_;
+  DeviceBuffer<Vec3<T>> cg_centroid_;  // rotation-aware eq. 13: rest frames, rotations, moments (physics/cut_coupling.h)
+  DeviceBuffer<Mat3<T>> cg_gram_, cg_inertia_inverse_, cg_torque_;
+  DeviceBuffer<pbd::Quat<T>> cg_rotation_, saved_rotation_;
   std::int32_t groups_ = 0;
   std::size_t springs_ = 0;
   cudaStream_t stream_ = nullptr;

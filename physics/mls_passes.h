@@ -4,6 +4,7 @@
 
 #include <cstdint>
 
+#include "physics/cut_coupling.h"
 #include "physics/hd.h"
 #include "physics/mls_elasticity.h"
 #include "physics/mls_integrate.h"
@@ -40,6 +41,10 @@ struct MlsView {
   // force per member (N), recomputed from the displacement before every force pass. Null: no coupling.
   const std::int32_t* coupling_group = nullptr;
   const Vec3<T>* coupling_force = nullptr;
+  // A rotating group's moment (CouplingView::member_torque, rest_centroid): member k's share is coupling_force +
+  // coupling_torque (X_k - centroid). Null: every share is coupling_force alone.
+  const Mat3<T>* coupling_torque = nullptr;
+  const Vec3<T>* coupling_centroid = nullptr;
   // Optional pair tables of the rest configuration (mlsPairTerms; the CPU fallback builds them, the CUDA kernels
   // pass null and recompute from the rest positions, which costs them less than the traffic). Per CSR slot p of
   // particle i with neighbour j: pair_gradient[p] = w_ij A_i^{-T} x_ij, pair_force[p] = w_ij x_ij; weighted_sum[i]
@@ -195,12 +200,19 @@ INC_HD Vec3<T> mlsElasticForce(const MlsView<T>& s, std::int64_t k) {
   return mlsForcePairSum(s, k, 0, 1);
 }
 
+// Particle k's force from its coupling group (it has one).
+template <typename T>
+INC_HD Vec3<T> mlsCouplingShare(const MlsView<T>& s, std::int64_t k) {
+  const std::int32_t g = s.coupling_group[k];
+  return couplingMemberForce(s.coupling_force[g], s.coupling_torque, s.coupling_centroid, s.rest[k], g);
+}
+
 // Pass 2 at particle k: gather the force (plus its coupling group's share, eq. 12), then the second half kick
 // (free particles only). The stored force is what the next drift's first half kick uses.
 template <typename T>
 INC_HD void mlsForceAt(const MlsView<T>& s, std::int64_t k, Vec3<T> f, T half_dt, bool kick) {
   if (s.elastic_force) s.elastic_force[k] = f;
-  if (s.coupling_group && s.coupling_group[k] >= 0) f += s.coupling_force[s.coupling_group[k]];
+  if (s.coupling_group && s.coupling_group[k] >= 0) f += mlsCouplingShare(s, k);
   s.force[k] = f;
   if (kick && s.kind[k] == kMlsFree)
     s.velocity[k] = mlsHalfKick(s.velocity[k], f, s.mass[k], s.gravity, half_dt, s.coeffs.damping);
@@ -216,7 +228,7 @@ INC_HD void mlsForcePass(const MlsView<T>& s, std::int64_t k, T half_dt, bool ki
 template <typename T>
 INC_HD void mlsCouplingRefresh(const MlsView<T>& s, std::int64_t k) {
   Vec3<T> f = s.elastic_force[k];
-  if (s.coupling_group && s.coupling_group[k] >= 0) f += s.coupling_force[s.coupling_group[k]];
+  if (s.coupling_group && s.coupling_group[k] >= 0) f += mlsCouplingShare(s, k);
   s.force[k] = f;
 }
 

@@ -89,6 +89,167 @@ TEST(CouplingMath, GroupShareIsTheGradientWithRespectToEachMember) {
   EXPECT_EQ(norm(share), 0.0);
 }
 
+// One rotating group for the tests below: n points in a lens off the sphere centre C (as the points a cut leaves in
+// an interface sphere are), three springs, and the rest frames mlsCouplingFrames derives.
+struct RotatingGroup {
+  int n = 12;
+  std::vector<Vec3d> rest, anchors;
+  Vec3d centre{0.001, -0.002, 0.0005};
+  std::vector<double> lengths{0.01, 0.0105, 0.0095}, k{80.0, 120.0, 60.0};
+  std::vector<std::int32_t> offsets{0, 12}, members, soff{0, 3};
+  MlsCouplingFrames frames;
+  Vec3d disp, share;
+  Mat3d torque;
+  pbd::Quat<double> rot;
+  RotatingGroup() {
+    for (int i = 0; i < n; ++i) {
+      rest.push_back(centre + Vec3d(0.003 + 0.002 * hashSigned(i), 0.003 * hashSigned(30 + i), 0.0025 * hashSigned(60 + i)));
+      members.push_back(i);
+    }
+    anchors = {centre + Vec3d(0.012, 0.0, 0.0), centre + Vec3d(0.0, -0.011, 0.002), centre + Vec3d(-0.004, 0.003, 0.01)};
+    MlsCouplingGroups g;
+    g.members = members;
+    g.member_offsets = offsets;
+    g.rest_centres = {centre};
+    g.spring_offsets = soff;
+    g.rest_lengths = lengths;
+    g.stiffnesses = k;
+    frames = mlsCouplingFrames(g, rest);
+  }
+  CouplingView<double> view() {
+    CouplingView<double> v;
+    v.groups = 1;
+    v.member_offsets = offsets.data();
+    v.members = members.data();
+    v.rest_centre = &centre;
+    v.spring_offsets = soff.data();
+    v.anchor = anchors.data();
+    v.rest_length = lengths.data();
+    v.stiffness = k.data();
+    v.group_displacement = &disp;
+    v.member_force = &share;
+    v.member_rest = rest.data();
+    v.rest_centroid = frames.centroid.data();
+    v.rest_gram = frames.gram.data();
+    v.inertia_inverse = frames.inertia_inverse.data();
+    v.rotation = &rot;
+    v.member_torque = &torque;
+    return v;
+  }
+  // u_a (fresh warm start: a converged extraction of the rotation at u).
+  Vec3d displacement(const std::vector<Vec3d>& u) {
+    rot = pbd::Quat<double>();
+    couplingGroupPass(view(), u.data(), 0);
+    return disp;
+  }
+  double energy(const std::vector<Vec3d>& u) {
+    const Vec3d xa = centre + displacement(u);
+    double e = 0.0;
+    for (std::size_t s = 0; s < anchors.size(); ++s) e += couplingSpringEnergy(xa, anchors[s], lengths[s], k[s]);
+    return e;
+  }
+  Vec3d memberForce(int i) const {
+    return couplingMemberForce(share, &torque, frames.centroid.data(), rest[std::size_t(i)], 0);
+  }
+};
+
+std::vector<Vec3d> rigidDisplacements(const std::vector<Vec3d>& rest, const Mat3d& r, const Vec3d& t) {
+  std::vector<Vec3d> u;
+  for (const Vec3d& x : rest) u.push_back(r * x + t - x);
+  return u;
+}
+
+// The paper's eq. 13 (the mean displacement) misplaces a turned sphere by (R - I)(Xbar - C); the rotation-aware
+// eq. 13 puts it at R C + t for any rigid motion of its points (1e-12 m), and stays the plain mean under a
+// translation (bit for bit) and at rest (exactly zero).
+TEST(CouplingMath, RotatingGroupFollowsAnyRigidMotionExactly) {
+  RotatingGroup grp;
+  ASSERT_GT(grp.frames.min_inertia[0], 0.0);  // the lens spans a volume: the group rotates
+  EXPECT_EQ(norm(grp.displacement(std::vector<Vec3d>(grp.rest.size()))), 0.0);
+  const Vec3d t(0.004, -0.002, 0.003);
+  const std::vector<Vec3d> shifted = rigidDisplacements(grp.rest, Mat3d::identity(), t);
+  const Vec3d ut = grp.displacement(shifted);
+  const Vec3d mean = couplingSphereDisplacement(shifted.data(), grp.members.data(), 0, grp.n);
+  EXPECT_EQ(ut.x, mean.x);
+  EXPECT_EQ(ut.y, mean.y);
+  EXPECT_EQ(ut.z, mean.z);
+  for (double angle : {0.1, 0.7, 1.5, 2.5, 3.0}) {
+    const Mat3d r = mls_test::rotation(Vec3d(0.3, -1.0, 0.5), angle);
+    const Vec3d ua = grp.displacement(rigidDisplacements(grp.rest, r, t));
+    EXPECT_LT(norm(grp.centre + ua - (r * grp.centre + t)), 1e-12) << "angle " << angle;
+    const Vec3d old = couplingSphereDisplacement(rigidDisplacements(grp.rest, r, t).data(), grp.members.data(), 0, grp.n);
+    EXPECT_GT(norm(grp.centre + old - (r * grp.centre + t)), 1e-4) << "the plain mean is off by (R - I)(Xbar - C)";
+  }
+}
+
+// The rotation-aware eq. 12: at a rigid configuration the members' forces are -dE/du_i of the springs' energy with
+// x_a(u) the rotation-aware eq. 13 (central differences, 1e-5 of the largest force), and together they carry the
+// springs' force F_a and its moment about the centroid, (x_a - xbar) x F_a (1e-12 relative).
+TEST(CouplingMath, RotatingGroupSharesAreTheGradientAndCarryForceAndMoment) {
+  RotatingGroup grp;
+  const Mat3d r = mls_test::rotation(Vec3d(1.0, 0.2, -0.4), 0.6);
+  const std::vector<Vec3d> u = rigidDisplacements(grp.rest, r, Vec3d(0.002, 0.001, -0.003));
+  const Vec3d ua = grp.displacement(u);
+  std::vector<Vec3d> f(std::size_t(grp.n));
+  Vec3d total, moment, xbar;
+  for (int i = 0; i < grp.n; ++i) xbar += (grp.rest[std::size_t(i)] + u[std::size_t(i)]) * (1.0 / grp.n);
+  double fmax = 0.0;
+  for (int i = 0; i < grp.n; ++i) {
+    f[std::size_t(i)] = grp.memberForce(i);
+    total += f[std::size_t(i)];
+    moment += cross(grp.rest[std::size_t(i)] + u[std::size_t(i)] - xbar, f[std::size_t(i)]);
+    fmax = std::max(fmax, norm(f[std::size_t(i)]));
+  }
+  const Vec3d fa = grp.share * double(grp.n), xa = grp.centre + ua;
+  EXPECT_LT(norm(total - fa), 1e-12 * norm(fa));
+  EXPECT_LT(norm(moment - cross(xa - xbar, fa)), 1e-12 * norm(fa) * norm(xa - xbar));
+  EXPECT_GT(norm(cross(xa - xbar, fa)), 0.1 * norm(fa) * 0.001);  // a real moment, not a centred sphere
+  const double h = 1e-8;
+  for (int i = 0; i < grp.n; ++i)
+    for (int comp = 0; comp < 3; ++comp) {
+      std::vector<Vec3d> p = u, m = u;
+      p[std::size_t(i)][comp] += h;
+      m[std::size_t(i)][comp] -= h;
+      const double g = (grp.energy(p) - grp.energy(m)) / (2 * h);
+      EXPECT_NEAR(f[std::size_t(i)][comp], -g, 1e-5 * fmax) << "member " << i << " component " << comp;
+    }
+}
+
+// Points too few or along a line determine no rotation: the group follows the plain mean, and the stable step
+// is the translation limit alone; a rotating group's moment arm shortens the step (sum k |C - Xbar|^2 / (m J)).
+TEST(CouplingMath, DegenerateGroupsFollowThePlainMean) {
+  MlsCouplingGroups g;
+  std::vector<Vec3d> rest;
+  for (int i = 0; i < 6; ++i) rest.push_back(Vec3d(0.001 * i, 0.0, 1e-9 * hashSigned(i)));  // a line
+  for (int i = 0; i < 3; ++i) rest.push_back(Vec3d(0.0, 0.001 * i, 0.002));                 // three points
+  g.members = {0, 1, 2, 3, 4, 5, 6, 7, 8};
+  g.member_offsets = {0, 6, 9};
+  g.rest_centres = {Vec3d(0.0, 0.003, 0.0), Vec3d(0.002, 0.0, 0.002)};
+  g.spring_offsets = {0, 1, 2};
+  g.rest_lengths = {0.01, 0.01};
+  g.stiffnesses = {10.0, 10.0};
+  const MlsCouplingFrames fr = mlsCouplingFrames(g, rest);
+  for (int k = 0; k < 2; ++k) {
+    EXPECT_EQ(fr.min_inertia[std::size_t(k)], 0.0) << k;
+    EXPECT_EQ(trace(fr.inertia_inverse[std::size_t(k)]), 0.0) << k;
+  }
+  const std::vector<double> mass(9, 0.001);
+  EXPECT_EQ(mlsCouplingStableStep(g, mass, &fr), mlsCouplingStableStep(g, mass));
+  RotatingGroup grp;
+  MlsCouplingGroups one;
+  one.members = grp.members;
+  one.member_offsets = grp.offsets;
+  one.rest_centres = {grp.centre};
+  one.spring_offsets = grp.soff;
+  one.rest_lengths = grp.lengths;
+  one.stiffnesses = grp.k;
+  const std::vector<double> m12(12, 0.001);
+  const Vec3d arm = grp.centre - grp.frames.centroid[0];
+  const double omega_rot = std::sqrt(260.0 * dot(arm, arm) / (0.001 * grp.frames.min_inertia[0]));
+  const double omega_trans = std::sqrt(260.0 / 0.012);
+  EXPECT_NEAR(mlsCouplingStableStep(one, m12, &grp.frames), 2.0 / std::max(omega_rot, omega_trans), 1e-12);
+}
+
 // A 3 x 3 x 3 MLS block, all 27 points one group on one spring (k = 1 N/m) to a fixed anchor, displaced 1 mm
 // along the spring, undamped, no gravity: the block moves rigidly and its centre oscillates at omega =
 // sqrt(k / M), amplitude kept (leapfrog is symplectic). Period within 0.5 %, amplitude within 1 %.
