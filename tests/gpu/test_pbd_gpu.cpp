@@ -4,6 +4,7 @@
 #if INCISION_HAVE_CUDA
 #include <algorithm>
 #include <cmath>
+#include <functional>
 
 #include "../pbd_fixtures.h"
 #include "cpu_fallback/pbd_solver_cpu.h"
@@ -270,22 +271,22 @@ TEST(PbdGpu, KinematicStartFromDevicePositionsEqualsExplicitStart) {
   }
 }
 
-// A liver-sized model (16 x 6 x 6 = 576 spheres at 4 mm, the bench_pbd case's size) on the cluster frame
-// (as many CTAs as it needs: 9) against the per-block launches: the same physics calls and gather order,
-// compiled separately (multiply-add contraction may differ), so equal within 1e-5 m on a 6 cm beam after
-// 30 frames of a probe pressing and a grasp lifting (float32), and bitwise equal replays of the cluster frame
-// (deterministic: no atomics, fixed ownership).
-TEST(PbdGpu, ClusterFrameMatchesLaunchesOnLiverSizedModel) {
-  if (!haveDevice()) {
-    GTEST_SKIP() << "no CUDA device";
-  }
+// A liver-sized model (16 x 6 x 6 = 576 spheres at 4 mm, the bench_pbd case's size, on a ground plane) run for 30
+// frames of a probe pressing and a grasp lifting (float32) on the per-block launches (mode 0) and twice on a
+// whole-frame path (modes 1 and 2; `configure` sets the path for mode > 0). The path makes the same physics calls
+// in the same gather order, compiled separately (multiply-add contraction may differ): within 1e-5 m of the
+// launches; its replays are bitwise equal (deterministic: no atomics, fixed ownership). `path`: the frame path that
+// modes 1 and 2 must report.
+namespace {
+void expectPathMatchesLaunchesOnLiverSizedModel(const char* what, const char* path,
+                                                const std::function<void(PbdStepParams<float>&, int mode)>& configure) {
   PbdModel<float> m = test::makeLatticeBeam<float>(0.06, 0.02, 0.02, 0.004, 2.0e4, true, 32);
   ASSERT_EQ(m.size(), 576u);
   pbd::PlaneCollider<float> ground;
   ground.offset = -0.01f;
   m.planes.push_back(ground);
   PbdState<float> s[3];
-  for (int mode = 0; mode < 3; ++mode) {  // 0: launches; 1, 2: cluster frame
+  for (int mode = 0; mode < 3; ++mode) {
     auto gpu = cuda::makePbdCudaBackend<float>();
     gpu->setModel(m);
     PbdStepParams<float> p;
@@ -294,9 +295,14 @@ TEST(PbdGpu, ClusterFrameMatchesLaunchesOnLiverSizedModel) {
     p.substeps = 4;
     p.volume_influence = 0.004f;
     p.fused_max_particles = 0;
-    p.cluster_max_particles = mode == 0 ? 0 : 8192;
+    p.cluster_max_particles = 0;
     p.grid_max_particles = 0;
-    for (int f = 0; f < 30; ++f) ASSERT_TRUE(gpu->advanceFrame(p, parityInput(m, f)).finite);
+    configure(p, mode);
+    for (int f = 0; f < 30; ++f) {
+      const PbdFrameStats st = gpu->advanceFrame(p, parityInput(m, f));
+      ASSERT_TRUE(st.finite);
+      ASSERT_EQ(st.path, mode == 0 ? "launches" : path) << "frame " << f;
+    }
     gpu->getState(s[mode]);
   }
   double dx = 0, disp = 0;
@@ -309,61 +315,36 @@ TEST(PbdGpu, ClusterFrameMatchesLaunchesOnLiverSizedModel) {
     EXPECT_NEAR(s[0].rotations[i].w, s[1].rotations[i].w, 1e-4f) << "sphere " << i;
     EXPECT_NEAR(s[0].rotations[i].x, s[1].rotations[i].x, 1e-4f) << "sphere " << i;
   }
-  std::printf("576 spheres, cluster frame vs launches after 30 frames: max |dx| %.3e m (max displacement %.3e m)\n", dx,
+  std::printf("576 spheres, %s vs launches after 30 frames: max |dx| %.3e m (max displacement %.3e m)\n", what, dx,
               disp);
   EXPECT_GT(disp, 1e-3);
   EXPECT_LT(dx, 1e-5);
 }
+}  // namespace
 
-// The same liver-sized model on the grid frame (frames launched directly) against the per-block launches, plain and Chebyshev-accelerated
-// Jacobi: the same physics calls, gather order and Chebyshev weights (the host's), compiled separately, so equal
-// within 1e-5 m after 30 frames of a probe pressing and a grasp lifting (float32); replays of the grid frame are
-// bitwise equal (no atomics; each phase's thread mapping is fixed by the launch).
+// The cluster frame with as many CTAs as the model needs (9).
+TEST(PbdGpu, ClusterFrameMatchesLaunchesOnLiverSizedModel) {
+  if (!haveDevice()) {
+    GTEST_SKIP() << "no CUDA device";
+  }
+  expectPathMatchesLaunchesOnLiverSizedModel("cluster frame", "cluster", [](PbdStepParams<float>& p, int mode) {
+    if (mode > 0) p.cluster_max_particles = 8192;
+  });
+}
+
+// The grid frame (every frame launched directly, its case), plain and Chebyshev-accelerated Jacobi; the Chebyshev
+// weights are the host's on both paths.
 TEST(PbdGpu, GridFrameMatchesLaunchesOnLiverSizedModel) {
   if (!haveDevice()) {
     GTEST_SKIP() << "no CUDA device";
   }
-  PbdModel<float> m = test::makeLatticeBeam<float>(0.06, 0.02, 0.02, 0.004, 2.0e4, true, 32);
-  ASSERT_EQ(m.size(), 576u);
-  pbd::PlaneCollider<float> ground;
-  ground.offset = -0.01f;
-  m.planes.push_back(ground);
-  for (float rho : {0.0f, 0.9f}) {
-    PbdState<float> s[3];
-    for (int mode = 0; mode < 3; ++mode) {  // 0: launches; 1, 2: grid frame
-      auto gpu = cuda::makePbdCudaBackend<float>();
-      gpu->setModel(m);
-      PbdStepParams<float> p;
-      p.solver = PbdSolverKind::Jacobi;
-      p.iterations = 10;
-      p.substeps = 4;
-      p.chebyshev_rho = rho;
-      p.volume_influence = 0.004f;
-      p.fused_max_particles = 0;
-      p.cluster_max_particles = 0;
-      p.grid_max_particles = mode == 0 ? 0 : 8192;
-      p.use_graph = false;  // every frame launched directly: the grid frame's case
-      for (int f = 0; f < 30; ++f) {
-        const PbdFrameStats st = gpu->advanceFrame(p, parityInput(m, f));
-        ASSERT_TRUE(st.finite);
-        ASSERT_EQ(st.path, mode == 0 ? "launches" : "grid");
-      }
-      gpu->getState(s[mode]);
-    }
-    double dx = 0, disp = 0;
-    for (std::size_t i = 0; i < m.size(); ++i) {
-      dx = std::max(dx, double(norm(s[0].positions[i] - s[1].positions[i])));
-      disp = std::max(disp, double(norm(s[0].positions[i] - m.rest_positions[i])));
-      EXPECT_EQ(s[1].positions[i].x, s[2].positions[i].x) << "sphere " << i;
-      EXPECT_EQ(s[1].positions[i].y, s[2].positions[i].y) << "sphere " << i;
-      EXPECT_EQ(s[1].positions[i].z, s[2].positions[i].z) << "sphere " << i;
-      EXPECT_NEAR(s[0].rotations[i].w, s[1].rotations[i].w, 1e-4f) << "sphere " << i;
-    }
-    std::printf("576 spheres, rho %.2f, grid frame vs launches after 30 frames: max |dx| %.3e m (max displacement %.3e m)\n",
-                double(rho), dx, disp);
-    EXPECT_GT(disp, 1e-3);
-    EXPECT_LT(dx, 1e-5);
-  }
+  for (float rho : {0.0f, 0.9f})
+    expectPathMatchesLaunchesOnLiverSizedModel(rho > 0 ? "grid frame, Chebyshev 0.9" : "grid frame", "grid",
+                                               [rho](PbdStepParams<float>& p, int mode) {
+                                                 p.chebyshev_rho = rho;
+                                                 p.use_graph = false;
+                                                 if (mode > 0) p.grid_max_particles = 8192;
+                                               });
 }
 
 #else
