@@ -583,8 +583,12 @@ class DissectionSimulation final : public SimulationModel {
     const SweptSurface& swept = a->swept;
     convert_worker_.runBeside([this, &swept] { surfaceAfterCut(swept); }, [&] { repackStroke(*a, cuts, c0); });
     earlier_cuts_.push_back(a->swept);  // after the re-pack: `cuts` points into earlier_cuts_
-    bindSurface();
-    surface_components_ = analyzeMesh(rest_surface_).components;
+    // The new surface's analysis (a count for the report) only reads the surface: beside the skin binding, which
+    // reads it too and writes only the skin.
+    int components = 0;
+    convert_worker_.runBeside([this, &components] { components = analyzeMesh(rest_surface_).components; },
+                              [this] { bindSurface(); });
+    surface_components_ = components;
     sphere_components_ = sphereGraphComponents(spheres_);
   }
 
