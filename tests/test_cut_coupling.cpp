@@ -45,63 +45,20 @@ TEST(CouplingMath, SpringForceIsTheNegativeEnergyGradient) {
   EXPECT_EQ(norm(couplingSpringForce(Vec3d(1, 2, 3), Vec3d(1, 2, 3), 0.01, 10.0)), 0.0);  // coincident ends
 }
 
-// eq. 12 as the chain rule of eq. 13: the force share on each overlapping point is -dE/du_i of the group's
-// spring energy with x_a = C_a + mean(u) (central differences, 1e-6 of the share).
-TEST(CouplingMath, GroupShareIsTheGradientWithRespectToEachMember) {
-  const int n = 7;
-  std::vector<Vec3d> u(n);
-  for (int i = 0; i < n; ++i) u[i] = Vec3d(hashSigned(i), hashSigned(10 + i), hashSigned(20 + i)) * 0.002;
-  const Vec3d c(0.001, -0.002, 0.0005);
-  const std::vector<Vec3d> anchors{{0.012, 0.0, 0.0}, {0.0, -0.011, 0.002}, {-0.004, 0.003, 0.01}};
-  const std::vector<double> rest{0.01, 0.0105, 0.0095}, k{80.0, 120.0, 60.0};
-  std::vector<std::int32_t> offsets{0, n}, members(n), soff{0, 3};
-  for (int i = 0; i < n; ++i) members[i] = i;
-  Vec3d disp, share;
-  CouplingView<double> view;
-  view.groups = 1;
-  view.member_offsets = offsets.data();
-  view.members = members.data();
-  view.rest_centre = &c;
-  view.spring_offsets = soff.data();
-  view.anchor = anchors.data();
-  view.rest_length = rest.data();
-  view.stiffness = k.data();
-  view.group_displacement = &disp;
-  view.member_force = &share;
-  couplingGroupPass(view, u.data(), 0);
-  // eq. 13: the mean displacement.
-  Vec3d mean;
-  for (const auto& v : u) mean += v * (1.0 / n);
-  EXPECT_LT(norm(disp - mean), 1e-18);
-  const double h = 1e-8;
-  for (int i = 0; i < n; ++i)
-    for (int comp = 0; comp < 3; ++comp) {
-      std::vector<Vec3d> p = u, m = u;
-      p[i][comp] += h;
-      m[i][comp] -= h;
-      const double g = (groupEnergy(p, c, anchors, rest, k) - groupEnergy(m, c, anchors, rest, k)) / (2 * h);
-      EXPECT_NEAR(share[comp], -g, 1e-6 * norm(share)) << "member " << i << " component " << comp;
-    }
-  // A group with no spring feels nothing.
-  std::vector<std::int32_t> none{0, 0};
-  view.spring_offsets = none.data();
-  couplingGroupPass(view, u.data(), 0);
-  EXPECT_EQ(norm(share), 0.0);
-}
-
-// One rotating group for the tests below: n points in a lens off the sphere centre C (as the points a cut leaves in
-// an interface sphere are), three springs, and the rest frames mlsCouplingFrames derives.
+// One coupling group for the tests below: n points in a lens off the sphere centre C (as the points a cut leaves in
+// an interface sphere are), three springs, and the rest frames mlsCouplingFrames derives. view(false): the same
+// group without rest frames (the plain mean of eq. 13).
 struct RotatingGroup {
   int n = 12;
   std::vector<Vec3d> rest, anchors;
   Vec3d centre{0.001, -0.002, 0.0005};
   std::vector<double> lengths{0.01, 0.0105, 0.0095}, k{80.0, 120.0, 60.0};
-  std::vector<std::int32_t> offsets{0, 12}, members, soff{0, 3};
+  std::vector<std::int32_t> offsets, members, soff{0, 3};
   MlsCouplingFrames frames;
   Vec3d disp, share;
   Mat3d torque;
   pbd::Quat<double> rot;
-  RotatingGroup() {
+  explicit RotatingGroup(int count = 12) : n(count), offsets{0, count} {
     for (int i = 0; i < n; ++i) {
       rest.push_back(centre + Vec3d(0.003 + 0.002 * hashSigned(i), 0.003 * hashSigned(30 + i), 0.0025 * hashSigned(60 + i)));
       members.push_back(i);
@@ -116,7 +73,7 @@ struct RotatingGroup {
     g.stiffnesses = k;
     frames = mlsCouplingFrames(g, rest);
   }
-  CouplingView<double> view() {
+  CouplingView<double> view(bool rotating = true) {
     CouplingView<double> v;
     v.groups = 1;
     v.member_offsets = offsets.data();
@@ -128,6 +85,7 @@ struct RotatingGroup {
     v.stiffness = k.data();
     v.group_displacement = &disp;
     v.member_force = &share;
+    if (!rotating) return v;
     v.member_rest = rest.data();
     v.rest_centroid = frames.centroid.data();
     v.rest_gram = frames.gram.data();
@@ -152,6 +110,40 @@ struct RotatingGroup {
     return couplingMemberForce(share, &torque, frames.centroid.data(), rest[std::size_t(i)], 0);
   }
 };
+
+// eq. 12 as the chain rule of eq. 13: the force share on each overlapping point is -dE/du_i of the group's
+// spring energy with x_a = C_a + mean(u) (central differences, 1e-6 of the share).
+TEST(CouplingMath, GroupShareIsTheGradientWithRespectToEachMember) {
+  const int n = 7;
+  std::vector<Vec3d> u(n);
+  for (int i = 0; i < n; ++i) u[i] = Vec3d(hashSigned(i), hashSigned(10 + i), hashSigned(20 + i)) * 0.002;
+  RotatingGroup grp(n);
+  const Vec3d c = grp.centre;
+  const std::vector<Vec3d> anchors = grp.anchors;
+  const std::vector<double> rest = grp.lengths, k = grp.k;
+  const Vec3d& disp = grp.disp;
+  const Vec3d& share = grp.share;
+  CouplingView<double> view = grp.view(false);
+  couplingGroupPass(view, u.data(), 0);
+  // eq. 13: the mean displacement.
+  Vec3d mean;
+  for (const auto& v : u) mean += v * (1.0 / n);
+  EXPECT_LT(norm(disp - mean), 1e-18);
+  const double h = 1e-8;
+  for (int i = 0; i < n; ++i)
+    for (int comp = 0; comp < 3; ++comp) {
+      std::vector<Vec3d> p = u, m = u;
+      p[i][comp] += h;
+      m[i][comp] -= h;
+      const double g = (groupEnergy(p, c, anchors, rest, k) - groupEnergy(m, c, anchors, rest, k)) / (2 * h);
+      EXPECT_NEAR(share[comp], -g, 1e-6 * norm(share)) << "member " << i << " component " << comp;
+    }
+  // A group with no spring feels nothing.
+  std::vector<std::int32_t> none{0, 0};
+  view.spring_offsets = none.data();
+  couplingGroupPass(view, u.data(), 0);
+  EXPECT_EQ(norm(share), 0.0);
+}
 
 std::vector<Vec3d> rigidDisplacements(const std::vector<Vec3d>& rest, const Mat3d& r, const Vec3d& t) {
   std::vector<Vec3d> u;
