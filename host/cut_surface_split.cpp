@@ -900,7 +900,7 @@ class Splitter {
 }  // namespace
 
 SurfaceSplit splitSurfaceBySweep(const TriangleMesh& mesh, const SweptSurface& sweep, const SurfaceSplitOptions& opt) {
-  checkInputMesh(mesh);
+  if (!opt.input_checked) checkInputMesh(mesh);
   if (!(opt.snap_fraction > 0.0 && opt.snap_fraction < 0.5))
     throw InputError("cut", "snap_fraction", "must be in (0, 0.5)");
   if (!(opt.wall_spacing_factor > 0.0)) throw InputError("cut", "wall_spacing_factor", "must be > 0");

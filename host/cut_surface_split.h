@@ -32,6 +32,9 @@ struct SurfaceSplitOptions {
   // Attempts with the swept surface shifted by 2e-6, 1e-4 then 1e-3 of the mesh size when the crossing curve comes
   // out inconsistent (a blade exactly through a vertex of the strip's outline, a crossing curve grazing the front).
   int max_attempts = 4;
+  // The mesh is a split's own output, which passed the same checks on the way out (CutSurfaceState::checked): the
+  // input check (closed, manifold, oriented, no degenerate triangle; a sixth of a split) is not repeated.
+  bool input_checked = false;
 };
 
 // The split surface. Input vertices keep their indices; new vertices follow: for each crossing of a mesh edge

@@ -16,8 +16,10 @@ CutSurfaceState cutSurfaceState(const TriangleMesh& rest) {
 
 SurfaceSplit applySurfaceCut(CutSurfaceState& state, const SweptSurface& sweep, const SurfaceSplitOptions& options) {
   SurfaceSplit r;
+  SurfaceSplitOptions opt = options;
+  opt.input_checked = opt.input_checked || state.checked;
   try {
-    r = splitSurfaceBySweep(state.mesh, sweep, options);
+    r = splitSurfaceBySweep(state.mesh, sweep, opt);
   } catch (const CutSplitFailed& e) {
     r.failure = e.reason();  // the surface stays as it is for this cut; spheres and links are still cut
     return r;
@@ -34,6 +36,7 @@ SurfaceSplit applySurfaceCut(CutSurfaceState& state, const SweptSurface& sweep, 
   state.mesh = r.mesh;
   state.wall = std::move(wall);
   state.probe = std::move(probe);
+  state.checked = true;
   ++state.splits;
   return r;
 }

@@ -16,6 +16,7 @@ struct CutSurfaceState {
   std::vector<std::uint8_t> wall;   // per triangle: 1 = cut wall (SimulationModel::cutWallTriangles)
   std::vector<Vec3d> probe;         // per vertex: where its skin binding looks from (SurfaceSplit::binding_probe)
   int splits = 0;                   // cuts that crossed the surface
+  bool checked = false;             // mesh is a split's output, checked closed and manifold (SurfaceSplitOptions::input_checked)
 };
 
 // The uncut surface.

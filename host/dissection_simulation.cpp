@@ -145,6 +145,7 @@ class DissectionSimulation final : public SimulationModel {
     std::vector<Vec3d> x(spheres_.rest_centers), v(spheres_.size());
     setSpheres(spheres_, x, v, {});
     bindSurface();
+    surface_components_ = analyzeMesh(rest_surface_).components;  // then each split reports its own
     sphere_components_ = sphereGraphComponents(spheres_);
     saveCheckpoint();
   }
@@ -583,12 +584,7 @@ class DissectionSimulation final : public SimulationModel {
     const SweptSurface& swept = a->swept;
     convert_worker_.runBeside([this, &swept] { surfaceAfterCut(swept); }, [&] { repackStroke(*a, cuts, c0); });
     earlier_cuts_.push_back(a->swept);  // after the re-pack: `cuts` points into earlier_cuts_
-    // The new surface's analysis (a count for the report) only reads the surface: beside the skin binding, which
-    // reads it too and writes only the skin.
-    int components = 0;
-    convert_worker_.runBeside([this, &components] { components = analyzeMesh(rest_surface_).components; },
-                              [this] { bindSurface(); });
-    surface_components_ = components;
+    bindSurface();
     sphere_components_ = sphereGraphComponents(spheres_);
   }
 
@@ -666,7 +662,9 @@ class DissectionSimulation final : public SimulationModel {
   // slit), at every cut; CGAL walls (host/cut_surface_split.h). A blade that never crossed the surface (or a split
   // that failed: CutSplitFailed) leaves it as it was.
   void surfaceAfterCut(const SweptSurface& cut) {
-    if (applySurfaceCut(surface_, cut).split) {
+    const SurfaceSplit r = applySurfaceCut(surface_, cut);
+    if (r.split) {
+      surface_components_ = r.components;  // from the split's own output check: no second analysis
       rest_surface_ = surface_.mesh;
       wall_flags_ = surface_.wall;
       surface_split_ = true;
