@@ -65,12 +65,12 @@ MlsCouplingFrames mlsCouplingFrames(const MlsCouplingGroups& g, const std::vecto
     Vec3d c;
     for (std::int32_t p = b; p < e; ++p) c += rest[std::size_t(g.members[std::size_t(p)])];
     c *= 1.0 / double(e - b);
-    Mat3d q2, j;
+    Mat3d q2;
     for (std::int32_t p = b; p < e; ++p) {
       const Vec3d q = rest[std::size_t(g.members[std::size_t(p)])] - c;
       q2 += outer(q, q);
-      j += Mat3d::diag(dot(q, q)) - outer(q, q);
     }
+    const Mat3d j = Mat3d::diag(trace(q2)) - q2;  // sum (|q|^2 I - q q^T)
     fr.centroid[k] = c;
     fr.gram[k] = q2;
     if (e - b < 4) continue;

@@ -764,7 +764,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
 
   PbdFrameStats advanceFrame(const PbdStepParams<T>& p, const PbdFrameInput<T>& in) override {
     validateFrameInput(std::size_t(n_), p, in);
-    direct_frame_ = false;
+    direct_frame_ = false;  // also after a frame whose recording threw
     PbdFrameStats st;
     // Per-frame inputs (synchronous uploads: the previous frame has finished with these buffers).
     INC_CUDA(cudaStreamSynchronize(stream_));
@@ -837,9 +837,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
         const bool direct = stale && key.topo != last_direct_topo_;
         if (direct) last_direct_topo_ = key.topo;
         if (direct) {
-          direct_frame_ = true;
-          recordFrame(p);
-          direct_frame_ = false;
+          recordDirectFrame(p);
         } else if (stale) {
           // After a patch the frame usually differs only in counts and pointers: updated in place.
           captureGraph(stream_, graph_exec_, [&] { recordFrame(p); });
@@ -847,9 +845,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
         }
         if (!direct) INC_CUDA(cudaGraphLaunch(graph_exec_, stream_));
       } else {
-        direct_frame_ = true;
-        recordFrame(p);
-        direct_frame_ = false;
+        recordDirectFrame(p);
       }
       INC_CUDA(cudaEventRecord(events_[1], stream_));
       if (summaryDue()) {
@@ -1460,16 +1456,23 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
            n_ <= p.grid_max_particles && int(blocks_.size()) <= kMaxFusedBlocks && !clusterFrame(p);
   }
 
+  // Records a frame that is launched as it is recorded (no capture): the grid frame's case (gridFrame).
+  void recordDirectFrame(const PbdStepParams<T>& p) {
+    direct_frame_ = true;
+    recordFrame(p);
+    direct_frame_ = false;
+  }
+
   // Whether the frame is one kernel (fused, cluster or grid), which takes the counts as arguments.
   bool singleKernelFrame(const PbdStepParams<T>& p) const {
     const bool jacobi = p.solver == PbdSolverKind::Jacobi;
-    const bool cluster = clusterFrame(p) || gridFrame(p);
+    const bool whole_frame = clusterFrame(p) || gridFrame(p);
     // The single-block frame beats per-block launches for Gauss-Seidel up to thousands of spheres (one launch
     // instead of one per colour) but for Jacobi only up to a few hundred (H100: 1008 spheres 0.23 ms per
     // iteration fused against 0.029 ms on launches), whatever fused_max_particles asks.
     const int fused_limit = jacobi ? std::min(p.fused_max_particles, kFusedJacobiMaxParticles) : p.fused_max_particles;
-    // Chebyshev acceleration runs on per-block launches only (the whole-frame kernels do not carry its iterates).
-    return cluster || (!profile_ && n_ > 0 && n_ <= fused_limit && int(blocks_.size()) <= kMaxFusedBlocks &&
+    // The single-block kernel does not carry the Chebyshev iterates (the grid frame does; the cluster frame does not).
+    return whole_frame || (!profile_ && n_ > 0 && n_ <= fused_limit && int(blocks_.size()) <= kMaxFusedBlocks &&
                        !(p.chebyshev_rho > T(0)));
   }
 

@@ -40,8 +40,9 @@ INC_HD bool couplingRotates(const CouplingView<T>& c, std::int32_t g) {
   return c.rest_centroid != nullptr && trace(c.inertia_inverse[g]) > T(0);
 }
 
-// The sums a group's eq. 13 needs over the slots begin + first, begin + first + stride, ... < end: the members'
-// displacements and, for a rotating group, sum u_i q_i^T (q_i = X_i - Xbar_a).
+// The sums a group's eq. 13 needs over its member slots first, first + stride, ...: the members' displacements and,
+// for a rotating group, sum u_i q_i^T (q_i = X_i - Xbar_a). The whole sums with (0, 1); a GPU team of `stride` lanes
+// adds its lanes' partial sums (kernels/mls_solver_cuda.cu).
 template <typename T>
 struct CouplingSums {
   Vec3<T> u;
@@ -61,26 +62,20 @@ INC_HD CouplingSums<T> couplingMemberSums(const CouplingView<T>& c, const Vec3<T
   return s;
 }
 
-// The sum of the members' displacements over the slots begin + first, begin + first + stride, ... < end: the
-// whole sum with (0, 1); a GPU team of `stride` lanes adds its lanes' partial sums (kernels/mls_solver_cuda.cu).
-template <typename T>
-INC_HD Vec3<T> couplingMemberSum(const Vec3<T>* u, const std::int32_t* members, std::int32_t begin, std::int32_t end,
-                                 std::int32_t first, std::int32_t stride) {
-  Vec3<T> s;
-  for (std::int32_t p = begin + first; p < end; p += stride) s += u[members[p]];
-  return s;
-}
-
-// eq. 13: the sphere's displacement is the mean displacement of its overlapping points (their sum given).
+// The paper's eq. 13: the sphere's displacement is the mean displacement of its overlapping points (their sum given).
 template <typename T>
 INC_HD Vec3<T> couplingMeanOf(const Vec3<T>& sum, std::int32_t begin, std::int32_t end) {
   return end > begin ? sum * (T(1) / T(end - begin)) : sum;
 }
 
+// The same from the displacements of members[begin .. end): what a group without rest frames follows, and the
+// reference the tests compare the rotation-aware eq. 13 with.
 template <typename T>
 INC_HD Vec3<T> couplingSphereDisplacement(const Vec3<T>* u, const std::int32_t* members, std::int32_t begin,
                                           std::int32_t end) {
-  return couplingMeanOf(couplingMemberSum(u, members, begin, end, 0, 1), begin, end);
+  Vec3<T> sum;
+  for (std::int32_t p = begin; p < end; ++p) sum += u[members[p]];
+  return couplingMeanOf(sum, begin, end);
 }
 
 // The force on sphere a (at x_a) of the spring a-j (x_j, rest length l, stiffness k): -dE/dx_a of
