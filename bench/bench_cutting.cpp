@@ -9,6 +9,7 @@
 #include <fstream>
 #include <map>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "cpu_fallback/mls_pair_sums_cpu.h"
@@ -46,6 +47,10 @@ double pbdStages(const FrameReport& r) {  // everything that is not a cut / MLS 
 // --pbd-iterations / --chebyshev-rho: the PBD iterations per substep and, for Jacobi, the Chebyshev estimate.
 int g_pbd_iterations = 10;
 double g_chebyshev_rho = 0;
+// --end-frames: cutting.stroke_end_frames (the stroke's end computed by a worker, applied that many frames later);
+// --pace-hz: frames start at this rate (an interactive loop; the worker gets the idle time), 0: back to back.
+int g_end_frames = 0;
+double g_pace_hz = 0;
 
 struct Row {
   std::string kind, backend, solver;
@@ -54,6 +59,10 @@ struct Row {
   double cut_length_m = 0;
   double ms_deform = 0, ms_cutting = 0, ms_mls = 0, ms_exchange = 0, ms_pbd = 0, ms_convert = 0;
   double ms_repack = 0, ms_apply_frame = 0, ms_after = 0;
+  // The stroke's end: the frame the blade leaves, the frames until the end is applied, the applying frame's wait
+  // for the worker, and the worker's parts (the same frame as apply when --end-frames is 0).
+  double ms_end_frame = 0, ms_ending = 0, ms_apply_wait = 0;
+  double ms_end_worker = 0, ms_end_split = 0, ms_end_repack = 0, ms_end_build = 0, ms_end_bind = 0;
 };
 
 // The liver_cut organ (ellipsoid 18 x 12 x 7 cm, bed glued) at the lattice spacing that gives about `target`
@@ -75,6 +84,7 @@ Scene liverScene(int target, double length_m, double leave_s, int samples, const
   s.pbd.solver = pbd_solver;
   s.pbd.chebyshev_rho = pbd_solver == "jacobi" ? g_chebyshev_rho : 0.0;  // the acceleration is Jacobi's
   s.cutting.samples_per_diameter = samples;
+  s.cutting.stroke_end_frames = g_end_frames;
   s.fixed = {{Vec3d(-0.1, -0.07, -0.04), Vec3d(0.1, 0.07, -0.02)}};
   ToolSpec t;
   t.name = "scalpel";
@@ -124,19 +134,33 @@ Row runCase(const std::string& kind, BackendKind backend, int target, double len
   std::map<std::string, std::vector<double>> stage_ms;
   auto sim = makeDissectionSimulation(scene, backend, Precision::Float32);
   r.spheres = int(sim->particleCount());
-  std::vector<double> deform, cutting, mls, exchange, pbd, convert, after;
+  std::vector<double> deform, cutting, mls, exchange, pbd, convert, after, ending;
   const double dt = 1.0 / 60.0;
-  bool applied = false;
+  bool applied = false, ended = false;
   for (int f = 0; f < 200; ++f) {
     const auto c0 = Clock::now();
     const FrameReport rep = sim->advance(dt);
     const double ms = msSince(c0);
+    if (g_pace_hz > 0) std::this_thread::sleep_until(c0 + std::chrono::duration<double>(1.0 / g_pace_hz));
     if (!rep.finite) throw InputError("bench_cutting", "frame", "non-finite state at frame " + std::to_string(f));
     const double points = rep.counters.at("nodal_points");
-    if (rep.counters.at("cuts_applied") > 0 && !applied) {
+    const bool pending = rep.counters.at("stroke_end_pending") > 0;
+    if (pending && !ended) {
+      ended = true;
+      r.ms_end_frame = ms;
+    } else if (pending) {
+      ending.push_back(ms);
+    } else if (rep.counters.at("cuts_applied") > 0 && !applied) {
       applied = true;
+      if (!ended) r.ms_end_frame = ms;  // applied in the frame the blade left
       r.ms_apply_frame = ms;
+      r.ms_apply_wait = stage(rep, "cut_apply_wait");
       r.ms_repack = stage(rep, "cut_repack");
+      r.ms_end_worker = rep.counters.at("stroke_end_worker_ms");
+      r.ms_end_split = rep.counters.at("stroke_end_split_ms");
+      r.ms_end_repack = rep.counters.at("stroke_end_repack_ms");
+      r.ms_end_build = rep.counters.at("stroke_end_build_ms");
+      r.ms_end_bind = rep.counters.at("stroke_end_bind_ms");
       r.spheres_after = int(rep.counters.at("spheres"));
     } else if (applied) {
       after.push_back(ms);
@@ -166,15 +190,17 @@ Row runCase(const std::string& kind, BackendKind backend, int target, double len
   r.ms_pbd = median(pbd);
   r.ms_convert = median(convert);
   r.ms_after = median(after);
+  r.ms_ending = median(ending);
   if (stages) printStages(r.backend + " " + r.solver, stage_ms);
   return r;
 }
 
 void printRow(const Row& r) {
-  std::printf("%-6s %-5s %-12s %7d %7d %6.3f %7d %6d %5d | %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f | %8.2f %8.2f %8.2f %7d\n",
+  std::printf("%-6s %-5s %-12s %7d %7d %6.3f %7d %6d %5d | %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f | %8.2f %8.2f %8.2f %7d"
+              " | %8.2f %8.2f %8.2f %8.2f\n",
               r.kind.c_str(), r.backend.c_str(), r.solver.c_str(), r.target, r.spheres, r.cut_length_m, r.nodal_points, r.interface,
               r.mls_substeps, r.ms_deform, r.ms_cutting, r.ms_mls, r.ms_exchange, r.ms_pbd, r.ms_convert, r.ms_repack,
-              r.ms_apply_frame, r.ms_after, r.spheres_after);
+              r.ms_apply_frame, r.ms_after, r.spheres_after, r.ms_end_frame, r.ms_ending, r.ms_apply_wait, r.ms_end_worker);
   std::fflush(stdout);
 }
 
@@ -199,6 +225,10 @@ int main(int argc, char** argv) {
   app.add_option("--pbd-iterations", g_pbd_iterations, "PBD iterations per substep (the scene's pbd.iterations)");
   app.add_option("--chebyshev-rho", g_chebyshev_rho,
                  "Jacobi PBD: Chebyshev acceleration with this spectral-radius estimate, [0, 0.9] (pbd.chebyshev_rho)");
+  app.add_option("--end-frames", g_end_frames, "cutting.stroke_end_frames: apply a stroke's end this many frames later")
+      ->check(CLI::Range(0, 120));
+  app.add_option("--pace-hz", g_pace_hz, "start frames at this rate (an interactive loop); 0: back to back")
+      ->check(CLI::Range(0.0, 10000.0));
   app.add_flag("--stages", stages, "print the median of every stage of the cutting frames");
   app.add_flag("--quick", quick, "a short run: size 500, lengths 0.06,0.24");
   app.add_flag("--portable-pair-sums", portable, "CPU MLS: the portable pair loops even where the CPU has AVX2 (same bits)");
@@ -235,9 +265,10 @@ int main(int argc, char** argv) {
     have_gpu = inc::cuda::queryDevices().device_count > 0;
 #endif
     std::vector<Row> rows;
-    std::printf("%-6s %-5s %-12s %7s %7s %6s %7s %6s %5s | %8s %8s %8s %8s %8s %8s | %8s %8s %8s %7s\n", "case", "back",
+    std::printf("%-6s %-5s %-12s %7s %7s %6s %7s %6s %5s | %8s %8s %8s %8s %8s %8s | %8s %8s %8s %7s | %8s %8s %8s %8s\n",
+                "case", "back",
                 "pbd", "target", "spheres", "len_m", "nodes", "iface", "mlsub", "deform", "cutting", "mls", "exchng", "pbd",
-                "convert", "repack", "apply", "after", "spheres");
+                "convert", "repack", "apply", "after", "spheres", "end", "ending", "wait", "worker");
     for (BackendKind b : backends) {
       if (b == BackendKind::Cuda && !have_gpu) continue;
       for (double n : sizes) {
@@ -254,13 +285,17 @@ int main(int argc, char** argv) {
       std::ofstream f(csv);
       if (!f) throw InputError(csv, "--csv", "cannot write");
       f << "case,backend,target,spheres,cut_length_m,nodal_points,interface_spheres,mls_substeps,ms_deform,ms_cutting,"
-           "ms_mls,ms_exchange,ms_pbd,ms_convert,ms_repack,ms_apply_frame,ms_after,spheres_after,pbd_solver,pbd_iterations\n";
+           "ms_mls,ms_exchange,ms_pbd,ms_convert,ms_repack,ms_apply_frame,ms_after,spheres_after,pbd_solver,pbd_iterations,"
+           "stroke_end_frames,pace_hz,ms_end_frame,ms_ending,ms_apply_wait,ms_end_worker,ms_end_split,ms_end_repack,"
+           "ms_end_build,ms_end_bind\n";
       for (const Row& r : rows)
         f << r.kind << ',' << r.backend << ',' << r.target << ',' << r.spheres << ',' << r.cut_length_m << ','
           << r.nodal_points << ',' << r.interface << ',' << r.mls_substeps << ',' << r.ms_deform << ',' << r.ms_cutting
           << ',' << r.ms_mls << ',' << r.ms_exchange << ',' << r.ms_pbd << ',' << r.ms_convert << ',' << r.ms_repack
           << ',' << r.ms_apply_frame << ',' << r.ms_after << ',' << r.spheres_after << ',' << r.solver << ','
-          << r.pbd_iterations << '\n';
+          << r.pbd_iterations << ',' << g_end_frames << ',' << g_pace_hz << ',' << r.ms_end_frame << ','
+          << r.ms_ending << ',' << r.ms_apply_wait << ',' << r.ms_end_worker << ',' << r.ms_end_split << ','
+          << r.ms_end_repack << ',' << r.ms_end_build << ',' << r.ms_end_bind << '\n';
     }
     if (rows.empty()) {
       std::printf("bench_cutting: no rows (sizes above the limits or no device)\n");

@@ -2,6 +2,11 @@
 // caller rebuilds PBD). Long-lived so that its OpenMP thread pool is made once, not per task.
 #pragma once
 
+#if defined(__linux__)
+#include <pthread.h>
+#include <sched.h>
+#endif
+
 #include <chrono>
 #include <condition_variable>
 #include <exception>
@@ -16,7 +21,9 @@ namespace inc {
 
 class BackgroundTask {
  public:
-  BackgroundTask() = default;
+  // idle_priority: the thread runs only when a core would otherwise idle (Linux SCHED_IDLE; best effort, ignored
+  // where refused): work that may lag behind the frames (a stroke's end) must not slow them down on few cores.
+  explicit BackgroundTask(bool idle_priority = false) : idle_priority_(idle_priority) {}
   BackgroundTask(const BackgroundTask&) = delete;
   BackgroundTask& operator=(const BackgroundTask&) = delete;
   ~BackgroundTask() {
@@ -66,6 +73,13 @@ class BackgroundTask {
 
  private:
   void loop() {
+#if defined(__linux__) && defined(SCHED_IDLE)
+    if (idle_priority_) {
+      sched_param p{};
+      p.sched_priority = 0;
+      pthread_setschedparam(pthread_self(), SCHED_IDLE, &p);  // threads it starts (OpenMP) inherit it
+    }
+#endif
     std::unique_lock<std::mutex> lock(mutex_);
     for (;;) {
       wake_.wait(lock, [this] { return stop_ || task_; });
@@ -91,6 +105,7 @@ class BackgroundTask {
   std::function<void()> task_;
   std::exception_ptr error_;
   bool done_ = true, stop_ = false;
+  bool idle_priority_ = false;
   std::thread thread_;
 };
 

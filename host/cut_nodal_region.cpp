@@ -383,7 +383,25 @@ void NodalRegion::scaleSafety(double factor) {
   if (solver_) solver_->setSafety(solver_->safety() * factor);
 }
 
-NodalRegionFinal NodalRegion::finish() {
+RepackPoints NodalRegion::repackPoints() const {
+  // The cut spheres' points to re-pack, the interface spheres' points as context (they stay: the faces the cut
+  // points share with them are not the tissue's surface), and the supports among them all.
+  RepackPoints p;
+  p.rest = rest_;
+  p.mass.resize(rest_.size());
+  p.context.resize(rest_.size());
+  for (std::size_t i = 0; i < rest_.size(); ++i) {
+    const bool context = role_[std::size_t(source_[i])] != SphereRole::Cut;
+    p.mass[i] = context ? 0.0 : mass_[i];
+    p.context[i] = context ? 1 : 0;
+  }
+  p.visible = supports();
+  p.spacing = spacing_;
+  p.support = settings_.mls.support_factor * spacing_;
+  return p;
+}
+
+NodalRegionFinal NodalRegion::finish(bool with_points) {
   NodalRegionFinal f;
   syncState();
   // Interface spheres: eq. 13 position and the mean velocity of their points.
@@ -398,19 +416,9 @@ NodalRegionFinal NodalRegion::finish() {
     f.interface_position.push_back(base_.rest_centers[std::size_t(b)] + group_u_[g]);
     f.interface_velocity.push_back(v);
   }
-  // The cut spheres' points to re-pack, the interface spheres' points as context (they stay: the faces the cut
-  // points share with them are not the tissue's surface), and the supports among them all.
-  for (std::size_t i = 0; i < rest_.size(); ++i) {
-    const bool context = role_[std::size_t(source_[i])] != SphereRole::Cut;
-    f.points.rest.push_back(rest_[i]);
-    f.points.mass.push_back(context ? 0.0 : mass_[i]);
-    f.points.context.push_back(context ? 1 : 0);
-    f.displacement.push_back(u_[i]);
-    f.velocity.push_back(v_[i]);
-  }
-  f.points.visible = supports();
-  f.points.spacing = spacing_;
-  f.points.support = settings_.mls.support_factor * spacing_;
+  if (with_points) f.points = repackPoints();
+  f.displacement = u_;
+  f.velocity = v_;
   // The nodal points go back to zero between cuts.
   solver_.reset();
   rest_.clear();

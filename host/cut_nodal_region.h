@@ -118,8 +118,12 @@ class NodalRegion {
   void restoreCheckpoint();
   void scaleSafety(double factor);
 
-  // Ends the stroke: the state the PBD side needs back. The region is empty afterwards (no nodal points).
-  NodalRegionFinal finish();
+  // The points a re-pack takes (rest configuration: the cut spheres' points, the interface spheres' as context, and
+  // the supports among them all). Depends on nothing that moves: fixed once the stroke stops converting.
+  RepackPoints repackPoints() const;
+  // Ends the stroke: the state the PBD side needs back (with the points of repackPoints() when `with_points`). The
+  // region is empty afterwards (no nodal points).
+  NodalRegionFinal finish(bool with_points = true);
 
  private:
   struct Link {

@@ -12,6 +12,7 @@
 #include "host/cut_nodal_points.h"
 #include "host/cut_nodal_region.h"
 #include "host/cut_repack.h"
+#include "host/cut_stroke_end.h"
 #include "host/cut_surface_state.h"
 #include "host/cut_swept_surface.h"
 #include "host/dissection_render_layers.h"
@@ -161,6 +162,11 @@ class DissectionSimulation final : public SimulationModel {
     timers_.apply_ms = mouse_cut_ms_;
     timers_.convert_ms = mouse_convert_ms_;
     mouse_cut_ms_ = mouse_convert_ms_ = 0.0;
+    if (ending_ && --ending_->frames_left <= 0) {
+      const auto c0 = std::chrono::steady_clock::now();
+      applyStrokeEnd();
+      timers_.apply_ms += msSince(c0);
+    }
     scriptedStrokes(t0, t1);
     updateGraspers(t0);
     PbdFrameInput<T> in;
@@ -207,6 +213,7 @@ class DissectionSimulation final : public SimulationModel {
     rep.stages.push_back({"coupling_exchange", timers_.exchange_ms});
     rep.stages.push_back({"cut_repack", timers_.repack_ms});
     rep.stages.push_back({"cut_apply", timers_.apply_ms});
+    rep.stages.push_back({"cut_apply_wait", timers_.apply_wait_ms});  // of cut_apply: waiting for the stroke end's worker
     rep.finite = st.finite && mls_finite;
     if (!st.finite) {
       rep.failure_stage = "pbd";
@@ -224,6 +231,7 @@ class DissectionSimulation final : public SimulationModel {
     saved_time_ = time_;
     saved_version_ = version_;
     saved_graspers_ = graspers_;
+    saved_frames_left_ = ending_ ? ending_->frames_left : -1;
     if (active_ && active_->region) active_->region->saveCheckpoint();
   }
   void restoreCheckpoint() override {
@@ -235,6 +243,7 @@ class DissectionSimulation final : public SimulationModel {
       graspers_ = saved_graspers_;
       backend_->setState(state_);
       if (active_ && active_->region) active_->region->restoreCheckpoint();
+      if (ending_ && saved_frames_left_ >= 0) ending_->frames_left = saved_frames_left_;  // the retried frame counts once
     }
   }
   void scaleTimeStep(double factor) override {
@@ -335,8 +344,8 @@ class DissectionSimulation final : public SimulationModel {
     const BladePose rest{restPointFromCurrent(world.base, x, spheres_.rest_centers),
                          restPointFromCurrent(world.tip, x, spheres_.rest_centers)};
     const auto c0 = std::chrono::steady_clock::now();
-    if (e.phase == ToolPhase::Press || !active_ || active_->scripted >= 0) {
-      if (active_) finishStroke();
+    if (e.phase == ToolPhase::Press || !active_ || ending_ || active_->scripted >= 0) {
+      completeStroke();
       beginStroke(rest, -1);
     } else {
       extendStroke(rest);
@@ -345,7 +354,7 @@ class DissectionSimulation final : public SimulationModel {
     if (e.phase == ToolPhase::Release) {
       const auto c1 = std::chrono::steady_clock::now();
       const bool swept = !active_->swept.empty();
-      finishStroke();
+      endStroke();
       if (swept)
         res.cut_applied = true;
       else
@@ -366,6 +375,7 @@ class DissectionSimulation final : public SimulationModel {
     double convert_pbd_build_ms = 0;  // of convert_pbd_ms: the host build (buildMetaballPbdModel)
     double convert_wait_ms = 0;       // of convert_ms: waiting for the MLS half after the PBD half
     double mls_ms = 0;  // wall time of the MLS advances (launches, the GPU's work, the reductions' downloads)
+    double apply_wait_ms = 0;  // of apply_ms: waiting for the stroke end's worker
   };
 
 
@@ -382,6 +392,7 @@ class DissectionSimulation final : public SimulationModel {
     range(c.pbd_substeps_per_exchange, 1, 64, "pbd_substeps_per_exchange");
     range(c.pbd_iterations, 0, 1000, "pbd_iterations");
     range(c.mls_substeps_per_exchange, 0, 100000, "mls_substeps_per_exchange");
+    range(c.stroke_end_frames, 0, 120, "stroke_end_frames");
     if (!(c.repack_boundary_offset > 0 && c.repack_boundary_offset < 1))
       throw InputError(s.file, "cutting.repack_boundary_offset", "must lie in (0, 1)");
     if (!(c.repack_spacing_factor > 0 && c.repack_spacing_factor <= 4))
@@ -431,7 +442,7 @@ class DissectionSimulation final : public SimulationModel {
       if (s.done || t1 < s.start) continue;
       const auto c0 = std::chrono::steady_clock::now();
       if (!s.begun) {
-        if (active_) finishStroke();  // a mouse stroke still open ends here
+        completeStroke();  // a mouse stroke still open, or a stroke end still in the making, is applied here
         s.begun = true;
         beginStroke(blade(s.tool, std::max(t0, s.start)), int(k));
       }
@@ -441,7 +452,7 @@ class DissectionSimulation final : public SimulationModel {
       if (t1 >= s.end) {
         s.done = true;
         const auto c1 = std::chrono::steady_clock::now();
-        finishStroke();
+        endStroke();
         timers_.apply_ms += msSince(c1);
       }
     }
@@ -570,49 +581,90 @@ class DissectionSimulation final : public SimulationModel {
     setSpheres(std::move(m), x, v, old_to_new, std::move(known));
   }
 
-  // The blade leaves: Algorithm 1 on the cut spheres' points, interface spheres back to PBD (eq. 13 state), the
-  // surface split, the PBD model rebuilt, the skin re-bound. The nodal points go back to zero.
-  void finishStroke() {
-    std::unique_ptr<ActiveStroke> a = std::move(active_);
-    ++cuts_done_;
-    if (a->swept.empty()) return;
-    const auto c0 = std::chrono::steady_clock::now();
-    std::vector<const SweptSurface*> cuts{&a->swept};
-    for (const SweptSurface& c : earlier_cuts_) cuts.push_back(&c);
-    // The surface split (the CGAL walls, host/cut_surface_split.h) touches only the surface state: it runs on the
-    // worker while this thread re-packs and rebuilds the PBD model; the skin binding below needs both.
-    const SweptSurface& swept = a->swept;
-    convert_worker_.runBeside([this, &swept] { surfaceAfterCut(swept); }, [&] { repackStroke(*a, cuts, c0); });
-    earlier_cuts_.push_back(a->swept);  // after the re-pack: `cuts` points into earlier_cuts_
-    bindSurface();
-    sphere_components_ = sphereGraphComponents(spheres_);
+  // The blade leaves. Every heavy part of a stroke's end works in the rest configuration (Algorithm 1 on the
+  // points' rest positions, the new PBD model's build, the surface split, the skin binding: host/cut_stroke_end.h),
+  // so it starts now on a worker and is applied cutting.stroke_end_frames frames later, the nodal points and
+  // spheres simulated meanwhile as during the stroke; the state transfer (applyStrokeEnd) reads the state then.
+  // A fixed frame count, not "when the worker is done", keeps runs deterministic. 0 frames: applied now.
+  void endStroke() {
+    ActiveStroke& a = *active_;
+    if (a.swept.empty()) {
+      ++cuts_done_;
+      active_.reset();
+      return;
+    }
+    auto e = std::make_unique<PendingStrokeEnd>();
+    StrokeEndInput& in = e->input;
+    in.repack = a.region && a.region->active();
+    // The kept model: the base spheres not cut, in base order (their stroke PBD indices keep their order, so a
+    // grasp on one stays valid), with the links among them.
+    std::vector<std::int32_t> base_to_new(a.base.size(), -1);
+    for (std::size_t b = 0; b < a.base.size(); ++b) {
+      if (in.repack && a.region->role(std::int32_t(b)) == SphereRole::Cut) continue;
+      base_to_new[b] = std::int32_t(in.kept.size());
+      in.kept.rest_centers.push_back(a.base.rest_centers[b]);
+      in.kept.rest_radii.push_back(a.base.rest_radii[b]);
+      in.kept.masses.push_back(a.base.masses[b]);
+    }
+    for (std::size_t l = 0; l < a.base.links.size(); ++l) {
+      const std::int32_t i = base_to_new[std::size_t(a.base.links[l][0])], j = base_to_new[std::size_t(a.base.links[l][1])];
+      if (i < 0 || j < 0) continue;
+      in.kept.links.push_back({std::min(i, j), std::max(i, j)});
+      in.kept.link_rest_lengths.push_back(a.base.link_rest_lengths[l]);
+    }
+    if (in.repack) in.points = a.region->repackPoints();
+    in.settings.boundary_offset = scene_.cutting.repack_boundary_offset;
+    in.settings.spacing_factor = scene_.cutting.repack_spacing_factor;
+    in.settings.sphere_budget = scene_.cutting.repack_sphere_budget;
+    in.settings.reference_mass = reference_mass_;
+    in.settings.max_radius = 1.5 * reference_radius_;
+    in.swept = a.swept;
+    in.earlier = earlier_cuts_;
+    in.surface = &surface_;  // read by the worker; nothing writes it before applyStrokeEnd
+    in.skin_k = 4;
+    in.file = scene_.file;
+    e->frames_left = scene_.cutting.stroke_end_frames;
+    PendingStrokeEnd* p = e.get();
+    ending_ = std::move(e);
+    end_worker_.start([this, p, opt = pbdOptions({}, false)] {
+      p->result = computeStrokeEnd(p->input, end_split_worker_,
+                                   [p, &opt](const MetaballModel& m) { p->pbd = buildMetaballPbdModel<T>(m, opt); });
+    });
+    if (ending_->frames_left <= 0) applyStrokeEnd();
   }
 
-  // Algorithm 1 on the stroke's points and the PBD model rebuilt with the new spheres (nothing when the blade
-  // converted no sphere).
-  void repackStroke(ActiveStroke& a, const std::vector<const SweptSurface*>& cuts,
-                    std::chrono::steady_clock::time_point c0) {
+  // Ends whatever stroke there is and applies its end now (a new stroke begins).
+  void completeStroke() {
+    if (!active_) return;
+    if (!ending_) endStroke();
+    if (ending_) applyStrokeEnd();
+  }
+
+  // The stroke end computed by the worker, applied with the state of now: interface spheres return to PBD at their
+  // eq. 13 position, every new sphere takes the mass-weighted mean displacement and velocity of the points it took,
+  // the other spheres keep theirs; the split surface and the new skin replace the old. The nodal points go back to
+  // zero.
+  void applyStrokeEnd() {
+    const auto c0 = std::chrono::steady_clock::now();
+    end_worker_.wait();
+    timers_.apply_wait_ms += msSince(c0);
+    std::unique_ptr<PendingStrokeEnd> e = std::move(ending_);
+    std::unique_ptr<ActiveStroke> a = std::move(active_);
+    StrokeEndResult& r = e->result;
+    ++cuts_done_;
     last_points_ = 0;
     last_added_ = 0;
-    if (a.region && a.region->active()) {
-      last_points_ = a.region->pointCount();
-      NodalRegionFinal fin = a.region->finish();
-      // New model: base spheres not cut (PBD and interface), then the re-packed ones.
-      MetaballModel m;
-      std::vector<std::int32_t> base_to_new(a.base.size(), -1);
-      std::vector<Vec3d> x, v;
-      std::vector<std::int32_t> old_to_new(model_.size(), -1);
+    if (r.repacked) {
+      last_points_ = a->region->pointCount();
+      const NodalRegionFinal fin = a->region->finish(false);
       std::map<std::int32_t, std::size_t> iface;
       for (std::size_t k = 0; k < fin.interface_ids.size(); ++k) iface[fin.interface_ids[k]] = k;
-      for (std::size_t b = 0; b < a.base.size(); ++b) {
-        const SphereRole role = a.region->role(std::int32_t(b));
-        if (role == SphereRole::Cut) continue;
-        base_to_new[b] = std::int32_t(m.size());
-        m.rest_centers.push_back(a.base.rest_centers[b]);
-        m.rest_radii.push_back(a.base.rest_radii[b]);
-        m.masses.push_back(a.base.masses[b]);
-        const std::int32_t pbd = a.base_to_pbd[b];
-        old_to_new[std::size_t(pbd)] = std::int32_t(m.size() - 1);
+      std::vector<Vec3d> x, v;
+      std::vector<std::int32_t> old_to_new(model_.size(), -1);
+      for (std::size_t b = 0; b < a->base.size(); ++b) {
+        if (a->region->role(std::int32_t(b)) == SphereRole::Cut) continue;
+        const std::int32_t pbd = a->base_to_pbd[b];
+        old_to_new[std::size_t(pbd)] = std::int32_t(x.size());
         const auto it = iface.find(std::int32_t(b));
         if (it != iface.end()) {
           x.push_back(fin.interface_position[it->second]);  // eq. 13
@@ -622,53 +674,38 @@ class DissectionSimulation final : public SimulationModel {
           v.push_back(Vec3d(state_.velocities[std::size_t(pbd)]));
         }
       }
-      for (std::size_t l = 0; l < a.base.links.size(); ++l) {
-        const std::int32_t i = base_to_new[std::size_t(a.base.links[l][0])], j = base_to_new[std::size_t(a.base.links[l][1])];
-        if (i < 0 || j < 0) continue;
-        m.links.push_back({std::min(i, j), std::max(i, j)});
-        m.link_rest_lengths.push_back(a.base.link_rest_lengths[l]);
+      const RepackResult& rp = r.repack;
+      std::vector<Vec3d> nu(rp.centres.size()), nv(rp.centres.size());
+      std::vector<double> nm(rp.centres.size(), 0.0);
+      for (std::size_t i = 0; i < e->input.points.size(); ++i) {
+        if (e->input.points.context[i]) continue;
+        const std::size_t s = std::size_t(rp.owner[i]);
+        nu[s] += fin.displacement[i] * e->input.points.mass[i];
+        nv[s] += fin.velocity[i] * e->input.points.mass[i];
+        nm[s] += e->input.points.mass[i];
       }
-      RepackSettings rs;
-      rs.boundary_offset = scene_.cutting.repack_boundary_offset;
-      rs.spacing_factor = scene_.cutting.repack_spacing_factor;
-      rs.sphere_budget = scene_.cutting.repack_sphere_budget;
-      rs.reference_mass = reference_mass_;
-      rs.max_radius = 1.5 * reference_radius_;
-      rs.earlier_cuts.assign(cuts.begin() + 1, cuts.end());
-      const RepackResult r = packNodalPoints(fin.points, a.swept, rs);
-      last_repack_ = r;
-      // New spheres take the mass-weighted mean displacement and velocity of the points they took.
-      std::vector<Vec3d> nu(r.centres.size()), nv(r.centres.size());
-      std::vector<double> nm(r.centres.size(), 0.0);
-      for (std::size_t i = 0; i < fin.points.size(); ++i) {
-        if (fin.points.context[i]) continue;
-        const std::size_t s = std::size_t(r.owner[i]);
-        nu[s] += fin.displacement[i] * fin.points.mass[i];
-        nv[s] += fin.velocity[i] * fin.points.mass[i];
-        nm[s] += fin.points.mass[i];
-      }
-      for (std::size_t s = 0; s < r.centres.size(); ++s) {
-        x.push_back(r.centres[s] + nu[s] * (1.0 / nm[s]));
+      for (std::size_t s = 0; s < rp.centres.size(); ++s) {
+        x.push_back(rp.centres[s] + nu[s] * (1.0 / nm[s]));
         v.push_back(nv[s] * (1.0 / nm[s]));
       }
-      appendRepackedSpheres(m, r, cuts);
-      last_added_ = r.centres.size();
-      timers_.repack_ms += msSince(c0);
-      setSpheres(std::move(m), x, v, old_to_new);
+      last_repack_ = rp;
+      last_added_ = rp.centres.size();
+      timers_.repack_ms += r.repack_ms;
+      last_pbd_build_ms_ = r.build_ms;
+      installSpheres(std::move(r.spheres), std::move(e->pbd), x, v, old_to_new);
     }
-  }
-
-  // The surface: split along the swept surface whatever its shape (a partial cut leaves one closed mesh with a
-  // slit), at every cut; CGAL walls (host/cut_surface_split.h). A blade that never crossed the surface (or a split
-  // that failed: CutSplitFailed) leaves it as it was.
-  void surfaceAfterCut(const SweptSurface& cut) {
-    const SurfaceSplit r = applySurfaceCut(surface_, cut);
     if (r.split) {
-      surface_components_ = r.components;  // from the split's own output check: no second analysis
+      surface_ = std::move(r.surface);
+      surface_components_ = r.surface_components;  // from the split's own output check: no second analysis
       rest_surface_ = surface_.mesh;
       wall_flags_ = surface_.wall;
       surface_split_ = true;
     }
+    earlier_cuts_.push_back(std::move(a->swept));
+    skin_ = Skin{r.skin.k, std::move(r.skin.rest_vertices), std::move(r.skin.sphere), std::move(r.skin.weight)};
+    skin_rest_centres_ = spheres_.rest_centers;
+    sphere_components_ = r.sphere_components;
+    last_end_ = {r.total_ms, r.repack_ms, r.build_ms, r.split_ms, r.bind_ms};
   }
 
   // --- PBD model ------------------------------------------------------------------------------------------
@@ -677,21 +714,34 @@ class DissectionSimulation final : public SimulationModel {
   // indices (grasps follow their spheres).
   void setSpheres(MetaballModel m, const std::vector<Vec3d>& x, const std::vector<Vec3d>& v,
                   const std::vector<std::int32_t>& old_to_new, std::vector<double> known_cell_volumes = {}) {
+    // The scene's supports must hold the organ as built; after a cut the clamped part may be gone.
+    const MetaballPbdOptions opt = pbdOptions(std::move(known_cell_volumes), model_.size() == 0);
+    const auto t0 = std::chrono::steady_clock::now();
+    PbdModel<T> built = buildMetaballPbdModel<T>(m, opt);
+    last_pbd_build_ms_ = msSince(t0);
+    installSpheres(std::move(m), std::move(built), x, v, old_to_new);
+  }
+
+  // The PBD model's build options for this scene (pure: a worker may build with them).
+  MetaballPbdOptions pbdOptions(std::vector<double> known_cell_volumes, bool require_fixed_held) const {
     MetaballPbdOptions opt;
     opt.youngs_modulus = scene_.material.youngs_modulus;
     opt.stretch_compliance = scene_.pbd.stretch_compliance;
     opt.laplacian_compliance = scene_.pbd.laplacian_compliance;
     opt.fixed = scene_.fixed;
     opt.file = scene_.file;
-    // The scene's supports must hold the organ as built; after a cut the clamped part may be gone.
-    opt.require_fixed_held = model_.size() == 0;
+    opt.require_fixed_held = require_fixed_held;
     opt.volume_samples = scene_.pbd.volume_preservation ? 64 : 0;
     opt.coloring = params_.solver == PbdSolverKind::GaussSeidel;  // Jacobi never reads it (a rebuild per conversion)
     opt.known_cell_volumes = std::move(known_cell_volumes);
+    return opt;
+  }
+
+  // Makes `built` (the PBD model of `m`) the backend's model with the given positions and velocities.
+  void installSpheres(MetaballModel m, PbdModel<T> built, const std::vector<Vec3d>& x, const std::vector<Vec3d>& v,
+                      const std::vector<std::int32_t>& old_to_new) {
     spheres_ = std::move(m);
-    const auto t0 = std::chrono::steady_clock::now();
-    model_ = buildMetaballPbdModel<T>(spheres_, opt);
-    last_pbd_build_ms_ = msSince(t0);
+    model_ = std::move(built);
     backend_->setModel(model_);
     backend_->getState(state_);
     for (std::size_t i = 0; i < spheres_.size(); ++i) {
@@ -900,6 +950,12 @@ class DissectionSimulation final : public SimulationModel {
     rep.counters["convert_ms"] = timers_.convert_ms;
     rep.counters["repack_ms"] = timers_.repack_ms;
     rep.counters["cut_apply_ms"] = timers_.apply_ms;
+    rep.counters["stroke_end_pending"] = ending_ ? 1.0 : 0.0;
+    rep.counters["stroke_end_worker_ms"] = last_end_.worker_ms;
+    rep.counters["stroke_end_repack_ms"] = last_end_.repack_ms;
+    rep.counters["stroke_end_build_ms"] = last_end_.build_ms;
+    rep.counters["stroke_end_split_ms"] = last_end_.split_ms;
+    rep.counters["stroke_end_bind_ms"] = last_end_.bind_ms;
   }
 
   Scene scene_;
@@ -910,7 +966,7 @@ class DissectionSimulation final : public SimulationModel {
   double reference_mass_ = 0.0, reference_radius_ = 0.0;  // kg, m: the organ's mean sphere before any cut
   std::shared_ptr<const pack::SurfaceDistance> tissue_;   // the organ's rest surface (inside test)
   double last_pbd_build_ms_ = 0;  // setSpheres' host build of the PBD model (timed for the stages)
-  BackgroundTask convert_worker_;  // a conversion's MLS half beside the PBD rebuild; a stroke's surface split beside its re-pack
+  BackgroundTask convert_worker_;  // a conversion's MLS half beside the PBD rebuild
   MetaballModel spheres_;  // the spheres of the PBD model (during a stroke: the base minus the cut ones)
   TriangleMesh rest_surface_;  // the surface after every cut so far (rest configuration) = surface_.mesh
   CutSurfaceState surface_;    // the split surface with its wall flags and binding probes
@@ -926,6 +982,19 @@ class DissectionSimulation final : public SimulationModel {
   PbdStepParams<T> params_;
   PbdState<T> state_, saved_state_;
   std::unique_ptr<ActiveStroke> active_;
+  // A stroke's end in the making (active_ is that stroke, its points still simulated): the worker's inputs and
+  // result, and the frames left until it is applied.
+  struct PendingStrokeEnd {
+    StrokeEndInput input;
+    StrokeEndResult result;
+    PbdModel<T> pbd;  // the new PBD model, built on the worker
+    int frames_left = 0;
+  };
+  std::unique_ptr<PendingStrokeEnd> ending_;
+  int saved_frames_left_ = -1;
+  struct EndTimes {
+    double worker_ms = 0, repack_ms = 0, build_ms = 0, split_ms = 0, bind_ms = 0;
+  } last_end_;  // the worker's times of the last applied stroke end
   std::vector<SweptSurface> earlier_cuts_;  // every stroke finished so far (rest configuration)
   std::size_t last_points_ = 0, last_added_ = 0;
   RepackResult last_repack_;
@@ -941,6 +1010,9 @@ class DissectionSimulation final : public SimulationModel {
   int base_substeps_ = 4;
   double substep_scale_ = 1.0, mls_safety_scale_ = 1.0;
   double time_ = 0, saved_time_ = 0;
+  // A stroke's end and its surface split, at idle priority (on two cores they would otherwise slow the frames
+  // simulated meanwhile 2.5-fold); declared last, joined first.
+  BackgroundTask end_split_worker_{true}, end_worker_{true};
 };
 
 }  // namespace

@@ -117,6 +117,8 @@ struct CuttingSpec {
   double repack_boundary_offset = 0.3;   // (0, 1): one-sided neighbourhood (centroid offset / support) = boundary
   double repack_spacing_factor = 0.5;    // (0, 4]: eq. 14's factor, d = factor * max distance of medial points to the cut
   double repack_sphere_budget = 1.0;     // (0, 8]: new spheres per converted sphere's mass, per group (merging)
+  int stroke_end_frames = 0;             // [0, 120]: frames from the blade leaving to the cut applied (a worker
+                                         // re-packs, splits and binds meanwhile); 0: in the frame it leaves
 };
 
 // One haptic device of a scene and its loop (docs/scene-format.md `haptics`, docs/haptics.md): the single-device

@@ -399,7 +399,8 @@ CuttingSpec readCutting(const ObjectReader& top) {
   if (!top.has("cutting")) return c;
   const ObjectReader r = top.object("cutting");
   r.allowOnly({"samples_per_diameter", "exchanges_per_frame", "pbd_substeps_per_exchange", "pbd_iterations",
-               "mls_substeps_per_exchange", "repack_boundary_offset", "repack_spacing_factor", "repack_sphere_budget"});
+               "mls_substeps_per_exchange", "repack_boundary_offset", "repack_spacing_factor", "repack_sphere_budget",
+               "stroke_end_frames"});
   c.samples_per_diameter = intInRange(r, "samples_per_diameter", c.samples_per_diameter, 2, 12);
   c.exchanges_per_frame = intInRange(r, "exchanges_per_frame", c.exchanges_per_frame, 1, 64);
   c.pbd_substeps_per_exchange = intInRange(r, "pbd_substeps_per_exchange", c.pbd_substeps_per_exchange, 1, 64);
@@ -414,6 +415,7 @@ CuttingSpec readCutting(const ObjectReader& top) {
   c.repack_sphere_budget = r.number("repack_sphere_budget", c.repack_sphere_budget);
   if (!(c.repack_sphere_budget > 0 && c.repack_sphere_budget <= 8))
     r.fail("repack_sphere_budget", "must lie in (0, 8] (new spheres per converted sphere's mass)" + got(c.repack_sphere_budget));
+  c.stroke_end_frames = intInRange(r, "stroke_end_frames", c.stroke_end_frames, 0, 120);
   return c;
 }
 
@@ -598,7 +600,8 @@ std::string sceneToJson(const Scene& s) {
                    {"mls_substeps_per_exchange", s.cutting.mls_substeps_per_exchange},
                    {"repack_boundary_offset", s.cutting.repack_boundary_offset},
                    {"repack_spacing_factor", s.cutting.repack_spacing_factor},
-                   {"repack_sphere_budget", s.cutting.repack_sphere_budget}};
+                   {"repack_sphere_budget", s.cutting.repack_sphere_budget},
+                   {"stroke_end_frames", s.cutting.stroke_end_frames}};
   j["haptics"] = hapticsSpecJson(s.haptics);
   return compactScalarArrays(j.dump(2)) + "\n";
 }

@@ -62,7 +62,8 @@ struct ToolEvent {
 struct ToolResult {
   bool supported = false;  // false: this model cannot do this (message says why); nothing changed
   int grasped = 0;         // particles / spheres held after the event
-  bool cut_applied = false;
+  bool cut_applied = false;  // a Release ended a stroke that swept a surface: its cut is applied (now, or
+                             // cutting.stroke_end_frames frames later)
   std::string message;
 };
 

@@ -179,7 +179,8 @@ TEST(CutCoupled, BadCuttingSettingsAreInputErrorsNamingTheKey) {
   const std::string base = R"({"geometry": {"kind": "box", "size_m": [0.06, 0.04, 0.03], "spacing_m": 0.01},
     "models": {"pbd_metaballs": true, "cutting": true}, "cutting": {)";
   for (const char* bad : {R"("exchanges_per_frame": 0)", R"("samples_per_diameter": 1)", R"("pbd_substeps_per_exchange": 65)",
-                          R"("repack_spacing_factor": -1)", R"("repack_boundary_offset": 1.0)", R"("unknown_key": 1)"}) {
+                          R"("repack_spacing_factor": -1)", R"("repack_boundary_offset": 1.0)", R"("stroke_end_frames": 121)",
+                          R"("stroke_end_frames": -1)", R"("unknown_key": 1)"}) {
     try {
       parseScene(base + bad + "}}", "<test>", ".");
       FAIL() << bad;
@@ -188,11 +189,17 @@ TEST(CutCoupled, BadCuttingSettingsAreInputErrorsNamingTheKey) {
       EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
     }
   }
-  const Scene good = parseScene(base + R"("exchanges_per_frame": 3, "repack_sphere_budget": 2})" + "}", "<test>", ".");
+  const Scene good = parseScene(base + R"("exchanges_per_frame": 3, "repack_sphere_budget": 2, "stroke_end_frames": 4})" + "}",
+                                "<test>", ".");
   EXPECT_EQ(good.cutting.exchanges_per_frame, 3);
   EXPECT_EQ(good.cutting.repack_sphere_budget, 2.0);
+  EXPECT_EQ(good.cutting.stroke_end_frames, 4);
   EXPECT_EQ(parseScene(sceneToJson(good), "<test>", ".").cutting.exchanges_per_frame, 3);
+  EXPECT_EQ(parseScene(sceneToJson(good), "<test>", ".").cutting.stroke_end_frames, 4);
   Scene s = blockScene(0.3);
+  s.cutting.stroke_end_frames = 121;
+  EXPECT_THROW(makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64), InputError);
+  s = blockScene(0.3);
   s.cutting.exchanges_per_frame = 0;
   try {
     makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64);

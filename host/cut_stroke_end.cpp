@@ -1,0 +1,55 @@
+// computeStrokeEnd: Algorithm 1 and the caller's model build beside the surface split, then the skin binding.
+#include "host/cut_stroke_end.h"
+
+#include <algorithm>
+#include <chrono>
+
+#include "host/elapsed_ms.h"
+#include "host/interactive_tool.h"
+
+namespace inc {
+
+StrokeEndResult computeStrokeEnd(const StrokeEndInput& in, BackgroundTask& beside,
+                                 const std::function<void(const MetaballModel&)>& build) {
+  const auto t0 = std::chrono::steady_clock::now();
+  StrokeEndResult r;
+  r.spheres = in.kept;
+  r.kept_count = in.kept.size();
+  std::vector<const SweptSurface*> cuts{&in.swept};
+  for (const SweptSurface& c : in.earlier) cuts.push_back(&c);
+  // The split touches only the surface; the re-pack and the build only the spheres: they run side by side.
+  beside.runBeside(
+      [&] {
+        const auto c0 = std::chrono::steady_clock::now();
+        r.surface = *in.surface;
+        const SurfaceSplit s = applySurfaceCut(r.surface, in.swept);
+        r.split = s.split;
+        r.surface_components = s.components;  // the split's own output check: no second analysis
+        r.split_ms = msSince(c0);
+      },
+      [&] {
+        if (in.repack) {
+          const auto c0 = std::chrono::steady_clock::now();
+          RepackSettings rs = in.settings;
+          rs.earlier_cuts.assign(cuts.begin() + 1, cuts.end());
+          r.repack = packNodalPoints(in.points, in.swept, rs);
+          appendRepackedSpheres(r.spheres, r.repack, cuts);
+          r.repacked = true;
+          r.repack_ms = msSince(c0);
+          const auto c1 = std::chrono::steady_clock::now();
+          build(r.spheres);
+          r.build_ms = msSince(c1);
+        }
+      });
+  const auto c2 = std::chrono::steady_clock::now();
+  std::vector<SweptSurface> all = in.earlier;  // in the order the cuts were made
+  all.push_back(in.swept);
+  const int k = std::min<int>(in.skin_k, int(r.spheres.size()));
+  r.skin = bindSkinAcrossCuts(r.surface, r.spheres, all, k, in.file);
+  r.bind_ms = msSince(c2);
+  r.sphere_components = sphereGraphComponents(r.spheres);
+  r.total_ms = msSince(t0);
+  return r;
+}
+
+}  // namespace inc

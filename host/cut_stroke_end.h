@@ -1,0 +1,54 @@
+// The rest-configuration work of a stroke's end (Algorithm 1, the surface split, the skin binding): a pure function
+// of inputs fixed when the blade leaves, so that a worker can compute it while the nodal points are still simulated.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "host/background_task.h"
+#include "host/cut_repack.h"
+#include "host/cut_surface_state.h"
+#include "host/cut_swept_surface.h"
+#include "host/metaball_model.h"
+#include "host/skin_binding.h"
+
+namespace inc {
+
+// Everything a stroke's end reads. Nothing here depends on where the points or spheres are now: the state transfer
+// (new spheres from their points' displacements, interface spheres by eq. 13) is the caller's, when it applies the
+// result. The pointers must stay valid and unchanged until computeStrokeEnd returns.
+struct StrokeEndInput {
+  MetaballModel kept;                 // the stroke's base spheres that were not cut (PBD and interface), their links
+  bool repack = false;                // the blade converted spheres: `points` holds them (else nothing is re-packed)
+  RepackPoints points;                // the region's points, rest configuration (NodalRegion::repackPoints)
+  RepackSettings settings;            // Algorithm 1's settings; earlier_cuts is filled from `earlier`
+  SweptSurface swept;                 // this stroke (rest configuration)
+  std::vector<SweptSurface> earlier;  // the cuts applied before it
+  const CutSurfaceState* surface = nullptr;  // the surface before this cut (read only)
+  int skin_k = 4;                     // spheres per surface vertex (at most the new model's size)
+  std::string file;                   // for error messages
+};
+
+struct StrokeEndResult {
+  MetaballModel spheres;              // kept, then the re-packed spheres with their links (= kept if !repacked)
+  bool repacked = false;
+  RepackResult repack;                // owner[i]: the new sphere (index among the re-packed ones) point i went to
+  std::size_t kept_count = 0;         // spheres[0, kept_count) are `kept`
+  CutSurfaceState surface;            // after the split (a copy of the input state where the blade crossed nothing)
+  bool split = false;                 // the blade crossed the surface and the split succeeded
+  int surface_components = 0;         // of the split surface (its own output check); valid when split
+  SkinBinding skin;                   // the surface bound to `spheres`, across every cut including this one
+  int sphere_components = 0;          // of `spheres`' link graph
+  double repack_ms = 0, build_ms = 0, split_ms = 0, bind_ms = 0, total_ms = 0;  // wall times of the parts
+};
+
+// Splits the surface on `beside` while this thread re-packs and then calls `build(spheres)` (the caller's own
+// model build, for example its PBD constraints, timed as build_ms); then binds the skin across every cut and counts
+// the sphere graph's components. Deterministic: the same input gives the same result on any thread, at any time.
+// Rethrows what the split, the re-pack, the build or the binding threw (after both halves have stopped).
+StrokeEndResult computeStrokeEnd(const StrokeEndInput& in, BackgroundTask& beside,
+                                 const std::function<void(const MetaballModel&)>& build);
+
+}  // namespace inc

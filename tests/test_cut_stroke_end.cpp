@@ -1,0 +1,200 @@
+// A stroke's end applied cutting.stroke_end_frames frames after the blade leaves: the same cut as an immediate end,
+// the points simulated meanwhile, deterministic, a retried frame counted once, a new stroke applying it at once.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "host/dissection_simulation.h"
+#include "host/mesh.h"
+
+namespace inc {
+namespace {
+
+constexpr double kDt = 1.0 / 60.0;
+
+// A 6 x 4 x 3 cm block of 1 cm metaballs falling freely (or at rest without gravity); a vertical 8 cm blade cuts it
+// through along x in the plane y = 2 mm of its rest configuration during 0.05 .. 0.15 s (it leaves in frame 8).
+Scene fallingBlock(int stroke_end_frames, bool gravity = true) {
+  Scene s;
+  s.file = "<test:stroke_end>";
+  s.geometry.kind = GeometrySpec::Kind::Box;
+  s.geometry.size = Vec3d(0.06, 0.04, 0.03);
+  s.geometry.spacing = 0.01;
+  s.material.youngs_modulus = 2.0e4;
+  s.material.damping = 20.0;
+  s.models.pbd_metaballs = true;
+  s.models.cutting = true;
+  s.solver.gravity = gravity ? Vec3d(0, 0, -9.81) : Vec3d(0, 0, 0);
+  s.solver.substeps = 2;
+  s.pbd.iterations = 5;
+  s.cutting.samples_per_diameter = 3;
+  s.cutting.exchanges_per_frame = 2;
+  s.cutting.stroke_end_frames = stroke_end_frames;
+  ToolSpec t;
+  t.name = "scalpel";
+  t.kind = "scalpel";
+  t.length = 0.08;
+  t.path = {{0.05, Vec3d(-0.05, 0.002, 0.0), Vec3d(0, 0, 1)}, {0.15, Vec3d(0.05, 0.002, 0.0), Vec3d(0, 0, 1)}};
+  s.tools = {t};
+  return s;
+}
+
+struct Recording {
+  std::vector<FrameReport> frames;
+  std::vector<std::vector<Vec3d>> surfaces;  // the skinned surface after each frame
+  std::vector<Vec3d> positions;              // the spheres after the last frame
+  TriangleMesh last_surface;
+};
+
+Recording record(const Scene& s, int frames) {
+  Recording r;
+  auto sim = makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64);
+  for (int f = 0; f < frames; ++f) {
+    r.frames.push_back(sim->advance(kDt));
+    EXPECT_TRUE(r.frames.back().finite) << f;
+    EXPECT_TRUE(sim->currentSurface(r.last_surface));
+    r.surfaces.push_back(r.last_surface.vertices);
+  }
+  sim->currentPositions(r.positions);
+  return r;
+}
+
+// Bit for bit (no tolerance): the same operations in the same order.
+bool same(const std::vector<Vec3d>& a, const std::vector<Vec3d>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    if (a[i].x != b[i].x || a[i].y != b[i].y || a[i].z != b[i].z) return false;
+  return true;
+}
+
+int firstApplied(const Recording& r) {
+  for (std::size_t f = 0; f < r.frames.size(); ++f)
+    if (r.frames[f].counters.at("cuts_applied") > 0) return int(f);
+  return -1;
+}
+
+// The cut applied 3 frames late is the same cut: the same spheres, links, components, surface triangles and
+// re-packing figures as applied at once (all of it is rest-configuration work); the points are simulated in the
+// 3 frames between (mass to 1e-9 relative in every frame), and the state carries over: the applying frame changes
+// no surface vertex's velocity by more than 2.5 x the largest change of a frame just before (the re-bound skin
+// alone gives 1.4 x; new spheres that lost their points' displacement and velocity give 26 x).
+TEST(CutStrokeEnd, DeferredEndIsTheSameCutWithThePointsSimulatedMeanwhile) {
+  const int delay = 3, frames = 18;
+  const Recording now = record(fallingBlock(0), frames);
+  const Recording late = record(fallingBlock(delay), frames);
+  const int fe = firstApplied(now);
+  ASSERT_GT(fe, 0);
+  ASSERT_EQ(firstApplied(late), fe + delay);
+  const double m0 = now.frames[0].counters.at("mass_kg");
+  for (int f = 0; f < frames; ++f) {
+    const auto& c = late.frames[std::size_t(f)].counters;
+    EXPECT_NEAR(c.at("mass_kg") / m0, 1.0, 1e-9) << f;
+    const bool waiting = f >= fe && f < fe + delay;
+    EXPECT_EQ(c.at("stroke_end_pending"), waiting ? 1.0 : 0.0) << f;
+    if (waiting) {
+      EXPECT_GT(c.at("nodal_points"), 0.0) << f;
+    }
+    if (f < fe) {
+      EXPECT_TRUE(same(late.surfaces[std::size_t(f)], now.surfaces[std::size_t(f)])) << f;  // bit for bit
+    }
+  }
+  const auto& a = now.frames[std::size_t(fe)].counters;
+  const auto& b = late.frames[std::size_t(fe + delay)].counters;
+  for (const char* key : {"spheres", "links", "sphere_components", "surface_components", "surface_split",
+                          "spheres_added_last_cut", "nodal_points_last_cut", "repack_packed", "repack_merged"})
+    EXPECT_EQ(a.at(key), b.at(key)) << key;
+  EXPECT_EQ(b.at("sphere_components"), 2.0);
+  EXPECT_EQ(b.at("surface_components"), 2.0);
+  EXPECT_EQ(b.at("nodal_points"), 0.0);
+  EXPECT_EQ(now.last_surface.triangles, late.last_surface.triangles);
+  // The applying frame moves the surface no more than the frames before it did.
+  const std::size_t before = late.surfaces[std::size_t(fe + delay - 1)].size();  // vertices keep their index
+  const auto kick = [&](int f) {  // largest |x(f) - 2 x(f-1) + x(f-2)| over the vertices: the frame's change of velocity
+    double m = 0;
+    for (std::size_t v = 0; v < before; ++v)
+      m = std::max(m, norm(late.surfaces[std::size_t(f)][v] - late.surfaces[std::size_t(f - 1)][v] * 2.0 +
+                           late.surfaces[std::size_t(f - 2)][v]));
+    return m;
+  };
+  double typical = 0;
+  for (int f = fe + 2; f < fe + delay; ++f) typical = std::max(typical, kick(f));
+  const double jump = kick(fe + delay);
+  EXPECT_GT(typical, 1e-5);  // the block falls while the end is in the making
+  EXPECT_LT(jump, 2.5 * typical) << "typical " << typical;
+  // Deterministic: the worker's timing changes nothing.
+  const Recording again = record(fallingBlock(delay), frames);
+  EXPECT_TRUE(same(again.positions, late.positions));
+}
+
+// No load: the organ stays at rest through the delay and the applied end (1e-9 m, 1e-15 J; float64).
+TEST(CutStrokeEnd, RestStaysAtRestThroughTheDelay) {
+  const Recording r = record(fallingBlock(4, false), 16);
+  ASSERT_GT(firstApplied(r), 0);
+  for (std::size_t f = 0; f < r.frames.size(); ++f) {
+    EXPECT_LT(r.frames[f].max_displacement, 1e-9) << f;
+    EXPECT_LT(r.frames[f].kinetic_energy, 1e-15) << f;
+  }
+}
+
+// The numerical guard's retry of a frame inside the delay (restore the checkpoint, advance again) counts that
+// frame once: the cut is applied in the same frame and the run ends bit for bit where an undisturbed one does.
+TEST(CutStrokeEnd, RetriedFrameInsideTheDelayCountsOnce) {
+  const int delay = 3, frames = 16;
+  const Recording plain = record(fallingBlock(delay), frames);
+  const int fe = firstApplied(plain) - delay;
+  auto sim = makeDissectionSimulation(fallingBlock(delay), BackendKind::Cpu, Precision::Float64);
+  int applied_at = -1;
+  for (int f = 0; f < frames; ++f) {
+    if (f == fe + 1) {
+      sim->saveCheckpoint();
+      ASSERT_TRUE(sim->advance(kDt).finite);
+      sim->restoreCheckpoint();
+    }
+    const FrameReport rep = sim->advance(kDt);
+    ASSERT_TRUE(rep.finite) << f;
+    if (applied_at < 0 && rep.counters.at("cuts_applied") > 0) applied_at = f;
+  }
+  EXPECT_EQ(applied_at, fe + delay);
+  std::vector<Vec3d> x;
+  sim->currentPositions(x);
+  EXPECT_TRUE(same(x, plain.positions));
+}
+
+// A stroke that begins while another's end is in the making applies that end first (at once, not after the
+// delay), then cuts the new pieces: a mouse stroke across the block right after the scripted one.
+TEST(CutStrokeEnd, NewStrokeAppliesThePendingEndFirst) {
+  const int delay = 5;
+  auto sim = makeDissectionSimulation(fallingBlock(delay, false), BackendKind::Cpu, Precision::Float64);
+  int f = 0;
+  for (; f < 30; ++f) {
+    const FrameReport rep = sim->advance(kDt);
+    ASSERT_TRUE(rep.finite);
+    if (rep.counters.at("stroke_end_pending") > 0) break;
+  }
+  ASSERT_LT(f, 30);
+  ToolEvent e;
+  e.kind = ToolKind::Cut;
+  e.axis = Vec3d(0, 0, -1);
+  e.blade_length_m = 0.08;
+  e.phase = ToolPhase::Press;
+  e.tip = Vec3d(0.012, -0.05, 0.0);
+  ASSERT_TRUE(sim->applyTool(e).supported);
+  FrameReport rep = sim->advance(kDt);
+  EXPECT_EQ(rep.counters.at("cuts_applied"), 1.0);  // the scripted stroke's end, applied by the Press
+  EXPECT_EQ(rep.counters.at("stroke_end_pending"), 0.0);
+  EXPECT_EQ(rep.counters.at("sphere_components"), 2.0);
+  e.phase = ToolPhase::Release;
+  e.tip = Vec3d(0.012, 0.05, 0.0);
+  EXPECT_TRUE(sim->applyTool(e).cut_applied);
+  for (int k = 0; k < delay; ++k) {
+    rep = sim->advance(kDt);
+    EXPECT_EQ(rep.counters.at("cuts_applied"), k + 1 < delay ? 1.0 : 2.0) << k;
+  }
+  EXPECT_GE(rep.counters.at("sphere_components"), 3.0);
+  EXPECT_EQ(rep.counters.at("stroke_end_pending"), 0.0);
+}
+
+}  // namespace
+}  // namespace inc
