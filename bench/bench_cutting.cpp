@@ -51,6 +51,7 @@ double g_chebyshev_rho = 0;
 // --pace-hz: frames start at this rate (an interactive loop; the worker gets the idle time), 0: back to back.
 int g_end_frames = 0;
 double g_pace_hz = 0;
+double g_blade_radius = 0;  // --blade-radius: cutting.blade_radius_m (the blade as a contact)
 
 struct Row {
   std::string kind, backend, solver;
@@ -85,6 +86,7 @@ Scene liverScene(int target, double length_m, double leave_s, int samples, const
   s.pbd.chebyshev_rho = pbd_solver == "jacobi" ? g_chebyshev_rho : 0.0;  // the acceleration is Jacobi's
   s.cutting.samples_per_diameter = samples;
   s.cutting.stroke_end_frames = g_end_frames;
+  s.cutting.blade_radius_m = g_blade_radius;
   s.fixed = {{Vec3d(-0.1, -0.07, -0.04), Vec3d(0.1, 0.07, -0.02)}};
   ToolSpec t;
   t.name = "scalpel";
@@ -227,6 +229,8 @@ int main(int argc, char** argv) {
                  "Jacobi PBD: Chebyshev acceleration with this spectral-radius estimate, [0, 0.9] (pbd.chebyshev_rho)");
   app.add_option("--end-frames", g_end_frames, "cutting.stroke_end_frames: apply a stroke's end this many frames later")
       ->check(CLI::Range(0, 120));
+  app.add_option("--blade-radius", g_blade_radius, "cutting.blade_radius_m: the blade's contact capsule (m), 0: none")
+      ->check(CLI::Range(0.0, 0.05));
   app.add_option("--pace-hz", g_pace_hz, "start frames at this rate (an interactive loop); 0: back to back")
       ->check(CLI::Range(0.0, 10000.0));
   app.add_flag("--stages", stages, "print the median of every stage of the cutting frames");
@@ -287,7 +291,7 @@ int main(int argc, char** argv) {
       f << "case,backend,target,spheres,cut_length_m,nodal_points,interface_spheres,mls_substeps,ms_deform,ms_cutting,"
            "ms_mls,ms_exchange,ms_pbd,ms_convert,ms_repack,ms_apply_frame,ms_after,spheres_after,pbd_solver,pbd_iterations,"
            "stroke_end_frames,pace_hz,ms_end_frame,ms_ending,ms_apply_wait,ms_end_worker,ms_end_split,ms_end_repack,"
-           "ms_end_build,ms_end_bind\n";
+           "ms_end_build,ms_end_bind,blade_radius_m\n";
       for (const Row& r : rows)
         f << r.kind << ',' << r.backend << ',' << r.target << ',' << r.spheres << ',' << r.cut_length_m << ','
           << r.nodal_points << ',' << r.interface << ',' << r.mls_substeps << ',' << r.ms_deform << ',' << r.ms_cutting
@@ -295,7 +299,7 @@ int main(int argc, char** argv) {
           << ',' << r.ms_apply_frame << ',' << r.ms_after << ',' << r.spheres_after << ',' << r.solver << ','
           << r.pbd_iterations << ',' << g_end_frames << ',' << g_pace_hz << ',' << r.ms_end_frame << ','
           << r.ms_ending << ',' << r.ms_apply_wait << ',' << r.ms_end_worker << ',' << r.ms_end_split << ','
-          << r.ms_end_repack << ',' << r.ms_end_build << ',' << r.ms_end_bind << '\n';
+          << r.ms_end_repack << ',' << r.ms_end_build << ',' << r.ms_end_bind << ',' << g_blade_radius << '\n';
     }
     if (rows.empty()) {
       std::printf("bench_cutting: no rows (sizes above the limits or no device)\n");

@@ -99,6 +99,7 @@ MlsView<T> MlsCpuSolver<T>::view() {
   s.pair_force = pair_force_.data();
   s.weighted_sum = weighted_sum_.data();
   s.elastic_force = elastic_force_.data();
+  if (bladeOn()) s.blade = &blade_t_;
   if (!cg_rest_centre_.empty()) {
     s.coupling_group = particle_group_.data();
     s.coupling_force = cg_force_.data();
@@ -215,6 +216,7 @@ void MlsCpuSolver<T>::substeps(T dt, int n, MlsFrameStats* stats) {
     coupling_stale_ = false;
   }
   if (n <= 0) return;
+  blade_t_ = bladeContact<T>(double(dt), n);
   const MlsView<T> s = view();
   MlsView<T> last = s;  // the last stress pass also leaves each particle's stiffening for reduce()
   last.stiffening = stiffening_out_.data();

@@ -73,6 +73,7 @@ class MlsCpuSolver final : public MlsSolver {
   // displacement and anchors. coupling_stale_: only the anchors changed since (the elastic part is still valid).
   bool forces_valid_ = false;
   bool coupling_stale_ = false;
+  MlsBladeContact<T> blade_t_;  // the blade of the substeps running now (MlsView::blade when bladeOn())
 };
 
 std::unique_ptr<MlsSolver> makeMlsSolverCpu(MlsModel<float> model);

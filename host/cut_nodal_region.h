@@ -103,6 +103,14 @@ class NodalRegion {
   // base index j), then `dt` of MLS (eqs. 4-10 with the springs of eqs. 11-12 every substep). `fixed_substeps`
   // > 0 takes at least that many (more when the stable step needs them). Updates the groups' eq. 13 state.
   MlsFrameStats advance(double dt, int fixed_substeps, const std::function<Vec3d(std::int32_t)>& pbd_position);
+  // The scalpel as a contact for the points over the next advance (world = the points' frame, m): its blade moves
+  // from `from` to `to`; points within `radius` of it are put on its surface (MlsSolver::setBladeContact).
+  // radius 0: none (the default).
+  void setBlade(const BladePose& from, const BladePose& to, double radius) {
+    blade_from_ = from;
+    blade_to_ = to;
+    blade_radius_ = radius;
+  }
 
   // eq. 13: the position (C_a + u_a) of every interface sphere after the last advance (or conversion).
   void interfacePositions(std::vector<std::int32_t>& ids, std::vector<Vec3d>& positions) const;
@@ -160,6 +168,8 @@ class NodalRegion {
   MlsReduction last_reduction_;
   double safety_scale_ = 1.0;
   double last_rebuild_ms_ = 0.0;
+  BladePose blade_from_, blade_to_;
+  double blade_radius_ = 0.0;
   ConversionTimes times_;
 };
 

@@ -167,11 +167,15 @@ class DissectionSimulation final : public SimulationModel {
       applyStrokeEnd();
       timers_.apply_ms += msSince(c0);
     }
+    frame_blade_ = FrameBlade{};
+    if (active_ && !ending_ && active_->scripted < 0) frame_blade_ = {true, mouse_blade_from_, mouse_blade_to_};
+    mouse_blade_from_ = mouse_blade_to_;
     scriptedStrokes(t0, t1);
     updateGraspers(t0);
     PbdFrameInput<T> in;
     for (const Grasper& g : graspers_) appendGrasperInput(g, t0, t1, in);
     appendProbeInputs(probes_, t0, t1, in);
+    appendBladeInput(in);
     appendMouseAttachments(mouse_, in);
     PbdFrameStats st;
     MlsFrameStats mls;
@@ -341,6 +345,8 @@ class DissectionSimulation final : public SimulationModel {
     ToolResult res;
     res.supported = true;
     const BladePose world = bladeFromToolEvent(e);
+    if (e.phase == ToolPhase::Press) mouse_blade_from_ = world;  // the blade's motion starts here
+    mouse_blade_to_ = world;
     const BladePose rest{restPointFromCurrent(world.base, x, spheres_.rest_centers),
                          restPointFromCurrent(world.tip, x, spheres_.rest_centers)};
     const auto c0 = std::chrono::steady_clock::now();
@@ -393,6 +399,8 @@ class DissectionSimulation final : public SimulationModel {
     range(c.pbd_iterations, 0, 1000, "pbd_iterations");
     range(c.mls_substeps_per_exchange, 0, 100000, "mls_substeps_per_exchange");
     range(c.stroke_end_frames, 0, 120, "stroke_end_frames");
+    if (!(c.blade_radius_m >= 0 && c.blade_radius_m <= 0.05))
+      throw InputError(s.file, "cutting.blade_radius_m", "must lie in [0, 0.05] m");
     if (!(c.repack_boundary_offset > 0 && c.repack_boundary_offset < 1))
       throw InputError(s.file, "cutting.repack_boundary_offset", "must lie in (0, 1)");
     if (!(c.repack_spacing_factor > 0 && c.repack_spacing_factor <= 4))
@@ -434,6 +442,27 @@ class DissectionSimulation final : public SimulationModel {
     return active_->region->role(b) == SphereRole::Interface;
   }
 
+  // --- The blade as a contact (cutting.blade_radius_m > 0) ------------------------------------------------
+
+  // The scalpel is a capsule around its blade while a stroke is in the tissue: spheres (a PBD tool capsule) and
+  // nodal points (MlsSolver::setBladeContact) it covers are pushed out of it, what its sweep cuts is cut.
+  bool bladeContact() const { return frame_blade_.on && scene_.cutting.blade_radius_m > 0.0; }
+  static BladePose lerpBlade(const BladePose& a, const BladePose& b, double s) {
+    return {a.base + (b.base - a.base) * s, a.tip + (b.tip - a.tip) * s};
+  }
+  void appendBladeInput(PbdFrameInput<T>& in) const {
+    if (!bladeContact()) return;
+    const auto capsule = [&](const BladePose& p) {
+      pbd::CapsuleCollider<T> c;
+      c.a = Vec3<T>(p.base);
+      c.b = Vec3<T>(p.tip);
+      c.radius = T(scene_.cutting.blade_radius_m);
+      return c;
+    };
+    in.tools_from.push_back(capsule(frame_blade_.from));
+    in.tools_to.push_back(capsule(frame_blade_.to));
+  }
+
   // --- Strokes --------------------------------------------------------------------------------------------
 
   void scriptedStrokes(double t0, double t1) {
@@ -447,6 +476,7 @@ class DissectionSimulation final : public SimulationModel {
         beginStroke(blade(s.tool, std::max(t0, s.start)), int(k));
       }
       extendStroke(blade(s.tool, std::min(t1, s.end)));
+      if (t1 < s.end) frame_blade_ = {true, blade(s.tool, std::max(t0, s.start)), blade(s.tool, t1)};
       timers_.sweep_ms += msSince(c0) - last_convert_ms_;
       timers_.convert_ms += last_convert_ms_;
       if (t1 >= s.end) {
@@ -824,6 +854,13 @@ class DissectionSimulation final : public SimulationModel {
     const auto pbdPosition = [&](std::int32_t b) { return Vec3d(state_.positions[std::size_t(a.base_to_pbd[std::size_t(b)])]); };
     st = PbdFrameStats{};
     for (int e = 0; e < K; ++e) {
+      if (bladeContact()) {
+        const double b0 = double(e) / K, b1 = double(e + 1) / K;
+        region.setBlade(lerpBlade(frame_blade_.from, frame_blade_.to, b0), lerpBlade(frame_blade_.from, frame_blade_.to, b1),
+                        scene_.cutting.blade_radius_m);
+      } else {
+        region.setBlade({}, {}, 0.0);
+      }
       const auto cm = std::chrono::steady_clock::now();
       const MlsFrameStats ms = region.advance(dt, scene_.cutting.mls_substeps_per_exchange, pbdPosition);
       timers_.mls_ms += msSince(cm);
@@ -1007,6 +1044,11 @@ class DissectionSimulation final : public SimulationModel {
   mutable CutLayerBinding cut_layers_;    // renderLayers' binding of the swept surfaces (rebuilt when they change)
   Timers timers_;
   double last_convert_ms_ = 0.0, mouse_cut_ms_ = 0.0, mouse_convert_ms_ = 0.0;
+  struct FrameBlade {  // the blade over this frame while a stroke is in the tissue (world, m)
+    bool on = false;
+    BladePose from, to;
+  } frame_blade_;
+  BladePose mouse_blade_from_, mouse_blade_to_;  // the mouse blade at the last frame's end and now (world)
   int base_substeps_ = 4;
   double substep_scale_ = 1.0, mls_safety_scale_ = 1.0;
   double time_ = 0, saved_time_ = 0;

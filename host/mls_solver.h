@@ -12,6 +12,7 @@
 #include "host/input_error.h"
 #include "host/mls_model.h"
 #include "host/simulation_model.h"
+#include "physics/mls_blade_contact.h"
 #include "physics/vec3.h"
 
 namespace inc {
@@ -181,6 +182,13 @@ class MlsSolver {
   virtual void setCouplingAnchors(const std::vector<Vec3d>& anchors) = 0;
   virtual void couplingDisplacements(std::vector<Vec3d>& out) = 0;
 
+  // The scalpel's capsule over the next advance() or step() (absolute, m): its segment moves from (a0, b0) to
+  // (a1, b1) over that call, and free points it covers are put on its surface in every substep
+  // (physics/mls_blade_contact.h). radius 0 (the default) switches it off. Kept until changed.
+  void setBladeContact(const Vec3d& a0, const Vec3d& b0, const Vec3d& a1, const Vec3d& b1, double radius) {
+    blade_ = {a0, b0, a1, b1, radius};
+  }
+
   virtual void saveCheckpoint() = 0;
   virtual void restoreCheckpoint() = 0;
   virtual MemoryReport memory() const = 0;
@@ -220,6 +228,21 @@ class MlsSolver {
     st.totals.first_bad = -1;
     return st;
   }
+  // The blade for n substeps of dt in precision T, relative to the model origin (radius 0: none).
+  template <typename T>
+  MlsBladeContact<T> bladeContact(double dt, int n) const {
+    MlsBladeContact<T> c;
+    const Vec3d o = origin();
+    c.a0 = Vec3<T>(blade_.a0 - o);
+    c.b0 = Vec3<T>(blade_.b0 - o);
+    c.a1 = Vec3<T>(blade_.a1 - o);
+    c.b1 = Vec3<T>(blade_.b1 - o);
+    c.radius = T(blade_.radius);
+    c.duration = T(dt * n);
+    c.substeps = n;
+    return c;
+  }
+  bool bladeOn() const { return blade_.radius > 0.0; }
   void forgetStiffening() { stiffening_known_ = false; }  // the state was replaced: measure again
   void setCouplingStableStep(double dt) { coupling_dt_ = dt; }  // s; infinity: no coupling springs
   double withCoupling(double dt) const {
@@ -235,6 +258,10 @@ class MlsSolver {
     stiffening_ = r.finite ? r.stiffening : stiffening_;
     stiffening_known_ = true;
   }
+  struct Blade {
+    Vec3d a0, b0, a1, b1;
+    double radius = 0.0;
+  } blade_;
   double safety_ = 0.5;
   double coupling_dt_ = std::numeric_limits<double>::infinity();
   double stiffening_ = 1.0;

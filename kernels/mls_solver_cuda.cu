@@ -310,6 +310,7 @@ class MlsCudaSolver final : public MlsSolver {
                        "time step " + std::to_string(dt) + " s is outside (0, stable limit " +
                            std::to_string(stableTimeStep()) + " s]; refused");
     if (n <= 0) return;
+    uploadBlade(dt, n);
     substeps(T(dt), n, false);
     INC_CUDA(cudaStreamSynchronize(stream_));  // step() returns with the state final (tests, benchmarks)
   }
@@ -319,6 +320,7 @@ class MlsCudaSolver final : public MlsSolver {
     st.substeps = planFrame(frame_dt, fixed_substeps, model_.source);
     if (st.substeps == 0) return unplannableFrame();
     st.dt = frame_dt / st.substeps;
+    uploadBlade(st.dt, st.substeps);
     if (!stage_timing_) {
       ensureEvents(2);
       INC_CUDA(cudaEventRecord(events_[0], stream_));
@@ -574,6 +576,7 @@ class MlsCudaSolver final : public MlsSolver {
     v.target = target_.data();
     v.stress_moment = stress_moment_.data();
     v.energy = energy_.data();
+    if (bladeOn()) v.blade = blade_buf_.data();
     if (groups_ > 0) {
       v.coupling_group = particle_group_.data();
       v.coupling_force = cg_force_.data();
@@ -743,7 +746,17 @@ class MlsCudaSolver final : public MlsSolver {
     return {std::uint64_t(n), dt_bits, std::uint64_t(model_.size()), std::uint64_t(groups_), bits(particle_group_.data()),
             bits(c.member_offsets), bits(c.members), bits(c.rest_centre), bits(c.spring_offsets), bits(c.anchor),
             bits(c.rest_length), bits(c.stiffness), bits(c.group_displacement), bits(c.member_force),
-            bits(c.rest_centroid), bits(c.rest_gram), bits(c.inertia_inverse), bits(c.rotation), bits(c.member_torque)};
+            bits(c.rest_centroid), bits(c.rest_gram), bits(c.inertia_inverse), bits(c.rotation), bits(c.member_torque),
+            bits(bladeOn() ? blade_buf_.data() : nullptr)};
+  }
+
+  // The blade of the coming substeps, one small upload (only where a blade contact is set). The stream is idle here
+  // (the last advance ended in its reduction's download), so nothing queued still reads the buffer.
+  void uploadBlade(double dt, int n) {
+    if (!bladeOn()) return;
+    const MlsBladeContact<T> c = bladeContact<T>(dt, n);
+    INC_CUDA(cudaStreamSynchronize(stream_));
+    blade_buf_.upload(&c, 1);
   }
 
   void ensureEvents(std::size_t count) {
@@ -794,6 +807,7 @@ class MlsCudaSolver final : public MlsSolver {
   DeviceBuffer<Vec3<T>> cg_centroid_;  // rotation-aware eq. 13: rest frames, rotations, moments (physics/cut_coupling.h)
   DeviceBuffer<Mat3<T>> cg_gram_, cg_inertia_inverse_, cg_torque_;
   DeviceBuffer<pbd::Quat<T>> cg_rotation_, saved_rotation_;
+  DeviceBuffer<MlsBladeContact<T>> blade_buf_;  // one entry: MlsView::blade while bladeOn()
   std::int32_t groups_ = 0;
   std::size_t springs_ = 0;
   cudaStream_t stream_ = nullptr;

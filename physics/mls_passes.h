@@ -6,6 +6,7 @@
 
 #include "physics/cut_coupling.h"
 #include "physics/hd.h"
+#include "physics/mls_blade_contact.h"
 #include "physics/mls_elasticity.h"
 #include "physics/mls_integrate.h"
 #include "physics/mls_kernel.h"
@@ -56,6 +57,8 @@ struct MlsView {
   // of the force (without the coupling share; mlsCouplingRefresh adds a new share to it). Null: not written.
   T* stiffening = nullptr;
   Vec3<T>* elastic_force = nullptr;
+  // Optional scalpel contact (physics/mls_blade_contact.h), applied to free particles in every drift. Null: none.
+  const MlsBladeContact<T>* blade = nullptr;
 };
 
 // The rest-configuration terms of one pair (i, j) that the passes use (x_ij = X_j - X_i, w_ij its eq. 4 weight):
@@ -241,6 +244,8 @@ INC_HD void mlsDriftPass(const MlsView<T>& s, std::int64_t k, T dt, int remainin
     const Vec3<T> v = mlsHalfKick(s.velocity[k], s.force[k], s.mass[k], s.gravity, T(0.5) * dt, s.coeffs.damping);
     s.velocity[k] = v;
     s.displacement[k] += v * dt;
+    if (s.blade && s.blade->radius > T(0))
+      mlsBladeContactAt(*s.blade, s.rest[k], s.displacement[k], s.velocity[k], remaining_substeps);
   } else if (kind == kMlsPrescribed) {
     mlsPrescribedStep(s.displacement[k], s.velocity[k], s.target[k], dt, remaining_substeps);
   } else {

@@ -248,9 +248,11 @@ TEST(CutGpu, ReplacedMlsSolverRunsAsANewOne) {
   }
 }
 
-// The same scripted cut on both backends, float64: the same topology every frame and positions within 1e-6 m. With
-// Gauss-Seidel and with Jacobi (whose stroke rebuilds are colouring-free models uploaded into reused buffers).
-void expectSameDissectionOnBothBackends(const std::string& solver) {
+// The same scripted cut on both backends, float64: the same topology every frame and positions within 1e-6 m (the
+// spheres and the nodal points). With Gauss-Seidel and with Jacobi (whose stroke rebuilds are colouring-free models
+// uploaded into reused buffers); with the blade as a contact (points and spheres pushed out of its capsule) and the
+// stroke's end applied frames after the blade leaves.
+void expectSameDissectionOnBothBackends(const std::string& solver, double blade_radius = 0.0, int stroke_end_frames = 0) {
   Scene s;
   s.file = "<gpu test:dissection parity>";
   s.geometry.kind = GeometrySpec::Kind::Box;
@@ -263,6 +265,8 @@ void expectSameDissectionOnBothBackends(const std::string& solver) {
   s.pbd.solver = solver;
   s.cutting.samples_per_diameter = 3;
   s.cutting.exchanges_per_frame = 2;
+  s.cutting.blade_radius_m = blade_radius;
+  s.cutting.stroke_end_frames = stroke_end_frames;
   s.fixed = {{Vec3d(-1, -1, -1), Vec3d(1, 1, -0.008)}};  // the bottom layer of centres (z = -0.01)
   ToolSpec t;
   t.name = "scalpel";
@@ -288,6 +292,12 @@ void expectSameDissectionOnBothBackends(const std::string& solver) {
     gpu->currentPositions(xb);
     ASSERT_EQ(xa.size(), xb.size());
     for (std::size_t i = 0; i < xa.size(); ++i) ASSERT_LT(norm(xa[i] - xb[i]), 1e-6) << "frame " << f << " sphere " << i;
+    RenderLayers la, lb;
+    cpu->renderLayers(la);
+    gpu->renderLayers(lb);
+    ASSERT_EQ(la.nodal_points.size(), lb.nodal_points.size()) << f;
+    for (std::size_t i = 0; i < la.nodal_points.size(); ++i)
+      ASSERT_LT(norm(la.nodal_points[i] - lb.nodal_points[i]), 1e-6) << "frame " << f << " point " << i;
   }
   EXPECT_GT(points_max, 0.0);
 }
@@ -300,6 +310,11 @@ TEST(CutGpu, ScriptedDissectionHasTheSameTopologyOnBothBackends) {
 TEST(CutGpu, JacobiDissectionHasTheSameTopologyOnBothBackends) {
   if (noDevice()) GTEST_SKIP() << "no CUDA device";
   expectSameDissectionOnBothBackends("jacobi");
+}
+
+TEST(CutGpu, BladeContactAndDeferredEndMatchCpu) {
+  if (noDevice()) GTEST_SKIP() << "no CUDA device";
+  expectSameDissectionOnBothBackends("jacobi", 0.002, 3);
 }
 
 }  // namespace
