@@ -857,7 +857,7 @@ class PbdCpuBackend final : public PbdBackend<T> {
         if (p.volume_influence < T(0)) {
           a = 1;
         } else {
-          for (std::size_t k = 0; k < in.tools_to.size() && !a; ++k)
+          for (int k = 0; k < in.volumeToolCount() && !a; ++k)
             if (pbd::capsuleDistance(x[i], in.tools_to[k]) <= model_.rest_radii[i] + p.volume_influence) a = 1;
         }
       }

@@ -227,6 +227,7 @@ class DissectionSimulation final : public SimulationModel {
       rep.failure_particle = mls.totals.first_bad;
     }
     report(rep, mls, exchanges);
+    rep.counters["volume_active"] = double(st.volume_active);  // spheres whose radius volume preservation set
     return rep;
   }
 
@@ -452,6 +453,7 @@ class DissectionSimulation final : public SimulationModel {
   }
   void appendBladeInput(PbdFrameInput<T>& in) const {
     if (!bladeContact()) return;
+    in.volume_tools = int(in.tools_to.size());  // the tools before the blade: it is a contact, not a squeeze
     const auto capsule = [&](const BladePose& p) {
       pbd::CapsuleCollider<T> c;
       c.a = Vec3<T>(p.base);
@@ -897,6 +899,7 @@ class DissectionSimulation final : public SimulationModel {
         ie.tools_from.push_back(pbd::lerpCapsule(in.tools_from[k], in.tools_to[k], s0));
         ie.tools_to.push_back(pbd::lerpCapsule(in.tools_from[k], in.tools_to[k], s1));
       }
+      ie.volume_tools = in.volume_tools;
       timers_.exchange_ms += msSince(c0);
       const PbdFrameStats ps = backend_->advanceFrame(p, ie);
       addStages(st.stages, ps.stages);

@@ -129,6 +129,13 @@ struct PbdFrameInput {
   std::vector<Vec3<T>> attach_from, attach_to; // target at the frame's start and end (m)
   std::vector<T> attach_compliance;            // m/N, >= 0
   std::vector<pbd::CapsuleCollider<T>> tools_from, tools_to;
+  // The first volume_tools tools also switch on local volume preservation near them (the paper's squeezing tools:
+  // graspers, probes); the others are contacts only (a scalpel's blade). -1: every tool.
+  int volume_tools = -1;
+  int volumeToolCount() const {
+    const int n = int(tools_to.size());
+    return volume_tools < 0 ? n : (volume_tools < n ? volume_tools : n);
+  }
 };
 
 template <typename T>

@@ -601,7 +601,7 @@ struct DeviceBlock {
 template <typename T>
 struct GraphKey {
   PbdStepParams<T> p;
-  std::size_t kinematic = 0, tools = 0;
+  std::size_t kinematic = 0, tools = 0, volume_tools = 0;
   std::size_t attached = 0;
   const void* ptrs[11] = {};  // frame-input buffers
   // Grid sizes of the particle and per-block launches (PbdCudaBackend::gridCount: buckets once the model was patched,
@@ -625,7 +625,7 @@ bool sameKey(const GraphKey<T>& a, const GraphKey<T>& b) {
          x.cluster_ctas == y.cluster_ctas && x.grid_max_particles == y.grid_max_particles &&
          x.chebyshev_rho == y.chebyshev_rho &&
          a.kinematic == b.kinematic &&
-         a.tools == b.tools && a.attached == b.attached && std::equal(a.ptrs, a.ptrs + 11, b.ptrs) &&
+         a.tools == b.tools && a.volume_tools == b.volume_tools && a.attached == b.attached && std::equal(a.ptrs, a.ptrs + 11, b.ptrs) &&
          a.n == b.n && std::equal(a.counts, a.counts + kMaxLiveBlocks, b.counts) && a.patched == b.patched &&
          a.topo == b.topo;
 }
@@ -814,6 +814,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
         key.p = p;
         key.kinematic = in.kinematic_ids.size();
         key.tools = in.tools_from.size();
+        key.volume_tools = std::size_t(in.volumeToolCount());
         key.attached = in.attach_ids.size();
         const void* ptrs[11] = {kin_ids_.data(),    kin_from_.data(),  kin_to_.data(),      tools_from_.data(),
                                 tools_to_.data(),   w_.data(),         att_ids_.data(),     att_from_.data(),
@@ -1332,6 +1333,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     n_att_ = int(in.attach_ids.size());
     n_kin_ = int(in.kinematic_ids.size());
     n_tools_ = int(in.tools_from.size());
+    n_volume_tools_ = in.volumeToolCount();
   }
 
   // Chebyshev iterates sized for the model and this frame's attachments; a reallocation bumps topo_version_ (the
@@ -1657,7 +1659,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
       const bool have_volume = p.volume_preservation && have_volume_data_;
       if (have_volume) {
         volumeActiveKernel<T><<<gn, kThreads, 0, stream_>>>(n_, x_.data(), rest_radii_.data(), tools_to_.data(),
-                                                            n_tools_, p.volume_influence, active_.data());
+                                                            n_volume_tools_, p.volume_influence, active_.data());
         INC_CUDA_LAUNCH("pbd volume active");
         for (int pass = 0; pass < p.volume_passes; ++pass) {
           radiusKernel<T><<<gn, kThreads, 0, stream_>>>(n_, x_.data(), radii_.data(), radii_next_.data(),
@@ -1762,7 +1764,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
   std::vector<ProfRecord> prof_;
   bool profile_ = false;
 
-  int n_ = 0, n_planes_ = 0, n_boxes_ = 0, n_kin_ = 0, n_att_ = 0, n_tools_ = 0, rotation_block_ = -1;
+  int n_ = 0, n_planes_ = 0, n_boxes_ = 0, n_kin_ = 0, n_att_ = 0, n_tools_ = 0, n_volume_tools_ = 0, rotation_block_ = -1;
   bool have_volume_data_ = false;
   std::vector<T> host_rest_radii_;
   DeviceBuffer<Vec3<T>> rest_positions_, x_, v_, x_prev_, kin_from_, kin_to_, samples_, att_from_, att_to_, att_lambda_;
