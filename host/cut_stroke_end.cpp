@@ -5,6 +5,7 @@
 #include <chrono>
 
 #include "host/elapsed_ms.h"
+#include "host/input_error.h"
 #include "host/interactive_tool.h"
 
 namespace inc {
@@ -22,8 +23,15 @@ StrokeEndResult computeStrokeEnd(const StrokeEndInput& in, BackgroundTask& besid
       [&] {
         const auto c0 = std::chrono::steady_clock::now();
         r.surface = *in.surface;
-        const SurfaceSplit s = applySurfaceCut(r.surface, in.swept);
+        SurfaceSplit s;
+        try {
+          s = applySurfaceCut(r.surface, in.swept);
+        } catch (const InputError& e) {
+          if (!in.interactive) throw;
+          s.failure = e.what();  // r.surface is unchanged: applySurfaceCut throws before it writes
+        }
         r.split = s.split;
+        r.split_failure = s.failure;
         r.surface_components = s.components;  // the split's own output check: no second analysis
         r.split_ms = msSince(c0);
       },

@@ -28,6 +28,10 @@ struct StrokeEndInput {
   std::vector<SweptSurface> earlier;  // the cuts applied before it
   const CutSurfaceState* surface = nullptr;  // the surface before this cut (read only)
   int skin_k = 4;                     // spheres per surface vertex (at most the new model's size)
+  // A mouse or haptic stroke: a blade path whose sweep the surface split refuses (one turning back over itself)
+  // leaves the surface unsplit for this cut (split_failure says why; spheres, points and links are cut all the
+  // same) instead of failing the run. A scripted path is the scene's: there it stays an error naming the file.
+  bool interactive = false;
   std::string file;                   // for error messages
 };
 
@@ -39,6 +43,7 @@ struct StrokeEndResult {
   CutSurfaceState surface;            // after the split (a copy of the input state where the blade crossed nothing)
   bool split = false;                 // the blade crossed the surface and the split succeeded
   int surface_components = 0;         // of the split surface (its own output check); valid when split
+  std::string split_failure;          // why the surface was left unsplit (empty: split, or not crossed)
   SkinBinding skin;                   // the surface bound to `spheres`, across every cut including this one
   int sphere_components = 0;          // of `spheres`' link graph
   double repack_ms = 0, build_ms = 0, split_ms = 0, bind_ms = 0, total_ms = 0;  // wall times of the parts

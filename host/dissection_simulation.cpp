@@ -655,6 +655,7 @@ class DissectionSimulation final : public SimulationModel {
     in.surface = &surface_;  // read by the worker; nothing writes it before applyStrokeEnd
     in.skin_k = 4;
     in.file = scene_.file;
+    in.interactive = a.scripted < 0;
     e->frames_left = scene_.cutting.stroke_end_frames;
     PendingStrokeEnd* p = e.get();
     ending_ = std::move(e);
@@ -737,6 +738,7 @@ class DissectionSimulation final : public SimulationModel {
     skin_ = Skin{r.skin.k, std::move(r.skin.rest_vertices), std::move(r.skin.sphere), std::move(r.skin.weight)};
     skin_rest_centres_ = spheres_.rest_centers;
     sphere_components_ = r.sphere_components;
+    last_split_failure_ = r.split_failure;
     last_end_ = {r.total_ms, r.repack_ms, r.build_ms, r.split_ms, r.bind_ms};
   }
 
@@ -991,6 +993,7 @@ class DissectionSimulation final : public SimulationModel {
     rep.counters["repack_ms"] = timers_.repack_ms;
     rep.counters["cut_apply_ms"] = timers_.apply_ms;
     rep.counters["stroke_end_pending"] = ending_ ? 1.0 : 0.0;
+    rep.counters["surface_split_failed"] = last_split_failure_.empty() ? 0.0 : 1.0;  // the last applied cut's
     rep.counters["stroke_end_worker_ms"] = last_end_.worker_ms;
     rep.counters["stroke_end_repack_ms"] = last_end_.repack_ms;
     rep.counters["stroke_end_build_ms"] = last_end_.build_ms;
@@ -1032,6 +1035,7 @@ class DissectionSimulation final : public SimulationModel {
   };
   std::unique_ptr<PendingStrokeEnd> ending_;
   int saved_frames_left_ = -1;
+  std::string last_split_failure_;  // why the last applied cut left the surface unsplit (empty: it did not)
   struct EndTimes {
     double worker_ms = 0, repack_ms = 0, build_ms = 0, split_ms = 0, bind_ms = 0;
   } last_end_;  // the worker's times of the last applied stroke end

@@ -6,7 +6,12 @@
 #include <cmath>
 #include <vector>
 
+#include "host/cut_stroke_end.h"
 #include "host/dissection_simulation.h"
+#include "host/organ_shapes.h"
+#include "tests/cut_fixtures.h"
+#include "tests/cut_surface_fixtures.h"
+#include "host/input_error.h"
 #include "host/mesh.h"
 
 namespace inc {
@@ -194,6 +199,61 @@ TEST(CutStrokeEnd, NewStrokeAppliesThePendingEndFirst) {
   }
   EXPECT_GE(rep.counters.at("sphere_components"), 3.0);
   EXPECT_EQ(rep.counters.at("stroke_end_pending"), 0.0);
+}
+
+// A mouse blade path that turns back over its own sweep: the surface split cannot make a consistent surface of it
+// (CutSplitFailed). The cut is applied to spheres and points, the surface is left unsplit for it (the new counter
+// surface_split_failed) and the run goes on.
+TEST(CutStrokeEnd, InteractiveStrokeTurningBackLeavesTheSurfaceUnsplit) {
+  const std::vector<double> xs = {-0.05, -0.01, 0.03, -0.02, 0.02};
+  Scene s = fallingBlock(2, false);
+  s.tools[0].path = {{100.0, Vec3d(-0.05, 0.002, 0.0), Vec3d(0, 0, 1)}, {101.0, Vec3d(0.05, 0.002, 0.0), Vec3d(0, 0, 1)}};
+  auto sim = makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64);
+  ToolEvent e;
+  e.kind = ToolKind::Cut;
+  e.axis = Vec3d(0, 0, -1);
+  e.blade_length_m = 0.08;
+  for (std::size_t k = 0; k < xs.size(); ++k) {
+    e.phase = k == 0 ? ToolPhase::Press : k + 1 == xs.size() ? ToolPhase::Release : ToolPhase::Drag;
+    e.tip = Vec3d(xs[k], 0.002, 0.0);
+    ASSERT_NO_THROW(sim->applyTool(e)) << k;
+    ASSERT_TRUE(sim->advance(kDt).finite) << k;
+  }
+  FrameReport rep;
+  for (int f = 0; f < 3; ++f) ASSERT_NO_THROW(rep = sim->advance(kDt));
+  EXPECT_EQ(rep.counters.at("cuts_applied"), 1.0);
+  EXPECT_EQ(rep.counters.at("surface_split_failed"), 1.0);
+  EXPECT_EQ(rep.counters.at("surface_split"), 0.0);
+  EXPECT_GT(rep.counters.at("nodal_points_last_cut"), 0.0);
+  EXPECT_EQ(rep.counters.at("nodal_points"), 0.0);
+  for (int f = 0; f < 10; ++f) ASSERT_TRUE(sim->advance(kDt).finite) << f;  // the run goes on
+}
+
+// computeStrokeEnd alone, with a sweep the surface split refuses as input (a triangle not of the strip pattern):
+// a scripted stroke's end rethrows it (naming the swept surface); an interactive one leaves the surface as it was,
+// says why, and still binds the skin to the spheres.
+TEST(CutStrokeEnd, RefusedSweepFailsAScriptedEndAndLeavesAnInteractiveOneUnsplit) {
+  const CutSurfaceState before = cutSurfaceState(makeBoxMesh(Vec3d(0.02, 0.02, 0.02), 4));
+  StrokeEndInput in;
+  in.kept = cuttest::latticeBlock(4, 4, 4);
+  in.swept = cuttest::straightBladeSweep(Vec3d(-0.03, 0.001, -0.05), Vec3d(-0.03, 0.001, 0.05), Vec3d(0.06, 0, 0));
+  std::swap(in.swept.triangles[0][1], in.swept.triangles[0][2]);  // not the strip pattern of sweepSurface
+  in.surface = &before;
+  BackgroundTask beside;
+  in.interactive = false;
+  try {
+    computeStrokeEnd(in, beside, [](const MetaballModel&) {});
+    FAIL() << "the refused sweep was split";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("swept surface"), std::string::npos) << e.what();
+  }
+  in.interactive = true;
+  const StrokeEndResult r = computeStrokeEnd(in, beside, [](const MetaballModel&) {});
+  EXPECT_FALSE(r.split);
+  EXPECT_NE(r.split_failure.find("strip"), std::string::npos) << r.split_failure;
+  EXPECT_EQ(r.surface.mesh.triangles, before.mesh.triangles);
+  EXPECT_EQ(r.skin.rest_vertices.size(), before.mesh.vertices.size());
+  EXPECT_EQ(r.sphere_components, 1);
 }
 
 }  // namespace
