@@ -6,6 +6,8 @@
 #include <cstdio>
 
 #include "host/input_error.h"
+#include "host/scene_loader.h"
+#include "test_paths.h"
 #include "viewer/scene_knobs.h"
 #include "viewer/sim_runner.h"
 
@@ -95,6 +97,38 @@ TEST(ViewerSceneKnobs, PbdSolverKnobsAndTheChebyshevRule) {
   } catch (const InputError& e) {
     EXPECT_EQ(e.key(), "pbd.chebyshev_rho");
   }
+}
+
+// A cutting scene has the Cutting knobs (stroke end delay, blade contact radius) at the scene's values; an edit
+// reaches the scene copy the factory builds from, and the rebuilt model takes it (the edited delay shows as frames
+// with a stroke end pending). Only cutting scenes have them.
+TEST(ViewerSceneKnobs, CuttingKnobsReachTheModel) {
+  Scene s = loadSceneFile(std::string(INCISION_SOURCE_DIR) + "/scenes/steak_cut.json");
+  s.solver.backend = BackendKind::Cpu;
+  const SceneViewerSetup setup = makeSceneViewerSetup(s);
+  const auto& k = setup.knobs;
+  const std::size_t delay = knobIndex(k, "stroke end delay [frames]"), blade = knobIndex(k, "blade contact radius [m]");
+  ASSERT_LT(delay, k.size());
+  ASSERT_LT(blade, k.size());
+  EXPECT_EQ(k[delay].group, "Cutting");
+  EXPECT_DOUBLE_EQ(k[delay].value, 3.0);
+  EXPECT_DOUBLE_EQ(k[blade].value, 0.0);
+  k[delay].edit(5.0);
+  k[blade].edit(0.001);
+  EXPECT_EQ(setup.scene->cutting.stroke_end_frames, 5);
+  EXPECT_DOUBLE_EQ(setup.scene->cutting.blade_radius_m, 0.001);
+  auto model = setup.factory();
+  int pending = 0, applied_at = -1;
+  for (int f = 0; f < 40 && applied_at < 0; ++f) {
+    const FrameReport rep = model->advance(s.solver.frame_dt);
+    ASSERT_TRUE(rep.finite) << f;
+    pending += rep.counters.at("stroke_end_pending") > 0 ? 1 : 0;
+    if (rep.counters.at("cuts_applied") > 0) applied_at = f;
+  }
+  EXPECT_GT(applied_at, 0);
+  EXPECT_EQ(pending, 5);
+  EXPECT_EQ(knobIndex(makeSceneViewerSetup(smallBeam()).knobs, "stroke end delay [frames]"),
+            makeSceneViewerSetup(smallBeam()).knobs.size());
 }
 
 // Doubling E through the UI's path halves the small-deflection tip sag (Euler-Bernoulli: delta = q L^4 / 8 E I,

@@ -60,6 +60,13 @@ SceneViewerSetup makeSceneViewerSetup(const Scene& scene_in, std::optional<Backe
     knob("Solver", "PBD Chebyshev rho (Jacobi)", 0.0, 0.9, s.pbd.chebyshev_rho, false, false,
          [sc](double v) { sc->pbd.chebyshev_rho = v; });
   }
+  if (s.models.cutting) {
+    // The stroke's end off the frame (0: the frame the blade leaves takes it all) and the blade as a contact.
+    knob("Cutting", "stroke end delay [frames]", 0, 30, s.cutting.stroke_end_frames, false, true,
+         [sc](double v) { sc->cutting.stroke_end_frames = int(std::lround(v)); });
+    knob("Cutting", "blade contact radius [m]", 0.0, 0.005, s.cutting.blade_radius_m, false, false,
+         [sc](double v) { sc->cutting.blade_radius_m = v; });
+  }
   knob("Solver", "substeps (0 = auto)", 0, 64, s.solver.substeps, false, true,
        [sc](double v) { sc->solver.substeps = int(std::lround(v)); });
   {

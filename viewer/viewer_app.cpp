@@ -507,7 +507,7 @@ int runViewer(const ViewerOptions& opt) {
           ImGui::Text("substeps %d   dt %.3g s", snap.report.substeps, snap.report.dt);
         }
         // The scene's material and solver settings (built from the loaded scene by the scene wiring).
-        for (const char* group : {"Material", "Solver"}) {
+        for (const char* group : {"Material", "Solver", "Cutting"}) {
           const std::vector<ViewerKnob> all = runner.knobs();
           if (std::none_of(all.begin(), all.end(), [&](const ViewerKnob& k) { return k.group == group; })) continue;
           if (ImGui::CollapsingHeader(group, ImGuiTreeNodeFlags_DefaultOpen)) drawKnobs(runner, group, knob_editing);
