@@ -135,7 +135,7 @@ void checkInputMesh(const TriangleMesh& mesh) {
 class Splitter {
  public:
   Splitter(const TriangleMesh& mesh, const SweptSurface& sweep, const SurfaceSplitOptions& opt)
-      : m_(mesh), s_(sweep), opt_(opt), dom_(unfoldSweptSurface(sweep)) {
+      : m_(mesh), s_(sweep), opt_(opt), dom_(unfoldSweptSurface(sweep)), query_(sweep) {
     Vec3d lo = mesh.vertices.front(), hi = lo;
     for (const auto& v : mesh.vertices)
       for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], v[a]), hi[a] = std::max(hi[a], v[a]);
@@ -155,7 +155,7 @@ class Splitter {
       out.mesh = m_;
       out.vertex_side.resize(m_.vertices.size());
       for (std::size_t v = 0; v < m_.vertices.size(); ++v)
-        out.vertex_side[v] = std::int8_t(!far_[v] ? side_[v] : (projectOntoSweep(s_, dom_, m_.vertices[v]).offset >= 0.0 ? 1 : -1));
+        out.vertex_side[v] = std::int8_t(!far_[v] ? side_[v] : (projectOntoSweep(s_, dom_, query_, m_.vertices[v]).offset >= 0.0 ? 1 : -1));
       out.binding_probe = m_.vertices;
       out.source_triangle.resize(m_.triangles.size());
       std::iota(out.source_triangle.begin(), out.source_triangle.end(), 0);
@@ -181,7 +181,21 @@ class Splitter {
         const int a = m_.triangles[t][k], b = m_.triangles[t][(k + 1) % 3];
         h.push_back({std::min(a, b), std::max(a, b), int(t * 3 + std::size_t(k))});
       }
-    std::sort(h.begin(), h.end(), [](const Half& x, const Half& y) { return x.lo != y.lo ? x.lo < y.lo : x.hi < y.hi; });
+    // Ordered by (lo, hi, slot): a counting sort on lo, then each vertex's few half-edges (linear time, and the two
+    // halves of an edge in a defined order).
+    const std::size_t nv = m_.vertices.size();
+    std::vector<int> start(nv + 1, 0);
+    for (const Half& e : h) ++start[std::size_t(e.lo) + 1];
+    for (std::size_t v = 0; v < nv; ++v) start[v + 1] += start[v];
+    {
+      std::vector<Half> by_lo(h.size());
+      std::vector<int> fill(start.begin(), start.end() - 1);
+      for (const Half& e : h) by_lo[std::size_t(fill[std::size_t(e.lo)]++)] = e;
+      h.swap(by_lo);
+    }
+    for (std::size_t v = 0; v < nv; ++v)
+      std::sort(h.begin() + start[v], h.begin() + start[v + 1],
+                [](const Half& x, const Half& y) { return x.hi != y.hi ? x.hi < y.hi : x.slot < y.slot; });
     tri_edge_.assign(m_.triangles.size() * 3, -1);
     for (std::size_t i = 0; i < h.size(); ++i) {
       if (i == 0 || h[i].lo != h[i - 1].lo || h[i].hi != h[i - 1].hi) {
@@ -235,7 +249,6 @@ class Splitter {
     // Vertices farther than two edges from the strip's box take no part in any crossing or snap (an edge that
     // meets the strip has both ends within one edge of it): they are labelled later, only if needed.
     far_.assign(nv, 0);
-    int hint = -1;
     for (std::size_t v = 0; v < nv; ++v) {
       const Vec3d& x = m_.vertices[v];
       double out2 = 0.0;
@@ -249,8 +262,7 @@ class Splitter {
         proj_[v].offset = std::numeric_limits<double>::max();
         continue;
       }
-      proj_[v] = projectOntoSweep(s_, dom_, x, hint);
-      hint = proj_[v].triangle;
+      proj_[v] = projectOntoSweep(s_, dom_, query_, x);
       side_[v] = std::fabs(proj_[v].offset) <= 1e-12 * size_ ? materialSide(int(v), proj_[v].offset)
                                                                : (proj_[v].offset >= 0.0 ? 1 : -1);
     }
@@ -388,7 +400,7 @@ class Splitter {
       }
       EdgeCrossing& x = edge_x_[e];
       x.cross = true;
-      x.uv = projectOntoSweep(s_, dom_, p + (q - p) * t).uv;
+      x.uv = projectOntoSweep(s_, dom_, query_, p + (q - p) * t).uv;
       x.real = hit || (!geometric && insideOutline(dom_, x.uv));
       x.x = p + (q - p) * std::clamp(t, tau, 1.0 - tau);
     }
@@ -415,7 +427,7 @@ class Splitter {
 
   int pierceNode(const Vec3d& x) {
     const int p = int(nodes_.size());
-    nodes_.push_back({NodeKind::Pierce, x, projectOntoSweep(s_, dom_, x).uv});
+    nodes_.push_back({NodeKind::Pierce, x, projectOntoSweep(s_, dom_, query_, x).uv});
     nodes_.back().s = outlinePosition(dom_, nodes_.back().uv);
     pierces_.push_back(p);
     return p;
@@ -749,7 +761,7 @@ class Splitter {
     for (auto& n : nodes_) {
       if (n.kind == NodeKind::Crossing || n.kind == NodeKind::OnVertex) {
         // Binding probes just off the strip on each side (a crossing may sit up to snap_fraction of an edge off it).
-        const SweepProjection p = projectOntoSweep(s_, dom_, n.x);
+        const SweepProjection p = projectOntoSweep(s_, dom_, query_, n.x);
         if (n.kind == NodeKind::OnVertex) {
           n.v_plus = n.vertex;  // the input vertex is the + copy
           out.vertex_side[std::size_t(n.vertex)] = 1;
@@ -774,7 +786,7 @@ class Splitter {
     std::vector<std::array<int, 2>> interior(wall_.interior_uv.size());
     for (std::size_t i = 0; i < interior.size(); ++i) {
       const Vec3d x = liftFromDomain(s_, dom_, wall_.interior_uv[i]);
-      const SweepProjection p = projectOntoSweep(s_, dom_, x);
+      const SweepProjection p = projectOntoSweep(s_, dom_, query_, x);
       interior[i] = {addVertex(x, 1, x + p.normal * probe_eps_), addVertex(x, -1, x - p.normal * probe_eps_)};
     }
     const auto cornerVertex = [&](const Corner& c) {
@@ -866,7 +878,7 @@ class Splitter {
     }
     for (std::size_t v = 0; v < n_in; ++v)
       if (!seen[v])
-        out.vertex_side[v] = std::int8_t(!far_[v] ? side_[v] : (projectOntoSweep(s_, dom_, m_.vertices[v]).offset >= 0.0 ? 1 : -1));
+        out.vertex_side[v] = std::int8_t(!far_[v] ? side_[v] : (projectOntoSweep(s_, dom_, query_, m_.vertices[v]).offset >= 0.0 ? 1 : -1));
   }
 
   struct Piece {
@@ -878,6 +890,7 @@ class Splitter {
   const SweptSurface& s_;
   const SurfaceSplitOptions& opt_;
   SweepDomain dom_;
+  SweptSurfaceQuery query_;  // the closest-triangle search of every projection (same answers, far runs skipped)
   double size_ = 0.0, probe_eps_ = 0.0, h_ = 0.0;
   std::vector<std::array<int, 2>> edges_;
   std::vector<int> tri_edge_;

@@ -128,6 +128,36 @@ SweepDomain unfoldSweptSurface(const SweptSurface& s) {
   return d;
 }
 
+namespace {
+// The projection's frame from its closest triangle and point: the normal, the signed offset and the domain position.
+SweepProjection projectionOn(const SweptSurface& s, const SweepDomain& d, const Vec3d& p, int triangle, const Vec3d& closest,
+                             double distance2) {
+  SweepProjection r;
+  r.triangle = triangle;
+  r.closest = closest;
+  const auto& t = s.triangles[std::size_t(r.triangle)];
+  const Vec3d& a = s.vertices[t[0]];
+  const Vec3d e1 = s.vertices[t[1]] - a, e2 = s.vertices[t[2]] - a, w = p - a;
+  const Vec3d n = cross(e1, e2);
+  r.normal = n * (1.0 / norm(n));
+  r.offset = dot(w, r.normal);
+  r.distance = std::sqrt(distance2);
+  // Projection onto the triangle's plane in barycentric coordinates (Gram system), then into the domain.
+  const double g11 = dot(e1, e1), g12 = dot(e1, e2), g22 = dot(e2, e2), r1 = dot(w, e1), r2 = dot(w, e2);
+  const double det = g11 * g22 - g12 * g12;
+  const double b1 = (r1 * g22 - r2 * g12) / det, b2 = (r2 * g11 - r1 * g12) / det;
+  const Vec2d &u0 = d.uv[t[0]], &u1 = d.uv[t[1]], &u2 = d.uv[t[2]];
+  r.uv = {u0[0] + b1 * (u1[0] - u0[0]) + b2 * (u2[0] - u0[0]), u0[1] + b1 * (u1[1] - u0[1]) + b2 * (u2[1] - u0[1])};
+  return r;
+}
+}  // namespace
+
+SweepProjection projectOntoSweep(const SweptSurface& s, const SweepDomain& d, const SweptSurfaceQuery& query, const Vec3d& p) {
+  Vec3d k;
+  const int t = query.closestTriangle(p, k);
+  return projectionOn(s, d, p, t, k, norm2(k - p));
+}
+
 SweepProjection projectOntoSweep(const SweptSurface& s, const SweepDomain& d, const Vec3d& p, int hint) {
   SweepProjection r;
   double best = std::numeric_limits<double>::infinity(), reach = best;  // best squared distance, and its root
@@ -148,20 +178,7 @@ SweepProjection projectOntoSweep(const SweptSurface& s, const SweepDomain& d, co
   };
   if (hint >= 0 && std::size_t(hint) < s.triangles.size()) visit(std::size_t(hint));
   for (std::size_t i = 0; i < s.triangles.size(); ++i) visit(i);
-  const auto& t = s.triangles[std::size_t(r.triangle)];
-  const Vec3d& a = s.vertices[t[0]];
-  const Vec3d e1 = s.vertices[t[1]] - a, e2 = s.vertices[t[2]] - a, w = p - a;
-  const Vec3d n = cross(e1, e2);
-  r.normal = n * (1.0 / norm(n));
-  r.offset = dot(w, r.normal);
-  r.distance = std::sqrt(best);
-  // Projection onto the triangle's plane in barycentric coordinates (Gram system), then into the domain.
-  const double g11 = dot(e1, e1), g12 = dot(e1, e2), g22 = dot(e2, e2), r1 = dot(w, e1), r2 = dot(w, e2);
-  const double det = g11 * g22 - g12 * g12;
-  const double b1 = (r1 * g22 - r2 * g12) / det, b2 = (r2 * g11 - r1 * g12) / det;
-  const Vec2d &u0 = d.uv[t[0]], &u1 = d.uv[t[1]], &u2 = d.uv[t[2]];
-  r.uv = {u0[0] + b1 * (u1[0] - u0[0]) + b2 * (u2[0] - u0[0]), u0[1] + b1 * (u1[1] - u0[1]) + b2 * (u2[1] - u0[1])};
-  return r;
+  return projectionOn(s, d, p, r.triangle, r.closest, best);
 }
 
 Vec3d liftFromDomain(const SweptSurface& s, const SweepDomain& d, const Vec2d& uv) {

@@ -43,6 +43,10 @@ struct SweepProjection {
 };
 // `hint`: a triangle to try first (e.g. the previous query's, for nearby points); the result does not depend on it.
 SweepProjection projectOntoSweep(const SweptSurface& surface, const SweepDomain& domain, const Vec3d& p, int hint = -1);
+// The same projection, bit for bit, with the closest triangle found by `query` (built on `surface`), which skips
+// whole runs of far triangles: for the many queries of one split.
+SweepProjection projectOntoSweep(const SweptSurface& surface, const SweepDomain& domain, const SweptSurfaceQuery& query,
+                                 const Vec3d& p);
 
 // The 3D point of domain position uv: the unfolded triangle containing it (or, outside the strip, the nearest
 // one with extended barycentric coordinates) mapped back affinely.
