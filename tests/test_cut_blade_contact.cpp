@@ -9,6 +9,7 @@
 #include "host/dissection_simulation.h"
 #include "host/simulation_model.h"
 #include "physics/mls_blade_contact.h"
+#include "tests/cut_block_scene.h"
 
 namespace inc {
 namespace {
@@ -79,27 +80,9 @@ TEST(MlsBladeContact, MovingBladeIsWhereItsSubstepPutsItAndCarriesThePointsItPus
 // capsule no nodal point is inside the blade at the end of any frame of the stroke (1e-9 relative), the mass stays
 // exact (1e-9); without it the same stroke leaves points inside, so the test sees the contact.
 Scene cutBlock(double blade_radius) {
-  Scene s;
+  Scene s = cuttest::cutBlockScene(0.25);
   s.file = "<test:blade_contact>";
-  s.geometry.kind = GeometrySpec::Kind::Box;
-  s.geometry.size = Vec3d(0.06, 0.04, 0.03);
-  s.geometry.spacing = 0.01;
-  s.material.youngs_modulus = 2.0e4;
-  s.material.damping = 20.0;
-  s.models.pbd_metaballs = true;
-  s.models.cutting = true;
-  s.solver.gravity = Vec3d(0, 0, 0);
-  s.solver.substeps = 2;
-  s.pbd.iterations = 5;
-  s.cutting.samples_per_diameter = 3;
-  s.cutting.exchanges_per_frame = 2;
   s.cutting.blade_radius_m = blade_radius;
-  ToolSpec t;
-  t.name = "scalpel";
-  t.kind = "scalpel";
-  t.length = 0.08;
-  t.path = {{0.05, Vec3d(-0.05, 0.002, 0.0), Vec3d(0, 0, 1)}, {0.25, Vec3d(0.05, 0.002, 0.0), Vec3d(0, 0, 1)}};
-  s.tools = {t};
   return s;
 }
 

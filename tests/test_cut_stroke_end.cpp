@@ -9,6 +9,7 @@
 #include "host/cut_stroke_end.h"
 #include "host/dissection_simulation.h"
 #include "host/organ_shapes.h"
+#include "tests/cut_block_scene.h"
 #include "tests/cut_fixtures.h"
 #include "tests/cut_surface_fixtures.h"
 #include "host/input_error.h"
@@ -19,30 +20,12 @@ namespace {
 
 constexpr double kDt = 1.0 / 60.0;
 
-// A 6 x 4 x 3 cm block of 1 cm metaballs falling freely (or at rest without gravity); a vertical 8 cm blade cuts it
-// through along x in the plane y = 2 mm of its rest configuration during 0.05 .. 0.15 s (it leaves in frame 8).
+// The fixture's block cut through by 0.15 s (the blade leaves in frame 8), falling freely (or at rest without gravity).
 Scene fallingBlock(int stroke_end_frames, bool gravity = true) {
-  Scene s;
+  Scene s = cuttest::cutBlockScene(0.15);
   s.file = "<test:stroke_end>";
-  s.geometry.kind = GeometrySpec::Kind::Box;
-  s.geometry.size = Vec3d(0.06, 0.04, 0.03);
-  s.geometry.spacing = 0.01;
-  s.material.youngs_modulus = 2.0e4;
-  s.material.damping = 20.0;
-  s.models.pbd_metaballs = true;
-  s.models.cutting = true;
-  s.solver.gravity = gravity ? Vec3d(0, 0, -9.81) : Vec3d(0, 0, 0);
-  s.solver.substeps = 2;
-  s.pbd.iterations = 5;
-  s.cutting.samples_per_diameter = 3;
-  s.cutting.exchanges_per_frame = 2;
+  if (gravity) s.solver.gravity = Vec3d(0, 0, -9.81);
   s.cutting.stroke_end_frames = stroke_end_frames;
-  ToolSpec t;
-  t.name = "scalpel";
-  t.kind = "scalpel";
-  t.length = 0.08;
-  t.path = {{0.05, Vec3d(-0.05, 0.002, 0.0), Vec3d(0, 0, 1)}, {0.15, Vec3d(0.05, 0.002, 0.0), Vec3d(0, 0, 1)}};
-  s.tools = {t};
   return s;
 }
 
