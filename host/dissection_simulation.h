@@ -26,7 +26,10 @@ namespace inc {
 // When it leaves: the cut spheres' points are re-packed by Algorithm 1 (host/cut_repack.h), interface spheres
 // return to PBD with their eq. 13 state, links never cross a cut, the surface is split along the swept surface
 // whatever its shape (curved, partial: a slit; CGAL walls, host/cut_surface_state.h) at every cut, the skin
-// re-bound across no cut (cutWallTriangles() flags the walls); the nodal points go back to zero.
+// re-bound across no cut (cutWallTriangles() flags the walls); the nodal points go back to zero. That work runs on
+// idle-priority workers (host/cut_stroke_end.h) and is applied cutting.stroke_end_frames frames after the blade
+// leaves, the points simulated meanwhile (0: in that frame). With cutting.blade_radius_m > 0 the blade is also a
+// contact capsule for the spheres and the nodal points while it is in the tissue.
 // Graspers (close at their first keyframe, drag, release at their last) and probes act on the spheres.
 // currentSurface() is the surface moved by the spheres (translation skinning; during a stroke a converted sphere
 // moves by eq. 13 of its points). FrameReport stages: the PBD backend's, cut_sweep, cut_convert, mls_integrate,
@@ -37,7 +40,8 @@ namespace inc {
 // coupling_exchanges, mls_substeps, mls_isolated_points, mls_regularised_points, supports_cut, cuts_applied,
 // sphere_components, links, grasped, nodal_points_last_cut, spheres_added_last_cut, repack_* (groups, boundary /
 // medial / middle points, packed, merged, spacing_m), surface_split, surface_components, sweep_ms, convert_ms,
-// repack_ms, cut_apply_ms. The interactive tool (SimulationModel::applyTool): grasp & drag, and mouse scalpel
+// repack_ms, cut_apply_ms, stroke_end_pending, stroke_end_{worker,split,repack,build,bind}_ms,
+// surface_split_failed, volume_active; stage cut_apply_wait. The interactive tool (SimulationModel::applyTool): grasp & drag, and mouse scalpel
 // strokes (Press begins, Drag extends, Release ends the stroke) cut by the same pipeline. renderLayers(): spheres,
 // fixed and grasped spheres, the swept surfaces (applied cuts and the stroke in progress) and, while a stroke is in
 // the tissue, the nodal points where they are now.
