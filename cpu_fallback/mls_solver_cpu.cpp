@@ -239,11 +239,12 @@ void MlsCpuSolver<T>::substeps(T dt, int n, MlsFrameStats* stats) {
       for (std::int64_t k = t.begin(s.n), e = t.end(s.n); k < e; ++k) mlsDriftPass(s, k, dt, remaining);
       t.barrier();
       lap(0);
-      if (coupled) {  // the groups' spring forces at the drifted displacement, before the force gather
+      // The groups' spring forces at the drifted displacement, for the force gather. The group pass and the stress
+      // pass both only read the displacement and write disjoint arrays: one phase, one barrier (as the GPU's
+      // stressCouplingKernel), so neither phase's imbalance waits alone.
+      if (coupled)
         for (std::int64_t g = t.begin(groups), e = t.end(groups); g < e; ++g)
           couplingGroupPass(c, s.displacement, std::int32_t(g));
-        t.barrier();
-      }
       lap(1);
       const MlsView<T>& sp = step == n - 1 ? last : s;
       mlsStressRange(sp, t.begin(s.n), t.end(s.n), avx2);
