@@ -306,8 +306,10 @@ int main(int argc, char** argv) {
       return 0;
     }
     const Row& first = rows.front();
-    std::printf("bench_cutting: %s (%s PBD) %d spheres: %.3f ms per frame while cutting (%d nodal points), re-packing %.3f ms\n",
-                first.backend.c_str(), first.solver.c_str(), first.spheres, first.ms_cutting, first.nodal_points, first.ms_repack);
+    std::printf("bench_cutting: %s (%s PBD) %d spheres: %.3f ms per frame while cutting (%d nodal points), re-packing %.3f ms; "
+                "stroke end (%d frames late): blade-leaving frame %.2f ms, applying frame %.2f ms (waited %.2f), workers %.2f ms\n",
+                first.backend.c_str(), first.solver.c_str(), first.spheres, first.ms_cutting, first.nodal_points, first.ms_repack,
+                g_end_frames, first.ms_end_frame, first.ms_apply_frame, first.ms_apply_wait, first.ms_end_worker);
   } catch (const InputError& e) {
     std::fprintf(stderr, "%s\n", e.what());
     return 2;

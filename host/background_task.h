@@ -21,8 +21,10 @@ namespace inc {
 
 class BackgroundTask {
  public:
-  // idle_priority: the thread runs only when a core would otherwise idle (Linux SCHED_IDLE; best effort, ignored
-  // where refused): work that may lag behind the frames (a stroke's end) must not slow them down on few cores.
+  // idle_priority: each task starts at idle priority, running only when a core would otherwise idle (Linux
+  // SCHED_IDLE; best effort, ignored where refused): work that may lag behind the frames (a stroke's end) must not
+  // slow them down on few cores. Measured on two cores: nice 10 instead still made the frames beside it 2x slower
+  // (CFS time slices stall their OpenMP barriers); idle priority left them as they were.
   explicit BackgroundTask(bool idle_priority = false) : idle_priority_(idle_priority) {}
   BackgroundTask(const BackgroundTask&) = delete;
   BackgroundTask& operator=(const BackgroundTask&) = delete;
@@ -64,6 +66,24 @@ class BackgroundTask {
     return msSince(t0);
   }
 
+  bool done() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return done_;
+  }
+
+  // Before waiting on an idle-priority task: back to normal priority for the rest of it, so that a machine busy
+  // with other work (a compile kept a 60 ms stroke end waiting 6.4 s) does not starve it while the caller waits.
+  // Best effort: raising a priority needs CAP_SYS_NICE or an RLIMIT_NICE of 20 on Linux; elsewhere, or refused,
+  // nothing changes (and threads the task started, OpenMP's, stay idle). The next task starts idle again.
+  void boost() {
+#if defined(__linux__) && defined(SCHED_IDLE)
+    if (!idle_priority_ || !thread_.joinable()) return;
+    sched_param p{};
+    p.sched_priority = 0;
+    pthread_setschedparam(thread_.native_handle(), SCHED_OTHER, &p);
+#endif
+  }
+
   // Waits for the task started last; rethrows what it threw.
   void wait() {
     std::unique_lock<std::mutex> lock(mutex_);
@@ -73,13 +93,6 @@ class BackgroundTask {
 
  private:
   void loop() {
-#if defined(__linux__) && defined(SCHED_IDLE)
-    if (idle_priority_) {
-      sched_param p{};
-      p.sched_priority = 0;
-      pthread_setschedparam(pthread_self(), SCHED_IDLE, &p);  // threads it starts (OpenMP) inherit it
-    }
-#endif
     std::unique_lock<std::mutex> lock(mutex_);
     for (;;) {
       wake_.wait(lock, [this] { return stop_ || task_; });
@@ -87,6 +100,13 @@ class BackgroundTask {
       std::function<void()> task = std::move(task_);
       task_ = nullptr;
       lock.unlock();
+#if defined(__linux__) && defined(SCHED_IDLE)
+      if (idle_priority_) {  // lowering is always allowed; a boost() of the last task is undone here
+        sched_param p{};
+        p.sched_priority = 0;
+        pthread_setschedparam(pthread_self(), SCHED_IDLE, &p);  // threads it starts (OpenMP) inherit it
+      }
+#endif
       std::exception_ptr error;
       try {
         task();

@@ -679,6 +679,10 @@ class DissectionSimulation final : public SimulationModel {
   // zero.
   void applyStrokeEnd() {
     const auto c0 = std::chrono::steady_clock::now();
+    if (!end_worker_.done()) {  // the frames ran out before the workers: let them have normal priority now
+      end_worker_.boost();
+      end_split_worker_.boost();
+    }
     end_worker_.wait();
     timers_.apply_wait_ms += msSince(c0);
     std::unique_ptr<PendingStrokeEnd> e = std::move(ending_);
@@ -1059,8 +1063,8 @@ class DissectionSimulation final : public SimulationModel {
   int base_substeps_ = 4;
   double substep_scale_ = 1.0, mls_safety_scale_ = 1.0;
   double time_ = 0, saved_time_ = 0;
-  // A stroke's end and its surface split, at idle priority (on two cores they would otherwise slow the frames
-  // simulated meanwhile 2.5-fold); declared last, joined first.
+  // A stroke's end and its surface split, at idle priority until the end is due (on two cores they would otherwise
+  // slow the frames simulated meanwhile 2.5-fold); declared last, joined first.
   BackgroundTask end_split_worker_{true}, end_worker_{true};
 };
 

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
 #include <stdexcept>
 #include <thread>
 
@@ -41,6 +42,41 @@ TEST(BackgroundTask, OverlapsWithTheCaller) {
   worker.wait();
   EXPECT_TRUE(saw_caller);
 }
+
+#if defined(__linux__) && defined(SCHED_IDLE)
+// An idle-priority worker: every task starts at SCHED_IDLE; boost() lifts the running task to SCHED_OTHER (where the
+// process may raise a priority; skipped where it may not) and the next task starts idle again.
+TEST(BackgroundTask, IdleTasksStartIdleAndABoostLastsForTheRunningTask) {
+  BackgroundTask worker(true);
+  const auto policy = [] {
+    int p = -1;
+    sched_param param{};
+    pthread_getschedparam(pthread_self(), &p, &param);
+    return p;
+  };
+  std::atomic<int> phase{0};
+  int at_start = -1, after_boost = -1, next_start = -1;
+  worker.start([&] {
+    at_start = policy();
+    phase = 1;
+    while (phase.load() != 2) std::this_thread::yield();
+    after_boost = policy();
+  });
+  // Sleep, not spin: an idle-priority thread runs only where a core idles.
+  while (phase.load() != 1) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  EXPECT_FALSE(worker.done());
+  worker.boost();
+  phase = 2;
+  worker.wait();
+  EXPECT_TRUE(worker.done());
+  worker.start([&] { next_start = policy(); });
+  worker.wait();
+  EXPECT_EQ(at_start, SCHED_IDLE);
+  EXPECT_EQ(next_start, SCHED_IDLE);
+  if (after_boost == SCHED_IDLE) GTEST_SKIP() << "raising a thread's priority is not permitted here";
+  EXPECT_EQ(after_boost, SCHED_OTHER);
+}
+#endif
 
 }  // namespace
 }  // namespace inc
