@@ -15,9 +15,9 @@ StrokeEndResult computeStrokeEnd(const StrokeEndInput& in, BackgroundTask& besid
   const auto t0 = std::chrono::steady_clock::now();
   StrokeEndResult r;
   r.spheres = in.kept;
-  r.kept_count = in.kept.size();
-  std::vector<const SweptSurface*> cuts{&in.swept};
-  for (const SweptSurface& c : in.earlier) cuts.push_back(&c);
+  const SweptSurface& swept = in.cuts.back();
+  std::vector<const SweptSurface*> cuts{&swept};  // this stroke first, then the earlier ones
+  for (std::size_t c = 0; c + 1 < in.cuts.size(); ++c) cuts.push_back(&in.cuts[c]);
   // The split touches only the surface; the re-pack and the build only the spheres: they run side by side.
   beside.runBeside(
       [&] {
@@ -25,7 +25,7 @@ StrokeEndResult computeStrokeEnd(const StrokeEndInput& in, BackgroundTask& besid
         r.surface = *in.surface;
         SurfaceSplit s;
         try {
-          s = applySurfaceCut(r.surface, in.swept);
+          s = applySurfaceCut(r.surface, swept);
         } catch (const InputError& e) {
           if (!in.interactive) throw;
           s.failure = e.what();  // r.surface is unchanged: applySurfaceCut throws before it writes
@@ -40,7 +40,7 @@ StrokeEndResult computeStrokeEnd(const StrokeEndInput& in, BackgroundTask& besid
           const auto c0 = std::chrono::steady_clock::now();
           RepackSettings rs = in.settings;
           rs.earlier_cuts.assign(cuts.begin() + 1, cuts.end());
-          r.repack = packNodalPoints(in.points, in.swept, rs);
+          r.repack = packNodalPoints(in.points, swept, rs);
           appendRepackedSpheres(r.spheres, r.repack, cuts);
           r.repacked = true;
           r.repack_ms = msSince(c0);
@@ -50,10 +50,8 @@ StrokeEndResult computeStrokeEnd(const StrokeEndInput& in, BackgroundTask& besid
         }
       });
   const auto c2 = std::chrono::steady_clock::now();
-  std::vector<SweptSurface> all = in.earlier;  // in the order the cuts were made
-  all.push_back(in.swept);
   const int k = std::min<int>(in.skin_k, int(r.spheres.size()));
-  r.skin = bindSkinAcrossCuts(r.surface, r.spheres, all, k, in.file);
+  r.skin = bindSkinAcrossCuts(r.surface, r.spheres, in.cuts, k, in.file);
   r.bind_ms = msSince(c2);
   r.sphere_components = sphereGraphComponents(r.spheres);
   r.total_ms = msSince(t0);

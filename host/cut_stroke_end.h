@@ -23,9 +23,8 @@ struct StrokeEndInput {
   MetaballModel kept;                 // the stroke's base spheres that were not cut (PBD and interface), their links
   bool repack = false;                // the blade converted spheres: `points` holds them (else nothing is re-packed)
   RepackPoints points;                // the region's points, rest configuration (NodalRegion::repackPoints)
-  RepackSettings settings;            // Algorithm 1's settings; earlier_cuts is filled from `earlier`
-  SweptSurface swept;                 // this stroke (rest configuration)
-  std::vector<SweptSurface> earlier;  // the cuts applied before it
+  RepackSettings settings;            // Algorithm 1's settings; earlier_cuts is filled from `cuts`
+  std::vector<SweptSurface> cuts;     // every cut in the order made, this stroke's last (rest configuration)
   const CutSurfaceState* surface = nullptr;  // the surface before this cut (read only)
   int skin_k = 4;                     // spheres per surface vertex (at most the new model's size)
   // A mouse or haptic stroke: a blade path whose sweep the surface split refuses (one turning back over itself)
@@ -39,7 +38,6 @@ struct StrokeEndResult {
   MetaballModel spheres;              // kept, then the re-packed spheres with their links (= kept if !repacked)
   bool repacked = false;
   RepackResult repack;                // owner[i]: the new sphere (index among the re-packed ones) point i went to
-  std::size_t kept_count = 0;         // spheres[0, kept_count) are `kept`
   CutSurfaceState surface;            // after the split (a copy of the input state where the blade crossed nothing)
   bool split = false;                 // the blade crossed the surface and the split succeeded
   int surface_components = 0;         // of the split surface (its own output check); valid when split

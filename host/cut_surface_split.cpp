@@ -12,6 +12,7 @@
 
 #include "host/cut_sweep_domain.h"
 #include "host/cut_wall_cdt.h"
+#include "host/edge_order.h"
 #include "host/input_error.h"
 
 namespace inc {
@@ -181,21 +182,9 @@ class Splitter {
         const int a = m_.triangles[t][k], b = m_.triangles[t][(k + 1) % 3];
         h.push_back({std::min(a, b), std::max(a, b), int(t * 3 + std::size_t(k))});
       }
-    // Ordered by (lo, hi, slot): a counting sort on lo, then each vertex's few half-edges (linear time, and the two
-    // halves of an edge in a defined order).
-    const std::size_t nv = m_.vertices.size();
-    std::vector<int> start(nv + 1, 0);
-    for (const Half& e : h) ++start[std::size_t(e.lo) + 1];
-    for (std::size_t v = 0; v < nv; ++v) start[v + 1] += start[v];
-    {
-      std::vector<Half> by_lo(h.size());
-      std::vector<int> fill(start.begin(), start.end() - 1);
-      for (const Half& e : h) by_lo[std::size_t(fill[std::size_t(e.lo)]++)] = e;
-      h.swap(by_lo);
-    }
-    for (std::size_t v = 0; v < nv; ++v)
-      std::sort(h.begin() + start[v], h.begin() + start[v + 1],
-                [](const Half& x, const Half& y) { return x.hi != y.hi ? x.hi < y.hi : x.slot < y.slot; });
+    // Ordered by (lo, hi, slot): the two halves of an edge in a defined order.
+    sortByLowerVertex(h, m_.vertices.size(),
+                      [](const Half& x, const Half& y) { return x.hi != y.hi ? x.hi < y.hi : x.slot < y.slot; });
     tri_edge_.assign(m_.triangles.size() * 3, -1);
     for (std::size_t i = 0; i < h.size(); ++i) {
       if (i == 0 || h[i].lo != h[i - 1].lo || h[i].hi != h[i - 1].hi) {

@@ -7,7 +7,6 @@
 #include <string>
 
 #include "host/input_error.h"
-#include "physics/cut_geometry.h"
 
 namespace inc {
 
@@ -103,12 +102,6 @@ SweepDomain unfoldSweptSurface(const SweptSurface& s) {
   d.box_lo = d.box_hi = s.vertices.front();
   for (const auto& v : s.vertices)
     for (int a = 0; a < 3; ++a) d.box_lo[a] = std::min(d.box_lo[a], v[a]), d.box_hi[a] = std::max(d.box_hi[a], v[a]);
-  for (const auto& t : s.triangles) {
-    const Vec3d &a = s.vertices[t[0]], &b = s.vertices[t[1]], &c = s.vertices[t[2]];
-    const Vec3d g = (a + b + c) * (1.0 / 3.0);
-    d.tri_centre.push_back(g);
-    d.tri_radius.push_back(std::sqrt(std::max({norm2(a - g), norm2(b - g), norm2(c - g)})));
-  }
   double area2 = 0.0;
   d.boundary_s.assign(std::size_t(nb) + 1, 0.0);
   for (int i = 0; i < nb; ++i) {
@@ -128,20 +121,16 @@ SweepDomain unfoldSweptSurface(const SweptSurface& s) {
   return d;
 }
 
-namespace {
-// The projection's frame from its closest triangle and point: the normal, the signed offset and the domain position.
-SweepProjection projectionOn(const SweptSurface& s, const SweepDomain& d, const Vec3d& p, int triangle, const Vec3d& closest,
-                             double distance2) {
+SweepProjection projectOntoSweep(const SweptSurface& s, const SweepDomain& d, const SweptSurfaceQuery& query, const Vec3d& p) {
   SweepProjection r;
-  r.triangle = triangle;
-  r.closest = closest;
+  r.triangle = query.closestTriangle(p, r.closest);
   const auto& t = s.triangles[std::size_t(r.triangle)];
   const Vec3d& a = s.vertices[t[0]];
   const Vec3d e1 = s.vertices[t[1]] - a, e2 = s.vertices[t[2]] - a, w = p - a;
   const Vec3d n = cross(e1, e2);
   r.normal = n * (1.0 / norm(n));
   r.offset = dot(w, r.normal);
-  r.distance = std::sqrt(distance2);
+  r.distance = std::sqrt(norm2(r.closest - p));
   // Projection onto the triangle's plane in barycentric coordinates (Gram system), then into the domain.
   const double g11 = dot(e1, e1), g12 = dot(e1, e2), g22 = dot(e2, e2), r1 = dot(w, e1), r2 = dot(w, e2);
   const double det = g11 * g22 - g12 * g12;
@@ -149,36 +138,6 @@ SweepProjection projectionOn(const SweptSurface& s, const SweepDomain& d, const 
   const Vec2d &u0 = d.uv[t[0]], &u1 = d.uv[t[1]], &u2 = d.uv[t[2]];
   r.uv = {u0[0] + b1 * (u1[0] - u0[0]) + b2 * (u2[0] - u0[0]), u0[1] + b1 * (u1[1] - u0[1]) + b2 * (u2[1] - u0[1])};
   return r;
-}
-}  // namespace
-
-SweepProjection projectOntoSweep(const SweptSurface& s, const SweepDomain& d, const SweptSurfaceQuery& query, const Vec3d& p) {
-  Vec3d k;
-  const int t = query.closestTriangle(p, k);
-  return projectionOn(s, d, p, t, k, norm2(k - p));
-}
-
-SweepProjection projectOntoSweep(const SweptSurface& s, const SweepDomain& d, const Vec3d& p, int hint) {
-  SweepProjection r;
-  double best = std::numeric_limits<double>::infinity(), reach = best;  // best squared distance, and its root
-  const auto visit = [&](std::size_t i) {
-    // Early out: a triangle whose bounding sphere lies farther than the best distance so far cannot be closer.
-    const double lim = d.tri_radius[i] + reach;
-    if (norm2(p - d.tri_centre[i]) > lim * lim) return;
-    const auto& t = s.triangles[i];
-    const Vec3d k = cut::closestPointOnTriangle(p, s.vertices[t[0]], s.vertices[t[1]], s.vertices[t[2]]);
-    const double d2 = norm2(k - p);
-    // Ties go to the lower index, whatever the visiting order.
-    if (d2 < best || (d2 == best && int(i) < r.triangle)) {
-      best = d2;
-      reach = std::sqrt(d2);
-      r.triangle = int(i);
-      r.closest = k;
-    }
-  };
-  if (hint >= 0 && std::size_t(hint) < s.triangles.size()) visit(std::size_t(hint));
-  for (std::size_t i = 0; i < s.triangles.size(); ++i) visit(i);
-  return projectionOn(s, d, p, r.triangle, r.closest, best);
 }
 
 Vec3d liftFromDomain(const SweptSurface& s, const SweepDomain& d, const Vec2d& uv) {

@@ -20,8 +20,6 @@ struct SweepDomain {
   std::vector<int> boundary;             // swept vertex ids of the strip's outline, counter-clockwise
   std::vector<double> boundary_s;        // arc length at each boundary vertex (size boundary.size() + 1)
   double diameter = 0.0;                 // of the domain's bounding box (m)
-  std::vector<Vec3d> tri_centre;         // per swept triangle: centroid and the radius of the sphere about it
-  std::vector<double> tri_radius;        // holding the triangle (for the closest-triangle search)
   Vec3d box_lo, box_hi;                  // bounding box of the swept surface (m)
   double perimeter() const { return boundary_s.back(); }
 };
@@ -41,10 +39,8 @@ struct SweepProjection {
   double distance = 0.0, offset = 0.0;
   Vec2d uv{0.0, 0.0};
 };
-// `hint`: a triangle to try first (e.g. the previous query's, for nearby points); the result does not depend on it.
-SweepProjection projectOntoSweep(const SweptSurface& surface, const SweepDomain& domain, const Vec3d& p, int hint = -1);
-// The same projection, bit for bit, with the closest triangle found by `query` (built on `surface`), which skips
-// whole runs of far triangles: for the many queries of one split.
+// The closest triangle comes from `query` (built on `surface`: the brute-force scan's triangle and point, far runs
+// of triangles skipped).
 SweepProjection projectOntoSweep(const SweptSurface& surface, const SweepDomain& domain, const SweptSurfaceQuery& query,
                                  const Vec3d& p);
 

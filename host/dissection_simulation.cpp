@@ -569,24 +569,33 @@ class DissectionSimulation final : public SimulationModel {
   }
 
   // The PBD model during a stroke: the base spheres that are not cut (interface spheres stay, kinematic).
-  void rebuildStrokePbd() {
-    ActiveStroke& a = *active_;
+  // The stroke's base spheres that are not cut, in base order, with the links among them (a link never crosses the
+  // stroke without entering one of its spheres); base_to_kept maps base indices to theirs (-1: cut).
+  static MetaballModel uncutSpheres(const ActiveStroke& a, std::vector<std::int32_t>& base_to_kept) {
     MetaballModel m;
-    std::vector<std::int32_t> base_to_pbd(a.base.size(), -1), pbd_to_base;
+    base_to_kept.assign(a.base.size(), -1);
     for (std::size_t b = 0; b < a.base.size(); ++b) {
-      if (a.region->role(std::int32_t(b)) == SphereRole::Cut) continue;
-      base_to_pbd[b] = std::int32_t(m.size());
-      pbd_to_base.push_back(std::int32_t(b));
+      if (a.region && a.region->role(std::int32_t(b)) == SphereRole::Cut) continue;
+      base_to_kept[b] = std::int32_t(m.size());
       m.rest_centers.push_back(a.base.rest_centers[b]);
       m.rest_radii.push_back(a.base.rest_radii[b]);
       m.masses.push_back(a.base.masses[b]);
     }
     for (std::size_t l = 0; l < a.base.links.size(); ++l) {
-      const std::int32_t i = base_to_pbd[std::size_t(a.base.links[l][0])], j = base_to_pbd[std::size_t(a.base.links[l][1])];
-      if (i < 0 || j < 0) continue;  // a link never crosses the stroke without entering one of its spheres
+      const std::int32_t i = base_to_kept[std::size_t(a.base.links[l][0])], j = base_to_kept[std::size_t(a.base.links[l][1])];
+      if (i < 0 || j < 0) continue;
       m.links.push_back({std::min(i, j), std::max(i, j)});
       m.link_rest_lengths.push_back(a.base.link_rest_lengths[l]);
     }
+    return m;
+  }
+
+  void rebuildStrokePbd() {
+    ActiveStroke& a = *active_;
+    std::vector<std::int32_t> base_to_pbd, pbd_to_base;
+    MetaballModel m = uncutSpheres(a, base_to_pbd);
+    for (std::size_t b = 0; b < a.base.size(); ++b)
+      if (base_to_pbd[b] >= 0) pbd_to_base.push_back(std::int32_t(b));
     // A sphere none of whose base links reaches a cut sphere keeps its link set, hence its rest cell volume.
     std::vector<double> known;
     if (a.base_cell_volume.size() == a.base.size()) {
@@ -628,30 +637,17 @@ class DissectionSimulation final : public SimulationModel {
     auto e = std::make_unique<PendingStrokeEnd>();
     StrokeEndInput& in = e->input;
     in.repack = a.region && a.region->active();
-    // The kept model: the base spheres not cut, in base order (their stroke PBD indices keep their order, so a
-    // grasp on one stays valid), with the links among them.
-    std::vector<std::int32_t> base_to_new(a.base.size(), -1);
-    for (std::size_t b = 0; b < a.base.size(); ++b) {
-      if (in.repack && a.region->role(std::int32_t(b)) == SphereRole::Cut) continue;
-      base_to_new[b] = std::int32_t(in.kept.size());
-      in.kept.rest_centers.push_back(a.base.rest_centers[b]);
-      in.kept.rest_radii.push_back(a.base.rest_radii[b]);
-      in.kept.masses.push_back(a.base.masses[b]);
-    }
-    for (std::size_t l = 0; l < a.base.links.size(); ++l) {
-      const std::int32_t i = base_to_new[std::size_t(a.base.links[l][0])], j = base_to_new[std::size_t(a.base.links[l][1])];
-      if (i < 0 || j < 0) continue;
-      in.kept.links.push_back({std::min(i, j), std::max(i, j)});
-      in.kept.link_rest_lengths.push_back(a.base.link_rest_lengths[l]);
-    }
+    // The kept model is the stroke's PBD model's spheres in the same order, so a grasp on one stays valid.
+    std::vector<std::int32_t> base_to_kept;
+    in.kept = uncutSpheres(a, base_to_kept);
     if (in.repack) in.points = a.region->repackPoints();
     in.settings.boundary_offset = scene_.cutting.repack_boundary_offset;
     in.settings.spacing_factor = scene_.cutting.repack_spacing_factor;
     in.settings.sphere_budget = scene_.cutting.repack_sphere_budget;
     in.settings.reference_mass = reference_mass_;
     in.settings.max_radius = 1.5 * reference_radius_;
-    in.swept = a.swept;
-    in.earlier = earlier_cuts_;
+    in.cuts = earlier_cuts_;
+    in.cuts.push_back(a.swept);
     in.surface = &surface_;  // read by the worker; nothing writes it before applyStrokeEnd
     in.skin_k = 4;
     in.file = scene_.file;

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "host/edge_order.h"
 #include "host/input_error.h"
 #include "host/mesh.h"
 #include "host/scene_json.h"
@@ -49,20 +50,9 @@ EdgeFacts classifyEdges(const TriangleMesh& mesh) {
       edges.push_back({std::min(a, b), std::max(a, b), a});
     }
   }
-  // Ordered by (lo, hi, from): a counting sort on lo, then each vertex's few edges by (hi, from). The order of one
-  // global sort in linear time (every cut's output check runs this on the whole surface).
-  std::vector<int> start(std::size_t(n) + 1, 0);
-  for (const Directed& e : edges) ++start[std::size_t(e.lo) + 1];
-  for (int v = 0; v < n; ++v) start[std::size_t(v) + 1] += start[std::size_t(v)];
-  {
-    std::vector<Directed> by_lo(edges.size());
-    std::vector<int> fill(start.begin(), start.end() - 1);
-    for (const Directed& e : edges) by_lo[std::size_t(fill[std::size_t(e.lo)]++)] = e;
-    edges.swap(by_lo);
-  }
-  for (int v = 0; v < n; ++v)
-    std::sort(edges.begin() + start[std::size_t(v)], edges.begin() + start[std::size_t(v) + 1],
-              [](const Directed& x, const Directed& y) { return x.hi != y.hi ? x.hi < y.hi : x.from < y.from; });
+  // Ordered by (lo, hi, from).
+  sortByLowerVertex(edges, std::size_t(n),
+                    [](const Directed& x, const Directed& y) { return x.hi != y.hi ? x.hi < y.hi : x.from < y.from; });
   EdgeFacts f;
   for (std::size_t i = 0; i < edges.size();) {
     std::size_t j = i;

@@ -219,8 +219,8 @@ TEST(CutStrokeEnd, RefusedSweepFailsAScriptedEndAndLeavesAnInteractiveOneUnsplit
   const CutSurfaceState before = cutSurfaceState(makeBoxMesh(Vec3d(0.02, 0.02, 0.02), 4));
   StrokeEndInput in;
   in.kept = cuttest::latticeBlock(4, 4, 4);
-  in.swept = cuttest::straightBladeSweep(Vec3d(-0.03, 0.001, -0.05), Vec3d(-0.03, 0.001, 0.05), Vec3d(0.06, 0, 0));
-  std::swap(in.swept.triangles[0][1], in.swept.triangles[0][2]);  // not the strip pattern of sweepSurface
+  in.cuts = {cuttest::straightBladeSweep(Vec3d(-0.03, 0.001, -0.05), Vec3d(-0.03, 0.001, 0.05), Vec3d(0.06, 0, 0))};
+  std::swap(in.cuts[0].triangles[0][1], in.cuts[0].triangles[0][2]);  // not the strip pattern of sweepSurface
   in.surface = &before;
   BackgroundTask beside;
   in.interactive = false;
