@@ -52,6 +52,7 @@ double g_chebyshev_rho = 0;
 int g_end_frames = 0;
 double g_pace_hz = 0;
 double g_blade_radius = 0;  // --blade-radius: cutting.blade_radius_m (the blade as a contact)
+int g_conversion_delay = 0;  // --conversion-delay: cutting.conversion_delay_frames (conversions prepared beside a frame)
 
 struct Row {
   std::string kind, backend, solver;
@@ -87,6 +88,7 @@ Scene liverScene(int target, double length_m, double leave_s, int samples, const
   s.cutting.samples_per_diameter = samples;
   s.cutting.stroke_end_frames = g_end_frames;
   s.cutting.blade_radius_m = g_blade_radius;
+  s.cutting.conversion_delay_frames = g_conversion_delay;
   s.fixed = {{Vec3d(-0.1, -0.07, -0.04), Vec3d(0.1, 0.07, -0.02)}};
   ToolSpec t;
   t.name = "scalpel";
@@ -231,6 +233,9 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 120));
   app.add_option("--blade-radius", g_blade_radius, "cutting.blade_radius_m: the blade's contact capsule (m), 0: none")
       ->check(CLI::Range(0.0, 0.05));
+  app.add_option("--conversion-delay", g_conversion_delay,
+                 "cutting.conversion_delay_frames: 1 prepares each conversion beside the frame and applies it at the next")
+      ->check(CLI::Range(0, 1));
   app.add_option("--pace-hz", g_pace_hz, "start frames at this rate (an interactive loop); 0: back to back")
       ->check(CLI::Range(0.0, 10000.0));
   app.add_flag("--stages", stages, "print the median of every stage of the cutting frames");
@@ -291,7 +296,7 @@ int main(int argc, char** argv) {
       f << "case,backend,target,spheres,cut_length_m,nodal_points,interface_spheres,mls_substeps,ms_deform,ms_cutting,"
            "ms_mls,ms_exchange,ms_pbd,ms_convert,ms_repack,ms_apply_frame,ms_after,spheres_after,pbd_solver,pbd_iterations,"
            "stroke_end_frames,pace_hz,ms_end_frame,ms_ending,ms_apply_wait,ms_end_worker,ms_end_split,ms_end_repack,"
-           "ms_end_build,ms_end_bind,blade_radius_m\n";
+           "ms_end_build,ms_end_bind,blade_radius_m,conversion_delay_frames\n";
       for (const Row& r : rows)
         f << r.kind << ',' << r.backend << ',' << r.target << ',' << r.spheres << ',' << r.cut_length_m << ','
           << r.nodal_points << ',' << r.interface << ',' << r.mls_substeps << ',' << r.ms_deform << ',' << r.ms_cutting
@@ -299,16 +304,18 @@ int main(int argc, char** argv) {
           << ',' << r.ms_apply_frame << ',' << r.ms_after << ',' << r.spheres_after << ',' << r.solver << ','
           << r.pbd_iterations << ',' << g_end_frames << ',' << g_pace_hz << ',' << r.ms_end_frame << ','
           << r.ms_ending << ',' << r.ms_apply_wait << ',' << r.ms_end_worker << ',' << r.ms_end_split << ','
-          << r.ms_end_repack << ',' << r.ms_end_build << ',' << r.ms_end_bind << ',' << g_blade_radius << '\n';
+          << r.ms_end_repack << ',' << r.ms_end_build << ',' << r.ms_end_bind << ',' << g_blade_radius << ','
+          << g_conversion_delay << '\n';
     }
     if (rows.empty()) {
       std::printf("bench_cutting: no rows (sizes above the limits or no device)\n");
       return 0;
     }
     const Row& first = rows.front();
-    std::printf("bench_cutting: %s (%s PBD) %d spheres: %.3f ms per frame while cutting (%d nodal points), re-packing %.3f ms; "
+    std::printf("bench_cutting: %s (%s PBD) %d spheres, conversion delay %d: %.3f ms per frame while cutting (%d nodal points), re-packing %.3f ms; "
                 "stroke end (%d frames late): blade-leaving frame %.2f ms, applying frame %.2f ms (waited %.2f), workers %.2f ms\n",
-                first.backend.c_str(), first.solver.c_str(), first.spheres, first.ms_cutting, first.nodal_points, first.ms_repack,
+                first.backend.c_str(), first.solver.c_str(), first.spheres, g_conversion_delay, first.ms_cutting, first.nodal_points,
+                first.ms_repack,
                 g_end_frames, first.ms_end_frame, first.ms_apply_frame, first.ms_apply_wait, first.ms_end_worker);
   } catch (const InputError& e) {
     std::fprintf(stderr, "%s\n", e.what());

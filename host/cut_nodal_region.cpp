@@ -7,6 +7,7 @@
 #include <cmath>
 #include <map>
 #include <numeric>
+#include <stdexcept>
 
 #include "cpu_fallback/parallel.h"
 #include "host/cut_nodal_points.h"
@@ -32,13 +33,13 @@ NodalRegion::NodalRegion(const MetaballModel& base, const NodalRegionSettings& s
     throw InputError(s.mls.source, "cutting.samples_per_diameter", "must be in [1, 64]");
   if (s.backend == BackendKind::Auto) throw InputError(s.mls.source, "solver.backend", "the nodal region needs a resolved backend");
   if (!(s.youngs_modulus > 0)) throw InputError(s.mls.source, "material.youngs_modulus_pa", "must be > 0");
-  role_.assign(base_.size(), SphereRole::Pbd);
+  r_.role.assign(base_.size(), SphereRole::Pbd);
   double rmean = 0.0;
   for (double r : base_.rest_radii) rmean += r / double(std::max<std::size_t>(1, base_.size()));
   spacing_ = 2.0 * rmean / s.samples_per_diameter;
-  supports_ = StrokeSupports(s.mls.support_factor * spacing_, earlier_);
+  r_.supports = StrokeSupports(s.mls.support_factor * spacing_, earlier_);
   adjacency_.resize(base_.size());
-  sphere_points_.resize(base_.size());
+  r_.sphere_points.resize(base_.size());
   for (std::size_t l = 0; l < base_.links.size(); ++l) {
     const auto& e = base_.links[l];
     const double d = base_.link_rest_lengths[l];
@@ -51,12 +52,12 @@ NodalRegion::NodalRegion(const MetaballModel& base, const NodalRegionSettings& s
 }
 
 std::size_t NodalRegion::interfaceCount() const {
-  return std::size_t(std::count(role_.begin(), role_.end(), SphereRole::Interface));
+  return std::size_t(std::count(r_.role.begin(), r_.role.end(), SphereRole::Interface));
 }
 
 double NodalRegion::pointMass() const {
   double m = 0.0;
-  for (double v : mass_) m += v;
+  for (double v : r_.mass) m += v;
   return m;
 }
 
@@ -67,48 +68,140 @@ void NodalRegion::syncState() {
   }
 }
 
-std::size_t NodalRegion::convert(const std::vector<std::int32_t>& cut,
-                                 const std::function<ConvertedSphereState(std::int32_t)>& state, const SweptSurface& stroke) {
-  const std::size_t changed = beginConversion(cut, state);
-  finishConversion(stroke);
-  return changed;
+std::vector<SphereRole> NodalRegion::rolesAfter(const std::vector<std::int32_t>& cut) const {
+  std::vector<SphereRole> role = r_.role;
+  for (std::int32_t b : cut) role[std::size_t(b)] = SphereRole::Cut;
+  for (std::int32_t b : cut)
+    for (const Link& l : adjacency_[std::size_t(b)])
+      if (role[std::size_t(l.other)] == SphereRole::Pbd) role[std::size_t(l.other)] = SphereRole::Interface;
+  return role;
 }
 
-std::size_t NodalRegion::beginConversion(const std::vector<std::int32_t>& cut,
-                                         const std::function<ConvertedSphereState(std::int32_t)>& state) {
-  last_rebuild_ms_ = 0.0;  // a conversion that samples no point rebuilds nothing
-  times_ = ConversionTimes{};
+NodalUpdate NodalRegion::prepareConversion(NodalRest from, const std::vector<std::int32_t>& cut,
+                                           const SweptSurface& stroke) const {
+  NodalUpdate u;
+  u.next = std::move(from);
+  NodalRest& r = u.next;
+  u.first_new = r.rest.size();
   const auto t0 = std::chrono::steady_clock::now();
-  syncState();
-  std::size_t changed = 0;
   // The spheres converted now (cut ones not sampled yet, and new interface spheres), then their points.
-  std::vector<std::int32_t> batch;
   for (std::int32_t b : cut) {
-    if (role_[std::size_t(b)] == SphereRole::Cut) continue;
-    if (sphere_points_[std::size_t(b)].empty()) batch.push_back(b);
-    role_[std::size_t(b)] = SphereRole::Cut;
-    ++changed;
+    if (r.role[std::size_t(b)] == SphereRole::Cut) continue;
+    if (r.sphere_points[std::size_t(b)].empty()) u.sampled.push_back(b);
+    r.role[std::size_t(b)] = SphereRole::Cut;
+    ++u.changed;
   }
   for (std::int32_t b : cut)
     for (const Link& l : adjacency_[std::size_t(b)])
-      if (role_[std::size_t(l.other)] == SphereRole::Pbd) {
-        batch.push_back(l.other);
-        role_[std::size_t(l.other)] = SphereRole::Interface;
-        ++changed;
+      if (r.role[std::size_t(l.other)] == SphereRole::Pbd) {
+        u.sampled.push_back(l.other);
+        r.role[std::size_t(l.other)] = SphereRole::Interface;
+        ++u.changed;
       }
-  sample(batch, state);
-  times_.sample_ms = msSince(t0);
-  return changed;
-}
-
-void NodalRegion::finishConversion(const SweptSurface& stroke) {
-  if (rest_.empty()) return;
+  sample(r, u.sampled);
+  u.sample_ms = msSince(t0);
+  if (r.rest.empty()) return u;  // nothing sampled: nothing to rebuild
   // Supports: symmetric lists of radius h with the visibility criterion for the stroke and every earlier cut,
   // updated for the new points and the stroke's new strip (a conversion's cost stays in what is new).
+  const auto t1 = std::chrono::steady_clock::now();
+  r.supports.update(r.rest, stroke);
+  u.supports_ms = msSince(t1);
+  build(u);
+  return u;
+}
+
+NodalUpdate NodalRegion::prepareStrip(NodalRest from, const SweptSurface& fresh) const {
+  NodalUpdate u;
+  u.next = std::move(from);
+  u.first_new = u.next.rest.size();
+  if (u.next.rest.empty() || fresh.empty()) return u;
   const auto t0 = std::chrono::steady_clock::now();
-  supports_.update(rest_, stroke);
-  times_.supports_ms = msSince(t0);
-  rebuild();
+  u.removed = u.next.supports.extend(u.next.rest, fresh);
+  u.supports_ms = msSince(t0);
+  if (u.removed > 0) build(u);
+  return u;
+}
+
+void NodalRegion::build(NodalUpdate& u) const {
+  regroup(u.next);
+  MlsBuildInput in = settings_.mls;
+  in.rest_positions = u.next.rest;
+  in.masses = u.next.mass;
+  in.kinds = u.next.kind;
+  in.spacing = spacing_;
+  in.neighbors = u.next.supports.lists();
+  const auto t0 = std::chrono::steady_clock::now();
+  u.model = buildMlsModelIn(in, settings_.precision);
+  u.model_build_ms = msSince(t0);
+  u.rebuild = true;
+}
+
+void NodalRegion::apply(NodalUpdate& u, const std::vector<ConvertedSphereState>& sampled_state) {
+  if (sampled_state.size() != u.sampled.size())
+    throw std::logic_error("NodalRegion::apply: one state per sampled sphere is needed");
+  last_rebuild_ms_ = 0.0;
+  times_ = ConversionTimes{};
+  times_.sample_ms = u.sample_ms;
+  times_.supports_ms = u.supports_ms;
+  times_.model_build_ms = u.model_build_ms;
+  if (!u.rebuild) {  // a strip that dropped no support, or nothing sampled: the points and their state stay
+    r_ = std::move(u.next);
+    return;
+  }
+  syncState();
+  // The new points start rigidly attached to their sphere: x = x_b + R_b (X - C_b), v = v_b.
+  const NodalRest& r = u.next;
+  for (std::size_t k = 0; k < u.sampled.size(); ++k) {
+    const std::int32_t b = u.sampled[k];
+    const ConvertedSphereState& st = sampled_state[k];
+    const Vec3d c = base_.rest_centers[std::size_t(b)];
+    for (std::int32_t i : r.sphere_points[std::size_t(b)]) {
+      if (std::size_t(i) < u.first_new) continue;
+      const Vec3d x = r.rest[std::size_t(i)];
+      u_.push_back(st.position + st.rotation * (x - c) - x);
+      v_.push_back(r.kind[std::size_t(i)] == kMlsFixed ? Vec3d() : st.velocity);
+    }
+  }
+  r_ = std::move(u.next);
+  const auto t0 = std::chrono::steady_clock::now();
+  loadMlsSolver(solver_, u.model, settings_.backend);  // the GPU reuses its buffers
+  times_.model_ms = u.model_build_ms + msSince(t0);
+  const auto t1 = std::chrono::steady_clock::now();
+  // A cut's few thousand points are launch-bound on the GPU: the substeps of an exchange replay as one graph.
+  solver_->setStageTiming(false);
+  solver_->setSafety(solver_->safety() * safety_scale_);
+  solver_->setDisplacements(u_);
+  solver_->setVelocities(v_);
+  solver_->setCouplingGroups(r_.groups);
+  // Anchors until the first exchange: each spring's PBD sphere where the points' own sphere puts it at rest
+  // length along the rest direction (no force); the exchange replaces them with the PBD positions.
+  group_u_.assign(r_.groups.size(), Vec3d());
+  anchors_.assign(r_.groups.springs(), Vec3d());
+  solver_->couplingDisplacements(group_u_);
+  for (std::size_t g = 0; g < r_.groups.size(); ++g)
+    for (std::int32_t s = r_.groups.spring_offsets[g]; s < r_.groups.spring_offsets[g + 1]; ++s) {
+      const std::int32_t j = r_.spring_other[std::size_t(s)];
+      anchors_[std::size_t(s)] = base_.rest_centers[std::size_t(j)] + group_u_[g];
+    }
+  solver_->setCouplingAnchors(anchors_);
+  last_reduction_ = solver_->reduce();
+  times_.setup_ms = msSince(t1);
+  last_rebuild_ms_ = msSince(t0);
+}
+
+std::size_t NodalRegion::convert(const std::vector<std::int32_t>& cut,
+                                 const std::function<ConvertedSphereState(std::int32_t)>& state, const SweptSurface& stroke) {
+  NodalUpdate u = prepareConversion(takeRest(), cut, stroke);
+  std::vector<ConvertedSphereState> st;
+  for (std::int32_t b : u.sampled) st.push_back(state(b));
+  apply(u, st);
+  return u.changed;
+}
+
+std::size_t NodalRegion::cutSupports(const SweptSurface& fresh) {
+  NodalUpdate u = prepareStrip(takeRest(), fresh);
+  apply(u, {});
+  return u.removed;
 }
 
 // Section 5.1's uniform sampling, on one lattice shared by every converted sphere (spacing 2 r_mean / n, cell
@@ -118,7 +211,7 @@ void NodalRegion::finishConversion(const SweptSurface& stroke) {
 // One lattice rather than one per sphere: where balls overlap, per-sphere lattices interleave, and the MLS gradient
 // does not see one sub-lattice sliding through the other, a zero-energy mode the coupling force (one sphere's
 // points) excites (measured: points escaping by 11 cm in the flap test).
-void NodalRegion::sample(const std::vector<std::int32_t>& batch, const std::function<ConvertedSphereState(std::int32_t)>& state) {
+void NodalRegion::sample(NodalRest& next, const std::vector<std::int32_t>& batch) const {
   const double p = spacing_;
   struct Candidate {
     std::int32_t sphere;
@@ -145,7 +238,7 @@ void NodalRegion::sample(const std::vector<std::int32_t>& batch, const std::func
       for (std::int64_t j = lo[1]; j <= hi[1]; ++j)
         for (std::int64_t k = lo[2]; k <= hi[2]; ++k) {
           const std::array<std::int64_t, 3> key{i, j, k};
-          if (occupied_.count(key)) continue;
+          if (next.occupied.count(key)) continue;
           const Vec3d x((double(i) + 0.5) * p, (double(j) + 0.5) * p, (double(k) + 0.5) * p);
           const double power = norm2(x - c) - r * r;
           if (power < 0) trials.push_back({b, key, power});
@@ -181,50 +274,38 @@ void NodalRegion::sample(const std::vector<std::int32_t>& batch, const std::func
   }
   std::map<std::int32_t, std::vector<Vec3d>> taken;
   for (const auto& [key, cand] : cells) {
-    occupied_.insert(key);
+    next.occupied.insert(key);
     taken[cand.sphere].push_back(Vec3d((double(key[0]) + 0.5) * p, (double(key[1]) + 0.5) * p, (double(key[2]) + 0.5) * p));
   }
   for (std::int32_t b : batch) {
     std::vector<Vec3d>& pts = taken[b];
     const Vec3d c = base_.rest_centers[std::size_t(b)];
     if (pts.empty()) pts.push_back(c);
-    const ConvertedSphereState st = state(b);
     bool fixed = false;
     for (const FixedRegion& f : settings_.fixed) fixed = fixed || insideBox(c, f);
     const double m = base_.masses[std::size_t(b)] / double(pts.size());  // section 5.1: m_i / n each
     for (const Vec3d& x : pts) {
-      sphere_points_[std::size_t(b)].push_back(std::int32_t(rest_.size()));
-      rest_.push_back(x);
-      mass_.push_back(m);
-      source_.push_back(b);
-      kind_.push_back(fixed ? kMlsFixed : kMlsFree);
-      u_.push_back(st.position + st.rotation * (x - c) - x);
-      v_.push_back(fixed ? Vec3d() : st.velocity);
+      next.sphere_points[std::size_t(b)].push_back(std::int32_t(next.rest.size()));
+      next.rest.push_back(x);
+      next.mass.push_back(m);
+      next.source.push_back(b);
+      next.kind.push_back(fixed ? kMlsFixed : kMlsFree);
     }
   }
 }
 
-std::size_t NodalRegion::cutSupports(const SweptSurface& fresh) {
-  if (rest_.empty() || fresh.empty()) return 0;
-  const std::size_t removed = supports_.extend(rest_, fresh);
-  if (removed == 0) return 0;
-  syncState();
-  rebuild();
-  return removed;
-}
-
 // Groups: an interface sphere is one group (all its points) with a spring to each PBD-role link neighbour; a cut
 // sphere has one group per connected piece of its points (supports among them), without springs.
-void NodalRegion::regroup() {
-  groups_ = MlsCouplingGroups{};
-  group_sphere_.clear();
-  spring_other_.clear();
-  std::vector<std::int32_t> local(rest_.size(), -1);
+void NodalRegion::regroup(NodalRest& r) const {
+  r.groups = MlsCouplingGroups{};
+  r.group_sphere.clear();
+  r.spring_other.clear();
+  std::vector<std::int32_t> local(r.rest.size(), -1);
   for (std::size_t b = 0; b < base_.size(); ++b) {
-    const auto& pts = sphere_points_[b];
+    const auto& pts = r.sphere_points[b];
     if (pts.empty()) continue;
     std::vector<std::vector<std::int32_t>> pieces;
-    if (role_[b] == SphereRole::Interface) {
+    if (r.role[b] == SphereRole::Interface) {
       pieces.push_back(pts);
     } else {
       for (std::size_t k = 0; k < pts.size(); ++k) local[std::size_t(pts[k])] = std::int32_t(k);
@@ -234,84 +315,46 @@ void NodalRegion::regroup() {
         while (parent[std::size_t(a)] != a) a = parent[std::size_t(a)] = parent[std::size_t(parent[std::size_t(a)])];
         return a;
       };
+      const NeighborLists& sup = r.supports.lists();
       for (std::size_t k = 0; k < pts.size(); ++k)
-        for (std::int64_t q = supports().offsets[std::size_t(pts[k])]; q < supports().offsets[std::size_t(pts[k]) + 1]; ++q) {
-          const std::int32_t j = local[std::size_t(supports().indices[std::size_t(q)])];
+        for (std::int64_t q = sup.offsets[std::size_t(pts[k])]; q < sup.offsets[std::size_t(pts[k]) + 1]; ++q) {
+          const std::int32_t j = local[std::size_t(sup.indices[std::size_t(q)])];
           if (j < 0) continue;
           const std::int32_t a = find(std::int32_t(k)), c = find(j);
           if (a != c) parent[std::size_t(std::max(a, c))] = std::min(a, c);
         }
       std::vector<std::int32_t> slot(pts.size(), -1);
       for (std::size_t k = 0; k < pts.size(); ++k) {
-        const std::int32_t r = find(std::int32_t(k));
-        if (slot[std::size_t(r)] < 0) {
-          slot[std::size_t(r)] = std::int32_t(pieces.size());
+        const std::int32_t root = find(std::int32_t(k));
+        if (slot[std::size_t(root)] < 0) {
+          slot[std::size_t(root)] = std::int32_t(pieces.size());
           pieces.emplace_back();
         }
-        pieces[std::size_t(slot[std::size_t(r)])].push_back(pts[k]);
+        pieces[std::size_t(slot[std::size_t(root)])].push_back(pts[k]);
       }
       for (std::int32_t p : pts) local[std::size_t(p)] = -1;
     }
     for (const auto& piece : pieces) {
-      groups_.members.insert(groups_.members.end(), piece.begin(), piece.end());
-      groups_.member_offsets.push_back(std::int32_t(groups_.members.size()));
-      groups_.rest_centres.push_back(base_.rest_centers[b]);
-      if (role_[b] == SphereRole::Interface)
+      r.groups.members.insert(r.groups.members.end(), piece.begin(), piece.end());
+      r.groups.member_offsets.push_back(std::int32_t(r.groups.members.size()));
+      r.groups.rest_centres.push_back(base_.rest_centers[b]);
+      if (r.role[b] == SphereRole::Interface)
         for (const Link& l : adjacency_[b])
-          if (role_[std::size_t(l.other)] == SphereRole::Pbd) {
-            groups_.rest_lengths.push_back(l.rest);
-            groups_.stiffnesses.push_back(l.stiffness);
-            spring_other_.push_back(l.other);
+          if (r.role[std::size_t(l.other)] == SphereRole::Pbd) {
+            r.groups.rest_lengths.push_back(l.rest);
+            r.groups.stiffnesses.push_back(l.stiffness);
+            r.spring_other.push_back(l.other);
           }
-      groups_.spring_offsets.push_back(std::int32_t(groups_.rest_lengths.size()));
-      group_sphere_.push_back(std::int32_t(b));
+      r.groups.spring_offsets.push_back(std::int32_t(r.groups.rest_lengths.size()));
+      r.group_sphere.push_back(std::int32_t(b));
     }
   }
-  group_u_.assign(groups_.size(), Vec3d());
-  anchors_.assign(groups_.springs(), Vec3d());
-}
-
-void NodalRegion::rebuild() {
-  const auto t0 = std::chrono::steady_clock::now();
-  rebuildSolver();
-  last_rebuild_ms_ = msSince(t0);
-}
-
-void NodalRegion::rebuildSolver() {
-  regroup();
-  MlsBuildInput in = settings_.mls;
-  in.rest_positions = rest_;
-  in.masses = mass_;
-  in.kinds = kind_;
-  in.spacing = spacing_;
-  in.neighbors = supports();
-  const auto t0 = std::chrono::steady_clock::now();
-  rebuildMlsSolver(solver_, in, settings_.backend, settings_.precision, &times_.model_build_ms);  // the GPU reuses its buffers
-  times_.model_ms = msSince(t0);
-  const auto t1 = std::chrono::steady_clock::now();
-  // A cut's few thousand points are launch-bound on the GPU: the substeps of an exchange replay as one graph.
-  solver_->setStageTiming(false);
-  solver_->setSafety(solver_->safety() * safety_scale_);
-  solver_->setDisplacements(u_);
-  solver_->setVelocities(v_);
-  solver_->setCouplingGroups(groups_);
-  // Anchors until the first exchange: each spring's PBD sphere where the points' own sphere puts it at rest
-  // length along the rest direction (no force); the exchange replaces them with the PBD positions.
-  solver_->couplingDisplacements(group_u_);
-  for (std::size_t g = 0; g < groups_.size(); ++g)
-    for (std::int32_t s = groups_.spring_offsets[g]; s < groups_.spring_offsets[g + 1]; ++s) {
-      const std::int32_t j = spring_other_[std::size_t(s)];
-      anchors_[std::size_t(s)] = base_.rest_centers[std::size_t(j)] + group_u_[g];
-    }
-  solver_->setCouplingAnchors(anchors_);
-  last_reduction_ = solver_->reduce();
-  times_.setup_ms = msSince(t1);
 }
 
 MlsFrameStats NodalRegion::advance(double dt, int fixed_substeps, const std::function<Vec3d(std::int32_t)>& pbd_position) {
   MlsFrameStats st;
   if (!solver_) return st;
-  for (std::size_t s = 0; s < anchors_.size(); ++s) anchors_[s] = pbd_position(spring_other_[s]);
+  for (std::size_t s = 0; s < anchors_.size(); ++s) anchors_[s] = pbd_position(r_.spring_other[s]);
   solver_->setCouplingAnchors(anchors_);
   int n = 0;
   if (fixed_substeps > 0) {
@@ -329,28 +372,28 @@ MlsFrameStats NodalRegion::advance(double dt, int fixed_substeps, const std::fun
 void NodalRegion::interfacePositions(std::vector<std::int32_t>& ids, std::vector<Vec3d>& pos) const {
   ids.clear();
   pos.clear();
-  for (std::size_t g = 0; g < group_sphere_.size(); ++g) {
-    const std::int32_t b = group_sphere_[g];
-    if (role_[std::size_t(b)] != SphereRole::Interface) continue;
+  for (std::size_t g = 0; g < r_.group_sphere.size(); ++g) {
+    const std::int32_t b = r_.group_sphere[g];
+    if (r_.role[std::size_t(b)] != SphereRole::Interface) continue;
     ids.push_back(b);
     pos.push_back(base_.rest_centers[std::size_t(b)] + group_u_[g]);  // eq. 13
   }
 }
 
 bool NodalRegion::sphereDisplacement(std::int32_t b, const Vec3d& p, Vec3d& out) const {
-  const auto& pts = sphere_points_[std::size_t(b)];
+  const auto& pts = r_.sphere_points[std::size_t(b)];
   if (pts.empty()) return false;
   // The point of b nearest p decides the piece; its group's eq. 13 displacement moves the skin.
   std::int32_t best = pts.front();
-  double bd = norm2(rest_[std::size_t(best)] - p);
+  double bd = norm2(r_.rest[std::size_t(best)] - p);
   for (std::int32_t q : pts) {
-    const double d = norm2(rest_[std::size_t(q)] - p);
+    const double d = norm2(r_.rest[std::size_t(q)] - p);
     if (d < bd) bd = d, best = q;
   }
-  for (std::size_t g = 0; g < group_sphere_.size(); ++g) {
-    if (group_sphere_[g] != b) continue;
-    for (std::int32_t k = groups_.member_offsets[g]; k < groups_.member_offsets[g + 1]; ++k)
-      if (groups_.members[std::size_t(k)] == best) {
+  for (std::size_t g = 0; g < r_.group_sphere.size(); ++g) {
+    if (r_.group_sphere[g] != b) continue;
+    for (std::int32_t k = r_.groups.member_offsets[g]; k < r_.groups.member_offsets[g + 1]; ++k)
+      if (r_.groups.members[std::size_t(k)] == best) {
         out = group_u_[g];
         return true;
       }
@@ -360,11 +403,11 @@ bool NodalRegion::sphereDisplacement(std::int32_t b, const Vec3d& p, Vec3d& out)
 
 double NodalRegion::springEnergy() const {
   double e = 0.0;
-  for (std::size_t g = 0; g < groups_.size(); ++g) {
-    const Vec3d xa = groups_.rest_centres[g] + group_u_[g];
-    for (std::int32_t s = groups_.spring_offsets[g]; s < groups_.spring_offsets[g + 1]; ++s)
-      e += couplingSpringEnergy(xa, anchors_[std::size_t(s)], groups_.rest_lengths[std::size_t(s)],
-                                groups_.stiffnesses[std::size_t(s)]);
+  for (std::size_t g = 0; g < r_.groups.size(); ++g) {
+    const Vec3d xa = r_.groups.rest_centres[g] + group_u_[g];
+    for (std::int32_t s = r_.groups.spring_offsets[g]; s < r_.groups.spring_offsets[g + 1]; ++s)
+      e += couplingSpringEnergy(xa, anchors_[std::size_t(s)], r_.groups.rest_lengths[std::size_t(s)],
+                                r_.groups.stiffnesses[std::size_t(s)]);
   }
   return e;
 }
@@ -388,12 +431,12 @@ RepackPoints NodalRegion::repackPoints() const {
   // The cut spheres' points to re-pack, the interface spheres' points as context (they stay: the faces the cut
   // points share with them are not the tissue's surface), and the supports among them all.
   RepackPoints p;
-  p.rest = rest_;
-  p.mass.resize(rest_.size());
-  p.context.resize(rest_.size());
-  for (std::size_t i = 0; i < rest_.size(); ++i) {
-    const bool context = role_[std::size_t(source_[i])] != SphereRole::Cut;
-    p.mass[i] = context ? 0.0 : mass_[i];
+  p.rest = r_.rest;
+  p.mass.resize(r_.rest.size());
+  p.context.resize(r_.rest.size());
+  for (std::size_t i = 0; i < r_.rest.size(); ++i) {
+    const bool context = r_.role[std::size_t(r_.source[i])] != SphereRole::Cut;
+    p.mass[i] = context ? 0.0 : r_.mass[i];
     p.context[i] = context ? 1 : 0;
   }
   p.visible = supports();
@@ -406,13 +449,13 @@ NodalRegionFinal NodalRegion::finish(bool with_points) {
   NodalRegionFinal f;
   syncState();
   // Interface spheres: eq. 13 position and the mean velocity of their points.
-  for (std::size_t g = 0; g < group_sphere_.size(); ++g) {
-    const std::int32_t b = group_sphere_[g];
-    if (role_[std::size_t(b)] != SphereRole::Interface) continue;
+  for (std::size_t g = 0; g < r_.group_sphere.size(); ++g) {
+    const std::int32_t b = r_.group_sphere[g];
+    if (r_.role[std::size_t(b)] != SphereRole::Interface) continue;
     Vec3d v;
-    for (std::int32_t k = groups_.member_offsets[g]; k < groups_.member_offsets[g + 1]; ++k)
-      v += v_[std::size_t(groups_.members[std::size_t(k)])];
-    v *= 1.0 / double(groups_.member_offsets[g + 1] - groups_.member_offsets[g]);
+    for (std::int32_t k = r_.groups.member_offsets[g]; k < r_.groups.member_offsets[g + 1]; ++k)
+      v += v_[std::size_t(r_.groups.members[std::size_t(k)])];
+    v *= 1.0 / double(r_.groups.member_offsets[g + 1] - r_.groups.member_offsets[g]);
     f.interface_ids.push_back(b);
     f.interface_position.push_back(base_.rest_centers[std::size_t(b)] + group_u_[g]);
     f.interface_velocity.push_back(v);
@@ -420,22 +463,18 @@ NodalRegionFinal NodalRegion::finish(bool with_points) {
   if (with_points) f.points = repackPoints();
   f.displacement = u_;
   f.velocity = v_;
-  // The nodal points go back to zero between cuts.
+  // The nodal points go back to zero between cuts (the roles stay: the stroke's end reads them).
   solver_.reset();
-  rest_.clear();
-  mass_.clear();
-  source_.clear();
-  kind_.clear();
   u_.clear();
   v_.clear();
-  supports_.clear();
-  groups_ = MlsCouplingGroups{};
-  group_sphere_.clear();
-  spring_other_.clear();
   group_u_.clear();
   anchors_.clear();
-  for (auto& p : sphere_points_) p.clear();
-  occupied_.clear();
+  NodalRest empty;
+  empty.role = std::move(r_.role);
+  empty.sphere_points.resize(r_.sphere_points.size());
+  empty.supports = std::move(r_.supports);
+  empty.supports.clear();
+  r_ = std::move(empty);
   return f;
 }
 

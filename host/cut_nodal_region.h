@@ -51,6 +51,37 @@ struct NodalRegionFinal {
   std::vector<Vec3d> interface_position, interface_velocity;  // eq. 13 position, mean velocity of its points
 };
 
+// The rest configuration of a stroke's points: everything a conversion changes, and nothing that moves (the
+// solver's state stays in NodalRegion). A conversion is worked out on its own copy (NodalUpdate), so that it can be
+// prepared on a worker while the points go on being simulated with the current one.
+struct NodalRest {
+  std::vector<SphereRole> role;                          // per base sphere
+  std::vector<std::vector<std::int32_t>> sphere_points;  // base sphere -> its points
+  std::vector<Vec3d> rest;                               // per point (m)
+  std::vector<double> mass;                              // kg
+  std::vector<std::int32_t> source;                      // the base sphere a point was sampled from
+  std::vector<std::uint8_t> kind;                        // MlsParticleKind
+  std::set<std::array<std::int64_t, 3>> occupied;        // lattice cells already holding a point
+  StrokeSupports supports;                               // visibility-filtered supports, kept across the stroke
+  MlsCouplingGroups groups;                              // group g belongs to base sphere group_sphere[g]
+  std::vector<std::int32_t> group_sphere;
+  std::vector<std::int32_t> spring_other;                // per spring: the base index of its PBD sphere
+};
+
+// A conversion, or a strip that only cuts supports, worked out in the rest configuration alone
+// (NodalRegion::prepareConversion / prepareStrip): the next rest data and, where the points or their supports
+// changed, the MLS model built on them. NodalRegion::apply brings it in with the state of a later moment.
+struct NodalUpdate {
+  NodalRest next;
+  std::vector<std::int32_t> sampled;   // base spheres whose points this update adds, in the order it adds them
+  std::size_t first_new = 0;           // next.rest[first_new ..] are those points
+  bool rebuild = false;                // the points or the supports changed: `model` is the MLS model on them
+  MlsBuiltModel model;
+  std::size_t changed = 0;             // spheres that changed role
+  std::size_t removed = 0;             // directed supports the strip dropped
+  double sample_ms = 0, supports_ms = 0, model_build_ms = 0;  // host time of the parts (ms)
+};
+
 class NodalRegion {
  public:
   // `base`: the sphere model when the stroke began (its indices are the "base" indices used below).
@@ -58,45 +89,55 @@ class NodalRegion {
   NodalRegion(const MetaballModel& base, const NodalRegionSettings& settings, std::vector<const SweptSurface*> earlier_cuts);
 
   const MetaballModel& base() const { return base_; }
-  SphereRole role(std::int32_t b) const { return role_[std::size_t(b)]; }
-  std::size_t pointCount() const { return rest_.size(); }
-  bool active() const { return !rest_.empty(); }
+  SphereRole role(std::int32_t b) const { return r_.role[std::size_t(b)]; }
+  const std::vector<SphereRole>& roles() const { return r_.role; }
+  std::size_t pointCount() const { return r_.rest.size(); }
+  bool active() const { return !r_.rest.empty(); }
   std::size_t interfaceCount() const;
-  std::size_t springCount() const { return groups_.springs(); }
+  std::size_t springCount() const { return r_.groups.springs(); }
   double pointSpacing() const { return spacing_; }
   double pointMass() const;                 // kg, sum over the points
-  std::size_t supportsRemoved() const { return supports_.removed(); }  // directed pairs dropped by the cuts so far
-  double lastRebuildMs() const { return last_rebuild_ms_; }  // the last MLS solver rebuild (model, device upload)
-  // The parts of the last conversion (ms): sampling (beginConversion), supports, the MLS model built and loaded
-  // (rebuildMlsSolver), the rest of the rebuild (groups, state and anchor uploads, the stable-step reduction).
+  std::size_t supportsRemoved() const { return r_.supports.removed(); }  // directed pairs dropped by the cuts so far
+  double lastRebuildMs() const { return last_rebuild_ms_; }  // the last apply's MLS solver load and setup
+  // The parts of the last conversion (ms): sampling, supports and the MLS model's host build (the update's
+  // preparation), the model built and loaded, the rest of the load (groups, state and anchor uploads, the
+  // stable-step reduction).
   struct ConversionTimes {
     double sample_ms = 0, supports_ms = 0, model_ms = 0, setup_ms = 0;
-    double model_build_ms = 0;  // of model_ms: the host build (CUDA reuse; 0 where a new solver was made)
+    double model_build_ms = 0;  // of model_ms: the host build (prepared apart from the load)
   };
   const ConversionTimes& lastConversionTimes() const { return times_; }
   const MlsSolver* solver() const { return solver_.get(); }
-  const NeighborLists& supports() const { return supports_.lists(); }
-  const std::vector<Vec3d>& restPoints() const { return rest_; }
-  const std::vector<std::int32_t>& pointSphere() const { return source_; }
+  const NeighborLists& supports() const { return r_.supports.lists(); }
+  const std::vector<Vec3d>& restPoints() const { return r_.rest; }
+  const std::vector<std::int32_t>& pointSphere() const { return r_.source; }
 
-  // Converts the listed base spheres to role Cut (sampling the ones not converted yet) and their PBD-role link
-  // neighbours to role Interface; `state(b)` gives a sphere's state when it is sampled. `stroke`: the stroke's
-  // swept surface so far (extending the one of the previous call, else the supports start over). Updates the
-  // supports (visibility against the stroke and the earlier cuts: the lists of the new points, the pairs the new
-  // strip crosses; the same lists as visibleSupports from scratch), rebuilds the coupling groups and the MLS model
-  // (moment matrices of every point recomputed), carrying the existing points' state. Returns the number of
-  // spheres that changed role.
+  // The roles after converting the listed base spheres: each becomes Cut, its PBD-role link neighbours Interface.
+  std::vector<SphereRole> rolesAfter(const std::vector<std::int32_t>& cut) const;
+
+  // The rest data an update starts from: a copy (an update prepared while advance() runs: prepare* read nothing
+  // advance() writes) or the region's own, moved out (an update applied at once; nothing but prepare* and apply
+  // may use the region in between).
+  NodalRest restCopy() const { return r_; }
+  NodalRest takeRest() { return std::move(r_); }
+  // Converts the listed base spheres (rolesAfter), sampling the ones without points yet (section 5.1, rest
+  // positions only), and updates the supports for the new points and the stroke so far (`stroke`: the swept
+  // surface, extending the one of the previous update, else the supports start over; visibility against the stroke
+  // and the earlier cuts, the same lists as visibleSupports from scratch), then the coupling groups and the MLS
+  // model (moment matrices of every point recomputed).
+  NodalUpdate prepareConversion(NodalRest from, const std::vector<std::int32_t>& cut, const SweptSurface& stroke) const;
+  // The stroke grew by `fresh` (a surface holding only the new triangles, the next ones of the stroke the next
+  // conversion gets): supports crossing it are dropped and, if any was, the groups and the MLS model are rebuilt.
+  NodalUpdate prepareStrip(NodalRest from, const SweptSurface& fresh) const;
+  // Brings `u` in: the existing points keep their state, the new points start rigidly attached to their sphere,
+  // x = x_b + R_b (X - C_b), v = v_b, from `sampled_state` (one per u.sampled, the spheres' state now); the MLS
+  // solver is loaded with u's model.
+  void apply(NodalUpdate& u, const std::vector<ConvertedSphereState>& sampled_state);
+  // prepareConversion on the region's own data then apply, with `state(b)` a sphere's state now. Returns the
+  // number of spheres that changed role.
   std::size_t convert(const std::vector<std::int32_t>& cut, const std::function<ConvertedSphereState(std::int32_t)>& state,
                       const SweptSurface& stroke);
-  // convert() in two halves: the roles and the new points' samples (the only part that reads the PBD state through
-  // `state`; role() is final after it), then the supports and the MLS rebuild, which touch nothing outside this
-  // region, so a caller may rebuild its PBD model on another thread meanwhile. Returns as convert() does.
-  std::size_t beginConversion(const std::vector<std::int32_t>& cut,
-                              const std::function<ConvertedSphereState(std::int32_t)>& state);
-  void finishConversion(const SweptSurface& stroke);
-  // The stroke grew by `fresh` (a surface holding only the new triangles, the next ones of the stroke the next
-  // convert() gets): supports crossing it are dropped and, if any was, the groups and the MLS model are rebuilt
-  // (moment matrices recomputed). Returns the pairs dropped.
+  // prepareStrip then apply, on the region's own data. Returns the pairs dropped.
   std::size_t cutSupports(const SweptSurface& fresh);
 
   // One coupling exchange: the springs' anchors from the PBD spheres' current positions (`pbd_position(j)` for
@@ -138,31 +179,18 @@ class NodalRegion {
     std::int32_t other;
     double rest, stiffness;
   };
-  void sample(const std::vector<std::int32_t>& batch, const std::function<ConvertedSphereState(std::int32_t)>& state);
-  void rebuild();        // rebuildSolver, timed (lastRebuildMs)
-  void rebuildSolver();
-  void regroup();
+  void sample(NodalRest& next, const std::vector<std::int32_t>& batch) const;
+  void regroup(NodalRest& r) const;
+  void build(NodalUpdate& u) const;  // groups and MLS model on u.next
   void syncState();  // host copies of u, v from the solver
 
   MetaballModel base_;
   NodalRegionSettings settings_;
   std::vector<const SweptSurface*> earlier_;
-  std::vector<SphereRole> role_;
-  std::vector<std::vector<Link>> adjacency_;      // base links per sphere with their spring stiffness
-  std::vector<std::vector<std::int32_t>> sphere_points_;  // base sphere -> its points
-  // points
-  std::vector<Vec3d> rest_;
-  std::vector<double> mass_;
-  std::vector<std::int32_t> source_;
-  std::vector<std::uint8_t> kind_;      // MlsParticleKind
-  std::vector<Vec3d> u_, v_;            // host copies (valid after syncState)
-  double spacing_ = 0.0;                // m, the shared sampling lattice's spacing
-  std::set<std::array<std::int64_t, 3>> occupied_;  // lattice cells already holding a point
-  StrokeSupports supports_;               // visibility-filtered supports, kept across the stroke
-  // coupling groups: group g belongs to base sphere group_sphere_[g]
-  MlsCouplingGroups groups_;
-  std::vector<std::int32_t> group_sphere_;
-  std::vector<std::int32_t> spring_other_;  // per spring: the base index of its PBD sphere
+  std::vector<std::vector<Link>> adjacency_;  // base links per sphere with their spring stiffness
+  double spacing_ = 0.0;                      // m, the shared sampling lattice's spacing
+  NodalRest r_;
+  std::vector<Vec3d> u_, v_;                  // host copies of the points' state (valid after syncState)
   std::vector<Vec3d> group_u_, anchors_;
   std::unique_ptr<MlsSolver> solver_;
   MlsReduction last_reduction_;

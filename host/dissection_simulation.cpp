@@ -162,6 +162,11 @@ class DissectionSimulation final : public SimulationModel {
     timers_.apply_ms = mouse_cut_ms_;
     timers_.convert_ms = mouse_convert_ms_;
     mouse_cut_ms_ = mouse_convert_ms_ = 0.0;
+    if (converting_ && t0 > converting_->launched_at) {  // delayed from an earlier frame (not this one retried)
+      const auto c0 = std::chrono::steady_clock::now();
+      applyConversion();
+      timers_.convert_ms += msSince(c0);
+    }
     if (ending_ && --ending_->frames_left <= 0) {
       const auto c0 = std::chrono::steady_clock::now();
       applyStrokeEnd();
@@ -198,6 +203,7 @@ class DissectionSimulation final : public SimulationModel {
     rep.stages.push_back({"cut_sweep", timers_.sweep_ms});
     rep.stages.push_back({"cut_convert", timers_.convert_ms});
     rep.stages.push_back({"cut_convert_pbd", timers_.convert_pbd_ms});  // a share of cut_convert
+    rep.stages.push_back({"cut_convert_prepare", timers_.convert_prepare_ms});  // on workers; delayed: off the frame
     rep.stages.push_back({"cut_convert_mls", timers_.convert_mls_ms});  // a share of cut_convert
     // The conversion's parts: sampling, then beside the PBD rebuild the supports and the MLS rebuild (model, setup).
     rep.stages.push_back({"cut_convert_sample", timers_.convert_sample_ms});
@@ -376,6 +382,7 @@ class DissectionSimulation final : public SimulationModel {
   struct Timers {
     double sweep_ms = 0, convert_ms = 0, exchange_ms = 0, repack_ms = 0, apply_ms = 0;
     double convert_pbd_ms = 0;  // of convert_ms: the PBD model rebuilt without the converted spheres
+    double convert_prepare_ms = 0;  // the conversions' rest-configuration work (off the frame when delayed)
     double convert_mls_ms = 0;  // of convert_ms: the MLS solver rebuilt on the points
     double convert_sample_ms = 0, convert_supports_ms = 0, convert_mls_model_ms = 0, convert_mls_setup_ms = 0;
     double convert_mls_build_ms = 0;
@@ -400,6 +407,7 @@ class DissectionSimulation final : public SimulationModel {
     range(c.pbd_iterations, 0, 1000, "pbd_iterations");
     range(c.mls_substeps_per_exchange, 0, 100000, "mls_substeps_per_exchange");
     range(c.stroke_end_frames, 0, 120, "stroke_end_frames");
+    range(c.conversion_delay_frames, 0, 1, "conversion_delay_frames");
     if (!(c.blade_radius_m >= 0 && c.blade_radius_m <= 0.05))
       throw InputError(s.file, "cutting.blade_radius_m", "must lie in [0, 0.05] m");
     if (!(c.repack_boundary_offset > 0 && c.repack_boundary_offset < 1))
@@ -504,15 +512,24 @@ class DissectionSimulation final : public SimulationModel {
   }
 
   // Extends the swept surface to `pose`; spheres the new strip enters become nodal points (with their PBD-role
-  // neighbours as interface spheres), or, when none does, supports crossing the new strip are cut.
+  // neighbours as interface spheres), or, when none does, supports crossing the new strip are cut. Everything of
+  // it but the state transfer works in the rest configuration (NodalRegion::prepareConversion, the stroke's next
+  // PBD model): with cutting.conversion_delay_frames 1 that work runs on workers beside this frame and the
+  // conversion is applied at the next frame's start with the state of then (applyConversion); with 0, now.
   void extendStroke(const BladePose& pose) {
     last_convert_ms_ = 0;
     ActiveStroke& a = *active_;
     const std::size_t nv = a.swept.vertices.size(), nt = a.swept.triangles.size();
     if (norm(pose.base - a.swept.vertices[nv - 2]) <= 1e-9 && norm(pose.tip - a.swept.vertices[nv - 1]) <= 1e-9) return;
+    const auto c0 = std::chrono::steady_clock::now();
+    applyConversion();  // one still pending (a mouse stroke's last pose): in before this strip is looked at
     extendSweptSurface(a.swept, pose);
-    if (a.swept.triangles.size() == nt) return;
-    SweptSurface fresh;  // the new strip alone
+    if (a.swept.triangles.size() == nt) {
+      last_convert_ms_ = msSince(c0);
+      return;
+    }
+    auto pc = std::make_unique<PendingConversion>();
+    SweptSurface& fresh = pc->fresh;  // the new strip alone
     fresh.vertices.assign(a.swept.vertices.end() - 4, a.swept.vertices.end());
     for (std::size_t t = nt; t < a.swept.triangles.size(); ++t) {
       const auto& tri = a.swept.triangles[t];
@@ -520,31 +537,79 @@ class DissectionSimulation final : public SimulationModel {
     }
     std::vector<std::int32_t> hit = findCutSpheres(fresh, a.base.rest_centers, a.base.rest_radii);
     if (a.region) hit.erase(std::remove_if(hit.begin(), hit.end(), [&](std::int32_t b) { return a.region->role(b) == SphereRole::Cut; }), hit.end());
-    const auto c0 = std::chrono::steady_clock::now();
-    if (!hit.empty()) {
-      if (!a.region) a.region = std::make_unique<NodalRegion>(a.base, regionSettings(), earlierCuts());
-      a.region->beginConversion(hit, [&](std::int32_t b) { return sphereState(b); });
-      // The region's supports and MLS rebuild touch nothing of the PBD side (the roles are final, the samples
-      // read the PBD state already): they run on the worker while this thread rebuilds the PBD model.
-      NodalRegion& region = *a.region;
-      const SweptSurface& swept = a.swept;
-      timers_.convert_wait_ms += convert_worker_.runBeside([&region, &swept] { region.finishConversion(swept); }, [&] {
-        const auto c1 = std::chrono::steady_clock::now();
-        rebuildStrokePbd();
-        timers_.convert_pbd_ms += msSince(c1);
-        timers_.convert_pbd_build_ms += last_pbd_build_ms_;
-      });
-      timers_.convert_mls_ms += a.region->lastRebuildMs();
-      const NodalRegion::ConversionTimes& ct = a.region->lastConversionTimes();
-      timers_.convert_sample_ms += ct.sample_ms;
-      timers_.convert_supports_ms += ct.supports_ms;
-      timers_.convert_mls_model_ms += ct.model_ms;
-      timers_.convert_mls_setup_ms += ct.setup_ms;
-      timers_.convert_mls_build_ms += ct.model_build_ms;
-    } else if (a.region && a.region->active()) {
-      a.region->cutSupports(fresh);
+    if (hit.empty() && !(a.region && a.region->active())) {
+      last_convert_ms_ = msSince(c0);
+      return;
+    }
+    if (!a.region) a.region = std::make_unique<NodalRegion>(a.base, regionSettings(), earlierCuts());
+    NodalRegion& region = *a.region;
+    const SweptSurface& swept = a.swept;  // nothing extends it before the conversion is applied
+    PendingConversion* p = pc.get();
+    p->launched_at = time_;
+    p->cut = !hit.empty();
+    const bool delayed = scene_.cutting.conversion_delay_frames > 0;
+    // The region's half (samples, supports, groups, MLS model) and the PBD half (the stroke's next model) read
+    // only rest data; delayed, the region's half starts from a copy (advance() goes on with the current data).
+    const auto mlsHalf = [p, &region, &swept, delayed, hit] {
+      const auto t0 = std::chrono::steady_clock::now();
+      NodalRest from = delayed ? region.restCopy() : region.takeRest();
+      p->mls = p->cut ? region.prepareConversion(std::move(from), hit, swept) : region.prepareStrip(std::move(from), p->fresh);
+      p->mls_prepare_ms = msSince(t0);
+    };
+    std::function<void()> pbdHalf = [] {};
+    if (p->cut)
+      pbdHalf = [this, p, roles = region.rolesAfter(hit)] {
+        const auto t0 = std::chrono::steady_clock::now();
+        p->pbd = planStrokePbd(roles);
+        p->pbd_prepare_ms = msSince(t0);
+      };
+    converting_ = std::move(pc);
+    if (delayed) {
+      convert_worker_.start(mlsHalf);
+      if (p->cut) prepare_pbd_worker_.start(std::move(pbdHalf));
+    } else {
+      if (p->cut)
+        timers_.convert_wait_ms += convert_worker_.runBeside(mlsHalf, pbdHalf);
+      else
+        mlsHalf();  // a strip's supports: well under a millisecond, not worth a thread hand-over
+      applyConversion();
     }
     last_convert_ms_ = msSince(c0);
+  }
+
+  // Brings a prepared conversion in with the state of now: the new points start rigidly attached to their spheres'
+  // current state, the existing points keep theirs, the stroke's next PBD model takes the current positions and
+  // velocities of the spheres it keeps (the region's load and the PBD model's run beside each other).
+  void applyConversion() {
+    if (!converting_) return;
+    const auto c0 = std::chrono::steady_clock::now();
+    convert_worker_.wait();
+    prepare_pbd_worker_.wait();
+    timers_.convert_wait_ms += msSince(c0);
+    std::unique_ptr<PendingConversion> pc = std::move(converting_);
+    NodalRegion& region = *active_->region;
+    std::vector<ConvertedSphereState> st;
+    st.reserve(pc->mls.sampled.size());
+    for (std::int32_t b : pc->mls.sampled) st.push_back(sphereState(b));  // before the PBD model changes
+    if (pc->cut) {
+      timers_.convert_wait_ms += convert_worker_.runBeside([&region, &pc, &st] { region.apply(pc->mls, st); }, [&] {
+        const auto c1 = std::chrono::steady_clock::now();
+        installStrokePbd(pc->pbd);
+        timers_.convert_pbd_ms += pc->pbd_prepare_ms + msSince(c1);
+        timers_.convert_pbd_build_ms += pc->pbd.build_ms;
+      });
+    } else {
+      region.apply(pc->mls, st);
+    }
+    timers_.convert_prepare_ms += std::max(pc->mls_prepare_ms, pc->pbd_prepare_ms);
+    if (!pc->mls.rebuild) return;
+    timers_.convert_mls_ms += region.lastRebuildMs();
+    const NodalRegion::ConversionTimes& ct = region.lastConversionTimes();
+    timers_.convert_sample_ms += ct.sample_ms;
+    timers_.convert_supports_ms += ct.supports_ms;
+    timers_.convert_mls_model_ms += ct.model_ms;
+    timers_.convert_mls_setup_ms += ct.setup_ms;
+    timers_.convert_mls_build_ms += ct.model_build_ms;
   }
 
   NodalRegionSettings regionSettings() const {
@@ -568,58 +633,77 @@ class DissectionSimulation final : public SimulationModel {
     return s;
   }
 
-  // The PBD model during a stroke: the base spheres that are not cut (interface spheres stay, kinematic).
-  // The stroke's base spheres that are not cut, in base order, with the links among them (a link never crosses the
-  // stroke without entering one of its spheres); base_to_kept maps base indices to theirs (-1: cut).
-  static MetaballModel uncutSpheres(const ActiveStroke& a, std::vector<std::int32_t>& base_to_kept) {
+  // The PBD model during a stroke: the base spheres that are not cut (interface spheres stay, kinematic), in base
+  // order, with the links among them (a link never crosses the stroke without entering one of its spheres);
+  // base_to_kept maps base indices to theirs (-1: cut).
+  static MetaballModel uncutSpheres(const MetaballModel& base, const std::vector<SphereRole>* roles,
+                                    std::vector<std::int32_t>& base_to_kept) {
     MetaballModel m;
-    base_to_kept.assign(a.base.size(), -1);
-    for (std::size_t b = 0; b < a.base.size(); ++b) {
-      if (a.region && a.region->role(std::int32_t(b)) == SphereRole::Cut) continue;
+    base_to_kept.assign(base.size(), -1);
+    for (std::size_t b = 0; b < base.size(); ++b) {
+      if (roles && (*roles)[b] == SphereRole::Cut) continue;
       base_to_kept[b] = std::int32_t(m.size());
-      m.rest_centers.push_back(a.base.rest_centers[b]);
-      m.rest_radii.push_back(a.base.rest_radii[b]);
-      m.masses.push_back(a.base.masses[b]);
+      m.rest_centers.push_back(base.rest_centers[b]);
+      m.rest_radii.push_back(base.rest_radii[b]);
+      m.masses.push_back(base.masses[b]);
     }
-    for (std::size_t l = 0; l < a.base.links.size(); ++l) {
-      const std::int32_t i = base_to_kept[std::size_t(a.base.links[l][0])], j = base_to_kept[std::size_t(a.base.links[l][1])];
+    for (std::size_t l = 0; l < base.links.size(); ++l) {
+      const std::int32_t i = base_to_kept[std::size_t(base.links[l][0])], j = base_to_kept[std::size_t(base.links[l][1])];
       if (i < 0 || j < 0) continue;
       m.links.push_back({std::min(i, j), std::max(i, j)});
-      m.link_rest_lengths.push_back(a.base.link_rest_lengths[l]);
+      m.link_rest_lengths.push_back(base.link_rest_lengths[l]);
     }
     return m;
   }
 
-  void rebuildStrokePbd() {
-    ActiveStroke& a = *active_;
+  // The stroke's next PBD model for the given roles, built (rest configuration only: a worker may run it while the
+  // frame goes on with the current model).
+  struct StrokePbdPlan {
+    MetaballModel spheres;
     std::vector<std::int32_t> base_to_pbd, pbd_to_base;
-    MetaballModel m = uncutSpheres(a, base_to_pbd);
+    PbdModel<T> built;
+    double build_ms = 0;
+  };
+  StrokePbdPlan planStrokePbd(const std::vector<SphereRole>& roles) const {
+    const ActiveStroke& a = *active_;
+    StrokePbdPlan p;
+    p.spheres = uncutSpheres(a.base, &roles, p.base_to_pbd);
     for (std::size_t b = 0; b < a.base.size(); ++b)
-      if (base_to_pbd[b] >= 0) pbd_to_base.push_back(std::int32_t(b));
+      if (p.base_to_pbd[b] >= 0) p.pbd_to_base.push_back(std::int32_t(b));
     // A sphere none of whose base links reaches a cut sphere keeps its link set, hence its rest cell volume.
     std::vector<double> known;
     if (a.base_cell_volume.size() == a.base.size()) {
       std::vector<char> lost(a.base.size(), 0);
       for (const auto& e : a.base.links) {
-        if (base_to_pbd[std::size_t(e[0])] < 0) lost[std::size_t(e[1])] = 1;
-        if (base_to_pbd[std::size_t(e[1])] < 0) lost[std::size_t(e[0])] = 1;
+        if (p.base_to_pbd[std::size_t(e[0])] < 0) lost[std::size_t(e[1])] = 1;
+        if (p.base_to_pbd[std::size_t(e[1])] < 0) lost[std::size_t(e[0])] = 1;
       }
-      known.assign(m.size(), std::numeric_limits<double>::quiet_NaN());
-      for (std::size_t i = 0; i < m.size(); ++i)
-        if (!lost[std::size_t(pbd_to_base[i])]) known[i] = a.base_cell_volume[std::size_t(pbd_to_base[i])];
+      known.assign(p.spheres.size(), std::numeric_limits<double>::quiet_NaN());
+      for (std::size_t i = 0; i < p.spheres.size(); ++i)
+        if (!lost[std::size_t(p.pbd_to_base[i])]) known[i] = a.base_cell_volume[std::size_t(p.pbd_to_base[i])];
     }
-    std::vector<Vec3d> x(m.size()), v(m.size());
+    const auto t0 = std::chrono::steady_clock::now();
+    p.built = buildMetaballPbdModel<T>(p.spheres, pbdOptions(std::move(known), false));
+    p.build_ms = msSince(t0);
+    return p;
+  }
+
+  // Makes the plan the stroke's PBD model, its spheres at their current positions and velocities.
+  void installStrokePbd(StrokePbdPlan& p) {
+    ActiveStroke& a = *active_;
+    std::vector<Vec3d> x(p.spheres.size()), v(p.spheres.size());
     std::vector<std::int32_t> old_to_new(model_.size(), -1);
-    for (std::size_t i = 0; i < m.size(); ++i) {
-      const std::int32_t old = a.base_to_pbd[std::size_t(pbd_to_base[i])];
+    for (std::size_t i = 0; i < p.spheres.size(); ++i) {
+      const std::int32_t old = a.base_to_pbd[std::size_t(p.pbd_to_base[i])];
       x[i] = Vec3d(state_.positions[std::size_t(old)]);
       v[i] = Vec3d(state_.velocities[std::size_t(old)]);
       old_to_new[std::size_t(old)] = std::int32_t(i);
     }
-    a.base_to_pbd = std::move(base_to_pbd);
-    a.pbd_to_base = std::move(pbd_to_base);
+    a.base_to_pbd = std::move(p.base_to_pbd);
+    a.pbd_to_base = std::move(p.pbd_to_base);
     mouse_.release();  // sphere indices change
-    setSpheres(std::move(m), x, v, old_to_new, std::move(known));
+    last_pbd_build_ms_ = p.build_ms;
+    installSpheres(std::move(p.spheres), std::move(p.built), x, v, old_to_new);
   }
 
   // The blade leaves. Every heavy part of a stroke's end works in the rest configuration (Algorithm 1 on the
@@ -628,6 +712,7 @@ class DissectionSimulation final : public SimulationModel {
   // spheres simulated meanwhile as during the stroke; the state transfer (applyStrokeEnd) reads the state then.
   // A fixed frame count, not "when the worker is done", keeps runs deterministic. 0 frames: applied now.
   void endStroke() {
+    applyConversion();  // the stroke's last strip
     ActiveStroke& a = *active_;
     if (a.swept.empty()) {
       ++cuts_done_;
@@ -639,7 +724,7 @@ class DissectionSimulation final : public SimulationModel {
     in.repack = a.region && a.region->active();
     // The kept model is the stroke's PBD model's spheres in the same order, so a grasp on one stays valid.
     std::vector<std::int32_t> base_to_kept;
-    in.kept = uncutSpheres(a, base_to_kept);
+    in.kept = uncutSpheres(a.base, a.region ? &a.region->roles() : nullptr, base_to_kept);
     if (in.repack) in.points = a.region->repackPoints();
     in.settings.boundary_offset = scene_.cutting.repack_boundary_offset;
     in.settings.spacing_factor = scene_.cutting.repack_spacing_factor;
@@ -1009,7 +1094,6 @@ class DissectionSimulation final : public SimulationModel {
   double reference_mass_ = 0.0, reference_radius_ = 0.0;  // kg, m: the organ's mean sphere before any cut
   std::shared_ptr<const pack::SurfaceDistance> tissue_;   // the organ's rest surface (inside test)
   double last_pbd_build_ms_ = 0;  // setSpheres' host build of the PBD model (timed for the stages)
-  BackgroundTask convert_worker_;  // a conversion's MLS half beside the PBD rebuild
   MetaballModel spheres_;  // the spheres of the PBD model (during a stroke: the base minus the cut ones)
   TriangleMesh rest_surface_;  // the surface after every cut so far (rest configuration) = surface_.mesh
   CutSurfaceState surface_;    // the split surface with its wall flags and binding probes
@@ -1034,6 +1118,17 @@ class DissectionSimulation final : public SimulationModel {
     int frames_left = 0;
   };
   std::unique_ptr<PendingStrokeEnd> ending_;
+  // A conversion in the making (cutting.conversion_delay_frames 1), or being applied: the strip, the region's
+  // update and the stroke's next PBD model, prepared on the workers below.
+  struct PendingConversion {
+    double launched_at = 0;  // s: the start of the frame the blade entered in (applied at a later frame's start)
+    SweptSurface fresh;      // the new strip alone
+    bool cut = false;        // spheres were cut: `pbd` is the stroke's next PBD model
+    NodalUpdate mls;
+    StrokePbdPlan pbd;
+    double mls_prepare_ms = 0, pbd_prepare_ms = 0;
+  };
+  std::unique_ptr<PendingConversion> converting_;
   int saved_frames_left_ = -1;
   std::string last_split_failure_;  // why the last applied cut left the surface unsplit (empty: it did not)
   struct EndTimes {
@@ -1062,6 +1157,8 @@ class DissectionSimulation final : public SimulationModel {
   // A stroke's end and its surface split, at idle priority until the end is due (on two cores they would otherwise
   // slow the frames simulated meanwhile 2.5-fold); declared last, joined first.
   BackgroundTask end_split_worker_{true}, end_worker_{true};
+  // A conversion's region half beside its PBD half (at normal priority: it is due at the next frame).
+  BackgroundTask convert_worker_, prepare_pbd_worker_;
 };
 
 }  // namespace

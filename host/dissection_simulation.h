@@ -19,7 +19,8 @@ namespace inc {
 //  - spheres the new strip enters become MLS nodal points (m / n each); their PBD-linked neighbours become
 //    interface spheres, sampled likewise (their points are the "overlapping points"), kept in the PBD model as
 //    kinematic spheres; supports crossing the swept surface (or an earlier cut) are dropped, moment matrices
-//    recomputed on every such change;
+//    recomputed on every such change; all of it but the state transfer works in the rest configuration, so with
+//    cutting.conversion_delay_frames 1 it is prepared on workers beside the frame and applied at the next one;
 //  - each frame is cutting.exchanges_per_frame coupling intervals: the points advance by MLS (the solver of the
 //    scene's backend) with the interface spheres' PBD springs acting on their points (eqs. 11-12), then the PBD
 //    spheres advance with each interface sphere moved to the mean displacement of its points (eq. 13).

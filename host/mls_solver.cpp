@@ -119,28 +119,39 @@ std::unique_ptr<MlsSolver> makeMlsSolver(const MlsBuildInput& input, BackendKind
   return f64 ? cpu::makeMlsSolverCpu(buildMlsModel<double>(input)) : cpu::makeMlsSolverCpu(buildMlsModel<float>(input));
 }
 
+MlsBuiltModel buildMlsModelIn(const MlsBuildInput& input, Precision precision) {
+  MlsBuiltModel m;
+  m.precision = precision;
+  if (precision == Precision::Float64)
+    m.f64 = buildMlsModel<double>(input);
+  else
+    m.f32 = buildMlsModel<float>(input);
+  return m;
+}
+
+void loadMlsSolver(std::unique_ptr<MlsSolver>& solver, MlsBuiltModel& model, BackendKind backend) {
+  const BackendKind kind = resolveBackend(backend).kind;
+  const bool f64 = model.precision == Precision::Float64;
+  // Only the CUDA solver reuses anything (its device buffers, stream and graph).
+  if (solver && kind == BackendKind::Cuda && solver->backend() == kind && solver->precision() == model.precision &&
+      (f64 ? solver->replaceModel(model.f64) : solver->replaceModel(model.f32)))
+    return;
+  solver.reset();  // free the old solver's device memory before the new one allocates
+  if (kind == BackendKind::Cuda) {
+#if INCISION_HAVE_CUDA
+    solver = f64 ? cuda::makeMlsSolverCuda(std::move(model.f64)) : cuda::makeMlsSolverCuda(std::move(model.f32));
+    return;
+#endif
+  }
+  solver = f64 ? cpu::makeMlsSolverCpu(std::move(model.f64)) : cpu::makeMlsSolverCpu(std::move(model.f32));
+}
+
 void rebuildMlsSolver(std::unique_ptr<MlsSolver>& solver, const MlsBuildInput& input, BackendKind backend,
                       Precision precision, double* build_ms) {
-  const BackendKind kind = resolveBackend(backend).kind;
   const auto t0 = std::chrono::steady_clock::now();
-  const auto built = [&] {
-    if (build_ms) *build_ms = msSince(t0);
-  };
-  // Only the CUDA solver reuses anything: building a model just to have the CPU refuse it would cost a build.
-  if (solver && kind == BackendKind::Cuda && solver->backend() == kind && solver->precision() == precision) {
-    if (precision == Precision::Float64) {
-      MlsModel<double> m = buildMlsModel<double>(input);
-      built();
-      if (solver->replaceModel(m)) return;
-    } else {
-      MlsModel<float> m = buildMlsModel<float>(input);
-      built();
-      if (solver->replaceModel(m)) return;
-    }
-  }
-  if (build_ms) *build_ms = 0.0;  // built inside makeMlsSolver, not timed apart
-  solver.reset();  // free the old solver's device memory before the new one allocates
-  solver = makeMlsSolver(input, backend, precision);
+  MlsBuiltModel m = buildMlsModelIn(input, precision);
+  if (build_ms) *build_ms = msSince(t0);
+  loadMlsSolver(solver, m, backend);
 }
 
 }  // namespace inc

@@ -119,6 +119,8 @@ struct CuttingSpec {
   double repack_sphere_budget = 1.0;     // (0, 8]: new spheres per converted sphere's mass, per group (merging)
   int stroke_end_frames = 0;             // [0, 120]: frames from the blade leaving to the cut applied (a worker
                                          // re-packs, splits and binds meanwhile); 0: in the frame it leaves
+  int conversion_delay_frames = 0;       // [0, 1]: frames from the blade entering spheres to their conversion
+                                         // applied (prepared on workers meanwhile); 0: in the frame it enters
   double blade_radius_m = 0.0;           // [0, 0.05]: the blade's contact capsule (pushes spheres and points it
                                          // does not cut); 0: the blade only cuts
 };

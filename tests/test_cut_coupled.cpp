@@ -180,7 +180,8 @@ TEST(CutCoupled, BadCuttingSettingsAreInputErrorsNamingTheKey) {
     "models": {"pbd_metaballs": true, "cutting": true}, "cutting": {)";
   for (const char* bad : {R"("exchanges_per_frame": 0)", R"("samples_per_diameter": 1)", R"("pbd_substeps_per_exchange": 65)",
                           R"("repack_spacing_factor": -1)", R"("repack_boundary_offset": 1.0)", R"("stroke_end_frames": 121)",
-                          R"("stroke_end_frames": -1)", R"("blade_radius_m": -0.001)",
+                          R"("stroke_end_frames": -1)", R"("blade_radius_m": -0.001)", R"("conversion_delay_frames": 2)",
+                          R"("conversion_delay_frames": -1)",
                           R"("blade_radius_m": 0.2)", R"("unknown_key": 1)"}) {
     try {
       parseScene(base + bad + "}}", "<test>", ".");
@@ -190,7 +191,8 @@ TEST(CutCoupled, BadCuttingSettingsAreInputErrorsNamingTheKey) {
       EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
     }
   }
-  const Scene good = parseScene(base + R"("exchanges_per_frame": 3, "repack_sphere_budget": 2, "stroke_end_frames": 4, "blade_radius_m": 0.001})" + "}",
+  const Scene good = parseScene(base + R"("exchanges_per_frame": 3, "repack_sphere_budget": 2, "stroke_end_frames": 4, "blade_radius_m": 0.001,
+                                "conversion_delay_frames": 1})" + "}",
                                 "<test>", ".");
   EXPECT_EQ(good.cutting.exchanges_per_frame, 3);
   EXPECT_EQ(good.cutting.repack_sphere_budget, 2.0);
@@ -198,8 +200,12 @@ TEST(CutCoupled, BadCuttingSettingsAreInputErrorsNamingTheKey) {
   EXPECT_EQ(parseScene(sceneToJson(good), "<test>", ".").cutting.exchanges_per_frame, 3);
   EXPECT_EQ(parseScene(sceneToJson(good), "<test>", ".").cutting.stroke_end_frames, 4);
   EXPECT_EQ(parseScene(sceneToJson(good), "<test>", ".").cutting.blade_radius_m, 0.001);
+  EXPECT_EQ(parseScene(sceneToJson(good), "<test>", ".").cutting.conversion_delay_frames, 1);
   Scene s = blockScene(0.3);
   s.cutting.stroke_end_frames = 121;
+  EXPECT_THROW(makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64), InputError);
+  s = blockScene(0.3);
+  s.cutting.conversion_delay_frames = 2;
   EXPECT_THROW(makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64), InputError);
   s = blockScene(0.3);
   s.cutting.blade_radius_m = std::nan("");

@@ -99,7 +99,8 @@ TEST(ViewerSceneKnobs, PbdSolverKnobsAndTheChebyshevRule) {
   }
 }
 
-// A cutting scene has the Cutting knobs (stroke end delay, blade contact radius) at the scene's values; an edit
+// A cutting scene has the Cutting knobs (stroke end delay, conversion delay, blade contact radius) at the scene's
+// values; an edit
 // reaches the scene copy the factory builds from, and the rebuilt model takes it (the edited delay shows as frames
 // with a stroke end pending). Only cutting scenes have them.
 TEST(ViewerSceneKnobs, CuttingKnobsReachTheModel) {
@@ -113,8 +114,13 @@ TEST(ViewerSceneKnobs, CuttingKnobsReachTheModel) {
   EXPECT_EQ(k[delay].group, "Cutting");
   EXPECT_DOUBLE_EQ(k[delay].value, 3.0);
   EXPECT_DOUBLE_EQ(k[blade].value, 0.0);
+  const std::size_t conversion = knobIndex(k, "conversion delay [frames]");
+  ASSERT_LT(conversion, k.size());
+  EXPECT_DOUBLE_EQ(k[conversion].value, 0.0);
   k[delay].edit(5.0);
   k[blade].edit(0.001);
+  k[conversion].edit(1.0);
+  EXPECT_EQ(setup.scene->cutting.conversion_delay_frames, 1);
   EXPECT_EQ(setup.scene->cutting.stroke_end_frames, 5);
   EXPECT_DOUBLE_EQ(setup.scene->cutting.blade_radius_m, 0.001);
   auto model = setup.factory();

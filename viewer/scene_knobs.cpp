@@ -64,6 +64,9 @@ SceneViewerSetup makeSceneViewerSetup(const Scene& scene_in, std::optional<Backe
     // The stroke's end off the frame (0: the frame the blade leaves takes it all) and the blade as a contact.
     knob("Cutting", "stroke end delay [frames]", 0, 30, s.cutting.stroke_end_frames, false, true,
          [sc](double v) { sc->cutting.stroke_end_frames = int(std::lround(v)); });
+    // Each conversion's rest-configuration work beside the frame, applied at the next one (0: in the frame).
+    knob("Cutting", "conversion delay [frames]", 0, 1, s.cutting.conversion_delay_frames, false, true,
+         [sc](double v) { sc->cutting.conversion_delay_frames = int(std::lround(v)); });
     knob("Cutting", "blade contact radius [m]", 0.0, 0.005, s.cutting.blade_radius_m, false, false,
          [sc](double v) { sc->cutting.blade_radius_m = v; });
   }
