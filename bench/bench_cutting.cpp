@@ -53,6 +53,7 @@ int g_end_frames = 0;
 double g_pace_hz = 0;
 double g_blade_radius = 0;  // --blade-radius: cutting.blade_radius_m (the blade as a contact)
 int g_conversion_delay = 0;  // --conversion-delay: cutting.conversion_delay_frames (conversions prepared beside a frame)
+int g_open_frames = 0;       // --open-frames: cutting.open_surface_frames (the surface opened during the stroke)
 
 struct Row {
   std::string kind, backend, solver;
@@ -89,6 +90,7 @@ Scene liverScene(int target, double length_m, double leave_s, int samples, const
   s.cutting.stroke_end_frames = g_end_frames;
   s.cutting.blade_radius_m = g_blade_radius;
   s.cutting.conversion_delay_frames = g_conversion_delay;
+  s.cutting.open_surface_frames = g_open_frames;
   s.fixed = {{Vec3d(-0.1, -0.07, -0.04), Vec3d(0.1, 0.07, -0.02)}};
   ToolSpec t;
   t.name = "scalpel";
@@ -236,6 +238,9 @@ int main(int argc, char** argv) {
   app.add_option("--conversion-delay", g_conversion_delay,
                  "cutting.conversion_delay_frames: 1 prepares each conversion beside the frame and applies it at the next")
       ->check(CLI::Range(0, 1));
+  app.add_option("--open-frames", g_open_frames,
+                 "cutting.open_surface_frames: open the surface along the sweep so far on a worker, shown this many frames later")
+      ->check(CLI::Range(0, 120));
   app.add_option("--pace-hz", g_pace_hz, "start frames at this rate (an interactive loop); 0: back to back")
       ->check(CLI::Range(0.0, 10000.0));
   app.add_flag("--stages", stages, "print the median of every stage of the cutting frames");
@@ -296,7 +301,7 @@ int main(int argc, char** argv) {
       f << "case,backend,target,spheres,cut_length_m,nodal_points,interface_spheres,mls_substeps,ms_deform,ms_cutting,"
            "ms_mls,ms_exchange,ms_pbd,ms_convert,ms_repack,ms_apply_frame,ms_after,spheres_after,pbd_solver,pbd_iterations,"
            "stroke_end_frames,pace_hz,ms_end_frame,ms_ending,ms_apply_wait,ms_end_worker,ms_end_split,ms_end_repack,"
-           "ms_end_build,ms_end_bind,blade_radius_m,conversion_delay_frames\n";
+           "ms_end_build,ms_end_bind,blade_radius_m,conversion_delay_frames,open_surface_frames\n";
       for (const Row& r : rows)
         f << r.kind << ',' << r.backend << ',' << r.target << ',' << r.spheres << ',' << r.cut_length_m << ','
           << r.nodal_points << ',' << r.interface << ',' << r.mls_substeps << ',' << r.ms_deform << ',' << r.ms_cutting
@@ -305,7 +310,7 @@ int main(int argc, char** argv) {
           << r.pbd_iterations << ',' << g_end_frames << ',' << g_pace_hz << ',' << r.ms_end_frame << ','
           << r.ms_ending << ',' << r.ms_apply_wait << ',' << r.ms_end_worker << ',' << r.ms_end_split << ','
           << r.ms_end_repack << ',' << r.ms_end_build << ',' << r.ms_end_bind << ',' << g_blade_radius << ','
-          << g_conversion_delay << '\n';
+          << g_conversion_delay << ',' << g_open_frames << '\n';
     }
     if (rows.empty()) {
       std::printf("bench_cutting: no rows (sizes above the limits or no device)\n");

@@ -52,6 +52,7 @@ struct ActiveStroke {
   std::vector<std::int32_t> base_to_pbd, pbd_to_base;
   std::vector<double> base_cell_volume;  // the base PBD model's rest cell volumes (empty: volume preservation off)
   int scripted = -1;  // index into the scripted strokes, -1: the mouse's
+  std::size_t opened_triangles = 0;  // swept triangles the last surface opening was started with
 };
 
 void addStages(std::vector<StageTime>& into, const std::vector<StageTime>& add) {
@@ -167,6 +168,12 @@ class DissectionSimulation final : public SimulationModel {
       applyConversion();
       timers_.convert_ms += msSince(c0);
     }
+    if (opening_ && t0 > opening_->launched_at && --opening_->frames_left <= 0) {
+      const auto c0 = std::chrono::steady_clock::now();
+      applyOpening();
+      timers_.apply_ms += msSince(c0);
+    }
+    openSurface(t0);
     if (ending_ && --ending_->frames_left <= 0) {
       const auto c0 = std::chrono::steady_clock::now();
       applyStrokeEnd();
@@ -223,7 +230,8 @@ class DissectionSimulation final : public SimulationModel {
     rep.stages.push_back({"coupling_exchange", timers_.exchange_ms});
     rep.stages.push_back({"cut_repack", timers_.repack_ms});
     rep.stages.push_back({"cut_apply", timers_.apply_ms});
-    rep.stages.push_back({"cut_apply_wait", timers_.apply_wait_ms});  // of cut_apply: waiting for the stroke end's worker
+    rep.stages.push_back({"cut_apply_wait", timers_.apply_wait_ms});
+    rep.stages.push_back({"cut_open_wait", timers_.open_wait_ms});  // of cut_apply: waiting for a surface opening  // of cut_apply: waiting for the stroke end's worker
     rep.finite = st.finite && mls_finite;
     if (!st.finite) {
       rep.failure_stage = "pbd";
@@ -243,6 +251,7 @@ class DissectionSimulation final : public SimulationModel {
     saved_version_ = version_;
     saved_graspers_ = graspers_;
     saved_frames_left_ = ending_ ? ending_->frames_left : -1;
+    saved_open_frames_left_ = opening_ ? opening_->frames_left : -1;
     if (active_ && active_->region) active_->region->saveCheckpoint();
   }
   void restoreCheckpoint() override {
@@ -255,6 +264,8 @@ class DissectionSimulation final : public SimulationModel {
       backend_->setState(state_);
       if (active_ && active_->region) active_->region->restoreCheckpoint();
       if (ending_ && saved_frames_left_ >= 0) ending_->frames_left = saved_frames_left_;  // the retried frame counts once
+      // (an opening started in the retried frame keeps its count: that frame does not count it, t0 == launched_at)
+      if (opening_ && saved_open_frames_left_ >= 0) opening_->frames_left = saved_open_frames_left_;
     }
   }
   void scaleTimeStep(double factor) override {
@@ -269,14 +280,16 @@ class DissectionSimulation final : public SimulationModel {
   }
   // Translation skinning: v = v0 + sum_j w_j u_j over the vertex's bound spheres, u_j the sphere's displacement;
   // during a stroke a converted sphere's displacement is eq. 13 over its points (the piece nearest the vertex).
+  // While a stroke's surface opening is shown (cutting.open_surface_frames), its mesh and skin instead.
   bool currentSurface(TriangleMesh& out) const override {
-    out = rest_surface_;
-    const int k = skin_.k;
+    const Skin& skin = opened_ ? opened_->skin : skin_;
+    out = opened_ ? opened_->mesh : rest_surface_;
+    const int k = skin.k;
     for (std::size_t v = 0; v < out.vertices.size(); ++v) {
       Vec3d d;
       for (int j = 0; j < k; ++j)
-        d += skinSphereDisplacement(skin_.sphere[v * k + j], skin_.rest_vertices[v]) * skin_.weight[v * k + j];
-      out.vertices[v] = skin_.rest_vertices[v] + d;
+        d += skinSphereDisplacement(skin.sphere[v * k + j], skin.rest_vertices[v]) * skin.weight[v * k + j];
+      out.vertices[v] = skin.rest_vertices[v] + d;
     }
     return true;
   }
@@ -291,7 +304,7 @@ class DissectionSimulation final : public SimulationModel {
     }
     return m;
   }
-  void cutWallTriangles(std::vector<std::uint8_t>& out) const override { out = wall_flags_; }
+  void cutWallTriangles(std::vector<std::uint8_t>& out) const override { out = opened_ ? opened_->wall : wall_flags_; }
   // The viewer's layers: spheres, fixed spheres, the spheres the graspers and the mouse hold
   // (host/pbd_render_layers.h), the swept surfaces of the applied cuts and of the stroke in progress carried by the
   // spheres (host/dissection_render_layers.h), and, while a stroke is in the tissue, the nodal points where the
@@ -383,6 +396,7 @@ class DissectionSimulation final : public SimulationModel {
     double sweep_ms = 0, convert_ms = 0, exchange_ms = 0, repack_ms = 0, apply_ms = 0;
     double convert_pbd_ms = 0;  // of convert_ms: the PBD model rebuilt without the converted spheres
     double convert_prepare_ms = 0;  // the conversions' rest-configuration work (off the frame when delayed)
+    double open_wait_ms = 0;        // of apply_ms: waiting for the surface opening's worker
     double convert_mls_ms = 0;  // of convert_ms: the MLS solver rebuilt on the points
     double convert_sample_ms = 0, convert_supports_ms = 0, convert_mls_model_ms = 0, convert_mls_setup_ms = 0;
     double convert_mls_build_ms = 0;
@@ -408,6 +422,7 @@ class DissectionSimulation final : public SimulationModel {
     range(c.mls_substeps_per_exchange, 0, 100000, "mls_substeps_per_exchange");
     range(c.stroke_end_frames, 0, 120, "stroke_end_frames");
     range(c.conversion_delay_frames, 0, 1, "conversion_delay_frames");
+    range(c.open_surface_frames, 0, 120, "open_surface_frames");
     if (!(c.blade_radius_m >= 0 && c.blade_radius_m <= 0.05))
       throw InputError(s.file, "cutting.blade_radius_m", "must lie in [0, 0.05] m");
     if (!(c.repack_boundary_offset > 0 && c.repack_boundary_offset < 1))
@@ -760,6 +775,7 @@ class DissectionSimulation final : public SimulationModel {
   // zero.
   void applyStrokeEnd() {
     const auto c0 = std::chrono::steady_clock::now();
+    discardOpening();  // before surface_ changes: an opening's worker reads it
     if (!end_worker_.done()) {  // the frames ran out before the workers: let them have normal priority now
       end_worker_.boost();
       end_split_worker_.boost();
@@ -825,6 +841,68 @@ class DissectionSimulation final : public SimulationModel {
     sphere_components_ = r.sphere_components;
     last_split_failure_ = r.split_failure;
     last_end_ = {r.total_ms, r.repack_ms, r.build_ms, r.split_ms, r.bind_ms};
+  }
+
+  // --- The surface opened during a stroke (cutting.open_surface_frames > 0) -------------------------------
+
+  // At a frame's start, when no opening is in the making and the sweep grew since the last one: a worker splits
+  // the surface as it was before the stroke along the sweep so far (a slit ending where the blade is) and binds the
+  // skin of the split surface to the stroke's base spheres across every cut including the partial sweep, so each
+  // side of the slit follows its own spheres and, through cut spheres, the piece of their points on its side
+  // (skinSphereDisplacement). It is shown from the start of the frame open_surface_frames frames later until the
+  // next one or the stroke's end, which splits the surface before the stroke along the whole sweep as without it:
+  // display only, no simulated result changes. A split the sweep so far does not allow leaves the last one shown.
+  void openSurface(double t0) {
+    const int n = scene_.cutting.open_surface_frames;
+    if (n <= 0 || opening_ || !active_ || ending_) return;
+    ActiveStroke& a = *active_;
+    if (a.swept.triangles.empty() || a.swept.triangles.size() == a.opened_triangles) return;
+    a.opened_triangles = a.swept.triangles.size();
+    auto job = std::make_shared<PendingOpening>();
+    job->launched_at = t0;
+    job->frames_left = n;
+    job->cuts = earlier_cuts_;
+    job->cuts.push_back(a.swept);
+    job->spheres = a.base;
+    opening_ = job;
+    // The worker owns its inputs but the surface, which only applyStrokeEnd changes (after discardOpening waited).
+    open_worker_.start([job, surface = &surface_, file = scene_.file] {
+      const auto c0 = std::chrono::steady_clock::now();
+      try {
+        job->state = *surface;
+        job->split = applySurfaceCut(job->state, job->cuts.back()).split;
+        if (job->split) {
+          const int k = std::min<int>(4, int(job->spheres.size()));
+          job->skin = bindSkinAcrossCuts(job->state, job->spheres, job->cuts, k, file);
+        }
+      } catch (const InputError&) {
+        job->split = false;  // a sweep the split refuses: nothing new to show (the stroke's end decides for good)
+      }
+      job->worker_ms = msSince(c0);
+    });
+  }
+
+  void applyOpening() {
+    const auto c0 = std::chrono::steady_clock::now();
+    if (!open_worker_.done()) open_worker_.boost();
+    open_worker_.wait();
+    timers_.open_wait_ms += msSince(c0);
+    std::shared_ptr<PendingOpening> job = std::move(opening_);
+    last_open_ms_ = job->worker_ms;
+    if (!job->split) return;
+    auto o = std::make_unique<OpenedSurface>();
+    o->mesh = job->state.mesh;
+    o->wall = job->state.wall;
+    o->skin = Skin{job->skin.k, std::move(job->skin.rest_vertices), std::move(job->skin.sphere), std::move(job->skin.weight)};
+    opened_ = std::move(o);
+  }
+
+  // The stroke's end replaces whatever opening there is (one in the making is waited for: its worker reads surface_).
+  void discardOpening() {
+    if (opening_ && !open_worker_.done()) open_worker_.boost();
+    open_worker_.wait();
+    opening_.reset();
+    opened_.reset();
   }
 
   // --- PBD model ------------------------------------------------------------------------------------------
@@ -1078,6 +1156,9 @@ class DissectionSimulation final : public SimulationModel {
     rep.counters["repack_ms"] = timers_.repack_ms;
     rep.counters["cut_apply_ms"] = timers_.apply_ms;
     rep.counters["stroke_end_pending"] = ending_ ? 1.0 : 0.0;
+    rep.counters["surface_opened"] = opened_ ? 1.0 : 0.0;  // a stroke's partial opening is shown
+    rep.counters["surface_open_pending"] = opening_ ? 1.0 : 0.0;
+    rep.counters["surface_open_ms"] = last_open_ms_;  // the last applied opening's worker time
     rep.counters["surface_split_failed"] = last_split_failure_.empty() ? 0.0 : 1.0;  // the last applied cut's
     rep.counters["stroke_end_worker_ms"] = last_end_.worker_ms;
     rep.counters["stroke_end_repack_ms"] = last_end_.repack_ms;
@@ -1129,6 +1210,26 @@ class DissectionSimulation final : public SimulationModel {
     double mls_prepare_ms = 0, pbd_prepare_ms = 0;
   };
   std::unique_ptr<PendingConversion> converting_;
+  // A surface opening in the making (its worker's inputs and result) and the one shown (openSurface).
+  struct PendingOpening {
+    double launched_at = 0;  // s: the start of the frame it was started in
+    int frames_left = 0;
+    std::vector<SweptSurface> cuts;  // the earlier cuts, then the stroke's sweep so far
+    MetaballModel spheres;           // the stroke's base
+    CutSurfaceState state;           // the surface before the stroke, then split
+    bool split = false;
+    SkinBinding skin;
+    double worker_ms = 0;
+  };
+  struct OpenedSurface {
+    TriangleMesh mesh;
+    std::vector<std::uint8_t> wall;
+    Skin skin;
+  };
+  std::shared_ptr<PendingOpening> opening_;
+  std::unique_ptr<OpenedSurface> opened_;
+  int saved_open_frames_left_ = -1;
+  double last_open_ms_ = 0;
   int saved_frames_left_ = -1;
   std::string last_split_failure_;  // why the last applied cut left the surface unsplit (empty: it did not)
   struct EndTimes {
@@ -1159,6 +1260,7 @@ class DissectionSimulation final : public SimulationModel {
   BackgroundTask end_split_worker_{true}, end_worker_{true};
   // A conversion's region half beside its PBD half (at normal priority: it is due at the next frame).
   BackgroundTask convert_worker_, prepare_pbd_worker_;
+  BackgroundTask open_worker_{true};  // surface openings, idle priority as a stroke's end
 };
 
 }  // namespace

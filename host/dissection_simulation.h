@@ -30,10 +30,14 @@ namespace inc {
 // re-bound across no cut (cutWallTriangles() flags the walls); the nodal points go back to zero. That work runs on
 // idle-priority workers (host/cut_stroke_end.h) and is applied cutting.stroke_end_frames frames after the blade
 // leaves, the points simulated meanwhile (0: in that frame). With cutting.blade_radius_m > 0 the blade is also a
-// contact capsule for the spheres and the nodal points while it is in the tissue.
+// contact capsule for the spheres and the nodal points while it is in the tissue. With cutting.open_surface_frames
+// N > 0 the surface is also split along the sweep so far on a worker while the blade is in, shown N frames later
+// (display only).
 // Graspers (close at their first keyframe, drag, release at their last) and probes act on the spheres.
 // currentSurface() is the surface moved by the spheres (translation skinning; during a stroke a converted sphere
-// moves by eq. 13 of its points). FrameReport stages: the PBD backend's, cut_sweep, cut_convert, mls_integrate,
+// moves by eq. 13 of its points; the shown opening's mesh while there is one). FrameReport stages: the PBD
+// backend's, cut_sweep, cut_convert (of it cut_convert_{pbd,mls,sample,supports,mls_model,mls_setup,mls_build,
+// pbd_build,wait}; cut_convert_prepare, the workers' share), mls_integrate,
 // mls_coupling, mls_stress, mls_forces (GPU times per stage; zero on the GPU's graph path), mls_substeps (the
 // GPU's graph of substeps), mls_reduce, mls_wall (wall time of the MLS advances), coupling_exchange, cut_repack,
 // cut_apply (ms). Counters: spheres, mass_kg,
@@ -42,7 +46,8 @@ namespace inc {
 // sphere_components, links, grasped, nodal_points_last_cut, spheres_added_last_cut, repack_* (groups, boundary /
 // medial / middle points, packed, merged, spacing_m), surface_split, surface_components, sweep_ms, convert_ms,
 // repack_ms, cut_apply_ms, stroke_end_pending, stroke_end_{worker,split,repack,build,bind}_ms,
-// surface_split_failed, volume_active; stage cut_apply_wait. The interactive tool (SimulationModel::applyTool): grasp & drag, and mouse scalpel
+// surface_split_failed, surface_opened, surface_open_pending, surface_open_ms, volume_active; stages
+// cut_apply_wait, cut_open_wait. The interactive tool (SimulationModel::applyTool): grasp & drag, and mouse scalpel
 // strokes (Press begins, Drag extends, Release ends the stroke) cut by the same pipeline. renderLayers(): spheres,
 // fixed and grasped spheres, the swept surfaces (applied cuts and the stroke in progress) and, while a stroke is in
 // the tissue, the nodal points where they are now.

@@ -121,6 +121,9 @@ struct CuttingSpec {
                                          // re-packs, splits and binds meanwhile); 0: in the frame it leaves
   int conversion_delay_frames = 0;       // [0, 1]: frames from the blade entering spheres to their conversion
                                          // applied (prepared on workers meanwhile); 0: in the frame it enters
+  int open_surface_frames = 0;           // [0, 120]: during a stroke, the surface split along the sweep so far is
+                                         // computed on a worker and shown this many frames later (display only);
+                                         // 0: the surface opens when the stroke ends
   double blade_radius_m = 0.0;           // [0, 0.05]: the blade's contact capsule (pushes spheres and points it
                                          // does not cut); 0: the blade only cuts
 };

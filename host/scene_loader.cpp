@@ -400,7 +400,7 @@ CuttingSpec readCutting(const ObjectReader& top) {
   const ObjectReader r = top.object("cutting");
   r.allowOnly({"samples_per_diameter", "exchanges_per_frame", "pbd_substeps_per_exchange", "pbd_iterations",
                "mls_substeps_per_exchange", "repack_boundary_offset", "repack_spacing_factor", "repack_sphere_budget",
-               "stroke_end_frames", "conversion_delay_frames", "blade_radius_m"});
+               "stroke_end_frames", "conversion_delay_frames", "open_surface_frames", "blade_radius_m"});
   c.samples_per_diameter = intInRange(r, "samples_per_diameter", c.samples_per_diameter, 2, 12);
   c.exchanges_per_frame = intInRange(r, "exchanges_per_frame", c.exchanges_per_frame, 1, 64);
   c.pbd_substeps_per_exchange = intInRange(r, "pbd_substeps_per_exchange", c.pbd_substeps_per_exchange, 1, 64);
@@ -417,6 +417,7 @@ CuttingSpec readCutting(const ObjectReader& top) {
     r.fail("repack_sphere_budget", "must lie in (0, 8] (new spheres per converted sphere's mass)" + got(c.repack_sphere_budget));
   c.stroke_end_frames = intInRange(r, "stroke_end_frames", c.stroke_end_frames, 0, 120);
   c.conversion_delay_frames = intInRange(r, "conversion_delay_frames", c.conversion_delay_frames, 0, 1);
+  c.open_surface_frames = intInRange(r, "open_surface_frames", c.open_surface_frames, 0, 120);
   c.blade_radius_m = r.number("blade_radius_m", c.blade_radius_m);
   if (!(c.blade_radius_m >= 0 && c.blade_radius_m <= 0.05))
     r.fail("blade_radius_m", "must lie in [0, 0.05] m (the blade's contact capsule; 0: none)" + got(c.blade_radius_m));
@@ -607,6 +608,7 @@ std::string sceneToJson(const Scene& s) {
                    {"repack_sphere_budget", s.cutting.repack_sphere_budget},
                    {"stroke_end_frames", s.cutting.stroke_end_frames},
                    {"conversion_delay_frames", s.cutting.conversion_delay_frames},
+                   {"open_surface_frames", s.cutting.open_surface_frames},
                    {"blade_radius_m", s.cutting.blade_radius_m}};
   j["haptics"] = hapticsSpecJson(s.haptics);
   return compactScalarArrays(j.dump(2)) + "\n";

@@ -99,8 +99,8 @@ TEST(ViewerSceneKnobs, PbdSolverKnobsAndTheChebyshevRule) {
   }
 }
 
-// A cutting scene has the Cutting knobs (stroke end delay, conversion delay, blade contact radius) at the scene's
-// values; an edit
+// A cutting scene has the Cutting knobs (stroke end delay, conversion delay, surface opening, blade contact radius)
+// at the scene's values; an edit
 // reaches the scene copy the factory builds from, and the rebuilt model takes it (the edited delay shows as frames
 // with a stroke end pending). Only cutting scenes have them.
 TEST(ViewerSceneKnobs, CuttingKnobsReachTheModel) {
@@ -117,6 +117,11 @@ TEST(ViewerSceneKnobs, CuttingKnobsReachTheModel) {
   const std::size_t conversion = knobIndex(k, "conversion delay [frames]");
   ASSERT_LT(conversion, k.size());
   EXPECT_DOUBLE_EQ(k[conversion].value, 0.0);
+  const std::size_t open = knobIndex(k, "open surface every [frames]");
+  ASSERT_LT(open, k.size());
+  EXPECT_DOUBLE_EQ(k[open].value, 0.0);
+  k[open].edit(2.0);
+  EXPECT_EQ(setup.scene->cutting.open_surface_frames, 2);
   k[delay].edit(5.0);
   k[blade].edit(0.001);
   k[conversion].edit(1.0);

@@ -67,6 +67,9 @@ SceneViewerSetup makeSceneViewerSetup(const Scene& scene_in, std::optional<Backe
     // Each conversion's rest-configuration work beside the frame, applied at the next one (0: in the frame).
     knob("Cutting", "conversion delay [frames]", 0, 1, s.cutting.conversion_delay_frames, false, true,
          [sc](double v) { sc->cutting.conversion_delay_frames = int(std::lround(v)); });
+    // The surface opened along the sweep while the blade is in, every so many frames (0: when the stroke ends).
+    knob("Cutting", "open surface every [frames]", 0, 30, s.cutting.open_surface_frames, false, true,
+         [sc](double v) { sc->cutting.open_surface_frames = int(std::lround(v)); });
     knob("Cutting", "blade contact radius [m]", 0.0, 0.005, s.cutting.blade_radius_m, false, false,
          [sc](double v) { sc->cutting.blade_radius_m = v; });
   }
