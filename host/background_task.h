@@ -84,6 +84,15 @@ class BackgroundTask {
 #endif
   }
 
+  // Waits at most `ms` milliseconds for the task started last: true when it is done (then as wait(): rethrows what
+  // it threw), false when it is still running.
+  bool waitFor(double ms) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    if (!finished_.wait_for(lock, std::chrono::duration<double, std::milli>(ms), [this] { return done_; })) return false;
+    if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
+    return true;
+  }
+
   // Waits for the task started last; rethrows what it threw.
   void wait() {
     std::unique_lock<std::mutex> lock(mutex_);

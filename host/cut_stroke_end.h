@@ -2,6 +2,8 @@
 // of inputs fixed when the blade leaves, so that a worker can compute it while the nodal points are still simulated.
 #pragma once
 
+#include <memory>
+
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -25,7 +27,9 @@ struct StrokeEndInput {
   RepackPoints points;                // the region's points, rest configuration (NodalRegion::repackPoints)
   RepackSettings settings;            // Algorithm 1's settings; earlier_cuts is filled from `cuts`
   std::vector<SweptSurface> cuts;     // every cut in the order made, this stroke's last (rest configuration)
-  const CutSurfaceState* surface = nullptr;  // the surface before this cut (read only)
+  // The surface before this cut (read only; shared, so that a computation the caller gave up waiting for may finish
+  // on its worker while the caller has gone on to another surface).
+  std::shared_ptr<const CutSurfaceState> surface;
   int skin_k = 4;                     // spheres per surface vertex (at most the new model's size)
   // A mouse or haptic stroke: a blade path whose sweep the surface split refuses (one turning back over itself)
   // leaves the surface unsplit for this cut (split_failure says why; spheres, points and links are cut all the
@@ -46,6 +50,14 @@ struct StrokeEndResult {
   int sphere_components = 0;          // of `spheres`' link graph
   double repack_ms = 0, build_ms = 0, split_ms = 0, bind_ms = 0, total_ms = 0;  // wall times of the parts
 };
+
+// For tests: when set, the dissection's idle-priority tasks (a stroke's end, a surface opening;
+// host/dissection_simulation.cpp) first call it on their worker, so a test can hold them as a busy machine would
+// starve them. Empty in normal use.
+inline std::function<void()>& idleWorkerGate() {
+  static std::function<void()> gate;
+  return gate;
+}
 
 // Splits the surface on `beside` while this thread re-packs and then calls `build(spheres)` (the caller's own
 // model build, for example its PBD constraints, timed as build_ms); then binds the skin across every cut and counts

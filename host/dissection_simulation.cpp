@@ -115,7 +115,7 @@ class DissectionSimulation final : public SimulationModel {
     base_substeps_ = scene.solver.substeps > 0 ? scene.solver.substeps : 4;
     spheres_ = buildSceneMetaballs(scene);
     rest_surface_ = sceneSurfaceMesh(scene);
-    surface_ = cutSurfaceState(rest_surface_);
+    surface_ = std::make_shared<const CutSurfaceState>(cutSurfaceState(rest_surface_));
     backend_ = makePbdBackend<T>(backend);
     region_.samples_per_diameter = scene.cutting.samples_per_diameter;
     region_.backend = backend_->kind();  // the nodal points run on the backend the scene asked for
@@ -734,7 +734,7 @@ class DissectionSimulation final : public SimulationModel {
       active_.reset();
       return;
     }
-    auto e = std::make_unique<PendingStrokeEnd>();
+    auto e = std::make_shared<PendingStrokeEnd>();
     StrokeEndInput& in = e->input;
     in.repack = a.region && a.region->active();
     // The kept model is the stroke's PBD model's spheres in the same order, so a grasp on one stays valid.
@@ -748,19 +748,31 @@ class DissectionSimulation final : public SimulationModel {
     in.settings.max_radius = 1.5 * reference_radius_;
     in.cuts = earlier_cuts_;
     in.cuts.push_back(a.swept);
-    in.surface = &surface_;  // read by the worker; nothing writes it before applyStrokeEnd
+    in.surface = surface_;
     in.skin_k = 4;
     in.file = scene_.file;
     in.interactive = a.scripted < 0;
     e->frames_left = scene_.cutting.stroke_end_frames;
-    PendingStrokeEnd* p = e.get();
-    ending_ = std::move(e);
-    end_worker_.start([this, p, opt = pbdOptions({}, false)] {
-      p->result = computeStrokeEnd(p->input, end_split_worker_,
-                                   [p, &opt](const MetaballModel& m) { p->pbd = buildMetaballPbdModel<T>(m, opt); });
+    ending_ = e;
+    if (e->frames_left <= 0) {  // due now: computed on this thread (applyStrokeEnd), no worker
+      applyStrokeEnd();
+      return;
+    }
+    if (!end_worker_.done()) return;  // still on an end given up on (starved): this one is computed when due
+    e->on_worker = true;
+    // The task holds the pending end (shared): applyStrokeEnd may give up on it and go on without it.
+    end_worker_.start([e, split = &end_split_worker_, opt = pbdOptions({}, false), gate = idleWorkerGate()] {
+      if (gate) gate();
+      e->result = computeStrokeEnd(e->input, *split,
+                                   [&e, &opt](const MetaballModel& m) { e->pbd = buildMetaballPbdModel<T>(m, opt); });
     });
-    if (ending_->frames_left <= 0) applyStrokeEnd();
   }
+
+  // How long a frame waits for an idle-priority worker's due result before computing it itself (ms): as long as
+  // computing it took the last time (at least 10 ms; 50 before any). Then the worst case is about twice the work
+  // instead of however long a busy machine starves the worker (its OpenMP threads stay idle even when boosted);
+  // the result is the same either way, so runs stay deterministic.
+  static double patience(double last_ms) { return last_ms > 0 ? std::min(std::max(last_ms, 10.0), 500.0) : 50.0; }
 
   // Ends whatever stroke there is and applies its end now (a new stroke begins).
   void completeStroke() {
@@ -775,16 +787,28 @@ class DissectionSimulation final : public SimulationModel {
   // zero.
   void applyStrokeEnd() {
     const auto c0 = std::chrono::steady_clock::now();
-    discardOpening();  // before surface_ changes: an opening's worker reads it
-    if (!end_worker_.done()) {  // the frames ran out before the workers: let them have normal priority now
+    discardOpening();
+    std::shared_ptr<PendingStrokeEnd> e = std::move(ending_);
+    bool here = !e->on_worker;
+    if (e->on_worker && !end_worker_.done()) {  // the frames ran out before the workers: normal priority now
       end_worker_.boost();
       end_split_worker_.boost();
+      here = !end_worker_.waitFor(patience(last_end_.worker_ms));
     }
-    end_worker_.wait();
+    if (e->on_worker && !here) end_worker_.wait();  // rethrows what the worker threw
+    // Computed here: the worker's copy of the result is left to it (it finishes in the background).
+    StrokeEndResult own;
+    PbdModel<T> own_pbd;
+    if (here) {
+      const MetaballPbdOptions opt = pbdOptions({}, false);
+      own = computeStrokeEnd(e->input, convert_worker_,
+                             [&](const MetaballModel& m) { own_pbd = buildMetaballPbdModel<T>(m, opt); });
+    }
+    last_end_here_ = here && e->on_worker;
     timers_.apply_wait_ms += msSince(c0);
-    std::unique_ptr<PendingStrokeEnd> e = std::move(ending_);
     std::unique_ptr<ActiveStroke> a = std::move(active_);
-    StrokeEndResult& r = e->result;
+    StrokeEndResult& r = here ? own : e->result;
+    PbdModel<T>& built = here ? own_pbd : e->pbd;
     ++cuts_done_;
     last_points_ = 0;
     last_added_ = 0;
@@ -826,13 +850,13 @@ class DissectionSimulation final : public SimulationModel {
       last_added_ = rp.centres.size();
       timers_.repack_ms += r.repack_ms;
       last_pbd_build_ms_ = r.build_ms;
-      installSpheres(std::move(r.spheres), std::move(e->pbd), x, v, old_to_new);
+      installSpheres(std::move(r.spheres), std::move(built), x, v, old_to_new);
     }
     if (r.split) {
-      surface_ = std::move(r.surface);
+      surface_ = std::make_shared<const CutSurfaceState>(std::move(r.surface));
       surface_components_ = r.surface_components;  // from the split's own output check: no second analysis
-      rest_surface_ = surface_.mesh;
-      wall_flags_ = surface_.wall;
+      rest_surface_ = surface_->mesh;
+      wall_flags_ = surface_->wall;
       surface_split_ = true;
     }
     earlier_cuts_.push_back(std::move(a->swept));
@@ -864,30 +888,55 @@ class DissectionSimulation final : public SimulationModel {
     job->cuts = earlier_cuts_;
     job->cuts.push_back(a.swept);
     job->spheres = a.base;
+    job->surface = surface_;
+    job->file = scene_.file;
     opening_ = job;
-    // The worker owns its inputs but the surface, which only applyStrokeEnd changes (after discardOpening waited).
-    open_worker_.start([job, surface = &surface_, file = scene_.file] {
-      const auto c0 = std::chrono::steady_clock::now();
-      try {
-        job->state = *surface;
-        job->split = applySurfaceCut(job->state, job->cuts.back()).split;
-        if (job->split) {
-          const int k = std::min<int>(4, int(job->spheres.size()));
-          job->skin = bindSkinAcrossCuts(job->state, job->spheres, job->cuts, k, file);
-        }
-      } catch (const InputError&) {
-        job->split = false;  // a sweep the split refuses: nothing new to show (the stroke's end decides for good)
-      }
-      job->worker_ms = msSince(c0);
+    if (!open_worker_.done()) return;  // still on an opening given up on (starved): this one is computed when due
+    job->on_worker = true;
+    open_worker_.start([job, gate = idleWorkerGate()] {  // the task holds its job: it may be given up on
+      if (gate) gate();
+      computeOpening(*job);
     });
   }
 
+  // An opening's split and binding (pure: the same job gives the same result on any thread).
+  template <typename Job>  // PendingOpening (declared with the members below)
+  static void computeOpening(Job& job) {
+    const auto c0 = std::chrono::steady_clock::now();
+    try {
+      job.state = *job.surface;
+      job.split = applySurfaceCut(job.state, job.cuts.back()).split;
+      if (job.split) {
+        const int k = std::min<int>(4, int(job.spheres.size()));
+        job.skin = bindSkinAcrossCuts(job.state, job.spheres, job.cuts, k, job.file);
+      }
+    } catch (const InputError&) {
+      job.split = false;  // a sweep the split refuses: nothing new to show (the stroke's end decides for good)
+    }
+    job.worker_ms = msSince(c0);
+  }
+
+  // Shows the opening due now: the worker's, or, when the worker is not done within patience(), one computed here
+  // from a copy of its inputs (the same result; the worker's copy is left to it).
   void applyOpening() {
     const auto c0 = std::chrono::steady_clock::now();
-    if (!open_worker_.done()) open_worker_.boost();
-    open_worker_.wait();
-    timers_.open_wait_ms += msSince(c0);
     std::shared_ptr<PendingOpening> job = std::move(opening_);
+    bool here = !job->on_worker;
+    if (job->on_worker && !open_worker_.done()) {
+      open_worker_.boost();
+      here = !open_worker_.waitFor(patience(last_open_ms_));
+    }
+    if (here) {  // computed here from a copy of its inputs: a worker given up on still reads the job's
+      auto own = std::make_shared<PendingOpening>();
+      own->cuts = job->cuts;
+      own->spheres = job->spheres;
+      own->surface = job->surface;
+      own->file = job->file;
+      computeOpening(*own);
+      job = own;
+      ++opened_here_;
+    }
+    timers_.open_wait_ms += msSince(c0);
     last_open_ms_ = job->worker_ms;
     if (!job->split) return;
     auto o = std::make_unique<OpenedSurface>();
@@ -897,10 +946,8 @@ class DissectionSimulation final : public SimulationModel {
     opened_ = std::move(o);
   }
 
-  // The stroke's end replaces whatever opening there is (one in the making is waited for: its worker reads surface_).
+  // The stroke's end replaces whatever opening there is (one in the making finishes on its worker, unused).
   void discardOpening() {
-    if (opening_ && !open_worker_.done()) open_worker_.boost();
-    open_worker_.wait();
     opening_.reset();
     opened_.reset();
   }
@@ -957,7 +1004,7 @@ class DissectionSimulation final : public SimulationModel {
     skin_rest_centres_ = spheres_.rest_centers;
     const int k = std::min<int>(4, int(spheres_.size()));
     const SkinBinding b = earlier_cuts_.empty() ? bindSkin(rest_surface_, spheres_, k, scene_.file)
-                                                : bindSkinAcrossCuts(surface_, spheres_, earlier_cuts_, k, scene_.file);
+                                                : bindSkinAcrossCuts(*surface_, spheres_, earlier_cuts_, k, scene_.file);
     skin_ = Skin{b.k, b.rest_vertices, b.sphere, b.weight};
   }
 
@@ -1159,8 +1206,10 @@ class DissectionSimulation final : public SimulationModel {
     rep.counters["surface_opened"] = opened_ ? 1.0 : 0.0;  // a stroke's partial opening is shown
     rep.counters["surface_open_pending"] = opening_ ? 1.0 : 0.0;
     rep.counters["surface_open_ms"] = last_open_ms_;  // the last applied opening's worker time
+    rep.counters["surface_open_here"] = double(opened_here_);  // openings computed on the frame's thread so far
     rep.counters["surface_split_failed"] = last_split_failure_.empty() ? 0.0 : 1.0;  // the last applied cut's
     rep.counters["stroke_end_worker_ms"] = last_end_.worker_ms;
+    rep.counters["stroke_end_here"] = last_end_here_ ? 1.0 : 0.0;  // the last end: its worker given up on
     rep.counters["stroke_end_repack_ms"] = last_end_.repack_ms;
     rep.counters["stroke_end_build_ms"] = last_end_.build_ms;
     rep.counters["stroke_end_split_ms"] = last_end_.split_ms;
@@ -1177,7 +1226,8 @@ class DissectionSimulation final : public SimulationModel {
   double last_pbd_build_ms_ = 0;  // setSpheres' host build of the PBD model (timed for the stages)
   MetaballModel spheres_;  // the spheres of the PBD model (during a stroke: the base minus the cut ones)
   TriangleMesh rest_surface_;  // the surface after every cut so far (rest configuration) = surface_.mesh
-  CutSurfaceState surface_;    // the split surface with its wall flags and binding probes
+  // The split surface with its wall flags and binding probes; replaced, never changed in place (workers read it).
+  std::shared_ptr<const CutSurfaceState> surface_;
   struct Skin {  // translation skinning slots v * k + j (sphere index into the bound model, weight)
     int k = 0;
     std::vector<Vec3d> rest_vertices;
@@ -1197,8 +1247,10 @@ class DissectionSimulation final : public SimulationModel {
     StrokeEndResult result;
     PbdModel<T> pbd;  // the new PBD model, built on the worker
     int frames_left = 0;
+    bool on_worker = false;  // started on the end workers (else computed when applied)
   };
-  std::unique_ptr<PendingStrokeEnd> ending_;
+  std::shared_ptr<PendingStrokeEnd> ending_;
+  bool last_end_here_ = false;  // the last applied end was computed on the frame's thread, the worker given up on
   // A conversion in the making (cutting.conversion_delay_frames 1), or being applied: the strip, the region's
   // update and the stroke's next PBD model, prepared on the workers below.
   struct PendingConversion {
@@ -1214,9 +1266,12 @@ class DissectionSimulation final : public SimulationModel {
   struct PendingOpening {
     double launched_at = 0;  // s: the start of the frame it was started in
     int frames_left = 0;
+    bool on_worker = false;  // started on open_worker_ (else computed when due)
     std::vector<SweptSurface> cuts;  // the earlier cuts, then the stroke's sweep so far
     MetaballModel spheres;           // the stroke's base
-    CutSurfaceState state;           // the surface before the stroke, then split
+    std::shared_ptr<const CutSurfaceState> surface;  // the surface before the stroke
+    std::string file;
+    CutSurfaceState state;           // a copy of it, then split
     bool split = false;
     SkinBinding skin;
     double worker_ms = 0;
@@ -1229,6 +1284,7 @@ class DissectionSimulation final : public SimulationModel {
   std::shared_ptr<PendingOpening> opening_;
   std::unique_ptr<OpenedSurface> opened_;
   int saved_open_frames_left_ = -1;
+  long opened_here_ = 0;
   double last_open_ms_ = 0;
   int saved_frames_left_ = -1;
   std::string last_split_failure_;  // why the last applied cut left the surface unsplit (empty: it did not)

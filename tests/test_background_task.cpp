@@ -43,6 +43,23 @@ TEST(BackgroundTask, OverlapsWithTheCaller) {
   EXPECT_TRUE(saw_caller);
 }
 
+// waitFor gives up on a task still running (false, the task untouched) and reports one that is done (true), with
+// its error rethrown as wait() does.
+TEST(BackgroundTask, WaitForGivesUpOnARunningTask) {
+  BackgroundTask worker;
+  std::atomic<bool> release{false};
+  worker.start([&] {
+    while (!release.load()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  });
+  EXPECT_FALSE(worker.waitFor(5.0));
+  EXPECT_FALSE(worker.done());
+  release = true;
+  EXPECT_TRUE(worker.waitFor(60000.0));
+  worker.start([] { throw std::runtime_error("from the worker"); });
+  EXPECT_THROW(worker.waitFor(60000.0), std::runtime_error);
+  EXPECT_TRUE(worker.waitFor(0.0));  // nothing pending
+}
+
 #if defined(__linux__) && defined(SCHED_IDLE)
 // An idle-priority worker: every task starts at SCHED_IDLE; boost() lifts the running task to SCHED_OTHER (where the
 // process may raise a priority; skipped where it may not) and the next task starts idle again.

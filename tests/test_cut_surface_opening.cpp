@@ -10,6 +10,7 @@
 #include "host/dissection_simulation.h"
 #include "host/mesh.h"
 #include "tests/cut_block_scene.h"
+#include "tests/held_idle_workers.h"
 
 namespace inc {
 namespace {
@@ -144,6 +145,31 @@ TEST(CutSurfaceOpening, EachSideOfTheSlitFollowsItsOwnTissue) {
   // (checked by mutation), the held wall sags with the free side: 19 mm.
   EXPECT_LT(held_max, 1e-6);
   EXPECT_GT(free_min, 1e-3);
+}
+
+// An opening worker starved past the due frame (held, as a busy machine would) is waited for no longer than
+// patience(): the due frame computes the opening itself, and the next ones, while the worker is still held, are
+// computed when due without it. What is shown is the same, frame by frame, bit for bit.
+TEST(CutSurfaceOpening, StarvedWorkerIsReplacedByTheDueFrame) {
+  const int open = 2, frames = 20;
+  const std::vector<Frame> plain = record(block(open, true), frames);
+  auto sim = makeDissectionSimulation(block(open, true), BackendKind::Cpu, Precision::Float64);
+  cuttest::HeldIdleWorkers held;
+  double here = 0;
+  for (int f = 0; f < frames; ++f) {
+    const FrameReport rep = sim->advance(kDt);
+    ASSERT_TRUE(rep.finite) << f;
+    here = rep.counters.at("surface_open_here");
+    EXPECT_EQ(rep.counters.at("surface_opened"), plain[std::size_t(f)].report.counters.at("surface_opened")) << f;
+    TriangleMesh surface;
+    ASSERT_TRUE(sim->currentSurface(surface));
+    ASSERT_EQ(surface.triangles, plain[std::size_t(f)].surface.triangles) << f;
+    ASSERT_EQ(surface.vertices.size(), plain[std::size_t(f)].surface.vertices.size()) << f;
+    for (std::size_t v = 0; v < surface.vertices.size(); ++v)
+      ASSERT_EQ(norm(surface.vertices[v] - plain[std::size_t(f)].surface.vertices[v]), 0.0) << f << " " << v;
+  }
+  EXPECT_GE(here, 3.0);          // every opening of the stroke was computed on the frame's thread
+  EXPECT_EQ(held.held(), 1);     // the one started on the worker waited at the gate throughout
 }
 
 }  // namespace
