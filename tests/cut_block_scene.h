@@ -2,6 +2,7 @@
 #pragma once
 
 #include "host/scene.h"
+#include "host/simulation_model.h"
 
 namespace inc::cuttest {
 
@@ -30,6 +31,30 @@ inline Scene cutBlockScene(double leave_s) {
   t.path = {{0.05, Vec3d(-0.05, 0.002, 0.0), Vec3d(0, 0, 1)}, {leave_s, Vec3d(0.05, 0.002, 0.0), Vec3d(0, 0, 1)}};
   s.tools = {t};
   return s;
+}
+
+// The same block named `file` (for error messages), falling under gravity or, without it, at rest.
+inline Scene cutBlockScene(double leave_s, bool gravity, const char* file) {
+  Scene s = cutBlockScene(leave_s);
+  s.file = file;
+  if (gravity) s.solver.gravity = Vec3d(0, 0, -9.81);
+  return s;
+}
+
+// The block for a mouse scalpel: the scripted one moved past any test's frames (100 s on).
+inline Scene mouseCutBlockScene(bool gravity, const char* file) {
+  Scene s = cutBlockScene(0.15, gravity, file);
+  s.tools[0].path = {{100.0, Vec3d(-0.05, 0.002, 0.0), Vec3d(0, 0, 1)}, {101.0, Vec3d(0.05, 0.002, 0.0), Vec3d(0, 0, 1)}};
+  return s;
+}
+
+// A mouse scalpel event (the phase and tip are the caller's): a vertical 8 cm blade, as the scripted one.
+inline ToolEvent mouseScalpel() {
+  ToolEvent e;
+  e.kind = ToolKind::Cut;
+  e.axis = Vec3d(0, 0, -1);
+  e.blade_length_m = 0.08;
+  return e;
 }
 
 }  // namespace inc::cuttest

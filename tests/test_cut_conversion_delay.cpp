@@ -18,9 +18,7 @@ constexpr double kDt = 1.0 / 60.0;
 // The fixture's block cut through by 0.3 s (the blade enters new spheres in most frames on its way), falling
 // freely or at rest.
 Scene block(int delay, bool gravity) {
-  Scene s = cuttest::cutBlockScene(0.3);
-  s.file = "<test:conversion_delay>";
-  if (gravity) s.solver.gravity = Vec3d(0, 0, -9.81);
+  Scene s = cuttest::cutBlockScene(0.3, gravity, "<test:conversion_delay>");
   s.cutting.conversion_delay_frames = delay;
   return s;
 }
@@ -149,13 +147,10 @@ TEST(CutConversionDelay, RetriedFrameDoesNotApplyItsOwnConversion) {
 // A mouse stroke with the delay: each drag's conversion is applied by the next frame (or the next event), the
 // release applies the last one with the stroke's end; the cut separates the block as the scripted one does.
 TEST(CutConversionDelay, MouseStrokeAppliesEachConversionByTheNextFrame) {
-  Scene s = block(1, false);
-  s.tools[0].path = {{100.0, Vec3d(-0.05, 0.002, 0.0), Vec3d(0, 0, 1)}, {101.0, Vec3d(0.05, 0.002, 0.0), Vec3d(0, 0, 1)}};
+  Scene s = cuttest::mouseCutBlockScene(false, "<test:conversion_delay>");
+  s.cutting.conversion_delay_frames = 1;
   auto sim = makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64);
-  ToolEvent e;
-  e.kind = ToolKind::Cut;
-  e.axis = Vec3d(0, 0, -1);
-  e.blade_length_m = 0.08;
+  ToolEvent e = cuttest::mouseScalpel();
   const int steps = 8;
   double points = 0;
   int grew = 0;

@@ -23,9 +23,7 @@ constexpr double kDt = 1.0 / 60.0;
 
 // The fixture's block cut through by 0.15 s (the blade leaves in frame 8), falling freely (or at rest without gravity).
 Scene fallingBlock(int stroke_end_frames, bool gravity = true) {
-  Scene s = cuttest::cutBlockScene(0.15);
-  s.file = "<test:stroke_end>";
-  if (gravity) s.solver.gravity = Vec3d(0, 0, -9.81);
+  Scene s = cuttest::cutBlockScene(0.15, gravity, "<test:stroke_end>");
   s.cutting.stroke_end_frames = stroke_end_frames;
   return s;
 }
@@ -190,10 +188,7 @@ TEST(CutStrokeEnd, NewStrokeAppliesThePendingEndFirst) {
     if (rep.counters.at("stroke_end_pending") > 0) break;
   }
   ASSERT_LT(f, 30);
-  ToolEvent e;
-  e.kind = ToolKind::Cut;
-  e.axis = Vec3d(0, 0, -1);
-  e.blade_length_m = 0.08;
+  ToolEvent e = cuttest::mouseScalpel();
   e.phase = ToolPhase::Press;
   e.tip = Vec3d(0.012, -0.05, 0.0);
   ASSERT_TRUE(sim->applyTool(e).supported);
@@ -217,13 +212,10 @@ TEST(CutStrokeEnd, NewStrokeAppliesThePendingEndFirst) {
 // surface_split_failed) and the run goes on.
 TEST(CutStrokeEnd, InteractiveStrokeTurningBackLeavesTheSurfaceUnsplit) {
   const std::vector<double> xs = {-0.05, -0.01, 0.03, -0.02, 0.02};
-  Scene s = fallingBlock(2, false);
-  s.tools[0].path = {{100.0, Vec3d(-0.05, 0.002, 0.0), Vec3d(0, 0, 1)}, {101.0, Vec3d(0.05, 0.002, 0.0), Vec3d(0, 0, 1)}};
+  Scene s = cuttest::mouseCutBlockScene(false, "<test:stroke_end>");
+  s.cutting.stroke_end_frames = 2;
   auto sim = makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64);
-  ToolEvent e;
-  e.kind = ToolKind::Cut;
-  e.axis = Vec3d(0, 0, -1);
-  e.blade_length_m = 0.08;
+  ToolEvent e = cuttest::mouseScalpel();
   for (std::size_t k = 0; k < xs.size(); ++k) {
     e.phase = k == 0 ? ToolPhase::Press : k + 1 == xs.size() ? ToolPhase::Release : ToolPhase::Drag;
     e.tip = Vec3d(xs[k], 0.002, 0.0);

@@ -19,9 +19,7 @@ constexpr double kDt = 1.0 / 60.0;
 
 // The fixture's block cut through by 0.3 s (the blade is in the block from about frame 5 to frame 15).
 Scene block(int open_frames, bool gravity) {
-  Scene s = cuttest::cutBlockScene(0.3);
-  s.file = "<test:surface_opening>";
-  if (gravity) s.solver.gravity = Vec3d(0, 0, -9.81);
+  Scene s = cuttest::cutBlockScene(0.3, gravity, "<test:surface_opening>");
   s.cutting.open_surface_frames = open_frames;
   return s;
 }
