@@ -362,7 +362,7 @@ MlsFrameStats NodalRegion::advance(double dt, int fixed_substeps, const std::fun
     const double need = std::ceil(dt / (solver_->safety() * solver_->currentStableTimeStep()) * (1.0 - 1e-12));
     n = std::max(fixed_substeps, int(std::min(need, double(kMlsMaxSubsteps))));
   }
-  solver_->setBladeContact(blade_from_.base, blade_from_.tip, blade_to_.base, blade_to_.tip, blade_radius_);
+  solver_->setBladeContact(blade_from_.base, blade_from_.tip, blade_to_.base, blade_to_.tip, blade_radius_, blade_friction_);
   st = solver_->advance(dt, n);
   last_reduction_ = st.totals;
   solver_->couplingDisplacements(group_u_);

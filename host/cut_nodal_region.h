@@ -145,12 +145,13 @@ class NodalRegion {
   // > 0 takes at least that many (more when the stable step needs them). Updates the groups' eq. 13 state.
   MlsFrameStats advance(double dt, int fixed_substeps, const std::function<Vec3d(std::int32_t)>& pbd_position);
   // The scalpel as a contact for the points over the next advance (world = the points' frame, m): its blade moves
-  // from `from` to `to`; points within `radius` of it are put on its surface (MlsSolver::setBladeContact).
-  // radius 0: none (the default).
-  void setBlade(const BladePose& from, const BladePose& to, double radius) {
+  // from `from` to `to`; points within `radius` of it are put on its surface, sliding with Coulomb friction
+  // `friction` (MlsSolver::setBladeContact). radius 0: none (the default).
+  void setBlade(const BladePose& from, const BladePose& to, double radius, double friction = 0.0) {
     blade_from_ = from;
     blade_to_ = to;
     blade_radius_ = radius;
+    blade_friction_ = friction;
   }
 
   // eq. 13: the position (C_a + u_a) of every interface sphere after the last advance (or conversion).
@@ -197,7 +198,7 @@ class NodalRegion {
   double safety_scale_ = 1.0;
   double last_rebuild_ms_ = 0.0;
   BladePose blade_from_, blade_to_;
-  double blade_radius_ = 0.0;
+  double blade_radius_ = 0.0, blade_friction_ = 0.0;
   ConversionTimes times_;
 };
 

@@ -425,6 +425,8 @@ class DissectionSimulation final : public SimulationModel {
     range(c.open_surface_frames, 0, 120, "open_surface_frames");
     if (!(c.blade_radius_m >= 0 && c.blade_radius_m <= 0.05))
       throw InputError(s.file, "cutting.blade_radius_m", "must lie in [0, 0.05] m");
+    if (!(c.blade_friction >= 0 && c.blade_friction <= 2))
+      throw InputError(s.file, "cutting.blade_friction", "must lie in [0, 2]");
     if (!(c.repack_boundary_offset > 0 && c.repack_boundary_offset < 1))
       throw InputError(s.file, "cutting.repack_boundary_offset", "must lie in (0, 1)");
     if (!(c.repack_spacing_factor > 0 && c.repack_spacing_factor <= 4))
@@ -1071,7 +1073,7 @@ class DissectionSimulation final : public SimulationModel {
       if (bladeContact()) {
         const double b0 = double(e) / K, b1 = double(e + 1) / K;
         region.setBlade(lerpBlade(frame_blade_.from, frame_blade_.to, b0), lerpBlade(frame_blade_.from, frame_blade_.to, b1),
-                        scene_.cutting.blade_radius_m);
+                        scene_.cutting.blade_radius_m, scene_.cutting.blade_friction);
       } else {
         region.setBlade({}, {}, 0.0);
       }

@@ -184,9 +184,11 @@ class MlsSolver {
 
   // The scalpel's capsule over the next advance() or step() (absolute, m): its segment moves from (a0, b0) to
   // (a1, b1) over that call, and free points it covers are put on its surface in every substep
-  // (physics/mls_blade_contact.h). radius 0 (the default) switches it off. Kept until changed.
-  void setBladeContact(const Vec3d& a0, const Vec3d& b0, const Vec3d& a1, const Vec3d& b1, double radius) {
-    blade_ = {a0, b0, a1, b1, radius};
+  // (physics/mls_blade_contact.h), sliding on it with Coulomb friction `friction` (0: frictionless). radius 0 (the
+  // default) switches it off. Kept until changed.
+  void setBladeContact(const Vec3d& a0, const Vec3d& b0, const Vec3d& a1, const Vec3d& b1, double radius,
+                       double friction = 0.0) {
+    blade_ = {a0, b0, a1, b1, radius, friction};
   }
 
   virtual void saveCheckpoint() = 0;
@@ -238,6 +240,7 @@ class MlsSolver {
     c.a1 = Vec3<T>(blade_.a1 - o);
     c.b1 = Vec3<T>(blade_.b1 - o);
     c.radius = T(blade_.radius);
+    c.friction = T(blade_.friction);
     c.duration = T(dt * n);
     c.substeps = n;
     return c;
@@ -261,6 +264,7 @@ class MlsSolver {
   struct Blade {
     Vec3d a0, b0, a1, b1;
     double radius = 0.0;
+    double friction = 0.0;
   } blade_;
   double safety_ = 0.5;
   double coupling_dt_ = std::numeric_limits<double>::infinity();

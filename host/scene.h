@@ -126,6 +126,7 @@ struct CuttingSpec {
                                          // 0: the surface opens when the stroke ends
   double blade_radius_m = 0.0;           // [0, 0.05]: the blade's contact capsule (pushes spheres and points it
                                          // does not cut); 0: the blade only cuts
+  double blade_friction = 0.0;           // [0, 2]: Coulomb coefficient of the nodal points sliding on that capsule
 };
 
 // One haptic device of a scene and its loop (docs/scene-format.md `haptics`, docs/haptics.md): the single-device

@@ -400,7 +400,7 @@ CuttingSpec readCutting(const ObjectReader& top) {
   const ObjectReader r = top.object("cutting");
   r.allowOnly({"samples_per_diameter", "exchanges_per_frame", "pbd_substeps_per_exchange", "pbd_iterations",
                "mls_substeps_per_exchange", "repack_boundary_offset", "repack_spacing_factor", "repack_sphere_budget",
-               "stroke_end_frames", "conversion_delay_frames", "open_surface_frames", "blade_radius_m"});
+               "stroke_end_frames", "conversion_delay_frames", "open_surface_frames", "blade_radius_m", "blade_friction"});
   c.samples_per_diameter = intInRange(r, "samples_per_diameter", c.samples_per_diameter, 2, 12);
   c.exchanges_per_frame = intInRange(r, "exchanges_per_frame", c.exchanges_per_frame, 1, 64);
   c.pbd_substeps_per_exchange = intInRange(r, "pbd_substeps_per_exchange", c.pbd_substeps_per_exchange, 1, 64);
@@ -421,6 +421,9 @@ CuttingSpec readCutting(const ObjectReader& top) {
   c.blade_radius_m = r.number("blade_radius_m", c.blade_radius_m);
   if (!(c.blade_radius_m >= 0 && c.blade_radius_m <= 0.05))
     r.fail("blade_radius_m", "must lie in [0, 0.05] m (the blade's contact capsule; 0: none)" + got(c.blade_radius_m));
+  c.blade_friction = r.number("blade_friction", c.blade_friction);
+  if (!(c.blade_friction >= 0 && c.blade_friction <= 2))
+    r.fail("blade_friction", "must lie in [0, 2] (a Coulomb coefficient; 0: frictionless)" + got(c.blade_friction));
   return c;
 }
 
@@ -609,7 +612,8 @@ std::string sceneToJson(const Scene& s) {
                    {"stroke_end_frames", s.cutting.stroke_end_frames},
                    {"conversion_delay_frames", s.cutting.conversion_delay_frames},
                    {"open_surface_frames", s.cutting.open_surface_frames},
-                   {"blade_radius_m", s.cutting.blade_radius_m}};
+                   {"blade_radius_m", s.cutting.blade_radius_m},
+                   {"blade_friction", s.cutting.blade_friction}};
   j["haptics"] = hapticsSpecJson(s.haptics);
   return compactScalarArrays(j.dump(2)) + "\n";
 }

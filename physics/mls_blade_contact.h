@@ -1,5 +1,6 @@
 // The scalpel's capsule as a contact for MLS nodal points: a point the moving blade covers is put back on its surface
-// and loses the velocity that carries it into the blade (frictionless, inelastic), inside each substep's drift.
+// and loses the velocity that carries it into the blade (inelastic, with Coulomb friction), inside each substep's
+// drift.
 #pragma once
 
 #include "physics/hd.h"
@@ -15,12 +16,16 @@ struct MlsBladeContact {
   T radius = T(0);         // m
   T duration = T(0);       // s, > 0 where radius > 0
   int substeps = 1;
+  T friction = T(0);       // Coulomb coefficient mu >= 0 (0: frictionless)
 };
 
 // Particle k after its drift in the substep with `remaining` substeps left (this one included): where its current
 // position x = X + u lies within `radius` of the blade's segment at the end of that substep, x moves along the
 // outward normal onto the capsule and the velocity's component into the blade, relative to the blade's own velocity
-// there, is removed. Outside the capsule nothing changes (bit for bit).
+// there, is removed. Friction: that normal velocity change dv_n, times mu, is taken from the relative tangential
+// velocity v_t (the Coulomb impulse limit for a point mass, dv_t <= mu dv_n): v_t scales by
+// max(0, 1 - mu dv_n / |v_t|), so a point slides along the blade more slowly or, where mu dv_n >= |v_t|, moves with
+// it. Outside the capsule, or moving out of it, nothing changes (bit for bit).
 template <typename T>
 INC_HD void mlsBladeContactAt(const MlsBladeContact<T>& c, const Vec3<T>& rest, Vec3<T>& u, Vec3<T>& v, int remaining) {
   const T f = T(c.substeps - remaining + 1) / T(c.substeps);
@@ -49,7 +54,12 @@ INC_HD void mlsBladeContactAt(const MlsBladeContact<T>& c, const Vec3<T>& rest, 
   u = q + n * c.radius - rest;
   const Vec3<T> w = ((c.a1 - c.a0) * (T(1) - t) + (c.b1 - c.b0) * t) * (T(1) / c.duration);  // the blade's velocity at q
   const T vn = dot(v - w, n);
-  if (vn < T(0)) v -= n * vn;
+  if (!(vn < T(0))) return;
+  v -= n * vn;
+  if (!(c.friction > T(0))) return;
+  const Vec3<T> vt = v - w - n * dot(v - w, n);  // relative, tangential (the normal part is zero up to rounding)
+  const T st = norm(vt), slip = c.friction * (-vn);
+  v -= st > slip ? vt * (slip / st) : vt;
 }
 
 }  // namespace inc

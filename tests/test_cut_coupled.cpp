@@ -180,7 +180,7 @@ TEST(CutCoupled, BadCuttingSettingsAreInputErrorsNamingTheKey) {
     "models": {"pbd_metaballs": true, "cutting": true}, "cutting": {)";
   for (const char* bad : {R"("exchanges_per_frame": 0)", R"("samples_per_diameter": 1)", R"("pbd_substeps_per_exchange": 65)",
                           R"("repack_spacing_factor": -1)", R"("repack_boundary_offset": 1.0)", R"("stroke_end_frames": 121)",
-                          R"("stroke_end_frames": -1)", R"("blade_radius_m": -0.001)", R"("conversion_delay_frames": 2)", R"("open_surface_frames": 121)",
+                          R"("stroke_end_frames": -1)", R"("blade_radius_m": -0.001)", R"("conversion_delay_frames": 2)", R"("open_surface_frames": 121)", R"("blade_friction": -0.1)", R"("blade_friction": 2.5)",
                           R"("conversion_delay_frames": -1)",
                           R"("blade_radius_m": 0.2)", R"("unknown_key": 1)"}) {
     try {
@@ -192,7 +192,7 @@ TEST(CutCoupled, BadCuttingSettingsAreInputErrorsNamingTheKey) {
     }
   }
   const Scene good = parseScene(base + R"("exchanges_per_frame": 3, "repack_sphere_budget": 2, "stroke_end_frames": 4, "blade_radius_m": 0.001,
-                                "conversion_delay_frames": 1, "open_surface_frames": 5})" + "}",
+                                "conversion_delay_frames": 1, "open_surface_frames": 5, "blade_friction": 0.25})" + "}",
                                 "<test>", ".");
   EXPECT_EQ(good.cutting.exchanges_per_frame, 3);
   EXPECT_EQ(good.cutting.repack_sphere_budget, 2.0);
@@ -202,6 +202,7 @@ TEST(CutCoupled, BadCuttingSettingsAreInputErrorsNamingTheKey) {
   EXPECT_EQ(parseScene(sceneToJson(good), "<test>", ".").cutting.blade_radius_m, 0.001);
   EXPECT_EQ(parseScene(sceneToJson(good), "<test>", ".").cutting.conversion_delay_frames, 1);
   EXPECT_EQ(parseScene(sceneToJson(good), "<test>", ".").cutting.open_surface_frames, 5);
+  EXPECT_EQ(parseScene(sceneToJson(good), "<test>", ".").cutting.blade_friction, 0.25);
   Scene s = blockScene(0.3);
   s.cutting.stroke_end_frames = 121;
   EXPECT_THROW(makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64), InputError);
@@ -210,6 +211,9 @@ TEST(CutCoupled, BadCuttingSettingsAreInputErrorsNamingTheKey) {
   EXPECT_THROW(makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64), InputError);
   s = blockScene(0.3);
   s.cutting.open_surface_frames = -1;
+  EXPECT_THROW(makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64), InputError);
+  s = blockScene(0.3);
+  s.cutting.blade_friction = std::nan("");
   EXPECT_THROW(makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64), InputError);
   s = blockScene(0.3);
   s.cutting.blade_radius_m = std::nan("");

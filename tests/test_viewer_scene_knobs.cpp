@@ -122,6 +122,10 @@ TEST(ViewerSceneKnobs, CuttingKnobsReachTheModel) {
   EXPECT_DOUBLE_EQ(k[open].value, 0.0);
   k[open].edit(2.0);
   EXPECT_EQ(setup.scene->cutting.open_surface_frames, 2);
+  const std::size_t friction = knobIndex(k, "blade friction");
+  ASSERT_LT(friction, k.size());
+  k[friction].edit(0.3);
+  EXPECT_DOUBLE_EQ(setup.scene->cutting.blade_friction, 0.3);
   k[delay].edit(5.0);
   k[blade].edit(0.001);
   k[conversion].edit(1.0);

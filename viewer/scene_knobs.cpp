@@ -72,6 +72,8 @@ SceneViewerSetup makeSceneViewerSetup(const Scene& scene_in, std::optional<Backe
          [sc](double v) { sc->cutting.open_surface_frames = int(std::lround(v)); });
     knob("Cutting", "blade contact radius [m]", 0.0, 0.005, s.cutting.blade_radius_m, false, false,
          [sc](double v) { sc->cutting.blade_radius_m = v; });
+    knob("Cutting", "blade friction", 0.0, 1.0, s.cutting.blade_friction, false, false,
+         [sc](double v) { sc->cutting.blade_friction = v; });
   }
   knob("Solver", "substeps (0 = auto)", 0, 64, s.solver.substeps, false, true,
        [sc](double v) { sc->solver.substeps = int(std::lround(v)); });

@@ -250,11 +250,12 @@ TEST(CutGpu, ReplacedMlsSolverRunsAsANewOne) {
 
 // The same scripted cut on both backends, float64: the same topology every frame and positions within 1e-6 m (the
 // spheres and the nodal points). With Gauss-Seidel and with Jacobi (whose stroke rebuilds are colouring-free models
-// uploaded into reused buffers); with the blade as a contact (points and spheres pushed out of its capsule) and the
+// uploaded into reused buffers); with the blade as a contact (points and spheres pushed out of its capsule, the
+// points sliding on it with friction) and the
 // stroke's end applied frames after the blade leaves; with each conversion prepared beside a frame and applied at
 // the next.
 void expectSameDissectionOnBothBackends(const std::string& solver, double blade_radius = 0.0, int stroke_end_frames = 0,
-                                        int conversion_delay_frames = 0) {
+                                        int conversion_delay_frames = 0, double blade_friction = 0.0) {
   Scene s;
   s.file = "<gpu test:dissection parity>";
   s.geometry.kind = GeometrySpec::Kind::Box;
@@ -270,6 +271,7 @@ void expectSameDissectionOnBothBackends(const std::string& solver, double blade_
   s.cutting.blade_radius_m = blade_radius;
   s.cutting.stroke_end_frames = stroke_end_frames;
   s.cutting.conversion_delay_frames = conversion_delay_frames;
+  s.cutting.blade_friction = blade_friction;
   s.fixed = {{Vec3d(-1, -1, -1), Vec3d(1, 1, -0.008)}};  // the bottom layer of centres (z = -0.01)
   ToolSpec t;
   t.name = "scalpel";
@@ -317,7 +319,7 @@ TEST(CutGpu, JacobiDissectionHasTheSameTopologyOnBothBackends) {
 
 TEST(CutGpu, BladeContactAndDeferredEndMatchCpu) {
   if (noDevice()) GTEST_SKIP() << "no CUDA device";
-  expectSameDissectionOnBothBackends("jacobi", 0.002, 3);
+  expectSameDissectionOnBothBackends("jacobi", 0.002, 3, 0, 0.5);  // with the blade's friction on the points
 }
 
 TEST(CutGpu, DelayedConversionsMatchCpu) {
