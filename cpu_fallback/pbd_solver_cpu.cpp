@@ -510,6 +510,7 @@ class PbdCpuBackend final : public PbdBackend<T> {
     state_ = s;
   }
   void getState(PbdState<T>& s) const override { s = state_; }
+  void getPositions(std::vector<Vec3<T>>& positions) const override { positions = state_.positions; }
 
   MemoryReport memory() const override {
     MemoryReport m;

@@ -1090,6 +1090,7 @@ class DissectionSimulation final : public SimulationModel {
       mls.totals = ms.totals;
       if (!ms.totals.finite) {
         mls_finite = false;
+        if (e > 0) backend_->getState(state_);  // the exchanges before read the positions alone
         break;
       }
       const auto c0 = std::chrono::steady_clock::now();
@@ -1124,7 +1125,10 @@ class DissectionSimulation final : public SimulationModel {
       st.volume_active = ps.volume_active;
       st.max_radius_ratio = ps.max_radius_ratio;
       const auto c1 = std::chrono::steady_clock::now();
-      backend_->getState(state_);  // the next exchange's anchors
+      if (e + 1 < K && ps.finite)
+        backend_->getPositions(state_.positions);  // the next exchange's anchors (the rest after the last one)
+      else
+        backend_->getState(state_);
       timers_.exchange_ms += msSince(c1);
       ++exchanges;
       pbd_substeps += p.substeps;

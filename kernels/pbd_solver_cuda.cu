@@ -737,6 +737,11 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     rotations_.upload(s.rotations);
   }
 
+  void getPositions(std::vector<Vec3<T>>& positions) const override {
+    INC_CUDA(cudaStreamSynchronize(stream_));
+    positions = x_.download();
+  }
+
   void getState(PbdState<T>& s) const override {
     INC_CUDA(cudaStreamSynchronize(stream_));
     s.positions = x_.download();
