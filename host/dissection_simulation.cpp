@@ -230,8 +230,8 @@ class DissectionSimulation final : public SimulationModel {
     rep.stages.push_back({"coupling_exchange", timers_.exchange_ms});
     rep.stages.push_back({"cut_repack", timers_.repack_ms});
     rep.stages.push_back({"cut_apply", timers_.apply_ms});
-    rep.stages.push_back({"cut_apply_wait", timers_.apply_wait_ms});
-    rep.stages.push_back({"cut_open_wait", timers_.open_wait_ms});  // of cut_apply: waiting for a surface opening  // of cut_apply: waiting for the stroke end's worker
+    rep.stages.push_back({"cut_apply_wait", timers_.apply_wait_ms});  // of cut_apply: the stroke end's worker (or computing it)
+    rep.stages.push_back({"cut_open_wait", timers_.open_wait_ms});    // of cut_apply: a surface opening's, likewise
     rep.finite = st.finite && mls_finite;
     if (!st.finite) {
       rep.failure_stage = "pbd";
@@ -912,8 +912,10 @@ class DissectionSimulation final : public SimulationModel {
         const int k = std::min<int>(4, int(job.spheres.size()));
         job.skin = bindSkinAcrossCuts(job.state, job.spheres, job.cuts, k, job.file);
       }
-    } catch (const InputError&) {
-      job.split = false;  // a sweep the split refuses: nothing new to show (the stroke's end decides for good)
+    } catch (const std::exception&) {
+      // A sweep the split refuses (or any failure of it): nothing new to show. Display only, so it never ends the
+      // run; the stroke's end splits for good and reports.
+      job.split = false;
     }
     job.worker_ms = msSince(c0);
   }
