@@ -363,9 +363,8 @@ MlsFrameStats NodalRegion::advance(double dt, int fixed_substeps, const std::fun
     n = std::max(fixed_substeps, int(std::min(need, double(kMlsMaxSubsteps))));
   }
   solver_->setBladeContact(blade_from_.base, blade_from_.tip, blade_to_.base, blade_to_.tip, blade_radius_, blade_friction_);
-  st = solver_->advance(dt, n);
+  st = solver_->advanceCoupled(dt, n, group_u_);
   last_reduction_ = st.totals;
-  solver_->couplingDisplacements(group_u_);
   return st;
 }
 

@@ -991,7 +991,7 @@ class DissectionSimulation final : public SimulationModel {
     spheres_ = std::move(m);
     model_ = std::move(built);
     backend_->setModel(model_);
-    backend_->getState(state_);
+    state_ = pbdRestState(model_);  // what setModel starts it in (no download)
     for (std::size_t i = 0; i < spheres_.size(); ++i) {
       if (model_.inv_mass[i] == T(0)) continue;  // fixed spheres stay at rest
       state_.positions[i] = Vec3<T>(x[i]);

@@ -156,6 +156,13 @@ class MlsSolver {
   // substepping uses the rest-state limit divided by sqrt(stiffening) of the last reduction (computed
   // before the first frame), so a strongly stretched body takes more substeps.
   virtual MlsFrameStats advance(double frame_dt, int fixed_substeps = 0) = 0;
+  // advance() then couplingDisplacements(group_u): a coupling exchange's MLS half. The CUDA solver reads the groups'
+  // displacements back with the frame's reduction (one wait instead of two); the results are the same.
+  virtual MlsFrameStats advanceCoupled(double frame_dt, int fixed_substeps, std::vector<Vec3d>& group_u) {
+    MlsFrameStats st = advance(frame_dt, fixed_substeps);
+    couplingDisplacements(group_u);
+    return st;
+  }
   // Exactly n substeps of dt (tests, benchmarks); refuses dt above the stable limit (InputError "dt").
   virtual void step(double dt, int n) = 0;
   // Passes 1 and 2 at the current displacement (forces and per-particle energies), no integration.

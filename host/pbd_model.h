@@ -161,6 +161,18 @@ struct PbdFrameStats {
   bool team_stalled = false;   // CPU backend: the team stalled and the lead thread finished the frame alone
 };
 
+// The state PbdBackend::setModel starts a model in: rest positions, zero velocities, rest radii, identity rotations
+// (built here instead of downloaded: a cut installs a new model every frame the blade enters spheres).
+template <typename T>
+PbdState<T> pbdRestState(const PbdModel<T>& model) {
+  PbdState<T> s;
+  s.positions = model.rest_positions;
+  s.velocities.assign(model.size(), Vec3<T>());
+  s.radii = model.rest_radii;
+  s.rotations.assign(model.size(), pbd::Quat<T>{});
+  return s;
+}
+
 template <typename T>
 class PbdBackend {
  public:

@@ -18,6 +18,7 @@
 #include "kernels/cuda_check.h"
 #include "kernels/graph_capture.h"
 #include "kernels/device_buffer.h"
+#include "kernels/pinned_staging.h"
 #include "physics/cut_coupling.h"
 #include "physics/mls_passes.h"
 
@@ -350,6 +351,38 @@ class MlsCudaSolver final : public MlsSolver {
       st.ms_stress += b;
       st.ms_forces += c;
     }
+    return st;
+  }
+
+  MlsFrameStats advanceCoupled(double frame_dt, int fixed_substeps, std::vector<Vec3d>& group_u) override {
+    if (stage_timing_ || groups_ == 0) return MlsSolver::advanceCoupled(frame_dt, fixed_substeps, group_u);
+    MlsFrameStats st;
+    st.substeps = planFrame(frame_dt, fixed_substeps, model_.source);
+    if (st.substeps == 0) {
+      st = unplannableFrame();
+      couplingDisplacements(group_u);
+      return st;
+    }
+    st.dt = frame_dt / st.substeps;
+    uploadBlade(st.dt, st.substeps);
+    ensureEvents(2);
+    INC_CUDA(cudaEventRecord(events_[0], stream_));
+    if (!persistent_ || !substepsPersistent(T(st.dt), st.substeps)) substepsGraph(T(st.dt), st.substeps);
+    INC_CUDA(cudaEventRecord(events_[1], stream_));
+    // The groups' eq. 13 state, queued before the reduction (which reads none of what the coupling pass writes),
+    // arrives with the reduction's wait.
+    couplingPass();
+    group_staging_.queueDownload(cg_displacement_.data(), std::size_t(groups_), stream_);
+    const auto t0 = std::chrono::steady_clock::now();
+    st.totals = reduce();  // synchronises
+    st.ms_reduce = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    std::vector<Vec3<T>> g(static_cast<std::size_t>(groups_));
+    group_staging_.take(g.data(), g.size());
+    group_u.resize(g.size());
+    for (std::size_t k = 0; k < g.size(); ++k) group_u[k] = Vec3d(g[k]);
+    float ms = 0;
+    INC_CUDA(cudaEventElapsedTime(&ms, events_[0], events_[1]));
+    st.ms_substeps = ms;
     return st;
   }
 
@@ -789,6 +822,7 @@ class MlsCudaSolver final : public MlsSolver {
   }
 
   MlsModel<T> model_;
+  PinnedStaging group_staging_;  // advanceCoupled's read-back of the groups' displacements
   DeviceBuffer<Vec3<T>> rest_;
   DeviceBuffer<T> mass_, volume_;
   DeviceBuffer<Mat3<T>> moment_inverse_;

@@ -34,6 +34,20 @@ class PinnedStaging {
     std::memcpy(host, ptr_, bytes);
   }
 
+  // n elements from device memory queued on `stream` into the staging, not waited for: take() copies them out once
+  // the caller has synchronised `stream` (another wait already due, so the read-back costs no round trip of its own).
+  template <typename U>
+  void queueDownload(const U* device, std::size_t n, cudaStream_t stream) {
+    const std::size_t bytes = n * sizeof(U);
+    if (bytes == 0) return;
+    reserve(bytes);
+    INC_CUDA(cudaMemcpyAsync(ptr_, device, bytes, cudaMemcpyDeviceToHost, stream));
+  }
+  template <typename U>
+  void take(U* host, std::size_t n) const {
+    if (n) std::memcpy(host, ptr_, n * sizeof(U));
+  }
+
   // n elements from host memory to device memory, queued on `stream` (not waited for: the staging keeps the
   // bytes, so the caller must synchronise `stream` before this staging's next upload).
   template <typename U>
