@@ -316,10 +316,23 @@ class MlsCudaSolver final : public MlsSolver {
     INC_CUDA(cudaStreamSynchronize(stream_));  // step() returns with the state final (tests, benchmarks)
   }
 
-  MlsFrameStats advance(double frame_dt, int fixed_substeps) override {
+  MlsFrameStats advance(double frame_dt, int fixed_substeps) override { return frame(frame_dt, fixed_substeps, nullptr); }
+
+  MlsFrameStats advanceCoupled(double frame_dt, int fixed_substeps, std::vector<Vec3d>& group_u) override {
+    if (stage_timing_ || groups_ == 0) return MlsSolver::advanceCoupled(frame_dt, fixed_substeps, group_u);
+    return frame(frame_dt, fixed_substeps, &group_u);
+  }
+
+  // One frame; with `group_u` (untimed stages only), the groups' eq. 13 displacements read back with the reduction:
+  // queued before it (it reads none of what the coupling pass writes), they arrive with its wait.
+  MlsFrameStats frame(double frame_dt, int fixed_substeps, std::vector<Vec3d>* group_u) {
     MlsFrameStats st;
     st.substeps = planFrame(frame_dt, fixed_substeps, model_.source);
-    if (st.substeps == 0) return unplannableFrame();
+    if (st.substeps == 0) {
+      st = unplannableFrame();
+      if (group_u) couplingDisplacements(*group_u);
+      return st;
+    }
     st.dt = frame_dt / st.substeps;
     uploadBlade(st.dt, st.substeps);
     if (!stage_timing_) {
@@ -327,9 +340,19 @@ class MlsCudaSolver final : public MlsSolver {
       INC_CUDA(cudaEventRecord(events_[0], stream_));
       if (!persistent_ || !substepsPersistent(T(st.dt), st.substeps)) substepsGraph(T(st.dt), st.substeps);
       INC_CUDA(cudaEventRecord(events_[1], stream_));
+      if (group_u) {
+        couplingPass();
+        group_staging_.queueDownload(cg_displacement_.data(), std::size_t(groups_), stream_);
+      }
       const auto t0 = std::chrono::steady_clock::now();
       st.totals = reduce();  // synchronises: the once-per-frame download
       st.ms_reduce = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      if (group_u) {
+        std::vector<Vec3<T>> g(static_cast<std::size_t>(groups_));
+        group_staging_.take(g.data(), g.size());
+        group_u->resize(g.size());
+        for (std::size_t k = 0; k < g.size(); ++k) (*group_u)[k] = Vec3d(g[k]);
+      }
       float ms = 0;
       INC_CUDA(cudaEventElapsedTime(&ms, events_[0], events_[1]));
       st.ms_substeps = ms;
@@ -351,38 +374,6 @@ class MlsCudaSolver final : public MlsSolver {
       st.ms_stress += b;
       st.ms_forces += c;
     }
-    return st;
-  }
-
-  MlsFrameStats advanceCoupled(double frame_dt, int fixed_substeps, std::vector<Vec3d>& group_u) override {
-    if (stage_timing_ || groups_ == 0) return MlsSolver::advanceCoupled(frame_dt, fixed_substeps, group_u);
-    MlsFrameStats st;
-    st.substeps = planFrame(frame_dt, fixed_substeps, model_.source);
-    if (st.substeps == 0) {
-      st = unplannableFrame();
-      couplingDisplacements(group_u);
-      return st;
-    }
-    st.dt = frame_dt / st.substeps;
-    uploadBlade(st.dt, st.substeps);
-    ensureEvents(2);
-    INC_CUDA(cudaEventRecord(events_[0], stream_));
-    if (!persistent_ || !substepsPersistent(T(st.dt), st.substeps)) substepsGraph(T(st.dt), st.substeps);
-    INC_CUDA(cudaEventRecord(events_[1], stream_));
-    // The groups' eq. 13 state, queued before the reduction (which reads none of what the coupling pass writes),
-    // arrives with the reduction's wait.
-    couplingPass();
-    group_staging_.queueDownload(cg_displacement_.data(), std::size_t(groups_), stream_);
-    const auto t0 = std::chrono::steady_clock::now();
-    st.totals = reduce();  // synchronises
-    st.ms_reduce = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    std::vector<Vec3<T>> g(static_cast<std::size_t>(groups_));
-    group_staging_.take(g.data(), g.size());
-    group_u.resize(g.size());
-    for (std::size_t k = 0; k < g.size(); ++k) group_u[k] = Vec3d(g[k]);
-    float ms = 0;
-    INC_CUDA(cudaEventElapsedTime(&ms, events_[0], events_[1]));
-    st.ms_substeps = ms;
     return st;
   }
 
