@@ -2,10 +2,9 @@
 // of inputs fixed when the blade leaves, so that a worker can compute it while the nodal points are still simulated.
 #pragma once
 
-#include <memory>
-
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 

@@ -145,7 +145,8 @@ class DissectionSimulation final : public SimulationModel {
     tissue_ = std::make_shared<pack::SurfaceDistance>(rest_surface_);
     region_.inside = [tissue = tissue_](const Vec3d& x) { return tissue->insideByRays(x); };
     std::vector<Vec3d> x(spheres_.rest_centers), v(spheres_.size());
-    setSpheres(spheres_, x, v, {});
+    // The scene's supports must hold the organ as built (after a cut the clamped part may be gone).
+    installSpheres(spheres_, buildMetaballPbdModel<T>(spheres_, pbdOptions({}, true)), x, v, {});
     bindSurface();
     surface_components_ = analyzeMesh(rest_surface_).components;  // then each split reports its own
     sphere_components_ = sphereGraphComponents(spheres_);
@@ -719,7 +720,6 @@ class DissectionSimulation final : public SimulationModel {
     a.base_to_pbd = std::move(p.base_to_pbd);
     a.pbd_to_base = std::move(p.pbd_to_base);
     mouse_.release();  // sphere indices change
-    last_pbd_build_ms_ = p.build_ms;
     installSpheres(std::move(p.spheres), std::move(p.built), x, v, old_to_new);
   }
 
@@ -851,7 +851,6 @@ class DissectionSimulation final : public SimulationModel {
       last_repack_ = rp;
       last_added_ = rp.centres.size();
       timers_.repack_ms += r.repack_ms;
-      last_pbd_build_ms_ = r.build_ms;
       installSpheres(std::move(r.spheres), std::move(built), x, v, old_to_new);
     }
     if (r.split) {
@@ -958,18 +957,6 @@ class DissectionSimulation final : public SimulationModel {
 
   // --- PBD model ------------------------------------------------------------------------------------------
 
-  // Replaces the PBD model by `m` with the given positions and velocities; old_to_new maps the previous PBD
-  // indices (grasps follow their spheres).
-  void setSpheres(MetaballModel m, const std::vector<Vec3d>& x, const std::vector<Vec3d>& v,
-                  const std::vector<std::int32_t>& old_to_new, std::vector<double> known_cell_volumes = {}) {
-    // The scene's supports must hold the organ as built; after a cut the clamped part may be gone.
-    const MetaballPbdOptions opt = pbdOptions(std::move(known_cell_volumes), model_.size() == 0);
-    const auto t0 = std::chrono::steady_clock::now();
-    PbdModel<T> built = buildMetaballPbdModel<T>(m, opt);
-    last_pbd_build_ms_ = msSince(t0);
-    installSpheres(std::move(m), std::move(built), x, v, old_to_new);
-  }
-
   // The PBD model's build options for this scene (pure: a worker may build with them).
   MetaballPbdOptions pbdOptions(std::vector<double> known_cell_volumes, bool require_fixed_held) const {
     MetaballPbdOptions opt;
@@ -985,7 +972,8 @@ class DissectionSimulation final : public SimulationModel {
     return opt;
   }
 
-  // Makes `built` (the PBD model of `m`) the backend's model with the given positions and velocities.
+  // Makes `built` (the PBD model of `m`) the backend's model with the given positions and velocities; old_to_new
+  // maps the previous PBD indices (grasps follow their spheres).
   void installSpheres(MetaballModel m, PbdModel<T> built, const std::vector<Vec3d>& x, const std::vector<Vec3d>& v,
                       const std::vector<std::int32_t>& old_to_new) {
     spheres_ = std::move(m);
@@ -1231,7 +1219,6 @@ class DissectionSimulation final : public SimulationModel {
   NodalRegionSettings region_;
   double reference_mass_ = 0.0, reference_radius_ = 0.0;  // kg, m: the organ's mean sphere before any cut
   std::shared_ptr<const pack::SurfaceDistance> tissue_;   // the organ's rest surface (inside test)
-  double last_pbd_build_ms_ = 0;  // setSpheres' host build of the PBD model (timed for the stages)
   MetaballModel spheres_;  // the spheres of the PBD model (during a stroke: the base minus the cut ones)
   TriangleMesh rest_surface_;  // the surface after every cut so far (rest configuration) = surface_.mesh
   // The split surface with its wall flags and binding probes; replaced, never changed in place (workers read it).

@@ -109,14 +109,11 @@ double mlsCouplingStableStep(const MlsCouplingGroups& g, const std::vector<doubl
 }
 
 std::unique_ptr<MlsSolver> makeMlsSolver(const MlsBuildInput& input, BackendKind backend, Precision precision) {
-  const BackendChoice choice = resolveBackend(backend);
-  const bool f64 = precision == Precision::Float64;
-  if (choice.kind == BackendKind::Cuda) {
-#if INCISION_HAVE_CUDA
-    return f64 ? cuda::makeMlsSolverCuda(buildMlsModel<double>(input)) : cuda::makeMlsSolverCuda(buildMlsModel<float>(input));
-#endif
-  }
-  return f64 ? cpu::makeMlsSolverCpu(buildMlsModel<double>(input)) : cpu::makeMlsSolverCpu(buildMlsModel<float>(input));
+  resolveBackend(backend);  // an unusable backend is refused before the build
+  MlsBuiltModel m = buildMlsModelIn(input, precision);
+  std::unique_ptr<MlsSolver> solver;
+  loadMlsSolver(solver, m, backend);
+  return solver;
 }
 
 MlsBuiltModel buildMlsModelIn(const MlsBuildInput& input, Precision precision) {

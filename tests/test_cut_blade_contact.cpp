@@ -23,16 +23,22 @@ double segmentDistance(const Vec3d& x, const Vec3d& a, const Vec3d& b) {
   return norm(x - (a + ab * t));
 }
 
-// A static blade along z (radius 1 cm): a covered point lands on the capsule along its own direction from the axis
-// (1e-15 m), loses only the velocity into the blade; a point on the axis lands on the surface too; a point outside,
-// or moving out, keeps its state bit for bit. Velocities to 1e-14 m/s (the normal's rounding).
-TEST(MlsBladeContact, CoveredPointsLandOnTheCapsuleAndKeepTheirTangentialVelocity) {
+// A blade held still along the z axis from z = -1 to 1 m, radius 1 cm, over 0.01 s in 4 substeps.
+MlsBladeContact<double> staticBladeAlongZ() {
   MlsBladeContact<double> c;
   c.a0 = c.a1 = Vec3d(0, 0, -1);
   c.b0 = c.b1 = Vec3d(0, 0, 1);
   c.radius = 0.01;
   c.duration = 0.01;
   c.substeps = 4;
+  return c;
+}
+
+// A static blade along z (radius 1 cm): a covered point lands on the capsule along its own direction from the axis
+// (1e-15 m), loses only the velocity into the blade; a point on the axis lands on the surface too; a point outside,
+// or moving out, keeps its state bit for bit. Velocities to 1e-14 m/s (the normal's rounding).
+TEST(MlsBladeContact, CoveredPointsLandOnTheCapsuleAndKeepTheirTangentialVelocity) {
+  MlsBladeContact<double> c = staticBladeAlongZ();
   const Vec3d rest(0.001, 0.002, 0.3);
   Vec3d u(0.003, 0.001, 0.0), v(-1.0, 0.5, 0.2);  // x = (0.004, 0.003, 0.3): 5 mm from the axis
   mlsBladeContactAt(c, rest, u, v, 2);
@@ -62,12 +68,7 @@ TEST(MlsBladeContact, CoveredPointsLandOnTheCapsuleAndKeepTheirTangentialVelocit
 // (mu dv_n >= |v_t|) it sticks: it moves with the blade, static or moving (1e-14 m/s). mu 0 is the frictionless
 // contact bit for bit; a point outside is untouched whatever mu.
 TEST(MlsBladeContact, FrictionTakesAtMostMuTimesTheNormalChange) {
-  MlsBladeContact<double> c;
-  c.a0 = c.a1 = Vec3d(0, 0, -1);
-  c.b0 = c.b1 = Vec3d(0, 0, 1);
-  c.radius = 0.01;
-  c.duration = 0.01;
-  c.substeps = 4;
+  MlsBladeContact<double> c = staticBladeAlongZ();
   const Vec3d rest(0.001, 0.002, 0.3), u0(0.003, 0.001, 0.0);  // x = (0.004, 0.003, 0.3): normal n = (0.8, 0.6, 0)
   const Vec3d v0(-1.0, 0.5, 0.0);  // -0.5 n + 1.0 t with t = (-0.6, 0.8, 0)
   Vec3d u = u0, v = v0, u_free = u0, v_free = v0;
