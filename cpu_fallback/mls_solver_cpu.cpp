@@ -100,6 +100,7 @@ MlsView<T> MlsCpuSolver<T>::view() {
   s.weighted_sum = weighted_sum_.data();
   s.elastic_force = elastic_force_.data();
   if (bladeOn()) s.blade = &blade_t_;
+  if (staticsOn()) s.statics = &statics_t_;
   if (!cg_rest_centre_.empty()) {
     s.coupling_group = particle_group_.data();
     s.coupling_force = cg_force_.data();
@@ -217,6 +218,7 @@ void MlsCpuSolver<T>::substeps(T dt, int n, MlsFrameStats* stats) {
   }
   if (n <= 0) return;
   blade_t_ = bladeContact<T>(double(dt), n);
+  statics_t_ = staticContacts<T>();
   const MlsView<T> s = view();
   MlsView<T> last = s;  // the last stress pass also leaves each particle's stiffening for reduce()
   last.stiffening = stiffening_out_.data();

@@ -74,6 +74,7 @@ class MlsCpuSolver final : public MlsSolver {
   bool forces_valid_ = false;
   bool coupling_stale_ = false;
   MlsBladeContact<T> blade_t_;  // the blade of the substeps running now (MlsView::blade when bladeOn())
+  MlsStaticContacts<T> statics_t_;  // the static colliders relative to the origin (MlsView::statics when staticsOn())
 };
 
 std::unique_ptr<MlsSolver> makeMlsSolverCpu(MlsModel<float> model);

@@ -13,6 +13,7 @@
 #include "host/cut_repack.h"
 #include "host/cut_stroke_supports.h"
 #include "host/cut_swept_surface.h"
+#include "host/scene_colliders.h"
 #include "host/metaball_model.h"
 #include "host/mls_model.h"
 #include "host/mls_solver.h"
@@ -34,6 +35,7 @@ struct NodalRegionSettings {
   double youngs_modulus = 3.0e3;       // Pa: link stiffness k = 1 / alpha with alpha as the PBD links
   double stretch_compliance = 0.0;     // m/N; 0: alpha = d / (E pi rbar^2) (host/pbd_builders.h)
   std::function<bool(const Vec3d&)> inside;  // the tissue: points are sampled only inside it (empty: everywhere)
+  StaticColliders colliders;           // the scene's planes and boxes: the points stay out of them
 };
 
 // A sphere's state when it is converted: its points start rigidly attached, x = x_b + R_b (X - C_b), v = v_b.

@@ -1,6 +1,7 @@
 // DissectionSimulation: PBD metaballs cut by scalpel strokes; while the blade is in the tissue the cut spheres are MLS
 // nodal points coupled both ways with the spheres (section 5.2-5.3), re-packed by Algorithm 1 when it leaves.
 #include "host/dissection_simulation.h"
+#include "host/scene_colliders.h"
 
 #include <algorithm>
 #include <chrono>
@@ -114,6 +115,7 @@ class DissectionSimulation final : public SimulationModel {
     params_.volume_influence = T(2.0 * scene.geometry.spacing);
     base_substeps_ = scene.solver.substeps > 0 ? scene.solver.substeps : 4;
     spheres_ = buildSceneMetaballs(scene);
+    checkCollidersClear(scene, spheres_.rest_centers, "sphere centres");
     rest_surface_ = sceneSurfaceMesh(scene);
     surface_ = std::make_shared<const CutSurfaceState>(cutSurfaceState(rest_surface_));
     backend_ = makePbdBackend<T>(backend);
@@ -121,6 +123,7 @@ class DissectionSimulation final : public SimulationModel {
     region_.backend = backend_->kind();  // the nodal points run on the backend the scene asked for
     region_.precision = sizeof(T) == 8 ? Precision::Float64 : Precision::Float32;
     region_.fixed = scene.fixed;
+    region_.colliders = staticColliders(scene.colliders);
     region_.youngs_modulus = scene.material.youngs_modulus;
     region_.stretch_compliance = scene.pbd.stretch_compliance;
     MlsBuildInput& m = region_.mls;
@@ -964,6 +967,7 @@ class DissectionSimulation final : public SimulationModel {
     opt.stretch_compliance = scene_.pbd.stretch_compliance;
     opt.laplacian_compliance = scene_.pbd.laplacian_compliance;
     opt.fixed = scene_.fixed;
+    opt.colliders = scene_.colliders;
     opt.file = scene_.file;
     opt.require_fixed_held = require_fixed_held;
     opt.volume_samples = scene_.pbd.volume_preservation ? 64 : 0;

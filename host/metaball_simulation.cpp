@@ -1,5 +1,6 @@
 // PBD metaball organ as a SimulationModel: sphere fill (lattice or packer), constraint model, skinned surface, tools, frame reports.
 #include "host/metaball_simulation.h"
+#include "host/scene_colliders.h"
 
 #include <algorithm>
 #include <cmath>
@@ -110,11 +111,13 @@ class MetaballSimulation final : public SimulationModel {
     auto_substeps_ = scene.solver.substeps == 0;
 
     const MetaballModel mb = buildSceneMetaballs(scene);
+    checkCollidersClear(scene, mb.rest_centers, "sphere centres");
     MetaballPbdOptions opt;
     opt.youngs_modulus = scene.material.youngs_modulus;
     opt.stretch_compliance = scene.pbd.stretch_compliance;
     opt.laplacian_compliance = scene.pbd.laplacian_compliance;
     opt.fixed = scene.fixed;
+    opt.colliders = scene.colliders;
     opt.file = f;
     opt.volume_samples = scene.pbd.volume_preservation ? 64 : 0;
     model_ = buildMetaballPbdModel<T>(mb, opt);

@@ -1,5 +1,6 @@
 // MlsSimulation: an MlsSolver behind the SimulationModel interface, assembled from a Scene.
 #include "host/mls_simulation.h"
+#include "host/scene_colliders.h"
 
 #include <algorithm>
 #include <cmath>
@@ -274,7 +275,10 @@ std::unique_ptr<SimulationModel> makeMlsSimulation(const Scene& scene, BackendKi
     throw InputError(scene.file, "solver.backend", "makeMlsSimulation needs a resolved backend (cpu or cuda)");
   if (scene.solver.substeps < 0) throw InputError(scene.file, "solver.substeps", "must be >= 0");
   const MlsBuildInput in = mlsBuildInputFromScene(scene);
+  checkCollidersClear(scene, in.rest_positions, "particles");
   std::unique_ptr<MlsSolver> solver = makeMlsSolver(in, resolved, precision);
+  const StaticColliders colliders = staticColliders(scene.colliders);
+  solver->setStaticColliders(colliders.planes, colliders.boxes);
   return std::make_unique<MlsSimulation>(std::move(solver), scene, in);
 }
 

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -13,6 +14,7 @@
 #include "host/mls_model.h"
 #include "host/simulation_model.h"
 #include "physics/mls_blade_contact.h"
+#include "physics/mls_static_contact.h"
 #include "physics/vec3.h"
 
 namespace inc {
@@ -197,6 +199,18 @@ class MlsSolver {
                        double friction = 0.0) {
     blade_ = {a0, b0, a1, b1, radius, friction};
   }
+  // The scene's static colliders (world frame, m) as contacts for the free points in every drift (physics/
+  // mls_static_contact.h), kept until replaced (also across replaceModel). Throws std::invalid_argument beyond
+  // MlsStaticContacts::kMax of a kind (scenes are refused earlier, naming the key).
+  void setStaticColliders(const std::vector<pbd::PlaneCollider<double>>& planes,
+                          const std::vector<pbd::BoxCollider<double>>& boxes) {
+    if (planes.size() > std::size_t(MlsStaticContacts<double>::kMax) || boxes.size() > std::size_t(MlsStaticContacts<double>::kMax))
+      throw std::invalid_argument("MlsSolver: at most " + std::to_string(MlsStaticContacts<double>::kMax) +
+                                  " planes and as many boxes");
+    planes_ = planes;
+    boxes_ = boxes;
+    ++statics_version_;
+  }
 
   virtual void saveCheckpoint() = 0;
   virtual void restoreCheckpoint() = 0;
@@ -253,6 +267,23 @@ class MlsSolver {
     return c;
   }
   bool bladeOn() const { return blade_.radius > 0.0; }
+  // The static colliders in precision T, relative to the model origin.
+  template <typename T>
+  MlsStaticContacts<T> staticContacts() const {
+    MlsStaticContacts<T> c;
+    const Vec3d o = origin();
+    for (const auto& p : planes_) {
+      c.planes[c.planes_n].normal = Vec3<T>(p.normal);
+      c.planes[c.planes_n++].offset = T(p.offset - dot(p.normal, o));
+    }
+    for (const auto& b : boxes_) {
+      c.boxes[c.boxes_n].min = Vec3<T>(b.min - o);
+      c.boxes[c.boxes_n++].max = Vec3<T>(b.max - o);
+    }
+    return c;
+  }
+  bool staticsOn() const { return !planes_.empty() || !boxes_.empty(); }
+  std::uint64_t staticsVersion() const { return statics_version_; }  // changes with every setStaticColliders
   void forgetStiffening() { stiffening_known_ = false; }  // the state was replaced: measure again
   void setCouplingStableStep(double dt) { coupling_dt_ = dt; }  // s; infinity: no coupling springs
   double withCoupling(double dt) const {
@@ -273,6 +304,9 @@ class MlsSolver {
     double radius = 0.0;
     double friction = 0.0;
   } blade_;
+  std::vector<pbd::PlaneCollider<double>> planes_;
+  std::vector<pbd::BoxCollider<double>> boxes_;
+  std::uint64_t statics_version_ = 0;
   double safety_ = 0.5;
   double coupling_dt_ = std::numeric_limits<double>::infinity();
   double stiffening_ = 1.0;

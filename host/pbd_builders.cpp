@@ -175,6 +175,12 @@ PbdModel<T> buildMetaballPbdModel(const MetaballModel& mb, const MetaballPbdOpti
     throw InputError(f, "known_cell_volumes", "must hold one entry per sphere (or none)");
   if (opt.volume_samples > 0)
     computeRestCellVolumes(m, opt.volume_samples, opt.known_cell_volumes.empty() ? nullptr : &opt.known_cell_volumes);
+  for (const ColliderSpec& c : opt.colliders) {
+    if (c.kind == "plane")
+      m.planes.push_back({Vec3<T>(c.normal), T(dot(c.normal, c.point))});
+    else
+      m.boxes.push_back({Vec3<T>(c.min), Vec3<T>(c.max)});
+  }
   return m;
 }
 

@@ -30,6 +30,7 @@ struct MetaballPbdOptions {
   // only on its rest ball and its linked neighbours' balls, so one whose link set is unchanged since an earlier
   // build may pass that build's value (a cut's stroke model drops only the cut spheres: the dissection does).
   std::vector<double> known_cell_volumes;
+  std::vector<ColliderSpec> colliders;  // the scene's static colliders (the model's planes and boxes)
   bool coloring = true;              // false: no Gauss-Seidel colouring (a Jacobi-only model; a cut rebuilds the
                                      // model every frame the blade enters spheres, and the colouring is its
                                      // largest host cost after the volumes); Gauss-Seidel on it is refused

@@ -177,6 +177,16 @@ struct OutputSpec {
   bool metrics_csv = true;
 };
 
+// A static collider (`colliders[k]`, docs/scene-format.md): the organ's spheres (by their radius) and nodal points
+// stay out of it, without friction.
+struct ColliderSpec {
+  std::string kind = "plane";  // "plane" | "box"
+  Vec3d normal{0, 0, 1};       // plane: unit (normalised on load), pointing to the free side
+  Vec3d point;                 // plane: a point on it (m)
+  Vec3d min, max;              // box: its corners (m), min < max in every component
+};
+constexpr int kMaxCollidersPerKind = 8;  // planes, and boxes, per scene (each contact runs in every substep)
+
 struct Scene {
   std::string file;        // where it came from ("<embedded:name>" for built-in scenes)
   std::string name;
@@ -190,6 +200,7 @@ struct Scene {
   SolverSpec solver;
   std::vector<FixedRegion> fixed;
   std::vector<ToolSpec> tools;
+  std::vector<ColliderSpec> colliders;
   OutputSpec output;
   TearingSpec tearing;
   CuttingSpec cutting;

@@ -296,6 +296,46 @@ Vec3d unitDirection(const ObjectReader& r, const std::string& key, const Vec3d& 
   return d;
 }
 
+// colliders: planes {"kind": "plane", "point_m", "normal"} and boxes {"kind": "box", "min_m", "max_m"}.
+std::vector<ColliderSpec> readColliders(const ObjectReader& top, const ModelsSpec& models) {
+  std::vector<ColliderSpec> out;
+  const nlohmann::json* arr = top.array("colliders");
+  if (!arr) return out;
+  int planes = 0, boxes = 0;
+  for (std::size_t i = 0; i < arr->size(); ++i) {
+    const ObjectReader r((*arr)[i], top.file(), scene_json::indexPath(top.keyPath("colliders"), i));
+    ColliderSpec c;
+    c.kind = r.choice("kind", "", {"plane", "box"});
+    if (c.kind == "plane") {
+      r.allowOnly({"kind", "point_m", "normal"});
+      if (!r.has("point_m")) r.fail("point_m", "is required (a point on the plane, m)");
+      if (!r.has("normal")) r.fail("normal", "is required (the plane's normal, pointing to the free side)");
+      c.point = r.vec3("point_m", c.point);
+      c.normal = unitDirection(r, "normal", c.normal);
+      if (++planes > kMaxCollidersPerKind)
+        r.fail("kind", "more than " + std::to_string(kMaxCollidersPerKind) + " planes in one scene");
+    } else {
+      r.allowOnly({"kind", "min_m", "max_m"});
+      if (!r.has("min_m")) r.fail("min_m", "is required (the box's low corner, m)");
+      if (!r.has("max_m")) r.fail("max_m", "is required (the box's high corner, m)");
+      c.min = r.vec3("min_m", c.min);
+      c.max = r.vec3("max_m", c.max);
+      for (int k = 0; k < 3; ++k)
+        if (!(c.min[k] < c.max[k]))
+          r.fail("max_m", "must be > min_m in every component (component " + std::to_string(k) + ": " +
+                              formatNumber(c.max[k]) + " <= " + formatNumber(c.min[k]) + ")");
+      if (++boxes > kMaxCollidersPerKind)
+        r.fail("kind", "more than " + std::to_string(kMaxCollidersPerKind) + " boxes in one scene");
+    }
+    out.push_back(c);
+  }
+  // The tearing sheet has no contacts: a collider there would be passed through.
+  if (!out.empty() && models.tearing)
+    top.fail("colliders", "act on the PBD metaball organ, the MLS body and a cut's nodal points; models.tearing's "
+                          "sheet would pass through them");
+  return out;
+}
+
 std::vector<ToolSpec> readTools(const ObjectReader& top) {
   std::vector<ToolSpec> out;
   const nlohmann::json* arr = top.array("tools");
@@ -473,7 +513,7 @@ Scene parseScene(const std::string& json_text, const std::string& file_label, co
   const nlohmann::json doc = scene_json::parseChecked(json_text, file_label);
   const ObjectReader top(doc, file_label, "");
   top.allowOnly({"name", "description", "duration_s", "geometry", "material", "models", "mls", "pbd", "solver",
-                 "fixed", "tools", "output", "tearing", "cutting", "haptics"});
+                 "fixed", "tools", "colliders", "output", "tearing", "cutting", "haptics"});
   Scene s;
   s.file = file_label;
   s.name = top.string("name", std::filesystem::path(file_label).stem().string());
@@ -488,6 +528,7 @@ Scene parseScene(const std::string& json_text, const std::string& file_label, co
   s.solver = readSolver(top);
   s.fixed = readFixed(top);
   s.tools = readTools(top);
+  s.colliders = readColliders(top, s.models);
   s.output = readOutput(top);
   s.tearing = readTearing(top);
   s.cutting = readCutting(top);
@@ -586,6 +627,13 @@ std::string sceneToJson(const Scene& s) {
     tools.push_back(J{{"name", t.name}, {"kind", t.kind}, {"radius_m", t.radius}, {"length_m", t.length}, {"path", path}});
   }
   j["tools"] = tools;
+  if (!s.colliders.empty()) {
+    J colliders = J::array();
+    for (const ColliderSpec& c : s.colliders)
+      colliders.push_back(c.kind == "plane" ? J{{"kind", "plane"}, {"point_m", vec(c.point)}, {"normal", vec(c.normal)}}
+                                            : J{{"kind", "box"}, {"min_m", vec(c.min)}, {"max_m", vec(c.max)}});
+    j["colliders"] = colliders;
+  }
   j["output"] = J{{"every_frames", s.output.every_frames},
                   {"particles_ply", s.output.particles_ply},
                   {"mesh_obj", s.output.mesh_obj},

@@ -312,6 +312,7 @@ class MlsCudaSolver final : public MlsSolver {
                            std::to_string(stableTimeStep()) + " s]; refused");
     if (n <= 0) return;
     uploadBlade(dt, n);
+    uploadStatics();
     substeps(T(dt), n, false);
     INC_CUDA(cudaStreamSynchronize(stream_));  // step() returns with the state final (tests, benchmarks)
   }
@@ -335,6 +336,7 @@ class MlsCudaSolver final : public MlsSolver {
     }
     st.dt = frame_dt / st.substeps;
     uploadBlade(st.dt, st.substeps);
+    uploadStatics();
     if (!stage_timing_) {
       ensureEvents(2);
       INC_CUDA(cudaEventRecord(events_[0], stream_));
@@ -601,6 +603,7 @@ class MlsCudaSolver final : public MlsSolver {
     v.stress_moment = stress_moment_.data();
     v.energy = energy_.data();
     if (bladeOn()) v.blade = blade_buf_.data();
+    if (staticsOn()) v.statics = statics_buf_.data();
     if (groups_ > 0) {
       v.coupling_group = particle_group_.data();
       v.coupling_force = cg_force_.data();
@@ -771,7 +774,7 @@ class MlsCudaSolver final : public MlsSolver {
             bits(c.member_offsets), bits(c.members), bits(c.rest_centre), bits(c.spring_offsets), bits(c.anchor),
             bits(c.rest_length), bits(c.stiffness), bits(c.group_displacement), bits(c.member_force),
             bits(c.rest_centroid), bits(c.rest_gram), bits(c.inertia_inverse), bits(c.rotation), bits(c.member_torque),
-            bits(bladeOn() ? blade_buf_.data() : nullptr)};
+            bits(bladeOn() ? blade_buf_.data() : nullptr), bits(staticsOn() ? statics_buf_.data() : nullptr)};
   }
 
   // The blade of the coming substeps, one small upload (only where a blade contact is set). The stream is idle here
@@ -781,6 +784,20 @@ class MlsCudaSolver final : public MlsSolver {
     const MlsBladeContact<T> c = bladeContact<T>(dt, n);
     INC_CUDA(cudaStreamSynchronize(stream_));
     blade_buf_.upload(&c, 1);
+  }
+
+  // The static colliders relative to the origin, uploaded when they or the origin (a replaced model) changed.
+  void uploadStatics() {
+    if (!staticsOn()) return;
+    const Vec3d o = origin();
+    if (statics_uploaded_ == staticsVersion() && o.x == statics_origin_.x && o.y == statics_origin_.y &&
+        o.z == statics_origin_.z)
+      return;
+    const MlsStaticContacts<T> c = staticContacts<T>();
+    INC_CUDA(cudaStreamSynchronize(stream_));
+    statics_buf_.upload(&c, 1);
+    statics_uploaded_ = staticsVersion();
+    statics_origin_ = o;
   }
 
   void ensureEvents(std::size_t count) {
@@ -833,6 +850,9 @@ class MlsCudaSolver final : public MlsSolver {
   DeviceBuffer<Mat3<T>> cg_gram_, cg_inertia_inverse_, cg_torque_;
   DeviceBuffer<pbd::Quat<T>> cg_rotation_, saved_rotation_;
   DeviceBuffer<MlsBladeContact<T>> blade_buf_;  // one entry: MlsView::blade while bladeOn()
+  DeviceBuffer<MlsStaticContacts<T>> statics_buf_;  // one entry: MlsView::statics while staticsOn()
+  std::uint64_t statics_uploaded_ = ~std::uint64_t(0);  // the staticsVersion() in statics_buf_
+  Vec3d statics_origin_;                                // the origin it was made relative to
   std::int32_t groups_ = 0;
   std::size_t springs_ = 0;
   cudaStream_t stream_ = nullptr;

@@ -10,6 +10,7 @@
 #include "physics/mls_elasticity.h"
 #include "physics/mls_integrate.h"
 #include "physics/mls_kernel.h"
+#include "physics/mls_static_contact.h"
 #include "physics/vec3.h"
 
 namespace inc {
@@ -59,6 +60,8 @@ struct MlsView {
   Vec3<T>* elastic_force = nullptr;
   // Optional scalpel contact (physics/mls_blade_contact.h), applied to free particles in every drift. Null: none.
   const MlsBladeContact<T>* blade = nullptr;
+  // Optional static colliders (physics/mls_static_contact.h), applied to free particles after the blade. Null: none.
+  const MlsStaticContacts<T>* statics = nullptr;
 };
 
 // The rest-configuration terms of one pair (i, j) that the passes use (x_ij = X_j - X_i, w_ij its eq. 4 weight):
@@ -246,6 +249,7 @@ INC_HD void mlsDriftPass(const MlsView<T>& s, std::int64_t k, T dt, int remainin
     s.displacement[k] += v * dt;
     if (s.blade && s.blade->radius > T(0))
       mlsBladeContactAt(*s.blade, s.rest[k], s.displacement[k], s.velocity[k], remaining_substeps);
+    if (s.statics) mlsStaticContactAt(*s.statics, s.rest[k], s.displacement[k], s.velocity[k]);
   } else if (kind == kMlsPrescribed) {
     mlsPrescribedStep(s.displacement[k], s.velocity[k], s.target[k], dt, remaining_substeps);
   } else {

@@ -1,0 +1,40 @@
+// The scene's static colliders (planes, boxes) as contacts for MLS nodal points: a point that ends a drift inside one
+// is put back on its surface and loses the velocity that carries it in (inelastic, frictionless, as the PBD spheres'
+// contacts are).
+#pragma once
+
+#include "physics/hd.h"
+#include "physics/pbd_collision.h"
+#include "physics/vec3.h"
+
+namespace inc {
+
+// The colliders in the points' frame (relative to the model origin). Fixed-size so that one small upload carries
+// them and a kernel reads them without a second indirection; scenes are refused beyond kMax of a kind.
+template <typename T>
+struct MlsStaticContacts {
+  static constexpr int kMax = 8;
+  pbd::PlaneCollider<T> planes[kMax];
+  pbd::BoxCollider<T> boxes[kMax];
+  int planes_n = 0, boxes_n = 0;
+};
+
+// Particle k after its drift: each collider in turn (planes, then boxes, as pbd::resolveContacts orders a sphere's)
+// moves x = X + u out along the contact normal (the point is a sphere of radius 0: pbd::planeContact /
+// pbd::boxContact give the correction) and removes the velocity's inward normal component. A point outside every
+// collider is unchanged bit for bit.
+template <typename T>
+INC_HD void mlsStaticContactAt(const MlsStaticContacts<T>& c, const Vec3<T>& rest, Vec3<T>& u, Vec3<T>& v) {
+  const auto apply = [&](const Vec3<T>& corr) {
+    const T len = norm(corr);
+    if (!(len > T(0))) return;
+    u += corr;
+    const Vec3<T> n = corr * (T(1) / len);
+    const T vn = dot(v, n);
+    if (vn < T(0)) v -= n * vn;
+  };
+  for (int k = 0; k < c.planes_n; ++k) apply(pbd::planeContact(rest + u, T(0), c.planes[k]));
+  for (int k = 0; k < c.boxes_n; ++k) apply(pbd::boxContact(rest + u, T(0), c.boxes[k]));
+}
+
+}  // namespace inc
