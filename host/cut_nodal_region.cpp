@@ -169,7 +169,7 @@ void NodalRegion::apply(NodalUpdate& u, const std::vector<ConvertedSphereState>&
   const auto t1 = std::chrono::steady_clock::now();
   // A cut's few thousand points are launch-bound on the GPU: the substeps of an exchange replay as one graph.
   solver_->setStageTiming(false);
-  solver_->setStaticColliders(settings_.colliders.planes, settings_.colliders.boxes);
+  solver_->setStaticColliders(settings_.colliders.planes, settings_.colliders.boxes, 0.5 * spacing_);
   solver_->setSafety(solver_->safety() * safety_scale_);
   solver_->setDisplacements(u_);
   solver_->setVelocities(v_);

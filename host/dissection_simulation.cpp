@@ -968,6 +968,8 @@ class DissectionSimulation final : public SimulationModel {
     opt.laplacian_compliance = scene_.pbd.laplacian_compliance;
     opt.fixed = scene_.fixed;
     opt.colliders = scene_.colliders;
+    if (!scene_.colliders.empty())
+      opt.surface_depth = [t = tissue_](const Vec3d& x) { return -t->signedDistance(x).distance; };
     opt.file = scene_.file;
     opt.require_fixed_held = require_fixed_held;
     opt.volume_samples = scene_.pbd.volume_preservation ? 64 : 0;

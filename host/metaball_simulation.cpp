@@ -1,5 +1,6 @@
 // PBD metaball organ as a SimulationModel: sphere fill (lattice or packer), constraint model, skinned surface, tools, frame reports.
 #include "host/metaball_simulation.h"
+#include "host/metaball_pack_bvh.h"
 #include "host/scene_colliders.h"
 
 #include <algorithm>
@@ -118,11 +119,16 @@ class MetaballSimulation final : public SimulationModel {
     opt.laplacian_compliance = scene.pbd.laplacian_compliance;
     opt.fixed = scene.fixed;
     opt.colliders = scene.colliders;
+    rest_surface_ = sceneSurfaceMesh(scene);
+    std::shared_ptr<const pack::SurfaceDistance> depth;
+    if (!scene.colliders.empty()) {
+      depth = std::make_shared<const pack::SurfaceDistance>(rest_surface_);
+      opt.surface_depth = [depth](const Vec3d& x) { return -depth->signedDistance(x).distance; };
+    }
     opt.file = f;
     opt.volume_samples = scene.pbd.volume_preservation ? 64 : 0;
     model_ = buildMetaballPbdModel<T>(mb, opt);
     // The organ's surface rides on the spheres (linear-blend skinning, k = 4 nearest spheres).
-    rest_surface_ = sceneSurfaceMesh(scene);
     skin_ = skinArrays<T>(bindSkin(rest_surface_, mb, std::min<int>(4, int(mb.size())), f));
     backend_ = makePbdBackend<T>(backend);
     backend_->setModel(model_);

@@ -278,7 +278,7 @@ std::unique_ptr<SimulationModel> makeMlsSimulation(const Scene& scene, BackendKi
   checkCollidersClear(scene, in.rest_positions, "particles");
   std::unique_ptr<MlsSolver> solver = makeMlsSolver(in, resolved, precision);
   const StaticColliders colliders = staticColliders(scene.colliders);
-  solver->setStaticColliders(colliders.planes, colliders.boxes);
+  solver->setStaticColliders(colliders.planes, colliders.boxes, 0.5 * in.spacing);
   return std::make_unique<MlsSimulation>(std::move(solver), scene, in);
 }
 

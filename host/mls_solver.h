@@ -200,15 +200,18 @@ class MlsSolver {
     blade_ = {a0, b0, a1, b1, radius, friction};
   }
   // The scene's static colliders (world frame, m) as contacts for the free points in every drift (physics/
-  // mls_static_contact.h), kept until replaced (also across replaceModel). Throws std::invalid_argument beyond
-  // MlsStaticContacts::kMax of a kind (scenes are refused earlier, naming the key).
+  // mls_static_contact.h), each point a ball of `radius` (m; half the sampling spacing puts the sampled surface on
+  // them), kept until replaced (also across replaceModel). Throws std::invalid_argument beyond
+  // MlsStaticContacts::kMax of a kind (scenes are refused earlier, naming the key) or for a radius < 0.
   void setStaticColliders(const std::vector<pbd::PlaneCollider<double>>& planes,
-                          const std::vector<pbd::BoxCollider<double>>& boxes) {
+                          const std::vector<pbd::BoxCollider<double>>& boxes, double radius = 0.0) {
+    if (!(radius >= 0.0) || !std::isfinite(radius)) throw std::invalid_argument("MlsSolver: contact radius must be >= 0");
     if (planes.size() > std::size_t(MlsStaticContacts<double>::kMax) || boxes.size() > std::size_t(MlsStaticContacts<double>::kMax))
       throw std::invalid_argument("MlsSolver: at most " + std::to_string(MlsStaticContacts<double>::kMax) +
                                   " planes and as many boxes");
     planes_ = planes;
     boxes_ = boxes;
+    statics_radius_ = radius;
     ++statics_version_;
   }
 
@@ -271,6 +274,7 @@ class MlsSolver {
   template <typename T>
   MlsStaticContacts<T> staticContacts() const {
     MlsStaticContacts<T> c;
+    c.radius = T(statics_radius_);
     const Vec3d o = origin();
     for (const auto& p : planes_) {
       c.planes[c.planes_n].normal = Vec3<T>(p.normal);
@@ -307,6 +311,7 @@ class MlsSolver {
   std::vector<pbd::PlaneCollider<double>> planes_;
   std::vector<pbd::BoxCollider<double>> boxes_;
   std::uint64_t statics_version_ = 0;
+  double statics_radius_ = 0.0;
   double safety_ = 0.5;
   double coupling_dt_ = std::numeric_limits<double>::infinity();
   double stiffening_ = 1.0;

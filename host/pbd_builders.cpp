@@ -170,17 +170,26 @@ PbdModel<T> buildMetaballPbdModel(const MetaballModel& mb, const MetaballPbdOpti
     m.overlap_ids.insert(m.overlap_ids.end(), nbr[i].begin(), nbr[i].end());
     m.overlap_offsets.push_back(std::int32_t(m.overlap_ids.size()));
   }
-  finalizePbdModel(m, opt.coloring);
-  if (!opt.known_cell_volumes.empty() && opt.known_cell_volumes.size() != n)
-    throw InputError(f, "known_cell_volumes", "must hold one entry per sphere (or none)");
-  if (opt.volume_samples > 0)
-    computeRestCellVolumes(m, opt.volume_samples, opt.known_cell_volumes.empty() ? nullptr : &opt.known_cell_volumes);
   for (const ColliderSpec& c : opt.colliders) {
     if (c.kind == "plane")
       m.planes.push_back({Vec3<T>(c.normal), T(dot(c.normal, c.point))});
     else
       m.boxes.push_back({Vec3<T>(c.min), Vec3<T>(c.max)});
   }
+  // Where a ball bulges beyond the organ's surface (by up to a quarter lattice spacing on flat faces, more on curved
+  // ones) the static colliders meet the surface: inset = radius - depth of the centre, clamped to [0, radius].
+  if (!opt.colliders.empty() && opt.surface_depth) {
+    m.contact_inset.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const double depth = std::max(0.0, opt.surface_depth(mb.rest_centers[i]));
+      m.contact_inset[i] = T(std::min(mb.rest_radii[i], std::max(0.0, mb.rest_radii[i] - depth)));
+    }
+  }
+  finalizePbdModel(m, opt.coloring);
+  if (!opt.known_cell_volumes.empty() && opt.known_cell_volumes.size() != n)
+    throw InputError(f, "known_cell_volumes", "must hold one entry per sphere (or none)");
+  if (opt.volume_samples > 0)
+    computeRestCellVolumes(m, opt.volume_samples, opt.known_cell_volumes.empty() ? nullptr : &opt.known_cell_volumes);
   return m;
 }
 

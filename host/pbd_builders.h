@@ -3,6 +3,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,9 @@ struct MetaballPbdOptions {
   // build may pass that build's value (a cut's stroke model drops only the cut spheres: the dissection does).
   std::vector<double> known_cell_volumes;
   std::vector<ColliderSpec> colliders;  // the scene's static colliders (the model's planes and boxes)
+  // With colliders: the depth (m, > 0 inside) of a point below the organ's surface, which sets each sphere's
+  // PbdModel::contact_inset (radius - depth of its centre); empty: the balls themselves meet the colliders.
+  std::function<double(const Vec3d&)> surface_depth;
   bool coloring = true;              // false: no Gauss-Seidel colouring (a Jacobi-only model; a cut rebuilds the
                                      // model every frame the blade enters spheres, and the colouring is its
                                      // largest host cost after the volumes); Gauss-Seidel on it is refused

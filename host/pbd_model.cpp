@@ -75,6 +75,12 @@ void finalizePbdModel(PbdModel<T>& model, bool coloring) {
   const std::size_t n = model.size();
   if (model.masses.size() != n || model.inv_mass.size() != n || model.rest_radii.size() != n)
     throw InputError(kFile, "particles", "masses, inverse masses and radii must have one entry per particle");
+  if (!model.contact_inset.empty()) {
+    if (model.contact_inset.size() != n) throw InputError(kFile, "contact_inset", "must have one entry per particle (or none)");
+    for (std::size_t i = 0; i < n; ++i)
+      if (!(model.contact_inset[i] >= T(0) && model.contact_inset[i] <= model.rest_radii[i]))
+        throw InputError(kFile, "contact_inset[" + std::to_string(i) + "]", "must lie in [0, the particle's radius]");
+  }
   for (std::size_t i = 0; i < n; ++i) {
     if (!isFinite(model.rest_positions[i])) throw InputError(kFile, "rest_positions[" + std::to_string(i) + "]", "not finite");
     if (!(model.masses[i] > T(0)) || !(model.inv_mass[i] >= T(0)))

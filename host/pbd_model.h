@@ -76,6 +76,9 @@ struct PbdModel {
 
   std::vector<pbd::PlaneCollider<T>> planes;
   std::vector<pbd::BoxCollider<T>> boxes;
+  // Per particle (or empty: none), m in [0, rest radius]: the planes and boxes meet particle i at its radius minus
+  // this, so that where its ball bulges beyond the organ's surface, the surface rests on them, not the ball.
+  std::vector<T> contact_inset;
 
   std::size_t size() const { return rest_positions.size(); }
 };

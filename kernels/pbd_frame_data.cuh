@@ -30,6 +30,7 @@ struct FusedFrame {
   Vec3<T>* x_prev = nullptr;
   const T* w = nullptr;
   const T* r = nullptr;
+  const T* inset = nullptr;  // PbdModel::contact_inset (null: none)
   Vec3<T> g;
   T damp = T(1), dt = T(0);
   pbd::SolveContext<T> ctx;

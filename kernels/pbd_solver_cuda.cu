@@ -258,11 +258,13 @@ __global__ void rotationKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx, co
 }
 
 template <typename T>
-__global__ void contactKernel(int n, const int* live_n, Vec3<T>* x, const T* r, const T* w, const pbd::PlaneCollider<T>* planes,
+__global__ void contactKernel(int n, const int* live_n, Vec3<T>* x, const T* r, const T* inset, const T* w,
+                              const pbd::PlaneCollider<T>* planes,
                               int np, const pbd::BoxCollider<T>* boxes, int nb, const pbd::CapsuleCollider<T>* tools_from,
                               const pbd::CapsuleCollider<T>* tools_to, int nt, T t, ChebyshevArgs<T> ch) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i < liveCount(live_n, n)) x[i] = endIterationAt(i, x[i], r, w, planes, np, boxes, nb, tools_from, tools_to, nt, t, ch);
+  if (i < liveCount(live_n, n))
+    x[i] = endIterationAt(i, x[i], r, inset, w, planes, np, boxes, nb, tools_from, tools_to, nt, t, ch);
   chebyshevMultipliers(ch);
 }
 
@@ -271,13 +273,14 @@ __global__ void contactKernel(int n, const int* live_n, Vec3<T>* x, const T* r, 
 // in the same order) without the second pass over the positions and its launch. Both contact kernels take the
 // iteration's Chebyshev step (positions before their contacts, as the CPU's contact phase does, and every multiplier).
 template <typename T>
-__global__ void gatherContactKernel(int n, const int* live_n, pbd::BlockView<T> b, Vec3<T>* x, const T* r, const T* w,
+__global__ void gatherContactKernel(int n, const int* live_n, pbd::BlockView<T> b, Vec3<T>* x, const T* r,
+                                    const T* inset, const T* w,
                                     const pbd::PlaneCollider<T>* planes, int np, const pbd::BoxCollider<T>* boxes,
                                     int nb, const pbd::CapsuleCollider<T>* tools_from,
                                     const pbd::CapsuleCollider<T>* tools_to, int nt, T t, ChebyshevArgs<T> ch) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i < liveCount(live_n, n))
-    x[i] = endIterationAt(i, x[i] + gatherSum(b, i), r, w, planes, np, boxes, nb, tools_from, tools_to, nt, t, ch);
+    x[i] = endIterationAt(i, x[i] + gatherSum(b, i), r, inset, w, planes, np, boxes, nb, tools_from, tools_to, nt, t, ch);
   chebyshevMultipliers(ch);
 }
 
@@ -565,7 +568,7 @@ __global__ void __launch_bounds__(kFusedThreads) fusedFrameKernel(FusedFrame<T> 
       __syncthreads();
       for (int i = tid; i < f.n; i += nth)
         if (w[i] > T(0))
-          x[i] = pbd::resolveContacts(x[i], f.r[i], f.planes, f.np, f.boxes, f.nb, f.tools_from, f.tools_to, f.nt,
+          x[i] = pbd::resolveContacts(x[i], f.r[i], f.inset ? f.inset[i] : T(0), f.planes, f.np, f.boxes, f.nb, f.tools_from, f.tools_to, f.nt,
                                         t_end);
       __syncthreads();
     }
@@ -675,6 +678,8 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     bulk_.add(rest_radii_, m.rest_radii);
     bulk_.add(radii_, m.rest_radii);
     bulk_.add(radii_next_, m.rest_radii);
+    has_inset_ = !m.contact_inset.empty();
+    if (has_inset_) bulk_.add(inset_, m.contact_inset);
     std::vector<pbd::Quat<T>> ident(m.size());
     bulk_.add(rotations_, ident);
     bulk_.zero(active_, m.size());
@@ -904,6 +909,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
   }
 
   void appendParticles(int n_new, const std::uint8_t* fixed_dev) override {
+    if (has_inset_) throw InputError("pbd patch", "contact_inset", "a model with contact insets cannot gain particles");
     if (n_new < n_) throw InputError("pbd patch", "particles", "appendParticles cannot remove particles");
     if (std::size_t(n_new) > deviceParticles().capacity)
       throw InputError("pbd patch", "particles", "call reserveParticles first (" + std::to_string(n_new) + " particles)");
@@ -1012,6 +1018,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
                                const std::vector<Vec3<T>>& v, const std::vector<T>& mass,
                                const std::vector<std::uint8_t>& fixed) override {
     const std::size_t m = rest.size();
+    if (has_inset_) throw InputError("pbd patch", "contact_inset", "a model with contact insets cannot gain particles");
     if (x.size() != m || v.size() != m || mass.size() != m || fixed.size() != m || m < std::size_t(n_))
       throw InputError("pbd patch", "particles", "whole arrays of one size >= the particle count expected");
     for (T mm : mass)
@@ -1514,6 +1521,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
       f.x_prev = x_prev_.data();
       f.w = w_.data();
       f.r = radii_.data();
+      f.inset = insetPtr();
       f.g = p.gravity;
       f.damp = damp;
       f.dt = dt;
@@ -1602,7 +1610,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
               launchProjection(b, ctx, nullptr, gc, live_count, stream_);
             INC_CUDA_LAUNCH("pbd project (jacobi)");
             if (fuse_contacts && int(bi) == last_solved) {
-              gatherContactKernel<T><<<gcont, kThreads, 0, stream_>>>(n_, live_n, b, x_.data(), radii_.data(), w_.data(),
+              gatherContactKernel<T><<<gcont, kThreads, 0, stream_>>>(n_, live_n, b, x_.data(), radii_.data(), insetPtr(), w_.data(),
                                                                    planes_.data(), n_planes_, boxes_.data(), n_boxes_,
                                                                    tools_from_.data(), tools_to_.data(), n_tools_, t_end, ch);
               INC_CUDA_LAUNCH("pbd gather + contacts");
@@ -1635,7 +1643,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
         stageEnd(1, ev);
         ev = stageBegin();
         if (n_ > 0 && !fuse_contacts) {
-          contactKernel<T><<<gcont, kThreads, 0, stream_>>>(n_, live_n, x_.data(), radii_.data(), w_.data(), planes_.data(),
+          contactKernel<T><<<gcont, kThreads, 0, stream_>>>(n_, live_n, x_.data(), radii_.data(), insetPtr(), w_.data(), planes_.data(),
                                                          n_planes_, boxes_.data(), n_boxes_, tools_from_.data(),
                                                          tools_to_.data(), n_tools_, t_end, ch);
           INC_CUDA_LAUNCH("pbd contacts");
@@ -1772,6 +1780,9 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
   int n_ = 0, n_planes_ = 0, n_boxes_ = 0, n_kin_ = 0, n_att_ = 0, n_tools_ = 0, n_volume_tools_ = 0, rotation_block_ = -1;
   bool have_volume_data_ = false;
   std::vector<T> host_rest_radii_;
+  DeviceBuffer<T> inset_;  // PbdModel::contact_inset where the model has one
+  bool has_inset_ = false;
+  const T* insetPtr() const { return has_inset_ ? inset_.data() : nullptr; }
   DeviceBuffer<Vec3<T>> rest_positions_, x_, v_, x_prev_, kin_from_, kin_to_, samples_, att_from_, att_to_, att_lambda_;
   DeviceBuffer<T> masses_, inv_mass_, w_, rest_radii_, radii_, radii_next_, rest_cell_, att_comp_;
   DeviceBuffer<pbd::Quat<T>> rotations_;

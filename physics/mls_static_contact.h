@@ -17,10 +17,12 @@ struct MlsStaticContacts {
   pbd::PlaneCollider<T> planes[kMax];
   pbd::BoxCollider<T> boxes[kMax];
   int planes_n = 0, boxes_n = 0;
+  T radius = T(0);  // m: a point meets the colliders this far from its centre (half the sampling spacing: the
+                    // surface the lattice samples lies that far beyond its outermost points)
 };
 
 // Particle k after its drift: each collider in turn (planes, then boxes, as pbd::resolveContacts orders a sphere's)
-// moves x = X + u out along the contact normal (the point is a sphere of radius 0: pbd::planeContact /
+// moves x = X + u out along the contact normal (the point is a ball of c.radius: pbd::planeContact /
 // pbd::boxContact give the correction) and removes the velocity's inward normal component. A point outside every
 // collider is unchanged bit for bit.
 template <typename T>
@@ -33,8 +35,8 @@ INC_HD void mlsStaticContactAt(const MlsStaticContacts<T>& c, const Vec3<T>& res
     const T vn = dot(v, n);
     if (vn < T(0)) v -= n * vn;
   };
-  for (int k = 0; k < c.planes_n; ++k) apply(pbd::planeContact(rest + u, T(0), c.planes[k]));
-  for (int k = 0; k < c.boxes_n; ++k) apply(pbd::boxContact(rest + u, T(0), c.boxes[k]));
+  for (int k = 0; k < c.planes_n; ++k) apply(pbd::planeContact(rest + u, c.radius, c.planes[k]));
+  for (int k = 0; k < c.boxes_n; ++k) apply(pbd::boxContact(rest + u, c.radius, c.boxes[k]));
 }
 
 }  // namespace inc

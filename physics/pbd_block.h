@@ -377,13 +377,15 @@ INC_HD CapsuleCollider<T> lerpCapsule(const CapsuleCollider<T>& a, const Capsule
 }
 
 // All contacts of one sphere, resolved one after another (Gauss-Seidel over its own contacts). Tools are
-// interpolated to the substep's end time t in [0, 1] of the frame.
+// interpolated to the substep's end time t in [0, 1] of the frame. The static colliders (planes, boxes) meet the
+// sphere at r - inset (at least 0): the organ's surface, not the ball, rests on them (PbdModel::contact_inset).
 template <typename T>
-INC_HD Vec3<T> resolveContacts(Vec3<T> x, T r, const PlaneCollider<T>* planes, int np, const BoxCollider<T>* boxes,
-                               int nb, const CapsuleCollider<T>* tools_from, const CapsuleCollider<T>* tools_to,
-                               int nt, T t) {
-  for (int k = 0; k < np; ++k) x += planeContact(x, r, planes[k]);
-  for (int k = 0; k < nb; ++k) x += boxContact(x, r, boxes[k]);
+INC_HD Vec3<T> resolveContacts(Vec3<T> x, T r, T inset, const PlaneCollider<T>* planes, int np,
+                               const BoxCollider<T>* boxes, int nb, const CapsuleCollider<T>* tools_from,
+                               const CapsuleCollider<T>* tools_to, int nt, T t) {
+  const T rs = r > inset ? r - inset : T(0);
+  for (int k = 0; k < np; ++k) x += planeContact(x, rs, planes[k]);
+  for (int k = 0; k < nb; ++k) x += boxContact(x, rs, boxes[k]);
   for (int k = 0; k < nt; ++k) x += capsuleContact(x, r, lerpCapsule(tools_from[k], tools_to[k], t));
   return x;
 }

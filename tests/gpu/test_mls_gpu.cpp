@@ -163,24 +163,24 @@ TEST(MlsGpu, StaticCollidersMatchTheCpu) {
   const Vec3d n(0, std::sin(0.3), std::cos(0.3));
   double low = 1e30, high = -1e30;
   for (const Vec3d& x : cpu->restPositions()) low = std::min(low, dot(n, x)), high = std::max(high, x.x);
-  const std::vector<pbd::PlaneCollider<double>> planes{{n, low - 0.002}};
-  const std::vector<pbd::BoxCollider<double>> boxes{{Vec3d(high + 0.001, -1, -1), Vec3d(high + 0.05, 1, 1)}};
-  cpu->setStaticColliders(planes, boxes);
-  gpu->setStaticColliders(planes, boxes);
+  const std::vector<pbd::PlaneCollider<double>> planes{{n, low - 0.004}};
+  const std::vector<pbd::BoxCollider<double>> boxes{{Vec3d(high + 0.003, -1, -1), Vec3d(high + 0.05, 1, 1)}};
+  cpu->setStaticColliders(planes, boxes, 0.002);
+  gpu->setStaticColliders(planes, boxes, 0.002);
   std::vector<Vec3d> xc, xg;
   double min_gap = 1e30;
   for (int f = 0; f < 20; ++f) {
     cpu->advance(1.0 / 60.0);
     gpu->advance(1.0 / 60.0);
     gpu->positions(xg);
-    for (const Vec3d& x : xg) min_gap = std::min(min_gap, dot(n, x) - (low - 0.002));
+    for (const Vec3d& x : xg) min_gap = std::min(min_gap, dot(n, x) - (low - 0.004));
   }
   cpu->positions(xc);
   std::vector<Vec3d> uc, ug;
   cpu->displacements(uc);
   gpu->displacements(ug);
-  EXPECT_GE(min_gap, -1e-12);
-  EXPECT_LT(min_gap, 1e-4) << "the block reaches the floor";
+  EXPECT_GE(min_gap, 0.002 - 1e-12);  // the points are balls of 2 mm
+  EXPECT_LT(min_gap, 0.002 + 1e-4) << "the block reaches the floor";
   EXPECT_LT(maxDiff(uc, ug) / maxNorm(uc), 1e-9);
 }
 
