@@ -116,6 +116,7 @@ class DissectionSimulation final : public SimulationModel {
     base_substeps_ = scene.solver.substeps > 0 ? scene.solver.substeps : 4;
     spheres_ = buildSceneMetaballs(scene);
     checkCollidersClear(scene, spheres_.rest_centers, "sphere centres");
+    collider_mesh_ = colliderMeshAround(scene.colliders, spheres_.rest_centers);
     rest_surface_ = sceneSurfaceMesh(scene);
     surface_ = std::make_shared<const CutSurfaceState>(cutSurfaceState(rest_surface_));
     backend_ = makePbdBackend<T>(backend);
@@ -315,6 +316,7 @@ class DissectionSimulation final : public SimulationModel {
   // MLS solver has them now (they go back to zero when the stroke ends).
   void renderLayers(RenderLayers& out) const override {
     out = RenderLayers{};
+    out.colliders = collider_mesh_;
     appendPbdSpheres(state_, out);
     appendPbdFixed(model_, state_, out);
     // The held spheres as the frame's input is assembled: scripted graspers first, then the mouse's others; a
@@ -1227,6 +1229,7 @@ class DissectionSimulation final : public SimulationModel {
   std::shared_ptr<const pack::SurfaceDistance> tissue_;   // the organ's rest surface (inside test)
   MetaballModel spheres_;  // the spheres of the PBD model (during a stroke: the base minus the cut ones)
   TriangleMesh rest_surface_;  // the surface after every cut so far (rest configuration) = surface_.mesh
+  TriangleMesh collider_mesh_;  // the scene's colliders drawn around the organ (RenderLayers::colliders)
   // The split surface with its wall flags and binding probes; replaced, never changed in place (workers read it).
   std::shared_ptr<const CutSurfaceState> surface_;
   struct Skin {  // translation skinning slots v * k + j (sphere index into the bound model, weight)

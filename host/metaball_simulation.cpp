@@ -113,6 +113,7 @@ class MetaballSimulation final : public SimulationModel {
 
     const MetaballModel mb = buildSceneMetaballs(scene);
     checkCollidersClear(scene, mb.rest_centers, "sphere centres");
+    collider_mesh_ = colliderMeshAround(scene.colliders, mb.rest_centers);
     MetaballPbdOptions opt;
     opt.youngs_modulus = scene.material.youngs_modulus;
     opt.stretch_compliance = scene.pbd.stretch_compliance;
@@ -248,6 +249,7 @@ class MetaballSimulation final : public SimulationModel {
   // spheres, the attachment forces on them and the reaction on the tool (host/pbd_render_layers.h).
   void renderLayers(RenderLayers& out) const override {
     out = RenderLayers{};
+    out.colliders = collider_mesh_;
     appendPbdSpheres(state_, out);
     appendPbdFixed(model_, state_, out);
     PbdFrameInput<T> all;
@@ -327,6 +329,7 @@ class MetaballSimulation final : public SimulationModel {
   PbdMouseGrasp mouse_;  // the viewer's grasp (not part of checkpoints: the user holds it)
   std::vector<std::uint8_t> movable_;
   TriangleMesh rest_surface_;
+  TriangleMesh collider_mesh_;  // the scene's colliders drawn around the organ (RenderLayers::colliders)
   SkinArrays<T> skin_;
   mutable std::vector<Mat3<T>> rotations_;  // scratch for currentSurface
   mutable std::vector<Vec3<T>> skinned_;

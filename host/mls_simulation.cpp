@@ -44,6 +44,7 @@ class MlsSimulation final : public SimulationModel {
       : solver_(std::move(solver)), fixed_substeps_(scene.solver.substeps), tools_(scene.tools) {
     // For the viewer's layers: which particles are fixed, the masses (as makeMlsModel sets them) and gravity.
     gravity_ = in.gravity;
+    collider_mesh_ = colliderMeshAround(scene.colliders, in.rest_positions);
     fixed_.assign(in.rest_positions.size(), 0);
     masses_.resize(in.rest_positions.size());
     for (std::size_t i = 0; i < masses_.size(); ++i) {
@@ -184,6 +185,7 @@ class MlsSimulation final : public SimulationModel {
   // -sum F_i over its particles.
   void renderLayers(RenderLayers& out) const override {
     out = RenderLayers{};
+    out.colliders = collider_mesh_;
     std::vector<Vec3d> x, f;
     solver_->positions(x);
     solver_->forces(f);
@@ -218,6 +220,7 @@ class MlsSimulation final : public SimulationModel {
  private:
   Vec3d gravity_;                        // m/s^2
   std::vector<double> masses_;           // kg
+  TriangleMesh collider_mesh_;           // the scene's colliders drawn around the body (RenderLayers::colliders)
   std::vector<std::uint8_t> fixed_;      // 1: in a fixed region
   std::vector<std::int32_t> mouse_ids_;  // the viewer's grasp: held particles
   std::vector<Vec3d> mouse_u0_;          // their displacements at the grasp (m)

@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "host/mesh.h"
 #include "host/scene.h"
 #include "physics/pbd_collision.h"
 
@@ -14,6 +15,13 @@ struct StaticColliders {
   std::vector<pbd::BoxCollider<double>> boxes;
 };
 StaticColliders staticColliders(const std::vector<ColliderSpec>& specs);
+
+// The colliders as triangles for drawing (RenderLayers::colliders): a plane as a square of side 2 * half_size
+// centred where `centre` (the organ's) projects onto it, a box as its 12 faces' triangles, outward.
+TriangleMesh colliderMesh(const std::vector<ColliderSpec>& specs, const Vec3d& centre, double half_size);
+// colliderMesh around `points` (the organ at rest): centred on their bounding box, planes as wide as its diagonal
+// on each side.
+TriangleMesh colliderMeshAround(const std::vector<ColliderSpec>& specs, const std::vector<Vec3d>& points);
 
 // Throws InputError(scene.file, "colliders[k]", reason) when any of `points` (the organ's sphere centres or nodal
 // points at rest, m) lies inside collider k: behind a plane, or strictly inside a box. The solvers would push

@@ -135,6 +135,39 @@ TEST(SceneColliders, TheContactInsetAppliesToStaticCollidersOnly) {
   EXPECT_NEAR(x.z, 0.0, 1e-15) << "an inset beyond the radius leaves the centre on the collider";
 }
 
+// The viewer's collider layer: a plane is a square of the asked half size centred on the organ's projection, its
+// triangles facing the free side; a box is 12 triangles facing out; the metaball model reports them.
+TEST(SceneColliders, TheColliderLayerDrawsPlanesAroundTheOrganAndBoxesFacingOut) {
+  const Scene s = parseScene(sceneWith(R"([{"kind": "plane", "point_m": [0, 0, -0.03], "normal": [0, 0.6, 0.8]},
+                                            {"kind": "box", "min_m": [0.1, -0.01, -0.02], "max_m": [0.2, 0.01, 0.01]}])"),
+                             "c.json", ".");
+  const TriangleMesh m = colliderMesh(s.colliders, Vec3d(0.01, 0.02, 0.0), 0.25);
+  ASSERT_EQ(m.triangles.size(), 2u + 12u);
+  const Vec3d n(0, 0.6, 0.8), p0(0, 0, -0.03);
+  Vec3d centre;
+  for (int k = 0; k < 4; ++k) {
+    EXPECT_NEAR(dot(n, m.vertices[std::size_t(k)] - p0), 0.0, 1e-15);
+    centre += m.vertices[std::size_t(k)] * 0.25;
+  }
+  const Vec3d o = Vec3d(0.01, 0.02, 0.0) - n * dot(n, Vec3d(0.01, 0.02, 0.0) - p0);
+  EXPECT_NEAR(norm(centre - o), 0.0, 1e-15);
+  EXPECT_NEAR(norm(m.vertices[0] - m.vertices[1]), 0.5, 1e-15);
+  const Vec3d box_centre(0.15, 0.0, -0.005);
+  for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+    const auto& tri = m.triangles[t];
+    const Vec3d a = m.vertices[std::size_t(tri[0])], b = m.vertices[std::size_t(tri[1])], c = m.vertices[std::size_t(tri[2])];
+    const Vec3d normal = cross(b - a, c - a);
+    if (t < 2)
+      EXPECT_GT(dot(normal, n), 0.0) << "the plane's triangles face the free side";
+    else
+      EXPECT_GT(dot(normal, (a + b + c) * (1.0 / 3.0) - box_centre), 0.0) << "box triangle " << t << " faces out";
+  }
+  auto model = makeMetaballSimulation(s, BackendKind::Cpu, Precision::Float64);
+  RenderLayers layers;
+  model->renderLayers(layers);
+  EXPECT_EQ(layers.colliders.triangles.size(), 14u);
+}
+
 // The lowest point (m) of a body.
 double lowest(const std::vector<Vec3d>& x) {
   double z = std::numeric_limits<double>::infinity();

@@ -49,6 +49,11 @@ void ModelLayerRenderer::drawOpaque(const ViewCamera& cam, const ModelLayerToggl
 }
 
 void ModelLayerRenderer::drawTranslucent(const ViewCamera& cam, const ModelLayerToggles& on) {
+  if (on.colliders && !layers_.colliders.triangles.empty()) {
+    OverlayStyle s;
+    s.rgba = ModelLayerColours::collider;
+    overlay_.draw(cam, layers_.colliders, s);
+  }
   if (!on.swept_surface || layers_.swept_surface.triangles.empty()) return;
   OverlayStyle s;
   s.rgba = ModelLayerColours::swept;

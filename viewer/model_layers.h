@@ -17,6 +17,7 @@ struct ModelLayerToggles {
   bool constrained = false;    // fixed particles and particles held by a tool (with spheres: those spheres recoloured)
   bool swept_surface = true;   // the scalpel's swept surface, translucent
   bool forces = true;          // force arrows, drawn on top
+  bool colliders = true;       // the scene's static colliders (planes, boxes), translucent grey
 };
 
 // Layer colours (linear RGB; splats and spheres get the headlight on top of these).
@@ -26,6 +27,7 @@ struct ModelLayerColours {
   static constexpr std::array<float, 3> fixed{1.00f, 0.85f, 0.10f};
   static constexpr std::array<float, 3> held{0.85f, 0.30f, 0.90f};
   static constexpr std::array<float, 4> swept{0.25f, 0.75f, 1.00f, 0.45f};
+  static constexpr std::array<float, 4> collider{0.55f, 0.57f, 0.60f, 0.35f};
   static constexpr std::array<float, 4> tool_force{1.00f, 0.50f, 0.00f, 1.0f};
   static constexpr std::array<float, 4> particle_force{0.95f, 0.95f, 0.95f, 1.0f};
 };
@@ -52,7 +54,7 @@ class ModelLayerRenderer {
   // The opaque layers (spheres, fixed / held particles, nodal points): depth-tested, writing depth. Draw before
   // the particle layer so that a marked particle shows over its plain splat.
   void drawOpaque(const ViewCamera& cam, const ModelLayerToggles& on, const SplatParams& splat);
-  // The translucent swept surface, after everything opaque (no depth write).
+  // The translucent colliders and swept surface, after everything opaque (no depth write).
   void drawTranslucent(const ViewCamera& cam, const ModelLayerToggles& on);
   // Force arrows on top of everything, `m_per_n` metres per newton; width 3 px (tool) and 2 px (particle).
   void drawForces(const ViewCamera& cam, const ModelLayerToggles& on, double m_per_n);

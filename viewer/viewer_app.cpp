@@ -60,11 +60,12 @@ ModelLayerToggles modelToggles(const ViewLayers& l) {
   t.constrained = l.constrained;
   t.swept_surface = l.swept_surface;
   t.forces = l.forces;
+  t.colliders = l.colliders;
   return t;
 }
 
 bool anyModelLayer(const ViewLayers& l) {
-  return l.spheres || l.nodal_points || l.constrained || l.swept_surface || l.forces;
+  return l.spheres || l.nodal_points || l.constrained || l.swept_surface || l.forces || l.colliders;
 }
 
 const char* viewerBackendName(BackendKind k) {
@@ -340,6 +341,7 @@ int runViewer(const ViewerOptions& opt) {
         if (ImGui::IsKeyPressed(GLFW_KEY_7)) layers.constrained = !layers.constrained;
         if (ImGui::IsKeyPressed(GLFW_KEY_8)) layers.swept_surface = !layers.swept_surface;
         if (ImGui::IsKeyPressed(GLFW_KEY_9)) layers.forces = !layers.forces;
+        if (ImGui::IsKeyPressed(GLFW_KEY_0)) layers.colliders = !layers.colliders;
         if (ImGui::IsKeyPressed(GLFW_KEY_T)) layers.tool = !layers.tool;
         if (ImGui::IsKeyPressed(GLFW_KEY_G)) tool_mode = tool_mode == ToolMode::Grasp ? ToolMode::Camera : ToolMode::Grasp;
         if (ImGui::IsKeyPressed(GLFW_KEY_C)) tool_mode = tool_mode == ToolMode::Cut ? ToolMode::Camera : ToolMode::Cut;
@@ -537,6 +539,8 @@ int runViewer(const ViewerOptions& opt) {
           ImGui::TextDisabled("%zu / %zu", rl.fixed_points.size(), rl.held_points.size());
           ImGui::SameLine();
           ImGui::Checkbox("swept surface (8)", &layers.swept_surface);
+          ImGui::Checkbox("colliders (0)", &layers.colliders);
+          ImGui::SameLine();
           ImGui::Checkbox("forces (9)", &layers.forces);
           ImGui::SameLine();
           double fmax = 0;

@@ -25,6 +25,7 @@ struct ViewLayers {
   bool constrained = false;    // fixed particles (yellow) and particles a tool holds (magenta)
   bool swept_surface = true;   // the scalpel's swept cut surface (translucent cyan)
   bool forces = true;          // tool reaction (orange) and per-particle external forces (white), on top
+  bool colliders = true;       // the scene's static colliders (translucent grey)
 };
 
 // What the left mouse button does over the model.
