@@ -688,7 +688,7 @@ class PbdCpuBackend final : public PbdBackend<T> {
         for (std::int64_t i = t.begin(ni), i1 = t.end(ni); i < i1; ++i)
           x[i] = pbd::endIteration(x[i], w_[i] > T(0), on ? &cheb_.x1[i] : nullptr, on ? &cheb_.x2[i] : nullptr,
                                    cheb_weight, mode, [&](const Vec3<T>& q) {
-                                     return pbd::resolveContacts(q, r[i], inset.empty() ? T(0) : inset[i], model_.planes.data(), int(model_.planes.size()),
+                                     return pbd::resolveContacts(q, r[i], inset.empty() ? T(0) : inset[i], &x_prev_[i], model_.planes.data(), int(model_.planes.size()),
                                                                  model_.boxes.data(), int(model_.boxes.size()),
                                                                  in.tools_from.data(), in.tools_to.data(), nt, t_end);
                                    });

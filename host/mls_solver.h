@@ -278,9 +278,11 @@ class MlsSolver {
     const Vec3d o = origin();
     for (const auto& p : planes_) {
       c.planes[c.planes_n].normal = Vec3<T>(p.normal);
+      c.planes[c.planes_n].friction = T(p.friction);
       c.planes[c.planes_n++].offset = T(p.offset - dot(p.normal, o));
     }
     for (const auto& b : boxes_) {
+      c.boxes[c.boxes_n].friction = T(b.friction);
       c.boxes[c.boxes_n].min = Vec3<T>(b.min - o);
       c.boxes[c.boxes_n++].max = Vec3<T>(b.max - o);
     }

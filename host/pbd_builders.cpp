@@ -172,9 +172,9 @@ PbdModel<T> buildMetaballPbdModel(const MetaballModel& mb, const MetaballPbdOpti
   }
   for (const ColliderSpec& c : opt.colliders) {
     if (c.kind == "plane")
-      m.planes.push_back({Vec3<T>(c.normal), T(dot(c.normal, c.point))});
+      m.planes.push_back({Vec3<T>(c.normal), T(dot(c.normal, c.point)), T(c.friction)});
     else
-      m.boxes.push_back({Vec3<T>(c.min), Vec3<T>(c.max)});
+      m.boxes.push_back({Vec3<T>(c.min), Vec3<T>(c.max), T(c.friction)});
   }
   // Where a ball bulges beyond the organ's surface (by up to a quarter lattice spacing on flat faces, more on curved
   // ones) the static colliders meet the surface: inset = radius - depth of the centre, clamped to [0, radius].

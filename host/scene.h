@@ -177,13 +177,14 @@ struct OutputSpec {
   bool metrics_csv = true;
 };
 
-// A static collider (`colliders[k]`, docs/scene-format.md): the organ's spheres (by their radius) and nodal points
-// stay out of it, without friction.
+// A static collider (`colliders[k]`, docs/scene-format.md): the organ's spheres and nodal points stay out of it,
+// with Coulomb friction.
 struct ColliderSpec {
   std::string kind = "plane";  // "plane" | "box"
   Vec3d normal{0, 0, 1};       // plane: unit (normalised on load), pointing to the free side
   Vec3d point;                 // plane: a point on it (m)
   Vec3d min, max;              // box: its corners (m), min < max in every component
+  double friction = 0.0;       // [0, 2]: Coulomb coefficient against the organ (0: frictionless)
 };
 constexpr int kMaxCollidersPerKind = 8;  // planes, and boxes, per scene (each contact runs in every substep)
 

@@ -12,9 +12,9 @@ StaticColliders staticColliders(const std::vector<ColliderSpec>& specs) {
   StaticColliders out;
   for (const ColliderSpec& c : specs) {
     if (c.kind == "plane")
-      out.planes.push_back({c.normal, dot(c.normal, c.point)});
+      out.planes.push_back({c.normal, dot(c.normal, c.point), c.friction});
     else
-      out.boxes.push_back({c.min, c.max});
+      out.boxes.push_back({c.min, c.max, c.friction});
   }
   return out;
 }

@@ -307,7 +307,7 @@ std::vector<ColliderSpec> readColliders(const ObjectReader& top, const ModelsSpe
     ColliderSpec c;
     c.kind = r.choice("kind", "", {"plane", "box"});
     if (c.kind == "plane") {
-      r.allowOnly({"kind", "point_m", "normal"});
+      r.allowOnly({"kind", "point_m", "normal", "friction"});
       if (!r.has("point_m")) r.fail("point_m", "is required (a point on the plane, m)");
       if (!r.has("normal")) r.fail("normal", "is required (the plane's normal, pointing to the free side)");
       c.point = r.vec3("point_m", c.point);
@@ -315,7 +315,7 @@ std::vector<ColliderSpec> readColliders(const ObjectReader& top, const ModelsSpe
       if (++planes > kMaxCollidersPerKind)
         r.fail("kind", "more than " + std::to_string(kMaxCollidersPerKind) + " planes in one scene");
     } else {
-      r.allowOnly({"kind", "min_m", "max_m"});
+      r.allowOnly({"kind", "min_m", "max_m", "friction"});
       if (!r.has("min_m")) r.fail("min_m", "is required (the box's low corner, m)");
       if (!r.has("max_m")) r.fail("max_m", "is required (the box's high corner, m)");
       c.min = r.vec3("min_m", c.min);
@@ -327,6 +327,9 @@ std::vector<ColliderSpec> readColliders(const ObjectReader& top, const ModelsSpe
       if (++boxes > kMaxCollidersPerKind)
         r.fail("kind", "more than " + std::to_string(kMaxCollidersPerKind) + " boxes in one scene");
     }
+    c.friction = r.number("friction", c.friction);
+    if (!(c.friction >= 0 && c.friction <= 2))
+      r.fail("friction", "must lie in [0, 2] (a Coulomb coefficient; 0: frictionless)" + got(c.friction));
     out.push_back(c);
   }
   // The tearing sheet has no contacts: a collider there would be passed through.
@@ -630,8 +633,10 @@ std::string sceneToJson(const Scene& s) {
   if (!s.colliders.empty()) {
     J colliders = J::array();
     for (const ColliderSpec& c : s.colliders)
-      colliders.push_back(c.kind == "plane" ? J{{"kind", "plane"}, {"point_m", vec(c.point)}, {"normal", vec(c.normal)}}
-                                            : J{{"kind", "box"}, {"min_m", vec(c.min)}, {"max_m", vec(c.max)}});
+      colliders.push_back(c.kind == "plane" ? J{{"kind", "plane"}, {"point_m", vec(c.point)}, {"normal", vec(c.normal)},
+                                                {"friction", c.friction}}
+                                            : J{{"kind", "box"}, {"min_m", vec(c.min)}, {"max_m", vec(c.max)},
+                                                {"friction", c.friction}});
     j["colliders"] = colliders;
   }
   j["output"] = J{{"every_frames", s.output.every_frames},

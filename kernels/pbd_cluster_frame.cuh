@@ -188,7 +188,7 @@ __global__ void __launch_bounds__(kClusterThreads, 1) clusterFrameKernel(FusedFr
     __syncthreads();
     for (int i = p0 + tid; i < p1; i += nth)
       if (sw[i] > T(0))
-        sx[i] = pbd::resolveContacts(sx[i], sr[i], f.inset ? f.inset[i] : T(0), f.planes, f.np, f.boxes, f.nb, f.tools_from, f.tools_to, f.nt, t_end);
+        sx[i] = pbd::resolveContacts(sx[i], sr[i], f.inset ? f.inset[i] : T(0), f.x_prev + i, f.planes, f.np, f.boxes, f.nb, f.tools_from, f.tools_to, f.nt, t_end);
     __syncthreads();
   };
 

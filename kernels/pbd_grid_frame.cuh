@@ -78,7 +78,7 @@ __global__ void __launch_bounds__(kGridFrameThreads) gridFrameKernel(GridFrame<T
         grid.sync();
         if (fuse_contacts && b == g.last_solved) {
           for (int i = tid; i < f.n; i += nth)
-            x[i] = endIterationAt(i, x[i] + gatherSum(fb.view, i), f.r, f.inset, f.w, f.planes, f.np, f.boxes, f.nb,
+            x[i] = endIterationAt(i, x[i] + gatherSum(fb.view, i), f.r, f.inset, f.x_prev, f.w, f.planes, f.np, f.boxes, f.nb,
                                   f.tools_from, f.tools_to, f.nt, t_end, ch);
           chebyshevMultipliers(ch);
         } else {
@@ -96,7 +96,7 @@ __global__ void __launch_bounds__(kGridFrameThreads) gridFrameKernel(GridFrame<T
           grid.sync();
         }
         for (int i = tid; i < f.n; i += nth)
-          x[i] = endIterationAt(i, x[i], f.r, f.inset, f.w, f.planes, f.np, f.boxes, f.nb, f.tools_from, f.tools_to, f.nt,
+          x[i] = endIterationAt(i, x[i], f.r, f.inset, f.x_prev, f.w, f.planes, f.np, f.boxes, f.nb, f.tools_from, f.tools_to, f.nt,
                                 t_end, ch);
         chebyshevMultipliers(ch);
         grid.sync();

@@ -34,7 +34,8 @@ __device__ __forceinline__ Vec3<T> gatherSum(const pbd::BlockView<T>& b, int i) 
 
 // A particle's end of an iteration (pbd::endIteration): the Chebyshev step, the contacts, the record.
 template <typename T>
-__device__ __forceinline__ Vec3<T> endIterationAt(int i, Vec3<T> xi, const T* r, const T* inset, const T* w,
+__device__ __forceinline__ Vec3<T> endIterationAt(int i, Vec3<T> xi, const T* r, const T* inset, const Vec3<T>* x_prev,
+                                                  const T* w,
                                                   const pbd::PlaneCollider<T>* planes,
                                                   int np, const pbd::BoxCollider<T>* boxes, int nb,
                                                   const pbd::CapsuleCollider<T>* tools_from,
@@ -43,7 +44,7 @@ __device__ __forceinline__ Vec3<T> endIterationAt(int i, Vec3<T> xi, const T* r,
   const bool on = ch.mode != pbd::ChebyshevMode::Off;
   return pbd::endIteration(xi, w[i] > T(0), on ? ch.x1 + i : nullptr, on ? ch.x2 + i : nullptr, ch.weight, ch.mode,
                            [&](const Vec3<T>& p) {
-                             return pbd::resolveContacts(p, r[i], inset ? inset[i] : T(0), planes, np, boxes, nb, tools_from,
+                             return pbd::resolveContacts(p, r[i], inset ? inset[i] : T(0), x_prev + i, planes, np, boxes, nb, tools_from,
                                                                        tools_to, nt, t);
                            });
 }

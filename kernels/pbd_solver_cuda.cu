@@ -258,13 +258,14 @@ __global__ void rotationKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx, co
 }
 
 template <typename T>
-__global__ void contactKernel(int n, const int* live_n, Vec3<T>* x, const T* r, const T* inset, const T* w,
+__global__ void contactKernel(int n, const int* live_n, Vec3<T>* x, const T* r, const T* inset, const Vec3<T>* x_prev,
+                              const T* w,
                               const pbd::PlaneCollider<T>* planes,
                               int np, const pbd::BoxCollider<T>* boxes, int nb, const pbd::CapsuleCollider<T>* tools_from,
                               const pbd::CapsuleCollider<T>* tools_to, int nt, T t, ChebyshevArgs<T> ch) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i < liveCount(live_n, n))
-    x[i] = endIterationAt(i, x[i], r, inset, w, planes, np, boxes, nb, tools_from, tools_to, nt, t, ch);
+    x[i] = endIterationAt(i, x[i], r, inset, x_prev, w, planes, np, boxes, nb, tools_from, tools_to, nt, t, ch);
   chebyshevMultipliers(ch);
 }
 
@@ -274,13 +275,13 @@ __global__ void contactKernel(int n, const int* live_n, Vec3<T>* x, const T* r, 
 // iteration's Chebyshev step (positions before their contacts, as the CPU's contact phase does, and every multiplier).
 template <typename T>
 __global__ void gatherContactKernel(int n, const int* live_n, pbd::BlockView<T> b, Vec3<T>* x, const T* r,
-                                    const T* inset, const T* w,
+                                    const T* inset, const Vec3<T>* x_prev, const T* w,
                                     const pbd::PlaneCollider<T>* planes, int np, const pbd::BoxCollider<T>* boxes,
                                     int nb, const pbd::CapsuleCollider<T>* tools_from,
                                     const pbd::CapsuleCollider<T>* tools_to, int nt, T t, ChebyshevArgs<T> ch) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i < liveCount(live_n, n))
-    x[i] = endIterationAt(i, x[i] + gatherSum(b, i), r, inset, w, planes, np, boxes, nb, tools_from, tools_to, nt, t, ch);
+    x[i] = endIterationAt(i, x[i] + gatherSum(b, i), r, inset, x_prev, w, planes, np, boxes, nb, tools_from, tools_to, nt, t, ch);
   chebyshevMultipliers(ch);
 }
 
@@ -568,7 +569,7 @@ __global__ void __launch_bounds__(kFusedThreads) fusedFrameKernel(FusedFrame<T> 
       __syncthreads();
       for (int i = tid; i < f.n; i += nth)
         if (w[i] > T(0))
-          x[i] = pbd::resolveContacts(x[i], f.r[i], f.inset ? f.inset[i] : T(0), f.planes, f.np, f.boxes, f.nb, f.tools_from, f.tools_to, f.nt,
+          x[i] = pbd::resolveContacts(x[i], f.r[i], f.inset ? f.inset[i] : T(0), f.x_prev + i, f.planes, f.np, f.boxes, f.nb, f.tools_from, f.tools_to, f.nt,
                                         t_end);
       __syncthreads();
     }
@@ -1610,7 +1611,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
               launchProjection(b, ctx, nullptr, gc, live_count, stream_);
             INC_CUDA_LAUNCH("pbd project (jacobi)");
             if (fuse_contacts && int(bi) == last_solved) {
-              gatherContactKernel<T><<<gcont, kThreads, 0, stream_>>>(n_, live_n, b, x_.data(), radii_.data(), insetPtr(), w_.data(),
+              gatherContactKernel<T><<<gcont, kThreads, 0, stream_>>>(n_, live_n, b, x_.data(), radii_.data(), insetPtr(), x_prev_.data(), w_.data(),
                                                                    planes_.data(), n_planes_, boxes_.data(), n_boxes_,
                                                                    tools_from_.data(), tools_to_.data(), n_tools_, t_end, ch);
               INC_CUDA_LAUNCH("pbd gather + contacts");
@@ -1643,7 +1644,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
         stageEnd(1, ev);
         ev = stageBegin();
         if (n_ > 0 && !fuse_contacts) {
-          contactKernel<T><<<gcont, kThreads, 0, stream_>>>(n_, live_n, x_.data(), radii_.data(), insetPtr(), w_.data(), planes_.data(),
+          contactKernel<T><<<gcont, kThreads, 0, stream_>>>(n_, live_n, x_.data(), radii_.data(), insetPtr(), x_prev_.data(), w_.data(), planes_.data(),
                                                          n_planes_, boxes_.data(), n_boxes_, tools_from_.data(),
                                                          tools_to_.data(), n_tools_, t_end, ch);
           INC_CUDA_LAUNCH("pbd contacts");

@@ -249,7 +249,7 @@ INC_HD void mlsDriftPass(const MlsView<T>& s, std::int64_t k, T dt, int remainin
     s.displacement[k] += v * dt;
     if (s.blade && s.blade->radius > T(0))
       mlsBladeContactAt(*s.blade, s.rest[k], s.displacement[k], s.velocity[k], remaining_substeps);
-    if (s.statics) mlsStaticContactAt(*s.statics, s.rest[k], s.displacement[k], s.velocity[k]);
+    if (s.statics) mlsStaticContactAt(*s.statics, s.rest[k], s.displacement[k], s.velocity[k], dt);
   } else if (kind == kMlsPrescribed) {
     mlsPrescribedStep(s.displacement[k], s.velocity[k], s.target[k], dt, remaining_substeps);
   } else {

@@ -1,6 +1,6 @@
 // The scene's static colliders (planes, boxes) as contacts for MLS nodal points: a point that ends a drift inside one
-// is put back on its surface and loses the velocity that carries it in (inelastic, frictionless, as the PBD spheres'
-// contacts are).
+// is put back on its surface and loses the velocity that carries it in (inelastic), with the collider's Coulomb
+// friction on the velocity along it.
 #pragma once
 
 #include "physics/hd.h"
@@ -23,20 +23,30 @@ struct MlsStaticContacts {
 
 // Particle k after its drift: each collider in turn (planes, then boxes, as pbd::resolveContacts orders a sphere's)
 // moves x = X + u out along the contact normal (the point is a ball of c.radius: pbd::planeContact /
-// pbd::boxContact give the correction) and removes the velocity's inward normal component. A point outside every
-// collider is unchanged bit for bit.
+// pbd::boxContact give the correction) and removes the velocity's inward normal component, dv_n; friction mu then
+// takes at most mu dv_n from the tangential velocity (the impulse limit of a point mass, as the blade's contact:
+// physics/mls_blade_contact.h), and the same share of the drift it made along the collider (v is the drift's
+// velocity, dt its step): a velocity-only friction let a sticking block creep by that drift every substep (2.5 mm/s
+// on a 20 degree slope). A point outside every collider is unchanged bit for bit.
 template <typename T>
-INC_HD void mlsStaticContactAt(const MlsStaticContacts<T>& c, const Vec3<T>& rest, Vec3<T>& u, Vec3<T>& v) {
-  const auto apply = [&](const Vec3<T>& corr) {
+INC_HD void mlsStaticContactAt(const MlsStaticContacts<T>& c, const Vec3<T>& rest, Vec3<T>& u, Vec3<T>& v, T dt) {
+  const auto apply = [&](const Vec3<T>& corr, T mu) {
     const T len = norm(corr);
     if (!(len > T(0))) return;
     u += corr;
     const Vec3<T> n = corr * (T(1) / len);
     const T vn = dot(v, n);
-    if (vn < T(0)) v -= n * vn;
+    if (!(vn < T(0))) return;
+    v -= n * vn;
+    if (!(mu > T(0))) return;
+    const Vec3<T> vt = v - n * dot(v, n);
+    const T st = norm(vt), slip = mu * (-vn);
+    const Vec3<T> dv = st > slip ? vt * (slip / st) : vt;
+    v -= dv;
+    u -= dv * dt;
   };
-  for (int k = 0; k < c.planes_n; ++k) apply(pbd::planeContact(rest + u, c.radius, c.planes[k]));
-  for (int k = 0; k < c.boxes_n; ++k) apply(pbd::boxContact(rest + u, c.radius, c.boxes[k]));
+  for (int k = 0; k < c.planes_n; ++k) apply(pbd::planeContact(rest + u, c.radius, c.planes[k]), c.planes[k].friction);
+  for (int k = 0; k < c.boxes_n; ++k) apply(pbd::boxContact(rest + u, c.radius, c.boxes[k]), c.boxes[k].friction);
 }
 
 }  // namespace inc

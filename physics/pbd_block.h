@@ -378,14 +378,23 @@ INC_HD CapsuleCollider<T> lerpCapsule(const CapsuleCollider<T>& a, const Capsule
 
 // All contacts of one sphere, resolved one after another (Gauss-Seidel over its own contacts). Tools are
 // interpolated to the substep's end time t in [0, 1] of the frame. The static colliders (planes, boxes) meet the
-// sphere at r - inset (at least 0): the organ's surface, not the ball, rests on them (PbdModel::contact_inset).
+// sphere at r - inset (at least 0): the organ's surface, not the ball, rests on them (PbdModel::contact_inset); with
+// `x_prev` (the sphere's substep start) their Coulomb friction follows each push (coulombAfterContact).
 template <typename T>
-INC_HD Vec3<T> resolveContacts(Vec3<T> x, T r, T inset, const PlaneCollider<T>* planes, int np,
-                               const BoxCollider<T>* boxes, int nb, const CapsuleCollider<T>* tools_from,
+INC_HD Vec3<T> resolveContacts(Vec3<T> x, T r, T inset, const Vec3<T>* x_prev, const PlaneCollider<T>* planes,
+                               int np, const BoxCollider<T>* boxes, int nb, const CapsuleCollider<T>* tools_from,
                                const CapsuleCollider<T>* tools_to, int nt, T t) {
   const T rs = r > inset ? r - inset : T(0);
-  for (int k = 0; k < np; ++k) x += planeContact(x, rs, planes[k]);
-  for (int k = 0; k < nb; ++k) x += boxContact(x, rs, boxes[k]);
+  for (int k = 0; k < np; ++k) {
+    const Vec3<T> c = planeContact(x, rs, planes[k]);
+    x += c;
+    if (x_prev) x = coulombAfterContact(x, c, *x_prev, planes[k].friction);
+  }
+  for (int k = 0; k < nb; ++k) {
+    const Vec3<T> c = boxContact(x, rs, boxes[k]);
+    x += c;
+    if (x_prev) x = coulombAfterContact(x, c, *x_prev, boxes[k].friction);
+  }
   for (int k = 0; k < nt; ++k) x += capsuleContact(x, r, lerpCapsule(tools_from[k], tools_to[k], t));
   return x;
 }

@@ -12,13 +12,15 @@ namespace inc::pbd {
 template <typename T>
 struct PlaneCollider {
   Vec3<T> normal{T(0), T(0), T(1)};
-  T offset = T(0);  // m
+  T offset = T(0);    // m
+  T friction = T(0);  // Coulomb coefficient mu (0: frictionless)
 };
 
 // Solid axis-aligned box the organ must stay out of.
 template <typename T>
 struct BoxCollider {
-  Vec3<T> min, max;  // m
+  Vec3<T> min, max;   // m
+  T friction = T(0);  // Coulomb coefficient mu (0: frictionless)
 };
 
 // A tool: the segment a-b swept by a ball of `radius` (m).
@@ -65,6 +67,21 @@ INC_HD Vec3<T> boxContact(const Vec3<T>& x, T r, const BoxCollider<T>& b) {
   Vec3<T> out;
   out[axis] = sign * (best + r);
   return out;
+}
+
+// Position-based Coulomb friction after a static contact moved x by `corr` (its normal push d = |corr|): the
+// tangential part of the substep's displacement x - x_prev is removed where it is at most mu d (sticking), else
+// shortened by mu d (sliding). Over a substep's iterations the pushes add up to the normal impulse over m / dt, so
+// the friction adds up to mu times it: a sphere on a slope of angle a slides with g (sin a - mu cos a), or stays.
+template <typename T>
+INC_HD Vec3<T> coulombAfterContact(const Vec3<T>& x, const Vec3<T>& corr, const Vec3<T>& x_prev, T mu) {
+  const T d = norm(corr);
+  if (!(mu > T(0)) || !(d > T(0))) return x;
+  const Vec3<T> n = corr * (T(1) / d);
+  const Vec3<T> dx = x - x_prev;
+  const Vec3<T> t = dx - n * dot(dx, n);
+  const T lt = norm(t), lim = mu * d;
+  return lt <= lim ? x - t : x - t * (lim / lt);
 }
 
 template <typename T>

@@ -151,8 +151,8 @@ TEST(MlsGpu, PrescribedParticlesMatchTheCpu) {
   EXPECT_LT(maxDiff(uc, ug) / maxNorm(uc), 1e-10);
 }
 
-// The parity block, unclamped, dropped onto a floor tilted 0.3 rad about x and against a box at its side: the
-// static contacts run in the same drift on both backends (physics/mls_static_contact.h).
+// The parity block, unclamped, dropped onto a floor tilted 0.3 rad about x (friction 0.4) and against a box at its
+// side (friction 0.2): the static contacts run in the same drift on both backends (physics/mls_static_contact.h).
 TEST(MlsGpu, StaticCollidersMatchTheCpu) {
   if (noDevice()) GTEST_SKIP() << "no CUDA device";
   MlsBuildInput in = parityInput();
@@ -163,8 +163,8 @@ TEST(MlsGpu, StaticCollidersMatchTheCpu) {
   const Vec3d n(0, std::sin(0.3), std::cos(0.3));
   double low = 1e30, high = -1e30;
   for (const Vec3d& x : cpu->restPositions()) low = std::min(low, dot(n, x)), high = std::max(high, x.x);
-  const std::vector<pbd::PlaneCollider<double>> planes{{n, low - 0.004}};
-  const std::vector<pbd::BoxCollider<double>> boxes{{Vec3d(high + 0.003, -1, -1), Vec3d(high + 0.05, 1, 1)}};
+  const std::vector<pbd::PlaneCollider<double>> planes{{n, low - 0.004, 0.4}};
+  const std::vector<pbd::BoxCollider<double>> boxes{{Vec3d(high + 0.003, -1, -1), Vec3d(high + 0.05, 1, 1), 0.2}};
   cpu->setStaticColliders(planes, boxes, 0.002);
   gpu->setStaticColliders(planes, boxes, 0.002);
   std::vector<Vec3d> xc, xg;

@@ -17,13 +17,14 @@ namespace {
 
 bool haveDevice() { return cuda::queryDevices().device_count > 0; }
 
-// A clamped lattice beam over a ground plane (met at varied contact insets), pressed by a moving capsule tool, its free end grasped by a
+// A clamped lattice beam over a ground plane (met at varied contact insets, friction 0.5), pressed by a moving capsule tool, its free end grasped by a
 // compliant attachment that lifts it; volume preservation near the tool on.
 template <typename T>
 PbdModel<T> parityModel() {
   PbdModel<T> m = test::makeLatticeBeam<T>(0.06, 0.02, 0.02, 0.01, 2.0e4, true, 32);
   pbd::PlaneCollider<T> ground;
   ground.offset = T(-0.01);
+  ground.friction = T(0.5);
   m.planes.push_back(ground);
   // Contact insets of 0, 1/4 and 1/2 radius in turn: every frame path meets the ground at r - inset.
   m.contact_inset.resize(m.size());
