@@ -305,7 +305,8 @@ std::vector<ColliderSpec> readColliders(const ObjectReader& top, const ModelsSpe
   for (std::size_t i = 0; i < arr->size(); ++i) {
     const ObjectReader r((*arr)[i], top.file(), scene_json::indexPath(top.keyPath("colliders"), i));
     ColliderSpec c;
-    c.kind = r.choice("kind", "", {"plane", "box"});
+    if (!r.has("kind")) r.fail("kind", "is required (\"plane\" or \"box\")");
+    c.kind = r.choice("kind", c.kind, {"plane", "box"});
     if (c.kind == "plane") {
       r.allowOnly({"kind", "point_m", "normal", "friction"});
       if (!r.has("point_m")) r.fail("point_m", "is required (a point on the plane, m)");

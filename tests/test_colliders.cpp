@@ -66,6 +66,11 @@ TEST(SceneColliders, BadCollidersNameTheirKeyAndReason) {
   EXPECT_NE(errorOf(sceneWith(R"([{"kind": "plane", "point_m": [0, 0, 0], "normal": [0, 0, 0]}])")).find("non-zero"),
             std::string::npos);
   EXPECT_NE(errorOf(sceneWith(R"([{"kind": "disc"}])")).find("colliders[0].kind"), std::string::npos);
+  EXPECT_NE(errorOf(sceneWith(R"([{"point_m": [0, 0, 0], "normal": [0, 0, 1]}])")).find("colliders[0].kind: is required"),
+            std::string::npos);
+  EXPECT_NE(errorOf(sceneWith(R"([{"kind": "box", "min_m": [0, 0, 0], "max_m": [1, 1, 1], "friction": -0.1}])"))
+                .find("colliders[0].friction"),
+            std::string::npos);
   EXPECT_NE(errorOf(sceneWith(R"([{"kind": "box", "min_m": [0, 0, 0], "max_m": [1, 0, 1]}])")).find("colliders[0].max_m"),
             std::string::npos);
   EXPECT_NE(errorOf(sceneWith(R"([{"kind": "box", "min_m": [0, 0, 0], "max_m": [1, 1, 1], "radius_m": 1}])"))
