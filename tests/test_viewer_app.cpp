@@ -12,6 +12,7 @@
 #include "host/dissection_simulation.h"
 #include "host/metaball_simulation.h"
 #include "host/input_error.h"
+#include "viewer/orbit_camera.h"
 #include "host/mesh.h"
 #include "tests/viewer_test_model.h"
 #include "viewer/gl_window.h"
@@ -592,3 +593,21 @@ TEST(ViewerAppOptions, BadOptionsAreInputErrors) {
 
 }  // namespace
 }  // namespace inc::viewer
+
+// The orbit camera with z up (the scenes' convention): above the target for a positive pitch, the view's up vector
+// along +z's projection, the right vector horizontal; a drag keeps the eye's height rule. No GL needed.
+TEST(OrbitCameraZUp, EyeAboveTheTargetAndUpAlongZ) {
+  inc::viewer::OrbitCamera o;
+  o.z_up = true;
+  o.target = inc::Vec3d(0.1, 0.2, 0.3);
+  o.distance_m = 2.0;
+  const inc::Vec3d e = o.eye();
+  EXPECT_NEAR(e.z - 0.3, 2.0 * std::sin(o.pitch_rad), 1e-12);
+  EXPECT_NEAR(inc::norm(e - o.target), 2.0, 1e-12);
+  const inc::viewer::ViewCamera v = o.view(640, 480);
+  EXPECT_GT(v.up.z, 0.0);
+  EXPECT_NEAR(v.right.z, 0.0, 1e-12);
+  o.orbit(0.0, -1000.0);  // pitch clamped below the horizon
+  EXPECT_LT(o.eye().z, 0.3);
+}
+

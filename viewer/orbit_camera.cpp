@@ -7,8 +7,11 @@
 namespace inc::viewer {
 
 Vec3d OrbitCamera::eye() const {
-  const double cp = std::cos(pitch_rad);
-  return target + Vec3d{cp * std::sin(yaw_rad), std::sin(pitch_rad), cp * std::cos(yaw_rad)} * distance_m;
+  const double cp = std::cos(pitch_rad), sp = std::sin(pitch_rad);
+  // z up: yaw 0 looks along +y from its -y side (x to the right); y up: along -z from +z, as before.
+  const Vec3d dir = z_up ? Vec3d{cp * std::sin(yaw_rad), -cp * std::cos(yaw_rad), sp}
+                         : Vec3d{cp * std::sin(yaw_rad), sp, cp * std::cos(yaw_rad)};
+  return target + dir * distance_m;
 }
 
 void OrbitCamera::orbit(double dx_px, double dy_px) {
@@ -36,7 +39,7 @@ ViewCamera OrbitCamera::view(int width_px, int height_px) const {
   const Vec3d e = eye();
   // Near/far bracket the bounding sphere implied by the distance so depth precision stays useful.
   const double near_m = std::max(1e-4, 0.01 * distance_m);
-  return ViewCamera::lookAlong(e, target - e, Vec3d{0, 1, 0}, false, std::tan(0.5 * fovy_rad), near_m,
+  return ViewCamera::lookAlong(e, target - e, up(), false, std::tan(0.5 * fovy_rad), near_m,
                                100.0 * distance_m, std::max(1, width_px), std::max(1, height_px));
 }
 

@@ -8,12 +8,14 @@ namespace inc::viewer {
 
 struct OrbitCamera {
   Vec3d target{0, 0, 0};  // m, the point orbited about
-  double yaw_rad = 0.6;   // about world +y
+  bool z_up = false;      // world +z is up (the scenes' convention: gravity along -z); false: +y
+  double yaw_rad = 0.6;   // about the up axis
   double pitch_rad = 0.4; // above the horizontal, clamped to +-(pi/2 - 0.01)
   double distance_m = 1.0;
   double fovy_rad = 0.8;
 
   Vec3d eye() const;
+  Vec3d up() const { return z_up ? Vec3d{0, 0, 1} : Vec3d{0, 1, 0}; }
   // Drag of (dx, dy) pixels: orbit (0.01 rad per pixel), pan (the target moves in the view plane so that
   // the point under the cursor stays under it), zoom (factor > 1 moves away).
   void orbit(double dx_px, double dy_px);

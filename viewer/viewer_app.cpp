@@ -185,6 +185,7 @@ int runViewer(const ViewerOptions& opt) {
     std::uint64_t version = 0;
     runner.latest(snap, version);
     OrbitCamera orbit;
+    orbit.z_up = opt.z_up;
     double scene_radius = 0.1;
     auto frameScene = [&] {
       Vec3d lo, hi;

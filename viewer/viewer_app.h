@@ -69,6 +69,7 @@ struct ViewerOptions {
   bool show_ui = true;
   bool start_paused = false;
   double particle_radius_m = 0.0;  // 0: from the particles' mean spacing
+  bool z_up = false;               // the camera keeps world +z up (scenes with gravity along -z); false: +y
   ViewLayers layers;
   double force_scale_m_per_n = 0.0;  // force arrows, metres per newton; 0: the longest is a quarter of the scene radius
   ToolCollision collision = ToolCollision::DepthBuffer;

@@ -1,6 +1,7 @@
 // `incision view`: builds the scene's first model through the model factory and hands it to the viewer.
 #include "host/cli/view_command.h"
 
+#include <cmath>
 #include <cstdio>
 
 #include "host/input_error.h"
@@ -55,6 +56,9 @@ int runViewCommand(const Scene& scene_in, const ViewCommandOptions& options) {
   vo.knobs = setup.knobs;
   vo.title = "Incision: " + scene.name;
   vo.frame_dt_s = scene.solver.frame_dt;
+  // The scenes' convention is z up (gravity along -z); a scene whose gravity points mainly along y keeps y up.
+  const Vec3d g = scene.solver.gravity;
+  vo.z_up = !(std::fabs(g.y) > std::fabs(g.x) && std::fabs(g.y) > std::fabs(g.z));
   vo.frames = options.frames;
   vo.screenshot_path = options.screenshot;
   vo.layers.splats = options.splats;
