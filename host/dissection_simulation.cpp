@@ -52,6 +52,7 @@ struct ActiveStroke {
   std::unique_ptr<NodalRegion> region;
   std::vector<std::int32_t> base_to_pbd, pbd_to_base;
   std::vector<double> base_cell_volume;  // the base PBD model's rest cell volumes (empty: volume preservation off)
+  std::vector<double> base_contact_inset;  // the base PBD model's contact insets (empty: the scene has no colliders)
   int scripted = -1;  // index into the scripted strokes, -1: the mouse's
   std::size_t opened_triangles = 0;  // swept triangles the last surface opening was started with
 };
@@ -531,6 +532,7 @@ class DissectionSimulation final : public SimulationModel {
     for (std::size_t i = 0; i < spheres_.size(); ++i) active_->base_to_pbd[i] = active_->pbd_to_base[i] = std::int32_t(i);
     // The base model's rest cell volumes: a stroke rebuild reuses those of spheres that lost no linked neighbour.
     active_->base_cell_volume.assign(model_.rest_cell_volume.begin(), model_.rest_cell_volume.end());
+    active_->base_contact_inset.assign(model_.contact_inset.begin(), model_.contact_inset.end());
     last_convert_ms_ = 0;
   }
 
@@ -705,8 +707,15 @@ class DissectionSimulation final : public SimulationModel {
       for (std::size_t i = 0; i < p.spheres.size(); ++i)
         if (!lost[std::size_t(p.pbd_to_base[i])]) known[i] = a.base_cell_volume[std::size_t(p.pbd_to_base[i])];
     }
+    // A kept sphere's inset depends on its own rest ball alone: the base model's value, not a new surface query.
+    MetaballPbdOptions opt = pbdOptions(std::move(known), false);
+    if (a.base_contact_inset.size() == a.base.size()) {
+      opt.known_contact_insets.resize(p.spheres.size());
+      for (std::size_t i = 0; i < p.spheres.size(); ++i)
+        opt.known_contact_insets[i] = a.base_contact_inset[std::size_t(p.pbd_to_base[i])];
+    }
     const auto t0 = std::chrono::steady_clock::now();
-    p.built = buildMetaballPbdModel<T>(p.spheres, pbdOptions(std::move(known), false));
+    p.built = buildMetaballPbdModel<T>(p.spheres, opt);
     p.build_ms = msSince(t0);
     return p;
   }

@@ -178,9 +178,15 @@ PbdModel<T> buildMetaballPbdModel(const MetaballModel& mb, const MetaballPbdOpti
   }
   // Where a ball bulges beyond the organ's surface (by up to a quarter lattice spacing on flat faces, more on curved
   // ones) the static colliders meet the surface: inset = radius - depth of the centre, clamped to [0, radius].
+  if (!opt.known_contact_insets.empty() && opt.known_contact_insets.size() != n)
+    throw InputError(f, "known_contact_insets", "must hold one entry per sphere (or none)");
   if (!opt.colliders.empty() && opt.surface_depth) {
     m.contact_inset.resize(n);
     for (std::size_t i = 0; i < n; ++i) {
+      if (!opt.known_contact_insets.empty() && !std::isnan(opt.known_contact_insets[i])) {
+        m.contact_inset[i] = T(opt.known_contact_insets[i]);
+        continue;
+      }
       const double depth = std::max(0.0, opt.surface_depth(mb.rest_centers[i]));
       m.contact_inset[i] = T(std::min(mb.rest_radii[i], std::max(0.0, mb.rest_radii[i] - depth)));
     }

@@ -35,6 +35,9 @@ struct MetaballPbdOptions {
   // With colliders: the depth (m, > 0 inside) of a point below the organ's surface, which sets each sphere's
   // PbdModel::contact_inset (radius - depth of its centre); empty: the balls themselves meet the colliders.
   std::function<double(const Vec3d&)> surface_depth;
+  // Contact insets to reuse, one per sphere (NaN: compute; empty: compute all): a sphere's depends only on its rest
+  // ball, so a sphere kept from an earlier build may pass that build's value (the dissection's stroke models do).
+  std::vector<double> known_contact_insets;
   bool coloring = true;              // false: no Gauss-Seidel colouring (a Jacobi-only model; a cut rebuilds the
                                      // model every frame the blade enters spheres, and the colouring is its
                                      // largest host cost after the volumes); Gauss-Seidel on it is refused
