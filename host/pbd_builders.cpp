@@ -7,6 +7,7 @@
 #include <string>
 
 #include "host/input_error.h"
+#include "host/scene_colliders.h"
 #include "physics/pbd_constraints.h"
 
 namespace inc {
@@ -170,12 +171,9 @@ PbdModel<T> buildMetaballPbdModel(const MetaballModel& mb, const MetaballPbdOpti
     m.overlap_ids.insert(m.overlap_ids.end(), nbr[i].begin(), nbr[i].end());
     m.overlap_offsets.push_back(std::int32_t(m.overlap_ids.size()));
   }
-  for (const ColliderSpec& c : opt.colliders) {
-    if (c.kind == "plane")
-      m.planes.push_back({Vec3<T>(c.normal), T(dot(c.normal, c.point)), T(c.friction)});
-    else
-      m.boxes.push_back({Vec3<T>(c.min), Vec3<T>(c.max), T(c.friction)});
-  }
+  const StaticColliders colliders = staticColliders(opt.colliders);
+  for (const auto& p : colliders.planes) m.planes.push_back({Vec3<T>(p.normal), T(p.offset), T(p.friction)});
+  for (const auto& b : colliders.boxes) m.boxes.push_back({Vec3<T>(b.min), Vec3<T>(b.max), T(b.friction)});
   // Where a ball bulges beyond the organ's surface (by up to a quarter lattice spacing on flat faces, more on curved
   // ones) the static colliders meet the surface: inset = radius - depth of the centre, clamped to [0, radius].
   if (!opt.known_contact_insets.empty() && opt.known_contact_insets.size() != n)

@@ -4,6 +4,7 @@
 #pragma once
 
 #include "physics/hd.h"
+#include "physics/mls_contact_velocity.h"
 #include "physics/vec3.h"
 
 namespace inc {
@@ -53,13 +54,8 @@ INC_HD void mlsBladeContactAt(const MlsBladeContact<T>& c, const Vec3<T>& rest, 
   }
   u = q + n * c.radius - rest;
   const Vec3<T> w = ((c.a1 - c.a0) * (T(1) - t) + (c.b1 - c.b0) * t) * (T(1) / c.duration);  // the blade's velocity at q
-  const T vn = dot(v - w, n);
-  if (!(vn < T(0))) return;
-  v -= n * vn;
-  if (!(c.friction > T(0))) return;
-  const Vec3<T> vt = v - w - n * dot(v - w, n);  // relative, tangential (the normal part is zero up to rounding)
-  const T st = norm(vt), slip = c.friction * (-vn);
-  v -= st > slip ? vt * (slip / st) : vt;
+  Vec3<T> friction_dv;
+  mlsContactVelocity(v, w, n, c.friction, friction_dv);
 }
 
 }  // namespace inc

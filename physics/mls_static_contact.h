@@ -4,6 +4,7 @@
 #pragma once
 
 #include "physics/hd.h"
+#include "physics/mls_contact_velocity.h"
 #include "physics/pbd_collision.h"
 #include "physics/vec3.h"
 
@@ -34,16 +35,8 @@ INC_HD void mlsStaticContactAt(const MlsStaticContacts<T>& c, const Vec3<T>& res
     const T len = norm(corr);
     if (!(len > T(0))) return;
     u += corr;
-    const Vec3<T> n = corr * (T(1) / len);
-    const T vn = dot(v, n);
-    if (!(vn < T(0))) return;
-    v -= n * vn;
-    if (!(mu > T(0))) return;
-    const Vec3<T> vt = v - n * dot(v, n);
-    const T st = norm(vt), slip = mu * (-vn);
-    const Vec3<T> dv = st > slip ? vt * (slip / st) : vt;
-    v -= dv;
-    u -= dv * dt;
+    Vec3<T> friction_dv;
+    if (mlsContactVelocity(v, Vec3<T>(), corr * (T(1) / len), mu, friction_dv)) u -= friction_dv * dt;
   };
   for (int k = 0; k < c.planes_n; ++k) apply(pbd::planeContact(rest + u, c.radius, c.planes[k]), c.planes[k].friction);
   for (int k = 0; k < c.boxes_n; ++k) apply(pbd::boxContact(rest + u, c.radius, c.boxes[k]), c.boxes[k].friction);
