@@ -614,7 +614,7 @@ class PbdCpuBackend final : public PbdBackend<T> {
     const bool cheb = p.chebyshev_rho > T(0);
     T cheb_weight = T(1);  // every thread walks the same weights (pbd::chebyshevIteration)
     for (int s = 0; s < p.substeps; ++s) {
-      const T t_end = T(s + 1) / T(p.substeps);
+      const T t_start = T(s) / T(p.substeps), t_end = T(s + 1) / T(p.substeps);
       if (lead) t0 = Clock::now();
       // Prediction; kinematic particles (w = 0: prediction only records x_prev) are then placed on their path.
       for (std::int64_t i = t.begin(ni), i1 = t.end(ni); i < i1; ++i) {
@@ -690,7 +690,7 @@ class PbdCpuBackend final : public PbdBackend<T> {
                                    cheb_weight, mode, [&](const Vec3<T>& q) {
                                      return pbd::resolveContacts(q, r[i], inset.empty() ? T(0) : inset[i], &x_prev_[i], model_.planes.data(), int(model_.planes.size()),
                                                                  model_.boxes.data(), int(model_.boxes.size()),
-                                                                 in.tools_from.data(), in.tools_to.data(), nt, t_end);
+                                                                 in.tools_from.data(), in.tools_to.data(), nt, t_start, t_end);
                                    });
         // The next iteration's projections read every particle.
         if (it + 1 < p.iterations) t.barrier();

@@ -491,6 +491,7 @@ class DissectionSimulation final : public SimulationModel {
       c.a = Vec3<T>(p.base);
       c.b = Vec3<T>(p.tip);
       c.radius = T(scene_.cutting.blade_radius_m);
+      c.friction = T(scene_.cutting.blade_friction);  // the spheres slide on the blade as its points do
       return c;
     };
     in.tools_from.push_back(capsule(frame_blade_.from));

@@ -36,6 +36,7 @@ pbd::CapsuleCollider<double> toolCapsule(const ToolSpec& tool, const ToolPose& p
   c.a = pose.position;
   c.b = pose.position - pose.direction * tool.length;
   c.radius = tool.radius;
+  c.friction = tool.friction;
   return c;
 }
 

@@ -76,6 +76,7 @@ pbd::CapsuleCollider<T> capsuleAs(const pbd::CapsuleCollider<double>& c) {
   o.a = Vec3<T>(c.a);
   o.b = Vec3<T>(c.b);
   o.radius = T(c.radius);
+  o.friction = T(c.friction);
   return o;
 }
 

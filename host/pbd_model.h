@@ -234,9 +234,12 @@ inline void validateFrameInput(std::size_t n, const PbdStepParams<T>& p, const P
       throw InputError(f, "attach_compliance", "must be finite and >= 0");
   }
   if (in.tools_from.size() != in.tools_to.size()) throw InputError(f, "tools", "from and to must have equal sizes");
+  const auto bad = [](const pbd::CapsuleCollider<T>& c) {
+    return !(c.radius >= T(0)) || !isFinite(c.a) || !isFinite(c.b) || !(c.friction >= T(0) && c.friction <= T(2));
+  };
   for (std::size_t k = 0; k < in.tools_from.size(); ++k)
-    if (!(in.tools_from[k].radius >= T(0)) || !isFinite(in.tools_from[k].a) || !isFinite(in.tools_to[k].b))
-      throw InputError(f, "tools", "capsule not finite or negative radius");
+    if (bad(in.tools_from[k]) || bad(in.tools_to[k]))
+      throw InputError(f, "tools", "capsule not finite, negative radius, or friction outside [0, 2]");
 }
 
 // A block's particle -> slot CSR from its ids (n particles): a counting sort, so each particle's slots are

@@ -85,6 +85,8 @@ struct ToolSpec {
   std::string kind = "probe";  // "probe" | "grasper" | "scalpel"
   double radius = 0.002;       // m, capsule radius around the tool
   double length = 0.02;        // m, blade length (scalpel)
+  double friction = 0.0;       // [0, 2], Coulomb coefficient of its contact with PBD spheres (probe, open grasper);
+                               // a scalpel's is cutting.blade_friction
   std::vector<ToolKeyframe> path;  // piecewise-linear in time, sorted by t
 };
 

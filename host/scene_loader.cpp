@@ -347,7 +347,7 @@ std::vector<ToolSpec> readTools(const ObjectReader& top) {
   std::set<std::string> names;
   for (std::size_t i = 0; i < arr->size(); ++i) {
     const ObjectReader r((*arr)[i], top.file(), scene_json::indexPath(top.keyPath("tools"), i));
-    r.allowOnly({"name", "kind", "radius_m", "length_m", "path"});
+    r.allowOnly({"name", "kind", "radius_m", "length_m", "friction", "path"});
     ToolSpec t;
     t.name = r.string("name", "tool" + std::to_string(i));
     if (t.name.empty()) r.fail("name", "must not be empty");
@@ -355,6 +355,11 @@ std::vector<ToolSpec> readTools(const ObjectReader& top) {
     t.kind = r.choice("kind", t.kind, {"probe", "grasper", "scalpel"});
     t.radius = positive(r, "radius_m", t.radius);
     t.length = positive(r, "length_m", t.length);
+    if (r.has("friction") && t.kind == "scalpel")
+      r.fail("friction", "a scalpel's contact friction is cutting.blade_friction (with cutting.blade_radius_m)");
+    t.friction = r.number("friction", t.friction);
+    if (!(t.friction >= 0 && t.friction <= 2))
+      r.fail("friction", "must lie in [0, 2] (a Coulomb coefficient; 0: frictionless)" + got(t.friction));
     const nlohmann::json* path = r.array("path");
     if (!path || path->empty()) r.fail("path", "needs at least one keyframe {\"t_s\", \"position_m\"}");
     for (std::size_t k = 0; k < path->size(); ++k) {
@@ -628,7 +633,9 @@ std::string sceneToJson(const Scene& s) {
     J path = J::array();
     for (const ToolKeyframe& k : t.path)
       path.push_back(J{{"t_s", k.t}, {"position_m", vec(k.position)}, {"direction", vec(k.direction)}});
-    tools.push_back(J{{"name", t.name}, {"kind", t.kind}, {"radius_m", t.radius}, {"length_m", t.length}, {"path", path}});
+    J tool{{"name", t.name}, {"kind", t.kind}, {"radius_m", t.radius}, {"length_m", t.length}, {"path", path}};
+    if (t.friction != 0.0) tool["friction"] = t.friction;  // a scalpel has none (cutting.blade_friction)
+    tools.push_back(tool);
   }
   j["tools"] = tools;
   if (!s.colliders.empty()) {

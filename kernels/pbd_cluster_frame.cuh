@@ -178,7 +178,7 @@ __global__ void __launch_bounds__(kClusterThreads, 1) clusterFrameKernel(FusedFr
 
   // Attachments then contacts of the owned particles (each attached particle has one attachment), in that
   // order as in the per-launch path; the caller broadcasts and synchronises.
-  auto attachAndContact = [&](T t_end) {
+  auto attachAndContact = [&](T t_start, T t_end) {
     for (int q = tid; q < f.n_att; q += nth) {
       const std::int32_t id = f.att_ids[q];
       if (id >= p0 && id < p1)
@@ -188,12 +188,12 @@ __global__ void __launch_bounds__(kClusterThreads, 1) clusterFrameKernel(FusedFr
     __syncthreads();
     for (int i = p0 + tid; i < p1; i += nth)
       if (sw[i] > T(0))
-        sx[i] = pbd::resolveContacts(sx[i], sr[i], f.inset ? f.inset[i] : T(0), f.x_prev + i, f.planes, f.np, f.boxes, f.nb, f.tools_from, f.tools_to, f.nt, t_end);
+        sx[i] = pbd::resolveContacts(sx[i], sr[i], f.inset ? f.inset[i] : T(0), f.x_prev + i, f.planes, f.np, f.boxes, f.nb, f.tools_from, f.tools_to, f.nt, t_start, t_end);
     __syncthreads();
   };
 
   for (int s = 0; s < f.substeps; ++s) {
-    const T t_end = T(s + 1) / T(f.substeps);
+    const T t_start = T(s) / T(f.substeps), t_end = T(s + 1) / T(f.substeps);
     for (int i = p0 + tid; i < p1; i += nth) pbd::predictParticle(sx[i], f.v[i], f.x_prev[i], sw[i], f.g, f.damp, f.dt);
     // Multipliers restart each substep; each CTA clears those of the constraints it projects.
     for (int b = 0; b < f.nblocks; ++b) {
@@ -249,14 +249,14 @@ __global__ void __launch_bounds__(kClusterThreads, 1) clusterFrameKernel(FusedFr
         tick(2 + 4 * b);
         clusterframe::gatherOwned(cl, view, sp.slot_home[b], sslot, sx, p0, p1);
         __syncthreads();
-        if (b == last_block) attachAndContact(t_end);
+        if (b == last_block) attachAndContact(t_start, t_end);
         clusterframe::broadcastPositions(cl, sx, p0, p1, rank, ctas);
         tick(3 + 4 * b);
         cl.sync();
         tick(4 + 4 * b);
       }
       if (last_block < 0) {
-        attachAndContact(t_end);
+        attachAndContact(t_start, t_end);
         clusterframe::broadcastPositions(cl, sx, p0, p1, rank, ctas);
         cl.sync();
       }

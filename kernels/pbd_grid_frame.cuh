@@ -44,7 +44,7 @@ __global__ void __launch_bounds__(kGridFrameThreads) gridFrameKernel(GridFrame<T
   const pbd::SolveContext<T>& ctx = f.ctx;
   Vec3<T>* x = f.x;
   for (int s = 0; s < f.substeps; ++s) {
-    const T t_end = T(s + 1) / T(f.substeps);
+    const T t_start = T(s) / T(f.substeps), t_end = T(s + 1) / T(f.substeps);
     for (int i = tid; i < f.n; i += nth) {
       pbd::predictParticle(x[i], f.v[i], f.x_prev[i], f.w[i], f.g, f.damp, f.dt);
       if (cheb) ch.x1[i] = x[i];  // the substep's first iterate
@@ -79,7 +79,7 @@ __global__ void __launch_bounds__(kGridFrameThreads) gridFrameKernel(GridFrame<T
         if (fuse_contacts && b == g.last_solved) {
           for (int i = tid; i < f.n; i += nth)
             x[i] = endIterationAt(i, x[i] + gatherSum(fb.view, i), f.r, f.inset, f.x_prev, f.w, f.planes, f.np, f.boxes, f.nb,
-                                  f.tools_from, f.tools_to, f.nt, t_end, ch);
+                                  f.tools_from, f.tools_to, f.nt, t_start, t_end, ch);
           chebyshevMultipliers(ch);
         } else {
           for (int i = tid; i < f.n; i += nth) x[i] += gatherSum(fb.view, i);
@@ -97,7 +97,7 @@ __global__ void __launch_bounds__(kGridFrameThreads) gridFrameKernel(GridFrame<T
         }
         for (int i = tid; i < f.n; i += nth)
           x[i] = endIterationAt(i, x[i], f.r, f.inset, f.x_prev, f.w, f.planes, f.np, f.boxes, f.nb, f.tools_from, f.tools_to, f.nt,
-                                t_end, ch);
+                                t_start, t_end, ch);
         chebyshevMultipliers(ch);
         grid.sync();
       }

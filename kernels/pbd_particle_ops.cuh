@@ -39,13 +39,13 @@ __device__ __forceinline__ Vec3<T> endIterationAt(int i, Vec3<T> xi, const T* r,
                                                   const pbd::PlaneCollider<T>* planes,
                                                   int np, const pbd::BoxCollider<T>* boxes, int nb,
                                                   const pbd::CapsuleCollider<T>* tools_from,
-                                                  const pbd::CapsuleCollider<T>* tools_to, int nt, T t,
+                                                  const pbd::CapsuleCollider<T>* tools_to, int nt, T t0, T t,
                                                   const ChebyshevArgs<T>& ch) {
   const bool on = ch.mode != pbd::ChebyshevMode::Off;
   return pbd::endIteration(xi, w[i] > T(0), on ? ch.x1 + i : nullptr, on ? ch.x2 + i : nullptr, ch.weight, ch.mode,
                            [&](const Vec3<T>& p) {
                              return pbd::resolveContacts(p, r[i], inset ? inset[i] : T(0), x_prev + i, planes, np, boxes, nb, tools_from,
-                                                                       tools_to, nt, t);
+                                                                       tools_to, nt, t0, t);
                            });
 }
 

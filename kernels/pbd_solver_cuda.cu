@@ -262,10 +262,10 @@ __global__ void contactKernel(int n, const int* live_n, Vec3<T>* x, const T* r, 
                               const T* w,
                               const pbd::PlaneCollider<T>* planes,
                               int np, const pbd::BoxCollider<T>* boxes, int nb, const pbd::CapsuleCollider<T>* tools_from,
-                              const pbd::CapsuleCollider<T>* tools_to, int nt, T t, ChebyshevArgs<T> ch) {
+                              const pbd::CapsuleCollider<T>* tools_to, int nt, T t0, T t, ChebyshevArgs<T> ch) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i < liveCount(live_n, n))
-    x[i] = endIterationAt(i, x[i], r, inset, x_prev, w, planes, np, boxes, nb, tools_from, tools_to, nt, t, ch);
+    x[i] = endIterationAt(i, x[i], r, inset, x_prev, w, planes, np, boxes, nb, tools_from, tools_to, nt, t0, t, ch);
   chebyshevMultipliers(ch);
 }
 
@@ -278,10 +278,11 @@ __global__ void gatherContactKernel(int n, const int* live_n, pbd::BlockView<T> 
                                     const T* inset, const Vec3<T>* x_prev, const T* w,
                                     const pbd::PlaneCollider<T>* planes, int np, const pbd::BoxCollider<T>* boxes,
                                     int nb, const pbd::CapsuleCollider<T>* tools_from,
-                                    const pbd::CapsuleCollider<T>* tools_to, int nt, T t, ChebyshevArgs<T> ch) {
+                                    const pbd::CapsuleCollider<T>* tools_to, int nt, T t0, T t, ChebyshevArgs<T> ch) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i < liveCount(live_n, n))
-    x[i] = endIterationAt(i, x[i] + gatherSum(b, i), r, inset, x_prev, w, planes, np, boxes, nb, tools_from, tools_to, nt, t, ch);
+    x[i] = endIterationAt(i, x[i] + gatherSum(b, i), r, inset, x_prev, w, planes, np, boxes, nb, tools_from, tools_to, nt, t0,
+                          t, ch);
   chebyshevMultipliers(ch);
 }
 
@@ -523,7 +524,7 @@ __global__ void __launch_bounds__(kFusedThreads) fusedFrameKernel(FusedFrame<T> 
     if (f.ctx.rotation) ctx.rotation = srot;
   }
   for (int s = 0; s < f.substeps; ++s) {
-    const T t_end = T(s + 1) / T(f.substeps);
+    const T t_start = T(s) / T(f.substeps), t_end = T(s + 1) / T(f.substeps);
     for (int i = tid; i < f.n; i += nth) pbd::predictParticle(x[i], f.v[i], f.x_prev[i], w[i], f.g, f.damp, f.dt);
     for (int b = 0; b < f.nblocks; ++b)
       for (int k = tid; k < f.blocks[b].multipliers; k += nth) f.blocks[b].view.lambda[k] = Vec3<T>();
@@ -570,7 +571,7 @@ __global__ void __launch_bounds__(kFusedThreads) fusedFrameKernel(FusedFrame<T> 
       for (int i = tid; i < f.n; i += nth)
         if (w[i] > T(0))
           x[i] = pbd::resolveContacts(x[i], f.r[i], f.inset ? f.inset[i] : T(0), f.x_prev + i, f.planes, f.np, f.boxes, f.nb, f.tools_from, f.tools_to, f.nt,
-                                        t_end);
+                                        t_start, t_end);
       __syncthreads();
     }
     const T inv_dt = T(1) / f.dt;
@@ -1572,7 +1573,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
     // thread a serial loop of ~10 dependent loads on the liver-sized model, +10 us per iteration on the H100).
     const unsigned gcont = cheb ? std::max(gn, blocksFor(ch.total)) : gn;
     for (int s = 0; s < (fused ? 0 : p.substeps); ++s) {
-      const T t_end = T(s + 1) / T(p.substeps);
+      const T t_start = T(s) / T(p.substeps), t_end = T(s + 1) / T(p.substeps);
       std::size_t ev = stageBegin();
       if (n_ > 0) {
         predictKernel<T><<<gn, kThreads, 0, stream_>>>(n_, live_n, x_.data(), v_.data(), x_prev_.data(), w_.data(), p.gravity,
@@ -1613,7 +1614,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
             if (fuse_contacts && int(bi) == last_solved) {
               gatherContactKernel<T><<<gcont, kThreads, 0, stream_>>>(n_, live_n, b, x_.data(), radii_.data(), insetPtr(), x_prev_.data(), w_.data(),
                                                                    planes_.data(), n_planes_, boxes_.data(), n_boxes_,
-                                                                   tools_from_.data(), tools_to_.data(), n_tools_, t_end, ch);
+                                                                   tools_from_.data(), tools_to_.data(), n_tools_, t_start, t_end, ch);
               INC_CUDA_LAUNCH("pbd gather + contacts");
             } else {
               gatherKernel<T><<<gn, kThreads, 0, stream_>>>(n_, live_n, b, x_.data());
@@ -1646,7 +1647,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
         if (n_ > 0 && !fuse_contacts) {
           contactKernel<T><<<gcont, kThreads, 0, stream_>>>(n_, live_n, x_.data(), radii_.data(), insetPtr(), x_prev_.data(), w_.data(), planes_.data(),
                                                          n_planes_, boxes_.data(), n_boxes_, tools_from_.data(),
-                                                         tools_to_.data(), n_tools_, t_end, ch);
+                                                         tools_to_.data(), n_tools_, t_start, t_end, ch);
           INC_CUDA_LAUNCH("pbd contacts");
         }
         stageEnd(2, ev);

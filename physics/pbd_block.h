@@ -373,17 +373,19 @@ INC_HD CapsuleCollider<T> lerpCapsule(const CapsuleCollider<T>& a, const Capsule
   c.a = lerp(a.a, b.a, t);
   c.b = lerp(a.b, b.b, t);
   c.radius = a.radius + (b.radius - a.radius) * t;
+  c.friction = a.friction;
   return c;
 }
 
 // All contacts of one sphere, resolved one after another (Gauss-Seidel over its own contacts). Tools are
-// interpolated to the substep's end time t in [0, 1] of the frame. The static colliders (planes, boxes) meet the
-// sphere at r - inset (at least 0): the organ's surface, not the ball, rests on them (PbdModel::contact_inset); with
-// `x_prev` (the sphere's substep start) their Coulomb friction follows each push (coulombAfterContact).
+// interpolated to the substep's end time t in [0, 1] of the frame (t0: its start). The static colliders (planes,
+// boxes) meet the sphere at r - inset (at least 0): the organ's surface, not the ball, rests on them
+// (PbdModel::contact_inset); tools meet the whole ball. With `x_prev` (the sphere's substep start) each push is
+// followed by its collider's Coulomb friction (coulombAfterContact; toolCoulombAfterContact relative to a tool).
 template <typename T>
 INC_HD Vec3<T> resolveContacts(Vec3<T> x, T r, T inset, const Vec3<T>* x_prev, const PlaneCollider<T>* planes,
                                int np, const BoxCollider<T>* boxes, int nb, const CapsuleCollider<T>* tools_from,
-                               const CapsuleCollider<T>* tools_to, int nt, T t) {
+                               const CapsuleCollider<T>* tools_to, int nt, T t0, T t) {
   const T rs = r > inset ? r - inset : T(0);
   for (int k = 0; k < np; ++k) {
     const Vec3<T> c = planeContact(x, rs, planes[k]);
@@ -395,7 +397,13 @@ INC_HD Vec3<T> resolveContacts(Vec3<T> x, T r, T inset, const Vec3<T>* x_prev, c
     x += c;
     if (x_prev) x = coulombAfterContact(x, c, *x_prev, boxes[k].friction);
   }
-  for (int k = 0; k < nt; ++k) x += capsuleContact(x, r, lerpCapsule(tools_from[k], tools_to[k], t));
+  for (int k = 0; k < nt; ++k) {
+    const CapsuleCollider<T> tool = lerpCapsule(tools_from[k], tools_to[k], t);
+    const Vec3<T> c = capsuleContact(x, r, tool);
+    x += c;
+    if (x_prev && tool.friction > T(0))
+      x = toolCoulombAfterContact(x, c, *x_prev, lerpCapsule(tools_from[k], tools_to[k], t0), tool);
+  }
   return x;
 }
 

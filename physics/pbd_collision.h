@@ -28,6 +28,7 @@ template <typename T>
 struct CapsuleCollider {
   Vec3<T> a, b;
   T radius = T(0);
+  T friction = T(0);  // Coulomb coefficient mu against the tissue (0: frictionless)
 };
 
 // Each contact is C(x) = signed distance between the sphere (centre x, radius r) and the collider >= 0,
@@ -84,13 +85,18 @@ INC_HD Vec3<T> coulombAfterContact(const Vec3<T>& x, const Vec3<T>& corr, const 
   return lt <= lim ? x - t : x - t * (lim / lt);
 }
 
+// The parameter s in [0, 1] of the point a + s (b - a) of segment a-b closest to x.
 template <typename T>
-INC_HD Vec3<T> closestPointOnSegment(const Vec3<T>& x, const Vec3<T>& a, const Vec3<T>& b) {
+INC_HD T closestSegmentParameter(const Vec3<T>& x, const Vec3<T>& a, const Vec3<T>& b) {
   const Vec3<T> ab = b - a;
   const T l2 = norm2(ab);
-  T t = l2 > T(0) ? dot(x - a, ab) / l2 : T(0);
-  t = t < T(0) ? T(0) : (t > T(1) ? T(1) : t);
-  return a + ab * t;
+  const T t = l2 > T(0) ? dot(x - a, ab) / l2 : T(0);
+  return t < T(0) ? T(0) : (t > T(1) ? T(1) : t);
+}
+
+template <typename T>
+INC_HD Vec3<T> closestPointOnSegment(const Vec3<T>& x, const Vec3<T>& a, const Vec3<T>& b) {
+  return a + (b - a) * closestSegmentParameter(x, a, b);
 }
 
 template <typename T>
@@ -111,6 +117,20 @@ INC_HD Vec3<T> capsuleContact(const Vec3<T>& x, T r, const CapsuleCollider<T>& c
   if (!(norm2(perp) > T(0))) perp = cross(axis, Vec3<T>(T(0), T(1), T(0)));
   if (!(norm2(perp) > T(0))) perp = Vec3<T>(T(0), T(0), T(1));
   return perp * (reach / norm(perp));
+}
+
+// Coulomb friction of a moving tool after its capsule pushed x by `corr`: coulombAfterContact relative to the tool.
+// The tool's surface point under the sphere (the same segment parameter on both poses, which move linearly) moved
+// by q(t) - q(t0) over the substep; the tangential part of the sphere's displacement relative to that point is
+// removed where it is at most mu d (sticking: the sphere moves with the tool) or shortened by mu d (sliding). A
+// tool that slides along its own axis over a sphere therefore drags it, and one at rest holds it like a static one.
+template <typename T>
+INC_HD Vec3<T> toolCoulombAfterContact(const Vec3<T>& x, const Vec3<T>& corr, const Vec3<T>& x_prev,
+                                       const CapsuleCollider<T>& at_t0, const CapsuleCollider<T>& at_t) {
+  if (!(at_t.friction > T(0)) || !(norm2(corr) > T(0))) return x;
+  const T s = closestSegmentParameter(x, at_t.a, at_t.b);
+  const Vec3<T> moved = (at_t.a + (at_t.b - at_t.a) * s) - (at_t0.a + (at_t0.b - at_t0.a) * s);
+  return coulombAfterContact(x, corr, x_prev + moved, at_t.friction);
 }
 
 }  // namespace inc::pbd

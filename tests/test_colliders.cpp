@@ -132,13 +132,13 @@ TEST(SceneColliders, TheContactInsetAppliesToStaticCollidersOnly) {
   pbd::CapsuleCollider<double> tool;
   tool.a = tool.b = Vec3d(-1, 0, 0.5);
   tool.radius = 0.0;
-  Vec3d x = pbd::resolveContacts(Vec3d(0, 0, -0.002), 0.01, 0.004, static_cast<const Vec3d*>(nullptr), &floor, 1, &box, 1, &tool, &tool, 1, 0.0);
+  Vec3d x = pbd::resolveContacts(Vec3d(0, 0, -0.002), 0.01, 0.004, static_cast<const Vec3d*>(nullptr), &floor, 1, &box, 1, &tool, &tool, 1, 0.0, 0.0);
   EXPECT_NEAR(x.z, 0.006, 1e-15);
-  x = pbd::resolveContacts(Vec3d(0.999, 0, 0.5), 0.01, 0.004, static_cast<const Vec3d*>(nullptr), &floor, 1, &box, 1, &tool, &tool, 1, 0.0);
+  x = pbd::resolveContacts(Vec3d(0.999, 0, 0.5), 0.01, 0.004, static_cast<const Vec3d*>(nullptr), &floor, 1, &box, 1, &tool, &tool, 1, 0.0, 0.0);
   EXPECT_NEAR(x.x, 0.994, 1e-12);
-  x = pbd::resolveContacts(Vec3d(-0.995, 0, 0.5), 0.01, 0.004, static_cast<const Vec3d*>(nullptr), &floor, 1, &box, 1, &tool, &tool, 1, 0.0);
+  x = pbd::resolveContacts(Vec3d(-0.995, 0, 0.5), 0.01, 0.004, static_cast<const Vec3d*>(nullptr), &floor, 1, &box, 1, &tool, &tool, 1, 0.0, 0.0);
   EXPECT_NEAR(x.x, -0.99, 1e-12);
-  x = pbd::resolveContacts(Vec3d(0, 0, -0.002), 0.01, 0.02, static_cast<const Vec3d*>(nullptr), &floor, 1, &box, 1, &tool, &tool, 1, 0.0);
+  x = pbd::resolveContacts(Vec3d(0, 0, -0.002), 0.01, 0.02, static_cast<const Vec3d*>(nullptr), &floor, 1, &box, 1, &tool, &tool, 1, 0.0, 0.0);
   EXPECT_NEAR(x.z, 0.0, 1e-15) << "an inset beyond the radius leaves the centre on the collider";
 }
 

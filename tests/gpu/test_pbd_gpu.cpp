@@ -17,7 +17,8 @@ namespace {
 
 bool haveDevice() { return cuda::queryDevices().device_count > 0; }
 
-// A clamped lattice beam over a ground plane (met at varied contact insets, friction 0.5), pressed by a moving capsule tool, its free end grasped by a
+// A clamped lattice beam over a ground plane (met at varied contact insets, friction 0.5), pressed by a moving capsule tool
+// (friction 0.8, sliding along its axis), its free end grasped by a
 // compliant attachment that lifts it; volume preservation near the tool on.
 template <typename T>
 PbdModel<T> parityModel() {
@@ -36,12 +37,14 @@ template <typename T>
 PbdFrameInput<T> parityInput(const PbdModel<T>& m, int frame, bool attachments = true) {
   PbdFrameInput<T> in;
   const T t0 = T(frame) / T(100), t1 = T(frame + 1) / T(100);
+  // Sliding along its own axis (y) as it presses down, with friction: it drags what it presses.
   pbd::CapsuleCollider<T> a, b;
-  a.a = Vec3<T>(T(0.03), T(-0.01), T(0.035) - T(0.01) * t0);
-  a.b = Vec3<T>(T(0.03), T(0.03), T(0.035) - T(0.01) * t0);
+  a.a = Vec3<T>(T(0.03), T(-0.01) + T(0.01) * t0, T(0.035) - T(0.01) * t0);
+  a.b = Vec3<T>(T(0.03), T(0.03) + T(0.01) * t0, T(0.035) - T(0.01) * t0);
   a.radius = b.radius = T(0.004);
-  b.a = Vec3<T>(T(0.03), T(-0.01), T(0.035) - T(0.01) * t1);
-  b.b = Vec3<T>(T(0.03), T(0.03), T(0.035) - T(0.01) * t1);
+  a.friction = b.friction = T(0.8);
+  b.a = Vec3<T>(T(0.03), T(-0.01) + T(0.01) * t1, T(0.035) - T(0.01) * t1);
+  b.b = Vec3<T>(T(0.03), T(0.03) + T(0.01) * t1, T(0.035) - T(0.01) * t1);
   in.tools_from.push_back(a);
   in.tools_to.push_back(b);
   for (std::size_t i = 0; i < m.size() && attachments; ++i)
