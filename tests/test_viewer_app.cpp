@@ -452,6 +452,31 @@ TEST_F(ViewerApp, ScriptedCaptureShowsTheOrganAtPlausibleSize) {
   EXPECT_GT(int(centre[0]), int(edge[0]) + 20);
 }
 
+// --camera: the first view looks from the asked yaw and pitch (y up here: the eye's direction from the target is
+// (cos p sin y, sin p, cos p cos y)), at the asked distance from the framed centre.
+TEST_F(ViewerApp, CameraOptionSetsTheFirstView) {
+  ViewerFrameInfo framed, turned;
+  for (int k = 0; k < 2; ++k) {
+    ViewerOptions o;
+    o.model = std::make_unique<SaggingBall>();
+    o.width = 200;
+    o.height = 150;
+    o.frames = 2;
+    o.show_ui = false;
+    if (k == 1) o.camera = CameraAngles{-60.0, 25.0, 0.9};
+    o.on_frame = [&](const ViewerFrameInfo& f) { (k == 0 ? framed : turned) = f; };
+    ASSERT_EQ(runViewer(o), 0);
+  }
+  const double y = -60.0 * M_PI / 180.0, p = 25.0 * M_PI / 180.0;
+  const Vec3d dir(std::cos(p) * std::sin(y), std::sin(p), std::cos(p) * std::cos(y));
+  EXPECT_NEAR(norm(turned.camera.forward + dir), 0.0, 1e-6);
+  // The same target as the default framing: it lies along the default view's axis and 0.9 m along the new one.
+  const Vec3d target = turned.camera.eye + turned.camera.forward * 0.9;
+  const Vec3d to_target = target - framed.camera.eye;
+  EXPECT_NEAR(norm(to_target - framed.camera.forward * dot(to_target, framed.camera.forward)), 0.0, 1e-6);
+  EXPECT_GT(dot(to_target, framed.camera.forward), 0.0);
+}
+
 // With the panels and the splat layer on, the frame is still mostly background with the organ in it,
 // and a recording writes one PNG per frame.
 TEST_F(ViewerApp, SplatLayerWithPanelsAndRecording) {

@@ -135,6 +135,9 @@ int runViewer(const ViewerOptions& opt) {
   if (!opt.model && !opt.factory) throw InputError("view", "model", "no model to show");
   if (opt.width < 16 || opt.height < 16) throw InputError("view", "window", "width and height must be >= 16");
   if (opt.frames < 0) throw InputError("view", "--frames", "must be >= 0");
+  if (opt.camera && !(std::isfinite(opt.camera->yaw_deg) && opt.camera->pitch_deg >= -89.0 && opt.camera->pitch_deg <= 89.0 &&
+                      opt.camera->distance_m >= 0.0 && std::isfinite(opt.camera->distance_m)))
+    throw InputError("view", "--camera", "yaw finite, pitch in [-89, 89] degrees, distance >= 0 m");
 
   GlWindowOptions wopt;
   wopt.width = opt.width;
@@ -195,6 +198,11 @@ int runViewer(const ViewerOptions& opt) {
       }
     };
     frameScene();
+    if (opt.camera) {  // the framing's target, the asked angles (and distance)
+      orbit.yaw_rad = opt.camera->yaw_deg * M_PI / 180.0;
+      orbit.pitch_rad = opt.camera->pitch_deg * M_PI / 180.0;
+      if (opt.camera->distance_m > 0.0) orbit.distance_m = opt.camera->distance_m;
+    }
     tool.upload([&] {
       TriangleMesh m;  // unit octahedron refined by normalising: a small sphere for the tool tip
       const double t = 1.0;

@@ -3,9 +3,11 @@
 
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "host/camera_option.h"
 #include "host/haptics/pointer_device.h"
 #include "host/simulation_model.h"
 #include "viewer/sim_runner.h"
@@ -70,6 +72,7 @@ struct ViewerOptions {
   bool start_paused = false;
   double particle_radius_m = 0.0;  // 0: from the particles' mean spacing
   bool z_up = false;               // the camera keeps world +z up (scenes with gravity along -z); false: +y
+  std::optional<CameraAngles> camera;  // the first view's yaw, pitch (and distance); unset: the default framing
   ViewLayers layers;
   double force_scale_m_per_n = 0.0;  // force arrows, metres per newton; 0: the longest is a quarter of the scene radius
   ToolCollision collision = ToolCollision::DepthBuffer;

@@ -68,7 +68,7 @@ int main(int argc, char** argv) {
   run->add_option("--out", out_dir, "Output folder (PLY/OBJ/VTK, metrics.csv, summary.txt)");
   run->add_flag("--quiet", quiet, "No progress output");
 
-  std::string view_arg, view_backend, screenshot;
+  std::string view_arg, view_backend, screenshot, view_camera;
   int view_frames = 0;
   bool view_splats = false;
   auto* view = app.add_subcommand("view", "Show a scene in the interactive viewer (GLFW + Dear ImGui)");
@@ -77,6 +77,9 @@ int main(int argc, char** argv) {
   view->add_option("--frames", view_frames, "Scripted run: draw N frames, then exit")->check(CLI::NonNegativeNumber);
   view->add_option("--screenshot", screenshot, "PNG written after the last scripted frame");
   view->add_flag("--splats", view_splats, "Start with point splats instead of the shaded surface");
+  view->add_option("--camera", view_camera,
+                   "First view: YAW,PITCH[,DISTANCE] (degrees about the up axis, degrees above the horizontal, metres "
+                   "from the framed centre; default: the framing's)");
 
   std::string validate_arg;
   auto* validate = app.add_subcommand("validate", "Load and check a scene file; print what it switches on");
@@ -122,6 +125,7 @@ int main(int argc, char** argv) {
       vo.frames = view_frames;
       vo.screenshot = screenshot;
       vo.splats = view_splats;
+      if (!view_camera.empty()) vo.camera = inc::parseCameraAngles(view_camera);
       return inc::cli::runViewCommand(resolveScene(view_arg), vo);
     }
     if (*tradeoff) {

@@ -60,6 +60,7 @@ int runViewCommand(const Scene& scene_in, const ViewCommandOptions& options) {
   const Vec3d g = scene.solver.gravity;
   vo.z_up = !(std::fabs(g.y) > std::fabs(g.x) && std::fabs(g.y) > std::fabs(g.z));
   vo.frames = options.frames;
+  vo.camera = options.camera;
   vo.screenshot_path = options.screenshot;
   vo.layers.splats = options.splats;
   vo.layers.surface = !options.splats;

@@ -4,6 +4,7 @@
 #include <optional>
 #include <string>
 
+#include "host/camera_option.h"
 #include "host/runner.h"
 #include "host/scene.h"
 
@@ -14,6 +15,7 @@ struct ViewCommandOptions {
   int frames = 0;               // > 0: scripted run of N frames, then exit (with `screenshot`)
   std::string screenshot;       // PNG written after the last scripted frame
   bool splats = false;          // start with point splats instead of the shaded surface
+  std::optional<CameraAngles> camera;  // --camera YAW,PITCH[,DISTANCE]; unset: the default framing
 };
 
 // Returns the process exit code: 0, 1 when no display / no OpenGL 3.3 or no viewer in this build.
