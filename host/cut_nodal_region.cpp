@@ -11,6 +11,7 @@
 
 #include "cpu_fallback/parallel.h"
 #include "host/cut_nodal_points.h"
+#include "host/device_capture_lock.h"
 #include "host/elapsed_ms.h"
 #include "host/input_error.h"
 #include "physics/cut_coupling.h"
@@ -164,16 +165,18 @@ void NodalRegion::apply(NodalUpdate& u, const std::vector<ConvertedSphereState>&
   }
   r_ = std::move(u.next);
   const auto t0 = std::chrono::steady_clock::now();
-  loadMlsSolver(solver_, u.model, settings_.backend);  // the GPU reuses its buffers
+  if (u.preloaded) {  // loaded on a worker: the current solver becomes the next spare
+    spare_ = std::move(solver_);
+    solver_ = std::move(u.preloaded);
+  } else {
+    loadMlsSolver(solver_, u.model, settings_.backend);  // the GPU reuses its buffers
+    loadRestData(*solver_, r_.groups);
+  }
   times_.model_ms = u.model_build_ms + msSince(t0);
   const auto t1 = std::chrono::steady_clock::now();
-  // A cut's few thousand points are launch-bound on the GPU: the substeps of an exchange replay as one graph.
-  solver_->setStageTiming(false);
-  solver_->setStaticColliders(settings_.colliders.planes, settings_.colliders.boxes, 0.5 * spacing_);
   solver_->setSafety(solver_->safety() * safety_scale_);
   solver_->setDisplacements(u_);
   solver_->setVelocities(v_);
-  solver_->setCouplingGroups(r_.groups);
   // Anchors until the first exchange: each spring's PBD sphere where the points' own sphere puts it at rest
   // length along the rest direction (no force); the exchange replaces them with the PBD positions.
   group_u_.assign(r_.groups.size(), Vec3d());
@@ -188,6 +191,23 @@ void NodalRegion::apply(NodalUpdate& u, const std::vector<ConvertedSphereState>&
   last_reduction_ = solver_->reduce();
   times_.setup_ms = msSince(t1);
   last_rebuild_ms_ = msSince(t0);
+}
+
+// What a solver takes from the rest data beside its model. A cut's few thousand points are launch-bound on the GPU:
+// the substeps of an exchange run untimed (one graph, or one cooperative launch).
+void NodalRegion::loadRestData(MlsSolver& s, const MlsCouplingGroups& groups) const {
+  s.setStageTiming(false);
+  s.setStaticColliders(settings_.colliders.planes, settings_.colliders.boxes, 0.5 * spacing_);
+  s.setCouplingGroups(groups);
+}
+
+void NodalRegion::preload(NodalUpdate& u) {
+  if (!u.rebuild) return;
+  const std::lock_guard<std::mutex> lock(deviceCaptureMutex());
+  std::unique_ptr<MlsSolver> s = std::move(spare_);
+  loadMlsSolver(s, u.model, settings_.backend);
+  loadRestData(*s, u.next.groups);
+  u.preloaded = std::move(s);
 }
 
 std::size_t NodalRegion::convert(const std::vector<std::int32_t>& cut,

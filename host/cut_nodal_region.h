@@ -79,6 +79,9 @@ struct NodalUpdate {
   std::size_t first_new = 0;           // next.rest[first_new ..] are those points
   bool rebuild = false;                // the points or the supports changed: `model` is the MLS model on them
   MlsBuiltModel model;
+  // The MLS solver already loaded with `model`, its groups and the scene's colliders on a worker (preload); apply()
+  // then only transfers the state into it. Null: apply() loads the model itself.
+  std::unique_ptr<MlsSolver> preloaded;
   std::size_t changed = 0;             // spheres that changed role
   std::size_t removed = 0;             // directed supports the strip dropped
   double sample_ms = 0, supports_ms = 0, model_build_ms = 0;  // host time of the parts (ms)
@@ -135,6 +138,11 @@ class NodalRegion {
   // x = x_b + R_b (X - C_b), v = v_b, from `sampled_state` (one per u.sampled, the spheres' state now); the MLS
   // solver is loaded with u's model.
   void apply(NodalUpdate& u, const std::vector<ConvertedSphereState>& sampled_state);
+  // Loads u's model into the region's spare solver (device buffers of the solver before last) with the rest data
+  // apply() would load: the groups, the scene's colliders, untimed stages. For a worker thread while advance() runs
+  // on the current solver: it touches only the spare, and holds deviceCaptureMutex() for the device work. Nothing
+  // when u needs no rebuild.
+  void preload(NodalUpdate& u);
   // prepareConversion on the region's own data then apply, with `state(b)` a sphere's state now. Returns the
   // number of spheres that changed role.
   std::size_t convert(const std::vector<std::int32_t>& cut, const std::function<ConvertedSphereState(std::int32_t)>& state,
@@ -196,6 +204,8 @@ class NodalRegion {
   std::vector<Vec3d> u_, v_;                  // host copies of the points' state (valid after syncState)
   std::vector<Vec3d> group_u_, anchors_;
   std::unique_ptr<MlsSolver> solver_;
+  std::unique_ptr<MlsSolver> spare_;
+  void loadRestData(MlsSolver& s, const MlsCouplingGroups& groups) const;  // the solver before last: preload() loads the next model into its buffers
   MlsReduction last_reduction_;
   double safety_scale_ = 1.0;
   double last_rebuild_ms_ = 0.0;

@@ -6,8 +6,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <map>
+#include <mutex>
 
 #include "host/background_task.h"
 #include "host/cut_nodal_points.h"
@@ -16,6 +18,7 @@
 #include "host/cut_stroke_end.h"
 #include "host/cut_surface_state.h"
 #include "host/cut_swept_surface.h"
+#include "host/device_capture_lock.h"
 #include "host/dissection_render_layers.h"
 #include "host/elapsed_ms.h"
 #include "host/grasper.h"
@@ -123,6 +126,8 @@ class DissectionSimulation final : public SimulationModel {
     backend_ = makePbdBackend<T>(backend);
     region_.samples_per_diameter = scene.cutting.samples_per_diameter;
     region_.backend = backend_->kind();  // the nodal points run on the backend the scene asked for
+    preload_ = scene.cutting.conversion_delay_frames > 0 && backend_->kind() == BackendKind::Cuda &&
+               !std::getenv("INCISION_NO_PRELOAD");
     region_.precision = sizeof(T) == 8 ? Precision::Float64 : Precision::Float32;
     region_.fixed = scene.fixed;
     region_.colliders = staticColliders(scene.colliders);
@@ -205,6 +210,7 @@ class DissectionSimulation final : public SimulationModel {
       PbdStepParams<T> p = params_;
       p.frame_dt = T(frame_dt);
       p.substeps = pbd_substeps = std::max(1, int(std::ceil(base_substeps_ * substep_scale_ - 1e-9)));
+      if (preload_ && active_) p.use_graph = false;  // a worker may be loading the stroke's next model
       st = backend_->advanceFrame(p, in);
       backend_->getState(state_);
     }
@@ -301,6 +307,10 @@ class DissectionSimulation final : public SimulationModel {
   }
   MemoryReport memory() const override {
     MemoryReport m = backend_->memory();
+    {
+      const std::lock_guard<std::mutex> lock(deviceCaptureMutex());  // a worker may be loading it
+      if (spare_backend_) m.device_bytes += spare_backend_->memory().device_bytes;
+    }
     m.host_bytes += model_.size() * (sizeof(Vec3<T>) * 3 + sizeof(T) * 4) +
                     rest_surface_.vertices.size() * sizeof(Vec3d) + rest_surface_.triangles.size() * 12;
     if (active_ && active_->region && active_->region->solver()) {
@@ -576,17 +586,22 @@ class DissectionSimulation final : public SimulationModel {
     const bool delayed = scene_.cutting.conversion_delay_frames > 0;
     // The region's half (samples, supports, groups, MLS model) and the PBD half (the stroke's next model) read
     // only rest data; delayed, the region's half starts from a copy (advance() goes on with the current data).
-    const auto mlsHalf = [p, &region, &swept, delayed, hit] {
+    // Delayed on the GPU, each half also loads its model into the spare device buffers (preload_), so that the
+    // applying frame only swaps them in and transfers the state.
+    const bool preload = delayed && preload_;
+    const auto mlsHalf = [p, &region, &swept, delayed, preload, hit] {
       const auto t0 = std::chrono::steady_clock::now();
       NodalRest from = delayed ? region.restCopy() : region.takeRest();
       p->mls = p->cut ? region.prepareConversion(std::move(from), hit, swept) : region.prepareStrip(std::move(from), p->fresh);
+      if (preload) region.preload(p->mls);
       p->mls_prepare_ms = msSince(t0);
     };
     std::function<void()> pbdHalf = [] {};
     if (p->cut)
-      pbdHalf = [this, p, roles = region.rolesAfter(hit)] {
+      pbdHalf = [this, p, preload, roles = region.rolesAfter(hit)] {
         const auto t0 = std::chrono::steady_clock::now();
         p->pbd = planStrokePbd(roles);
+        if (preload) preloadStrokePbd(p->pbd);
         p->pbd_prepare_ms = msSince(t0);
       };
     converting_ = std::move(pc);
@@ -689,7 +704,16 @@ class DissectionSimulation final : public SimulationModel {
     std::vector<std::int32_t> base_to_pbd, pbd_to_base;
     PbdModel<T> built;
     double build_ms = 0;
+    bool preloaded = false;  // `built` is in spare_backend_ already (preloadStrokePbd)
   };
+  // On the worker that planned it: the plan's model into the spare backend (the one before last), while the frame
+  // goes on with backend_. Only the worker touches spare_backend_ until the plan is installed.
+  void preloadStrokePbd(StrokePbdPlan& plan) {
+    const std::lock_guard<std::mutex> lock(deviceCaptureMutex());
+    if (!spare_backend_) spare_backend_ = makePbdBackend<T>(backend_->kind());
+    spare_backend_->setModel(plan.built);
+    plan.preloaded = true;
+  }
   StrokePbdPlan planStrokePbd(const std::vector<SphereRole>& roles) const {
     const ActiveStroke& a = *active_;
     StrokePbdPlan p;
@@ -735,7 +759,7 @@ class DissectionSimulation final : public SimulationModel {
     a.base_to_pbd = std::move(p.base_to_pbd);
     a.pbd_to_base = std::move(p.pbd_to_base);
     mouse_.release();  // sphere indices change
-    installSpheres(std::move(p.spheres), std::move(p.built), x, v, old_to_new);
+    installSpheres(std::move(p.spheres), std::move(p.built), x, v, old_to_new, p.preloaded);
   }
 
   // The blade leaves. Every heavy part of a stroke's end works in the rest configuration (Algorithm 1 on the
@@ -993,10 +1017,13 @@ class DissectionSimulation final : public SimulationModel {
   // Makes `built` (the PBD model of `m`) the backend's model with the given positions and velocities; old_to_new
   // maps the previous PBD indices (grasps follow their spheres).
   void installSpheres(MetaballModel m, PbdModel<T> built, const std::vector<Vec3d>& x, const std::vector<Vec3d>& v,
-                      const std::vector<std::int32_t>& old_to_new) {
+                      const std::vector<std::int32_t>& old_to_new, bool preloaded = false) {
     spheres_ = std::move(m);
     model_ = std::move(built);
-    backend_->setModel(model_);
+    if (preloaded)
+      std::swap(backend_, spare_backend_);  // loaded on a worker; the current one becomes the next spare
+    else
+      backend_->setModel(model_);
     state_ = pbdRestState(model_);  // what setModel starts it in (no download)
     for (std::size_t i = 0; i < spheres_.size(); ++i) {
       if (model_.inv_mass[i] == T(0)) continue;  // fixed spheres stay at rest
@@ -1068,6 +1095,7 @@ class DissectionSimulation final : public SimulationModel {
     p.frame_dt = T(dt);
     p.substeps = std::max(1, int(std::ceil(scene_.cutting.pbd_substeps_per_exchange * substep_scale_ - 1e-9)));
     if (scene_.cutting.pbd_iterations > 0) p.iterations = scene_.cutting.pbd_iterations;
+    if (preload_) p.use_graph = false;  // no capture beside the workers' loads (each model is new anyway)
     std::vector<std::int32_t> ids;
     std::vector<Vec3d> targets;
     region.interfacePositions(ids, targets);
@@ -1330,6 +1358,11 @@ class DissectionSimulation final : public SimulationModel {
   BackgroundTask end_split_worker_{true}, end_worker_{true};
   // A conversion's region half beside its PBD half (at normal priority: it is due at the next frame).
   BackgroundTask convert_worker_, prepare_pbd_worker_;
+  // CUDA with delayed conversions: the workers load each conversion's models into spare device buffers (the PBD
+  // backend and the MLS solver before last) beside the frame; INCISION_NO_PRELOAD=1 loads them in the applying frame
+  // instead (for A/B runs).
+  bool preload_ = false;
+  std::unique_ptr<PbdBackend<T>> spare_backend_;
   BackgroundTask open_worker_{true};  // surface openings, idle priority as a stroke's end
 };
 
