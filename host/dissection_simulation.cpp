@@ -1353,16 +1353,16 @@ class DissectionSimulation final : public SimulationModel {
   int base_substeps_ = 4;
   double substep_scale_ = 1.0, mls_safety_scale_ = 1.0;
   double time_ = 0, saved_time_ = 0;
+  // CUDA with delayed conversions: the workers load each conversion's models into spare device buffers (the PBD
+  // backend and the MLS solver before last) beside the frame; INCISION_NO_PRELOAD=1 loads them in the applying frame
+  // instead (for A/B runs). Declared before the workers: a worker still loading it is joined before it goes.
+  bool preload_ = false;
+  std::unique_ptr<PbdBackend<T>> spare_backend_;
   // A stroke's end and its surface split, at idle priority until the end is due (on two cores they would otherwise
   // slow the frames simulated meanwhile 2.5-fold); declared last, joined first.
   BackgroundTask end_split_worker_{true}, end_worker_{true};
   // A conversion's region half beside its PBD half (at normal priority: it is due at the next frame).
   BackgroundTask convert_worker_, prepare_pbd_worker_;
-  // CUDA with delayed conversions: the workers load each conversion's models into spare device buffers (the PBD
-  // backend and the MLS solver before last) beside the frame; INCISION_NO_PRELOAD=1 loads them in the applying frame
-  // instead (for A/B runs).
-  bool preload_ = false;
-  std::unique_ptr<PbdBackend<T>> spare_backend_;
   BackgroundTask open_worker_{true};  // surface openings, idle priority as a stroke's end
 };
 
