@@ -233,7 +233,7 @@ class DissectionSimulation final : public SimulationModel {
     rep.stages.push_back({"cut_convert_mls_build", timers_.convert_mls_build_ms});  // of _mls_model
     rep.stages.push_back({"cut_convert_pbd_build", timers_.convert_pbd_build_ms});  // of cut_convert_pbd
     rep.stages.push_back({"cut_convert_wait", timers_.convert_wait_ms});  // the MLS half outlasting the PBD half
-    rep.stages.push_back({"cut_convert_apply", timers_.convert_apply_ms});  // the rest of cut_convert: starting the next
+    rep.stages.push_back({"cut_convert_apply", timers_.convert_apply_ms});  // of cut_convert: a delayed one applied
     rep.stages.push_back({"cut_convert_apply_region", timers_.apply_region_ms});  // preloaded: the points' state transfer
     rep.stages.push_back({"cut_convert_apply_pbd", timers_.apply_pbd_ms});        // preloaded: the spheres' state transfer
     rep.stages.push_back({"mls_integrate", mls.ms_integrate});
