@@ -211,7 +211,7 @@ class DissectionSimulation final : public SimulationModel {
       PbdStepParams<T> p = params_;
       p.frame_dt = T(frame_dt);
       p.substeps = pbd_substeps = std::max(1, int(std::ceil(base_substeps_ * substep_scale_ - 1e-9)));
-      if (preload_ && active_) p.use_graph = false;  // a worker may be loading the stroke's next model
+      if (preload_ && active_ && directFrameFits(p)) p.use_graph = false;  // a worker may be loading the next model
       st = backend_->advanceFrame(p, in);
       backend_->getState(state_);
     }
@@ -722,6 +722,12 @@ class DissectionSimulation final : public SimulationModel {
     double build_ms = 0;
     bool preloaded = false;  // `built` is in spare_backend_ already (preloadStrokePbd)
   };
+  // While a stroke may be preloading, PBD frames that one grid launch runs (docs/pbd.md, "Grid frame") are launched
+  // directly: no capture then waits for a worker's load (each stroke model is new anyway). Larger models keep their
+  // graphs (their direct path is ~170 launches); a capture then waits for a load in progress (deviceCaptureMutex).
+  bool directFrameFits(const PbdStepParams<T>& p) const {
+    return p.solver == PbdSolverKind::Jacobi && model_.size() <= std::size_t(std::max(0, p.grid_max_particles));
+  }
   // On the worker that planned it: the plan's model into the spare backend (the one before last), while the frame
   // goes on with backend_. Only the worker touches spare_backend_ until the plan is installed.
   void preloadStrokePbd(StrokePbdPlan& plan) {
@@ -1111,7 +1117,7 @@ class DissectionSimulation final : public SimulationModel {
     p.frame_dt = T(dt);
     p.substeps = std::max(1, int(std::ceil(scene_.cutting.pbd_substeps_per_exchange * substep_scale_ - 1e-9)));
     if (scene_.cutting.pbd_iterations > 0) p.iterations = scene_.cutting.pbd_iterations;
-    if (preload_) p.use_graph = false;  // no capture beside the workers' loads (each model is new anyway)
+    if (preload_ && directFrameFits(p)) p.use_graph = false;  // no capture beside the workers' loads
     std::vector<std::int32_t> ids;
     std::vector<Vec3d> targets;
     region.interfacePositions(ids, targets);
