@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "host/pbd_builders.h"
@@ -35,6 +36,19 @@ PbdModel<T> makeHangingChain(int n, double d, double m, double alpha, double k =
   model.overlap_offsets.assign(std::size_t(n) + 1, 0);
   finalizePbdModel(model);
   return model;
+}
+
+// One free sphere (radius 1 cm, 10 g) at the origin with the given static planes, finalised without a colouring:
+// the contact and friction tests' body.
+inline PbdModel<double> makeFreeSphere(std::vector<pbd::PlaneCollider<double>> planes = {}) {
+  PbdModel<double> m;
+  m.rest_positions = {Vec3d(0, 0, 0)};
+  m.masses = {0.01};
+  m.inv_mass = {100.0};
+  m.rest_radii = {0.01};
+  m.planes = std::move(planes);
+  finalizePbdModel(m, false);
+  return m;
 }
 
 // Analytic static sag of that chain: link k (from the top, k = 1..n-1) carries T_k = (n - k) m g and

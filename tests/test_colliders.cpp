@@ -20,6 +20,7 @@
 #include "physics/pbd_block.h"
 #include "tests/cut_block_scene.h"
 #include "tests/mls_test_scenes.h"
+#include "tests/pbd_fixtures.h"
 
 namespace inc {
 namespace {
@@ -179,15 +180,8 @@ TEST(SceneColliders, TheColliderLayerDrawsPlanesAroundTheOrganAndBoxesFacingOut)
 // 1 s of 60 frames x 4 substeps x 5 iterations without damping: its distance down the slope.
 double slideDownPbdSlope(double angle, double mu) {
   const Vec3d n(std::sin(angle), 0.0, std::cos(angle));
-  PbdModel<double> m;
-  m.rest_positions = {Vec3d(0, 0, 0)};
-  m.masses = {0.01};
-  m.inv_mass = {100.0};
-  m.rest_radii = {0.01};
-  m.planes.push_back({n, -0.01, mu});  // the sphere touches it
-  finalizePbdModel(m, false);
   auto b = cpu::makePbdCpuBackend<double>();
-  b->setModel(m);
+  b->setModel(test::makeFreeSphere({{n, -0.01, mu}}));  // the sphere touches the plane
   PbdStepParams<double> p;
   p.solver = PbdSolverKind::GaussSeidel;
   p.substeps = 4;

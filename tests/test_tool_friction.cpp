@@ -14,6 +14,7 @@
 #include "host/pbd_model.h"
 #include "host/scene_loader.h"
 #include "physics/pbd_block.h"
+#include "tests/pbd_fixtures.h"
 
 namespace inc {
 namespace {
@@ -27,14 +28,8 @@ constexpr double kDt = 1.0 / 60.0;
 // substeps that bring it to vn add up to vn dt exactly, and each allows mu times itself of relative tangential
 // displacement, so the figures hold to rounding.
 Vec3d velocityAfterImpact(double mu, double vn, double vt, PbdSolverKind solver) {
-  PbdModel<double> m;
-  m.rest_positions = {Vec3d(0, 0, 0)};
-  m.masses = {0.01};
-  m.inv_mass = {100.0};
-  m.rest_radii = {0.01};
-  finalizePbdModel(m, false);
   auto b = cpu::makePbdCpuBackend<double>();
-  b->setModel(m);
+  b->setModel(test::makeFreeSphere());
   PbdStepParams<double> p;
   p.solver = solver;
   p.substeps = 4;
@@ -77,15 +72,8 @@ TEST(ToolFriction, AnImpactGivesTheTangentialSpeedCoulombAllows) {
 // under gravity tilted 20 degrees off the vertical, the sphere stays; frictionless it slides with the tilt.
 TEST(ToolFriction, AToolAtRestHoldsASphereAgainstASlidingForce) {
   const auto drift = [](double mu) {
-    PbdModel<double> m;
-    m.rest_positions = {Vec3d(0, 0, 0)};
-    m.masses = {0.01};
-    m.inv_mass = {100.0};
-    m.rest_radii = {0.01};
-    m.planes.push_back({Vec3d(0, 0, 1), -0.01, 0.0});  // the sphere rests on it
-    finalizePbdModel(m, false);
     auto b = cpu::makePbdCpuBackend<double>();
-    b->setModel(m);
+    b->setModel(test::makeFreeSphere({{Vec3d(0, 0, 1), -0.01, 0.0}}));  // the sphere rests on the floor
     PbdStepParams<double> p;
     p.solver = PbdSolverKind::GaussSeidel;
     p.substeps = 4;
@@ -180,14 +168,8 @@ TEST(ToolFriction, TheSceneKeyParsesRoundTripsAndRefusesBadValues) {
 
 // The frame input is checked: a tool's friction outside [0, 2] (or NaN) is refused before any frame runs.
 TEST(ToolFriction, AFrameInputWithBadToolFrictionIsRefused) {
-  PbdModel<double> m;
-  m.rest_positions = {Vec3d(0, 0, 0)};
-  m.masses = {0.01};
-  m.inv_mass = {100.0};
-  m.rest_radii = {0.01};
-  finalizePbdModel(m, false);
   auto b = cpu::makePbdCpuBackend<double>();
-  b->setModel(m);
+  b->setModel(test::makeFreeSphere());
   pbd::CapsuleCollider<double> c;
   c.b = Vec3d(1, 0, 0);
   c.radius = 0.001;
