@@ -10,10 +10,10 @@
 #include <string>
 #include <vector>
 
-#include "host/cut_mesh.h"
-#include "host/cut_surface_split.h"
-#include "host/input_error.h"
-#include "host/organ_shapes.h"
+#include "host/cut/cut_mesh.h"
+#include "host/cut/cut_surface_split.h"
+#include "model/input_error.h"
+#include "host/assembly/organ_shapes.h"
 
 namespace {
 

@@ -13,9 +13,10 @@
 #include <vector>
 
 #include "cpu_fallback/mls_pair_sums_cpu.h"
-#include "host/backend.h"
-#include "host/dissection_simulation.h"
-#include "host/input_error.h"
+#include "host/backends/backend_choice.h"
+#include "model/backend.h"
+#include "host/sim/dissection_simulation.h"
+#include "model/input_error.h"
 #if INCISION_HAVE_CUDA
 #include "kernels/device_info.h"
 #endif

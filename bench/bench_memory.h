@@ -7,7 +7,7 @@
 #include <fstream>
 #include <string>
 
-#include "host/backend.h"
+#include "model/backend.h"
 #if INCISION_HAVE_CUDA
 #include <cuda_runtime.h>
 

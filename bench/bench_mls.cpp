@@ -13,13 +13,16 @@
 #include <vector>
 
 #include "bench/bench_memory.h"
+#include "host/backends/backend_choice.h"
+#include "host/backends/solver_factory.h"
 #include "bench/mls_traffic.h"
 #include "cpu_fallback/mls_solver_cpu.h"
-#include "host/backend.h"
-#include "host/input_error.h"
-#include "host/mls_model.h"
-#include "host/mls_solver.h"
-#include "host/particle_sampling.h"
+#include "model/backend.h"
+#include "model/input_error.h"
+#include "host/assembly/mls_model_build.h"
+#include "model/mls_model.h"
+#include "model/mls_solver.h"
+#include "host/assembly/particle_sampling.h"
 #include "kernels/device_info.h"
 #if INCISION_HAVE_CUDA
 #include "kernels/mls_solver_cuda.h"

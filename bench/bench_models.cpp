@@ -8,11 +8,12 @@
 #include <string>
 #include <vector>
 
-#include "host/backend.h"
-#include "host/embedded_scenes.h"
-#include "host/input_error.h"
-#include "host/runner.h"
-#include "host/scene_loader.h"
+#include "model/backend.h"
+#include "host/backends/backend_choice.h"
+#include "host/scene/embedded_scenes.h"
+#include "model/input_error.h"
+#include "host/app/runner.h"
+#include "host/scene/scene_loader.h"
 
 using namespace inc;
 

@@ -12,10 +12,11 @@
 #include <vector>
 
 #include "bench/bench_memory.h"
+#include "host/backends/backend_choice.h"
 #include "cpu_fallback/neighbor_search_cpu.h"
-#include "cpu_fallback/parallel.h"
-#include "host/backend.h"
-#include "host/input_error.h"
+#include "base/parallel.h"
+#include "model/backend.h"
+#include "model/input_error.h"
 #include "kernels/device_info.h"
 #if INCISION_HAVE_CUDA
 #include <cuda_runtime.h>

@@ -9,12 +9,12 @@
 #include <string>
 #include <vector>
 
-#include "cpu_fallback/parallel.h"
+#include "base/parallel.h"
 #include "cpu_fallback/skinning_cpu.h"
-#include "host/input_error.h"
-#include "host/metaball_packing.h"
-#include "host/organ_shapes.h"
-#include "host/skin_binding.h"
+#include "model/input_error.h"
+#include "host/assembly/metaball_packing.h"
+#include "host/assembly/organ_shapes.h"
+#include "host/assembly/skin_binding.h"
 #include "kernels/device_info.h"
 #if INCISION_HAVE_CUDA
 #include <cuda_runtime.h>

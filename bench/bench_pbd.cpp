@@ -11,10 +11,11 @@
 #include <vector>
 
 #include "bench/bench_memory.h"
-#include "host/backend.h"
-#include "host/input_error.h"
-#include "host/pbd_builders.h"
-#include "host/pbd_model.h"
+#include "host/backends/solver_factory.h"
+#include "model/backend.h"
+#include "model/input_error.h"
+#include "host/assembly/pbd_builders.h"
+#include "model/pbd_model.h"
 #if INCISION_HAVE_CUDA
 #include "kernels/device_info.h"
 #endif

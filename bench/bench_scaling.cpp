@@ -10,15 +10,16 @@
 #include <vector>
 
 #include "bench/bench_memory.h"
+#include "host/backends/backend_choice.h"
 #include "bench/mls_traffic.h"
-#include "cpu_fallback/parallel.h"
-#include "host/backend.h"
-#include "host/embedded_scenes.h"
-#include "host/input_error.h"
-#include "host/runner.h"
-#include "host/scene_loader.h"
-#include "host/skin_binding.h"
-#include "host/pbd_builders.h"
+#include "base/parallel.h"
+#include "model/backend.h"
+#include "host/scene/embedded_scenes.h"
+#include "model/input_error.h"
+#include "host/app/runner.h"
+#include "host/scene/scene_loader.h"
+#include "host/assembly/skin_binding.h"
+#include "host/assembly/pbd_builders.h"
 #include "kernels/device_info.h"
 #if INCISION_HAVE_CUDA
 #include <cuda_runtime.h>

@@ -11,10 +11,10 @@
 #include <string>
 #include <vector>
 
-#include "host/backend.h"
-#include "host/input_error.h"
-#include "host/tearing_driver.h"
-#include "host/tearing_sheet.h"
+#include "model/backend.h"
+#include "model/input_error.h"
+#include "host/tear/tearing_driver.h"
+#include "model/tearing_sheet.h"
 #if INCISION_HAVE_CUDA
 #include "kernels/device_info.h"
 #endif

@@ -8,7 +8,7 @@
 #include <string>
 
 #include "cpu_fallback/mls_pair_sums_cpu.h"
-#include "cpu_fallback/parallel.h"
+#include "base/parallel.h"
 #include "physics/mls_passes.h"
 
 namespace inc::cpu {

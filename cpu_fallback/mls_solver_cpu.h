@@ -3,9 +3,9 @@
 
 #include <memory>
 
-#include "host/mls_model.h"
-#include "cpu_fallback/team.h"
-#include "host/mls_solver.h"
+#include "model/mls_model.h"
+#include "base/team.h"
+#include "model/mls_solver.h"
 #include "physics/cut_coupling.h"
 
 namespace inc::cpu {

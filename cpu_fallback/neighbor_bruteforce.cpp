@@ -3,7 +3,7 @@
 
 #include <stdexcept>
 
-#include "cpu_fallback/parallel.h"
+#include "base/parallel.h"
 #include "physics/distance.h"
 
 namespace inc::cpu {

@@ -3,7 +3,7 @@
 
 #include <vector>
 
-#include "host/neighbor_lists.h"
+#include "model/neighbor_lists.h"
 #include "physics/vec3.h"
 
 namespace inc::cpu {

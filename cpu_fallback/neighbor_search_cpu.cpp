@@ -13,8 +13,8 @@
 #include <immintrin.h>
 #endif
 
-#include "cpu_fallback/parallel.h"
-#include "host/input_error.h"
+#include "base/parallel.h"
+#include "model/input_error.h"
 
 namespace inc::cpu {
 namespace {

@@ -6,7 +6,7 @@
 #include <mutex>
 #include <vector>
 
-#include "host/neighbor_lists.h"
+#include "model/neighbor_lists.h"
 #include "physics/neighbor_grid.h"
 #include "physics/vec3.h"
 

@@ -11,9 +11,9 @@
 #include <emmintrin.h>
 #endif
 
-#include "cpu_fallback/parallel.h"
+#include "base/parallel.h"
 #include "cpu_fallback/pbd_rotation_lanes.h"
-#include "cpu_fallback/team.h"
+#include "base/team.h"
 #include "physics/pbd_block.h"
 #include "physics/pbd_terms3.h"
 #include "physics/pbd_volume.h"

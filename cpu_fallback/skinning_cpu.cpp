@@ -1,7 +1,7 @@
 // CPU skinning loops over the shared physics/skinning.h math (same functions and arguments as the CUDA kernels).
 #include "cpu_fallback/skinning_cpu.h"
 
-#include "cpu_fallback/parallel.h"
+#include "base/parallel.h"
 
 namespace inc::cpu {
 

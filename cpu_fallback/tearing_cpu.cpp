@@ -1,7 +1,7 @@
 // CPU tearing step: the five data-parallel phases of tearing_cpu.h, calling physics/tearing_tresca.h.
 #include "cpu_fallback/tearing_cpu.h"
 
-#include "cpu_fallback/parallel.h"
+#include "base/parallel.h"
 #include "physics/tearing_phases.h"
 
 namespace inc::cpu {

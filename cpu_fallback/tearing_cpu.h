@@ -4,29 +4,12 @@
 #include <cstdint>
 #include <vector>
 
-#include "host/tearing_sheet.h"
+#include "model/tear_step.h"
+#include "model/tearing_sheet.h"
 
 static_assert(sizeof(std::array<std::int32_t, 3>) == 3 * sizeof(std::int32_t), "triangles are read as int32 triples");
 
 namespace inc::cpu {
-
-struct TearStepStats {
-  int yielding = 0;        // particles past the criterion whose split is possible
-  int splits = 0;          // particles split this step (= new particles)
-  int deferred = 0;        // yielding but sharing a triangle with a higher-priority yielding particle
-  int moved_triangles = 0; // triangles moved from split particles to their new particles
-  int backed_off = 0;      // splits whose fraction t was reduced to keep triangles valid
-};
-
-// Per-particle results of the detection pass (kept for tests and the GPU parity check).
-template <typename T>
-struct TearCandidates {
-  std::vector<std::uint8_t> yield;      // criterion passed and the split separates triangles
-  std::vector<std::uint8_t> accept;     // in this step's independent set
-  std::vector<std::int32_t> partner;    // j: the broken bond's other particle
-  std::vector<Vec3<T>> dir;             // crack-opening direction (split plane normal), towards j
-  std::vector<T> t_pred;                // predicted fraction before the random perturbation
-};
 
 // One tearing step on sheet `s` (positions/velocities current). Phases, each a parallel loop:
 //  1 per particle: bond-strain extrema (or bond stress tensor), criterion, split side counts;

@@ -3,7 +3,7 @@
 
 #include <cuda_runtime.h>
 
-#include "host/device_capture_lock.h"
+#include "model/device_capture_lock.h"
 #include "kernels/cuda_check.h"
 
 namespace inc::cuda {

@@ -3,8 +3,8 @@
 
 #include <memory>
 
-#include "host/mls_model.h"
-#include "host/mls_solver.h"
+#include "model/mls_model.h"
+#include "model/mls_solver.h"
 
 namespace inc::cuda {
 

@@ -13,7 +13,7 @@
 #include <string>
 #include <type_traits>
 
-#include "host/input_error.h"
+#include "model/input_error.h"
 #include "kernels/cuda_check.h"
 #include "kernels/graph_capture.h"
 

@@ -9,7 +9,7 @@
 #include <utility>
 #include <vector>
 
-#include "host/neighbor_lists.h"
+#include "model/neighbor_lists.h"
 #include "kernels/device_buffer.h"
 #include "physics/neighbor_grid.h"
 #include "physics/vec3.h"

@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "host/pbd_model.h"
+#include "model/pbd_model.h"
 
 namespace inc::cuda {
 

@@ -3,7 +3,7 @@
 
 #include <memory>
 
-#include "host/pbd_model.h"
+#include "model/pbd_model.h"
 
 namespace inc::cuda {
 

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "kernels/cuda_check.h"
-#include "host/input_error.h"
+#include "model/input_error.h"
 #include "kernels/device_buffer.h"
 #include "kernels/device_grow.h"
 #include "kernels/pbd_device_cuda.h"
@@ -306,9 +306,9 @@ __global__ void lowerSlotsAndCountsKernel(tear::FanOutputs<T> o, int ne, const s
 template <typename T>
 class TearCudaWorkspace {
  public:
-  cpu::TearStepStats step(TearSheet<T>& s, const TearParams<T>& p, cpu::TearCandidates<T>* out) {
+  TearStepStats step(TearSheet<T>& s, const TearParams<T>& p, TearCandidates<T>* out) {
     const std::size_t n = s.size(), nt = s.tris.size();
-    cpu::TearStepStats st;
+    TearStepStats st;
     if (n == 0) return st;
     // Particle arrays get room for one new particle per old one (the most a step can create), so that the
     // split kernel writes in place.
@@ -856,7 +856,7 @@ class TearStepCuda final : public TearStepBackend<T> {
   BackendKind kind() const override { return BackendKind::Cuda; }
   int step(TearSheet<T>& s, const TearParams<T>& p, TearFrameStats& st) override {
     resident_ok_ = false;  // the host path owns the sheet now
-    const cpu::TearStepStats r = ws_.step(s, p, nullptr);
+    const TearStepStats r = ws_.step(s, p, nullptr);
     st.splits += r.splits;
     st.yielding += r.yielding;
     st.deferred += r.deferred;
@@ -889,14 +889,14 @@ std::unique_ptr<TearStepBackend<T>> makeTearStepCuda() {
 }
 
 template <typename T>
-cpu::TearStepStats tearStepCuda(TearSheet<T>& s, const TearParams<T>& p, cpu::TearCandidates<T>* out) {
+TearStepStats tearStepCuda(TearSheet<T>& s, const TearParams<T>& p, TearCandidates<T>* out) {
   TearCudaWorkspace<T> ws;
   return ws.step(s, p, out);
 }
 
 template std::unique_ptr<TearStepBackend<float>> makeTearStepCuda<float>();
 template std::unique_ptr<TearStepBackend<double>> makeTearStepCuda<double>();
-template cpu::TearStepStats tearStepCuda<float>(TearSheet<float>&, const TearParams<float>&, cpu::TearCandidates<float>*);
-template cpu::TearStepStats tearStepCuda<double>(TearSheet<double>&, const TearParams<double>&, cpu::TearCandidates<double>*);
+template TearStepStats tearStepCuda<float>(TearSheet<float>&, const TearParams<float>&, TearCandidates<float>*);
+template TearStepStats tearStepCuda<double>(TearSheet<double>&, const TearParams<double>&, TearCandidates<double>*);
 
 }  // namespace inc::cuda

@@ -3,8 +3,8 @@
 
 #include <memory>
 
-#include "cpu_fallback/tearing_cpu.h"
-#include "host/tearing_driver.h"
+#include "model/tear_step.h"
+#include "model/tearing_sheet.h"
 
 namespace inc::cuda {
 
@@ -15,6 +15,6 @@ std::unique_ptr<TearStepBackend<T>> makeTearStepCuda();
 // One step with the same phases and results as cpu::tearStepCpu (for the parity test). Leaves the adjacency
 // stale: call s.rebuildTopology() afterwards when splits > 0.
 template <typename T>
-cpu::TearStepStats tearStepCuda(TearSheet<T>& s, const TearParams<T>& p, cpu::TearCandidates<T>* out = nullptr);
+TearStepStats tearStepCuda(TearSheet<T>& s, const TearParams<T>& p, TearCandidates<T>* out = nullptr);
 
 }  // namespace inc::cuda

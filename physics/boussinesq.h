@@ -9,7 +9,7 @@ namespace inc {
 // origin. Returns B with B(k, l) = u_l(x) for a unit force in direction k (metres per newton), the same
 // convention as kelvinDisplacement. Normal force: Boussinesq; tangential: Cerruti (K. L. Johnson, Contact
 // Mechanics, 1985, chapter 3, written there with z into the solid; we evaluate them at zj = -z and flip the
-// z components; tests/test_haptic_boussinesq.cpp checks equilibrium, the free surface and reciprocity).
+// z components; tests/physics/test_haptic_boussinesq.cpp checks equilibrium, the free surface and reciprocity).
 // Singular at the origin and on the normal line above it (x = y = 0, z > 0, outside the solid): guard_rel > 0
 // bounds rho + zj below by guard_rel * rho there (only points of a concave organ above its tangent plane come
 // near that line; inside the solid rho + zj >= rho, so it never acts).

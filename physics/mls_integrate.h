@@ -29,7 +29,7 @@ INC_HD void mlsPrescribedStep(Vec3<T>& u, Vec3<T>& v, const Vec3<T>& target, T d
 }
 
 // Courant number of the explicit step: dt_max = kMlsCourant * spacing / c_p. Calibrated against the largest
-// eigenfrequency of the discrete MLS operator (power iteration in tests/test_mls_validation.cpp,
+// eigenfrequency of the discrete MLS operator (power iteration in tests/sim/test_mls_validation.cpp,
 // StableStepIsBelowTheDiscreteLimit): with support 2 spacings, jittered lattices and the volume penalty the
 // true limit 2 / omega_max is 0.80 .. 1.05 spacing / c_p for nu in [0, 0.499]; 0.7 keeps a margin. The
 // scene's safety factor (default 0.5) multiplies this. It is the rest-state (linearised) limit: a strongly

@@ -28,7 +28,7 @@ enum class ChebyshevMode : std::int32_t {
 };
 
 // The largest rho accepted (validateFrameInput), with a margin: 0.98 diverged on the liver-sized block (bench_pbd)
-// at 5 iterations, 0.99 failed the energy bound of tests/test_pbd_chebyshev.cpp; 0.95 and below passed both.
+// at 5 iterations, 0.99 failed the energy bound of tests/physics/test_pbd_chebyshev.cpp; 0.95 and below passed both.
 constexpr double kChebyshevMaxRho = 0.9;
 
 // Weight and mode of iteration `it` (0-based) of `iterations`; `weight` carries w_(k-1) in and w_k out, so a

@@ -4,7 +4,7 @@
 
 #include <array>
 
-#include "host/simulation_model.h"
+#include "host/sim/simulation_model.h"
 #include "viewer/overlay_renderer.h"
 #include "viewer/sphere_renderer.h"
 #include "viewer/splat_renderer.h"

@@ -4,7 +4,7 @@
 #include <array>
 #include <vector>
 
-#include "host/mesh.h"
+#include "host/io/mesh.h"
 #include "viewer/gl_api.h"
 #include "viewer/view_camera.h"
 

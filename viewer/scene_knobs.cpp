@@ -4,9 +4,10 @@
 #include <algorithm>
 #include <cmath>
 
-#include "host/backend.h"
-#include "host/input_error.h"
-#include "host/runner.h"
+#include "host/backends/backend_choice.h"
+#include "model/backend.h"
+#include "model/input_error.h"
+#include "host/app/runner.h"
 
 namespace inc::viewer {
 

@@ -7,7 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "host/scene.h"
+#include "host/scene/scene.h"
+#include "host/backends/backend_choice.h"
 #include "viewer/sim_runner.h"
 
 namespace inc::viewer {

@@ -5,7 +5,7 @@
 #include <chrono>
 #include <cmath>
 
-#include "host/input_error.h"
+#include "model/input_error.h"
 
 namespace inc::viewer {
 

@@ -12,8 +12,8 @@
 #include <thread>
 #include <vector>
 
-#include "host/mesh.h"
-#include "host/simulation_model.h"
+#include "host/io/mesh.h"
+#include "host/sim/simulation_model.h"
 
 namespace inc::viewer {
 

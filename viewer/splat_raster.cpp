@@ -5,7 +5,7 @@
 #include <cmath>
 #include <limits>
 
-#include "cpu_fallback/parallel.h"
+#include "base/parallel.h"
 
 namespace inc::viewer {
 

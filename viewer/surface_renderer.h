@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "host/mesh.h"
+#include "host/io/mesh.h"
 #include "viewer/gl_api.h"
 #include "viewer/view_camera.h"
 

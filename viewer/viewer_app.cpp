@@ -7,7 +7,7 @@
 #include <cstdio>
 #include <map>
 
-#include "host/input_error.h"
+#include "model/input_error.h"
 #include "viewer/gl_api.h"
 #include "viewer/gl_window.h"
 

@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "host/camera_option.h"
+#include "host/app/camera_option.h"
 #include "host/haptics/pointer_device.h"
-#include "host/simulation_model.h"
+#include "host/sim/simulation_model.h"
 #include "viewer/sim_runner.h"
 #include "viewer/zbuffer_collision.h"
 

@@ -9,8 +9,8 @@
 #include <filesystem>
 #include <sstream>
 
-#include "host/input_error.h"
-#include "host/scene_json.h"
+#include "model/input_error.h"
+#include "host/scene/scene_json.h"
 
 namespace inc {
 

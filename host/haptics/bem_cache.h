@@ -8,7 +8,7 @@
 #include <Eigen/Dense>
 
 #include "host/haptics/bem_global.h"
-#include "host/mesh.h"
+#include "host/io/mesh.h"
 
 namespace inc {
 

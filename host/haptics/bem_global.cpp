@@ -6,7 +6,7 @@
 #include <cmath>
 #include <map>
 
-#include "host/input_error.h"
+#include "model/input_error.h"
 #include "physics/kelvin.h"
 
 namespace inc {

@@ -7,7 +7,8 @@
 
 #include <Eigen/Dense>
 
-#include "host/mesh.h"
+#include "host/io/mesh.h"
+#include "host/scene/global_organ_mesh.h"  // BemBc: an element's boundary condition
 
 namespace inc {
 
@@ -21,7 +22,6 @@ struct BemMaterial {
 TriangleMesh icosphereMesh(double radius_m, int level);
 TriangleMesh uvSphereMesh(double radius_m, int bands, int segments);
 
-enum class BemBc : unsigned char { kTraction = 0, kDisplacement = 1 };
 
 // Linear elastostatics on a closed, outward-oriented triangle mesh: piecewise-constant u and t per
 // element, collocation at centroids (Brebbia): c u_i + sum_j H^_ij u_j = sum_j G_ij t_j, where

@@ -7,10 +7,6 @@
 
 namespace inc {
 
-// Throws InputError(file, key + ".<scene key>", reason) unless F_p >= 0, F_s > 0, F_d > 0, friction slope >= 0,
-// all finite, and F_d < F_s (scene keys: press_threshold_n, static_friction_n, dynamic_friction_n,
-// friction_n_per_m; docs/scene-format.md).
-void validateCutThresholds(const CutThresholds<double>& th, const std::string& file, const std::string& key);
 
 struct CutForceOutput {
   CutMachine machine;

@@ -9,8 +9,8 @@
 #include <limits>
 
 #include "host/haptics/hybrid_model.h"
-#include "host/input_error.h"
-#include "host/progress.h"
+#include "model/input_error.h"
+#include "base/progress.h"
 
 namespace inc {
 

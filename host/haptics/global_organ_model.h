@@ -14,7 +14,7 @@
 #include "host/haptics/cutting_tool.h"
 #include "host/haptics/mfs_local.h"
 #include "host/haptics/triple_buffer.h"
-#include "host/mesh.h"
+#include "host/io/mesh.h"
 
 namespace inc {
 

@@ -4,7 +4,7 @@
 #include <cmath>
 
 #include "host/haptics/haptic_cut_session.h"
-#include "host/input_error.h"
+#include "model/input_error.h"
 
 namespace inc {
 

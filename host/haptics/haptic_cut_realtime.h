@@ -9,7 +9,7 @@
 #include "host/haptics/cutting_tool.h"
 #include "host/haptics/haptic_link.h"
 #include "host/haptics/haptic_loop.h"
-#include "host/simulation_model.h"
+#include "host/sim/simulation_model.h"
 
 namespace inc {
 

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "host/input_error.h"
+#include "model/input_error.h"
 
 namespace inc {
 

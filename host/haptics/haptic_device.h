@@ -1,22 +1,14 @@
-// Haptic device interface (pose and buttons in, force out), the scripted device and trajectory files.
+// Haptic device interface (pose and buttons in, force out) and the scripted device.
 #pragma once
 
 #include <cstdint>
 #include <string>
 #include <vector>
 
+#include "host/io/trajectory.h"
 #include "physics/vec3.h"
 
 namespace inc {
-
-// One reading of a device: tool-tip position in the scene frame (metres), orientation as a unit
-// quaternion (w, x, y, z), button bit mask.
-struct DeviceSample {
-  double t_s = 0.0;
-  Vec3d position_m;
-  double orientation[4] = {1.0, 0.0, 0.0, 0.0};
-  std::uint32_t buttons = 0;
-};
 
 // A force-feedback device. read() and writeForce() are called only from the haptic thread, once per
 // tick, in that order; implementations must not block (a real driver copies its latest state).
@@ -32,17 +24,6 @@ class HapticDevice {
   virtual std::string name() const = 0;
 };
 
-// A trajectory: samples in increasing time. Text file, one sample a line:
-//   t_s x_m y_m z_m qw qx qy qz buttons
-// '#' starts a comment. Numbers are written as C99 hex floats by writeTrajectory so that a recorded
-// session is replayed bit-exactly; decimal input is accepted for hand-authored files.
-struct Trajectory {
-  std::vector<DeviceSample> samples;
-};
-Trajectory loadTrajectory(const std::string& path);  // throws InputError(path, "line N", reason)
-void writeTrajectory(const std::string& path, const Trajectory& trajectory);
-// Checks times strictly increase, finite values, unit quaternions (|q| within 1e-3 of 1).
-void validateTrajectory(const Trajectory& trajectory, const std::string& file);
 
 // Plays a trajectory. Mode kByTime linearly interpolates position (and normalised-lerps orientation)
 // at the tick's time, holding the end points outside the range: for authored paths. Mode kByTick

@@ -9,7 +9,7 @@
 #include "host/haptics/haptic_link.h"
 #include "host/haptics/haptic_loop.h"
 #include "host/haptics/tip_contact.h"
-#include "host/simulation_model.h"
+#include "host/sim/simulation_model.h"
 
 namespace inc {
 

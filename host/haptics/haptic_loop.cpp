@@ -15,7 +15,7 @@
 #include <future>
 #include <memory>
 
-#include "host/input_error.h"
+#include "model/input_error.h"
 #include "physics/haptic_safety.h"
 
 namespace inc {

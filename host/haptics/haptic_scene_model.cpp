@@ -1,7 +1,7 @@
 // HapticSceneModel: frame hooks of the scene's haptic loop around the wrapped model, and the force arrow.
 #include "host/haptics/haptic_scene_model.h"
 
-#include "host/input_error.h"
+#include "model/input_error.h"
 
 namespace inc {
 

@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "host/haptics/scene_haptics.h"
-#include "host/simulation_model.h"
+#include "host/sim/simulation_model.h"
 
 namespace inc {
 

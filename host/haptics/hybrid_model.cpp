@@ -11,7 +11,7 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "host/input_error.h"
+#include "model/input_error.h"
 #include "physics/boussinesq.h"
 
 namespace inc {

@@ -8,7 +8,7 @@
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
 
-#include "host/input_error.h"
+#include "model/input_error.h"
 #include "physics/mls_weight.h"
 
 namespace inc {

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <ctime>
 
-#include "host/input_error.h"
+#include "model/input_error.h"
 
 namespace inc {
 

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <thread>
 
-#include "host/input_error.h"
+#include "model/input_error.h"
 
 namespace inc {
 

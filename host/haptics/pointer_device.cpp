@@ -3,7 +3,7 @@
 
 #include <cmath>
 
-#include "host/input_error.h"
+#include "model/input_error.h"
 
 namespace inc {
 

@@ -7,11 +7,11 @@
 #include <filesystem>
 #include <limits>
 
-#include "host/haptics/global_organ_mesh.h"
-#include "host/haptics/haptics_scene.h"
+#include "host/scene/global_organ_mesh.h"
+#include "host/scene/haptics_scene.h"
 #include "host/haptics/udp_device.h"
-#include "host/input_error.h"
-#include "host/scene_json.h"
+#include "model/input_error.h"
+#include "host/scene/scene_json.h"
 #if INCISION_HAVE_OPENHAPTICS
 #include "host/haptics/openhaptics_device.h"
 #endif

@@ -8,8 +8,8 @@
 #include "host/haptics/global_organ_model.h"
 #include "host/haptics/haptic_hand.h"
 #include "host/haptics/tip_contact.h"
-#include "host/scene.h"
-#include "host/simulation_model.h"
+#include "host/scene/scene.h"
+#include "host/sim/simulation_model.h"
 
 namespace inc {
 

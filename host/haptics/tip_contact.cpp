@@ -4,7 +4,7 @@
 #include <cmath>
 #include <vector>
 
-#include "host/input_error.h"
+#include "model/input_error.h"
 
 namespace inc {
 

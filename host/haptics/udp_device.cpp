@@ -10,7 +10,7 @@
 #include <cmath>
 #include <cstring>
 
-#include "host/input_error.h"
+#include "model/input_error.h"
 
 namespace inc {
 

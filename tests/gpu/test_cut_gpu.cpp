@@ -8,14 +8,15 @@
 #include <string>
 
 #include "cpu_fallback/neighbor_bruteforce.h"
-#include "host/cut_nodal_points.h"
-#include "host/dissection_simulation.h"
-#include "host/mls_solver.h"
-#include "host/scene_loader.h"
+#include "host/backends/solver_factory.h"
+#include "host/cut/cut_nodal_points.h"
+#include "host/sim/dissection_simulation.h"
+#include "model/mls_solver.h"
+#include "host/scene/scene_loader.h"
 #include "kernels/cut_cuda.h"
 #include "kernels/device_info.h"
-#include "tests/cut_fixtures.h"
-#include "tests/mls_test_scenes.h"
+#include "tests/support/cut_fixtures.h"
+#include "tests/support/mls_test_scenes.h"
 
 using namespace inc;
 

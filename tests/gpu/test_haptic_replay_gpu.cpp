@@ -5,7 +5,7 @@
 #include <cstring>
 
 #include "kernels/device_info.h"
-#include "tests/haptic_replay_fixture.h"
+#include "tests/support/haptic_replay_fixture.h"
 
 using namespace inc;
 using namespace inc::hapticreplay;

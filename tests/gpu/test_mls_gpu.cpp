@@ -6,10 +6,11 @@
 #include <cmath>
 #include <limits>
 
-#include "host/mls_simulation.h"
-#include "host/mls_solver.h"
+#include "host/sim/mls_simulation.h"
+#include "host/backends/solver_factory.h"
+#include "model/mls_solver.h"
 #include "kernels/device_info.h"
-#include "tests/mls_test_scenes.h"
+#include "tests/support/mls_test_scenes.h"
 
 using namespace inc;
 using namespace inc::mls_test;

@@ -9,12 +9,12 @@
 
 #include "cpu_fallback/neighbor_bruteforce.h"
 #include "cpu_fallback/neighbor_search_cpu.h"
-#include "host/input_error.h"
-#include "host/neighbor_search.h"
+#include "model/input_error.h"
+#include "host/backends/neighbor_search.h"
 #include "kernels/device_buffer.h"
 #include "kernels/device_info.h"
 #include "kernels/neighbor_search_cuda.h"
-#include "tests/neighbor_clouds.h"
+#include "tests/support/neighbor_clouds.h"
 
 using namespace inc;
 using namespace inc::testing_neighbors;

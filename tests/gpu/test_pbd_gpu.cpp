@@ -6,7 +6,7 @@
 #include <cmath>
 #include <functional>
 
-#include "../pbd_fixtures.h"
+#include "tests/support/pbd_fixtures.h"
 #include "cpu_fallback/pbd_solver_cpu.h"
 #include "kernels/device_info.h"
 #include "kernels/pbd_solver_cuda.h"
@@ -359,8 +359,8 @@ TEST(PbdGpu, SkippedWithoutCuda) { GTEST_SKIP() << "built without CUDA"; }
 #endif
 
 #if INCISION_HAVE_CUDA
-#include "host/metaball_simulation.h"
-#include "host/scene_loader.h"
+#include "host/sim/metaball_simulation.h"
+#include "host/scene/scene_loader.h"
 #include "test_paths.h"
 
 // The shipped grasp scene on the CUDA backend: 100 frames, finite, grasped, and within 1 mm of the CPU run

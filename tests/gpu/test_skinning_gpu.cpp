@@ -6,9 +6,9 @@
 #include <vector>
 
 #include "cpu_fallback/skinning_cpu.h"
-#include "host/metaball_packing.h"
-#include "host/organ_shapes.h"
-#include "host/skin_binding.h"
+#include "host/assembly/metaball_packing.h"
+#include "host/assembly/organ_shapes.h"
+#include "host/assembly/skin_binding.h"
 #include "kernels/device_buffer.h"
 #include "kernels/device_info.h"
 #include "kernels/skinning_cuda.h"

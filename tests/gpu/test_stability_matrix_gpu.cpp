@@ -1,9 +1,9 @@
-// The stability matrix on the CUDA backend: the same cases as tests/test_stability_matrix.cpp (skip without a GPU).
+// The stability matrix on the CUDA backend: the same cases as tests/sim/test_stability_matrix.cpp (skip without a GPU).
 #include <gtest/gtest.h>
 
 #if INCISION_HAVE_CUDA
 #include "kernels/device_info.h"
-#include "tests/stability_matrix.h"
+#include "tests/support/stability_matrix.h"
 
 using namespace inc;
 using namespace inc::stability;

@@ -6,8 +6,8 @@
 #include <random>
 
 #include "cpu_fallback/tearing_cpu.h"
-#include "host/tearing_driver.h"
-#include "host/tearing_sheet.h"
+#include "host/tear/tearing_driver.h"
+#include "model/tearing_sheet.h"
 #include "kernels/device_info.h"
 #include "kernels/tearing_cuda.h"
 
@@ -38,9 +38,9 @@ void expectSameStep(TearCriterion crit, double pos_tol) {
     p.criterion = crit;
     p.break_strain = T(0.12);
     p.seed = 7 + trial;
-    cpu::TearCandidates<T> ca, cb;
-    const cpu::TearStepStats sa = cpu::tearStepCpu(a, p, &ca);
-    const cpu::TearStepStats sb = cuda::tearStepCuda(b, p, &cb);
+    TearCandidates<T> ca, cb;
+    const TearStepStats sa = cpu::tearStepCpu(a, p, &ca);
+    const TearStepStats sb = cuda::tearStepCuda(b, p, &cb);
     b.rebuildTopology();
     EXPECT_GT(sa.splits, 50);
     EXPECT_EQ(sa.splits, sb.splits);

@@ -9,9 +9,10 @@
 #include <tuple>
 
 #include "cpu_fallback/tearing_cpu.h"
-#include "host/tearing_driver.h"
-#include "host/tearing_sheet.h"
-#include "host/tearing_simulation.h"
+#include "host/backends/solver_factory.h"
+#include "host/tear/tearing_driver.h"
+#include "model/tearing_sheet.h"
+#include "host/sim/tearing_simulation.h"
 #include "kernels/cuda_check.h"
 #include "kernels/device_info.h"
 #include "kernels/pbd_device_cuda.h"
@@ -376,7 +377,7 @@ TEST(TearingPatchGpu, ResidentStepsMatchCpuStepsForTheSameSeed) {
       st.rotations.assign(a.size(), pbd::Quat<double>{});
       pbd->setState(st);  // the device sheet's positions are the PBD backend's
       const std::uint32_t counter = a.step;
-      const cpu::TearStepStats sc = cpu::tearStepCpu(a, p);
+      const TearStepStats sc = cpu::tearStepCpu(a, p);
       TearFrameStats sg;
       const int made = tb->stepResident(p, counter, sg, step % 2 == 1);
       ASSERT_EQ(made, sc.splits) << "step " << step;

@@ -1,0 +1,167 @@
+// The `incision` command line: run, validate, devices (and the subcommands of later modules).
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+#include "model/backend.h"
+#include "host/app/cli/tradeoff_command.h"
+#include "host/app/cli/view_command.h"
+#include "host/scene/embedded_scenes.h"
+#include "host/scene/haptics_scene.h"
+#include "model/input_error.h"
+#include "host/app/runner.h"
+#include "host/scene/scene_loader.h"
+#include "kernels/device_info.h"
+
+namespace {
+
+// A scene argument is a file path, or the name of an embedded scene, or empty for the default.
+inc::Scene resolveScene(const std::string& arg) {
+  if (arg.empty()) {
+    const auto& d = inc::defaultEmbeddedScene();
+    return inc::parseScene(d.json, std::string("<embedded:") + d.name + ">", ".");
+  }
+  if (!std::filesystem::exists(arg)) {
+    if (const auto* e = inc::findEmbeddedScene(arg))
+      return inc::parseScene(e->json, std::string("<embedded:") + e->name + ">", ".");
+  }
+  return inc::loadSceneFile(arg);
+}
+
+int cmdDevices() {
+  const auto d = inc::cuda::queryDevices();
+  std::printf("CUDA backend compiled: %s\n", d.compiled ? "yes" : "no");
+  if (d.device_count == 0) {
+    std::printf("usable GPU: none (%s)\n", d.error.c_str());
+  } else {
+    std::printf("usable GPUs: %d; device 0: %s, sm_%d%d, %d SMs, %.1f GiB, peak %.0f GB/s\n", d.device_count,
+                d.name.c_str(), d.sm_major, d.sm_minor, d.multiprocessors, double(d.global_memory_bytes) / (1 << 30),
+                d.peak_bandwidth_gbs);
+  }
+  // Haptic device drivers (scene key haptics.device; docs/haptics.md).
+  std::printf("haptic devices: scripted, udp (127.0.0.1), pointer (the viewer's mouse)%s\n",
+              inc::openHapticsBuilt() ? ", openhaptics" : "");
+  std::printf("OpenHaptics driver: %s\n", inc::openHapticsBuilt()
+                                               ? "built (Phantom / Geomagic Touch through the HD API; untested here)"
+                                               : "not built (CMake did not find the OpenHaptics SDK: HD/hd.h and libHD)");
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Incision: GPU-first soft-tissue simulation for surgical training"};
+  app.require_subcommand(1);
+
+  std::string scene_arg, backend = "", precision = "", out_dir = "out";
+  long steps = -1;
+  double seconds = -1.0;
+  bool quiet = false;
+  auto* run = app.add_subcommand("run", "Run a scene headless and write its outputs");
+  run->add_option("scene", scene_arg, "Scene file (JSON) or embedded scene name; default: the embedded default");
+  auto* o_steps = run->add_option("--steps", steps, "Number of frames to run");
+  run->add_option("--seconds", seconds, "Simulated seconds to run")->excludes(o_steps);
+  run->add_option("--backend", backend, "auto | cuda | cpu (overrides the scene)");
+  run->add_option("--precision", precision, "float32 | float64 (overrides the scene)");
+  run->add_option("--out", out_dir, "Output folder (PLY/OBJ/VTK, metrics.csv, summary.txt)");
+  run->add_flag("--quiet", quiet, "No progress output");
+
+  std::string view_arg, view_backend, screenshot, view_camera;
+  int view_frames = 0;
+  bool view_splats = false;
+  auto* view = app.add_subcommand("view", "Show a scene in the interactive viewer (GLFW + Dear ImGui)");
+  view->add_option("scene", view_arg, "Scene file (JSON) or embedded scene name; default: the embedded default");
+  view->add_option("--backend", view_backend, "auto | cuda | cpu (overrides the scene)");
+  view->add_option("--frames", view_frames, "Scripted run: draw N frames, then exit")->check(CLI::NonNegativeNumber);
+  view->add_option("--screenshot", screenshot, "PNG written after the last scripted frame");
+  view->add_flag("--splats", view_splats, "Start with point splats instead of the shaded surface");
+  view->add_option("--camera", view_camera,
+                   "First view: YAW,PITCH[,DISTANCE] (degrees about the up axis, degrees above the horizontal, metres "
+                   "from the framed centre; default: the framing's)");
+
+  std::string validate_arg;
+  auto* validate = app.add_subcommand("validate", "Load and check a scene file; print what it switches on");
+  validate->add_option("scene", validate_arg, "Scene file (JSON)")->required();
+
+  auto* scenes = app.add_subcommand("scenes", "List the embedded scenes");
+  auto* devices = app.add_subcommand("devices", "Report the CUDA devices and haptic device drivers this build can use");
+
+  std::string tradeoff_arg, tradeoff_budgets = "1,16", tradeoff_out = "tradeoff", tradeoff_backend, tradeoff_models,
+      tradeoff_cost = "wall";
+  bool tradeoff_quick = false;
+  auto* tradeoff = app.add_subcommand("tradeoff", "Sweep the scene's model knobs: ms per frame vs error (CSV, table, plot)");
+  tradeoff->add_option("scene", tradeoff_arg,
+                       "Scene file (JSON) or embedded scene name; default: the embedded beam (analytic reference)");
+  tradeoff->add_option("--budget-ms", tradeoff_budgets, "Comma list of frame budgets in ms for the Pareto tables");
+  tradeoff->add_option("--out", tradeoff_out, "Output folder (tradeoff.csv, tradeoff.md, tradeoff.png)");
+  tradeoff->add_option("--backend", tradeoff_backend, "auto | cuda | cpu (default cpu)");
+  tradeoff->add_option("--models", tradeoff_models, "Comma list (mls,pbd,mfs) swept instead of the scene's models");
+  tradeoff->add_flag("--quick", tradeoff_quick, "Few settings, short runs (checks it runs)");
+  tradeoff->add_option("--cost", tradeoff_cost, "wall | cpu: the time the Pareto tables use (cpu: process CPU time)");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : inc::kExitBadInput;
+  }
+
+  try {
+    if (*devices) return cmdDevices();
+    if (*scenes) {
+      for (const auto& e : inc::embeddedScenes())
+        std::printf("%-16s %s%s\n", e.name, e.summary,
+                    std::string(e.name) == inc::defaultEmbeddedScene().name ? " (default)" : "");
+      return 0;
+    }
+    if (*validate) {
+      const inc::Scene s = inc::loadSceneFile(validate_arg);
+      std::printf("%s: ok (%s)\n", validate_arg.c_str(), s.name.c_str());
+      return 0;
+    }
+    if (*view) {
+      inc::cli::ViewCommandOptions vo;
+      if (!view_backend.empty()) vo.backend = inc::parseBackend(view_backend);
+      vo.frames = view_frames;
+      vo.screenshot = screenshot;
+      vo.splats = view_splats;
+      if (!view_camera.empty()) vo.camera = inc::parseCameraAngles(view_camera);
+      return inc::cli::runViewCommand(resolveScene(view_arg), vo);
+    }
+    if (*tradeoff) {
+      inc::cli::TradeoffCommandOptions to;
+      to.sweep.budgets_ms = inc::parseBudgets(tradeoff_budgets);
+      to.sweep.quick = tradeoff_quick;
+      if (!tradeoff_backend.empty()) to.sweep.backend = inc::parseBackend(tradeoff_backend);
+      to.out_dir = tradeoff_out;
+      to.models = tradeoff_models;
+      to.cost = tradeoff_cost;
+      return inc::cli::runTradeoffCommand(resolveScene(tradeoff_arg.empty() ? "beam" : tradeoff_arg), to);
+    }
+    if (*run) {
+      const inc::Scene scene = resolveScene(scene_arg);
+      inc::RunOptions opt;
+      opt.frames = steps;
+      opt.seconds = seconds;
+      opt.out_dir = out_dir;
+      opt.quiet = quiet;
+      if (!backend.empty()) opt.backend = inc::parseBackend(backend);
+      if (!precision.empty()) {
+        if (precision == "float32") opt.precision = inc::Precision::Float32;
+        else if (precision == "float64") opt.precision = inc::Precision::Float64;
+        else throw inc::InputError("", "--precision", "unknown precision '" + precision + "' (float32 or float64)");
+      }
+      const inc::RunSummary sum = inc::runScene(scene, opt);
+      std::printf("incision: %s: %s\n", scene.name.c_str(), sum.line().c_str());
+      std::printf("incision: outputs in %s\n", out_dir.c_str());
+      return sum.failed ? inc::kExitSimulationFailed : 0;
+    }
+  } catch (const inc::InputError& e) {
+    std::fprintf(stderr, "incision: error: %s\n", e.what());
+    return inc::kExitBadInput;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "incision: internal error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

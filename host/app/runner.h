@@ -1,0 +1,53 @@
+// The headless runner: runs a scene frame by frame with the numerical guard, metrics and outputs.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "host/sim/model_factory.h"
+#include "host/haptics/haptic_loop.h"
+#include "host/scene/scene.h"
+#include "host/sim/simulation_model.h"
+
+namespace inc {
+
+struct RunOptions {
+  long frames = -1;                      // --steps N: frames of scene.solver.frame_dt (default: duration)
+  double seconds = -1.0;                 // --seconds T: simulated seconds
+  std::optional<BackendKind> backend;    // --backend overrides the scene
+  std::optional<Precision> precision;    // --precision overrides the scene
+  std::string out_dir = "out";
+  bool quiet = false;
+  bool retry_once = true;                // guard: roll back and retry a failed frame once with half the step
+};
+
+struct RunSummary {
+  long frames_requested = 0;
+  long frames_done = 0;
+  double simulated_s = 0.0;
+  double wall_s = 0.0;
+  long total_substeps = 0;
+  int retries = 0;
+  bool failed = false;
+  std::string failure;        // which frame, stage, particle, why
+  std::string backend_note;
+  std::string model_names;
+  double max_displacement = 0.0;
+  double final_total_energy = 0.0;
+  MemoryReport memory;
+  std::string haptic;         // a models.haptics scene: each haptic loop's statistics (SceneHaptics::summary)
+  std::vector<PeriodStats> haptic_stats;  // ... and its period statistics, one per device (empty: no haptic loop)
+  std::string line() const;  // the one-line summary printed at the end
+};
+
+// Creates the models the scene switches on (createSceneModels, host/sim/model_factory.h) or a test's own.
+using ModelFactory = std::function<std::vector<std::unique_ptr<SimulationModel>>(const Scene&, BackendKind)>;
+
+// Runs the scene. Throws InputError for bad options; a numerical failure is returned in the summary
+// (failed == true) after the last good state has been written to out_dir.
+RunSummary runScene(const Scene& scene, const RunOptions& opt, const ModelFactory& factory = createSceneModels);
+
+}  // namespace inc

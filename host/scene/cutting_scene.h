@@ -1,0 +1,27 @@
+// Scene keys of the haptic cutting force model (material.cutting): reading, validation and writing.
+#pragma once
+
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "host/scene/scene_json.h"
+#include "physics/cutting_force.h"
+
+namespace inc {
+
+// Reads material.cutting (docs/scene-format.md): press_threshold_n (F_p, >= 0), static_friction_n (F_s, > 0),
+// dynamic_friction_n (F_d, > 0 and < F_s), friction_n_per_m (>= 0); absent keys keep the defaults of
+// CutThresholds. Throws InputError(file, "material.cutting.<key>", reason) for a non-number, NaN, a
+// negative value or F_d >= F_s.
+CutThresholds<double> readCutThresholds(const scene_json::ObjectReader& cutting);
+
+// The same keys for sceneToJson (reads back to the same values).
+nlohmann::ordered_json cutThresholdsJson(const CutThresholds<double>& th);
+
+// Throws InputError(file, key + ".<scene key>", reason) unless F_p >= 0, F_s > 0, F_d > 0, friction slope >= 0,
+// all finite, and F_d < F_s (scene keys: press_threshold_n, static_friction_n, dynamic_friction_n,
+// friction_n_per_m; docs/scene-format.md).
+void validateCutThresholds(const CutThresholds<double>& th, const std::string& file, const std::string& key);
+
+}  // namespace inc

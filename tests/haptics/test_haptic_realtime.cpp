@@ -1,0 +1,107 @@
+// Tests of the real-time haptic cutting session: the loop thread decides (eqs. 15-16), the simulation thread cuts.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <thread>
+
+#include "host/haptics/haptic_cut_realtime.h"
+#include "host/haptics/tip_contact.h"
+#include "model/input_error.h"
+#include "host/sim/metaball_simulation.h"
+#include "tests/support/haptic_replay_fixture.h"
+
+namespace inc {
+namespace {
+
+using namespace hapticreplay;
+
+// A scalpel stroke from outside the -x end of the block (the contact model's tissue plane is the top face's
+// plane, so the blade presses in there), drawn along +x through the block and past its far end, halted, lifted.
+Trajectory throughStroke() {
+  Trajectory tr;
+  auto add = [&](double t, double x, double z) {
+    DeviceSample s;
+    s.t_s = t;
+    s.position_m = {x, 0.002, z};
+    tr.samples.push_back(s);
+  };
+  const double top = 0.015;
+  add(0.0, -0.036, top + 0.003);
+  add(0.1, -0.036, top - 0.004);
+  add(0.5, 0.045, top - 0.004);
+  add(0.6, 0.045, top - 0.004);
+  add(0.7, 0.045, top + 0.003);
+  return tr;
+}
+
+double counter(const FrameReport& r, const char* name) {
+  const auto it = r.counters.find(name);
+  return it == r.counters.end() ? -1.0 : it->second;
+}
+
+// The loop runs on its own thread (real clock) while the test thread steps the dissection model at its frame
+// rate: the cutting tool decides start (|f_t| > F_s once the drag builds up) and stop (|f_t| < F_d when the blade
+// halts), applyDecisions hands them to the cutting pipeline between frames, and the block ends in two pieces (the
+// stroke spans the whole section). Topology, not timing: which frame sees a decision depends on the machine.
+TEST(HapticRealtime, ThreadedCuttingSessionCutsTheBlockInTwo) {
+  const Scene scene = blockScene();
+  auto sim = makeDissectionSimulation(scene, BackendKind::Cpu, Precision::Float32);
+  const TipStiffness tip = mfsTipStiffness(MfsMaterial{scene.material.youngs_modulus, scene.material.poisson_ratio},
+                                           0.008, 0.002, Vec3d{0, 0, 1});
+  CuttingTool tool(tipElastic(tip), scene.material.cutting,
+                   Vec3d{0, 0, 0.015}, Vec3d{0, 0, 1});
+  ScriptedDevice device(throughStroke(), ScriptedDevice::Mode::kByTime, 3.3);
+  RealtimeCutConfig cfg;
+  cfg.blade_length_m = 0.08;  // vertical blade through the whole block height
+  cfg.loop.record_capacity = 20000;
+  RealtimeHapticCutSession session(device, tool, cfg);
+  const std::size_t spheres0 = sim->particleCount();
+  FrameReport first = sim->advance(0.02);
+  ASSERT_EQ(counter(first, "sphere_components"), 1.0);
+
+  const double frame_dt = 0.02;
+  session.start();
+  const auto t0 = std::chrono::steady_clock::now();
+  FrameReport last;
+  int frames = 0;
+  // Until the stroke is over (0.7 s) and its decisions are applied; 20 s of wall time at most (a loaded machine).
+  for (;;) {
+    last = session.runFrame(*sim, frame_dt);
+    ++frames;
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if ((wall > 0.8 && session.cutsApplied() >= 1) || wall > 20.0) break;
+    std::this_thread::sleep_until(t0 + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                           std::chrono::duration<double>(frames * frame_dt)));
+  }
+  session.stop();
+  last = sim->advance(frame_dt);  // the counters after the cut
+  EXPECT_TRUE(session.messages().empty()) << session.messages().front();
+  EXPECT_EQ(session.decisions(), 2);  // one start, one stop
+  EXPECT_EQ(session.cutsApplied(), 1);
+  EXPECT_EQ(counter(last, "cuts_applied"), 1.0);
+  EXPECT_EQ(counter(last, "sphere_components"), 2.0);   // the link graph: two pieces
+  EXPECT_EQ(counter(last, "surface_components"), 2.0);  // the surface: split and capped on both sides
+  EXPECT_NE(sim->particleCount(), spheres0);            // cut spheres re-packed on each side
+  EXPECT_GT(session.loop().records().size(), 100u);
+  EXPECT_EQ(tool.droppedEvents(), 0u);
+  std::printf("threaded session: %d frames, %zu ticks, spheres %zu -> %zu, %s\n", frames,
+              session.loop().records().size(), spheres0, sim->particleCount(), session.loop().scheduling().message.c_str());
+}
+
+// A model without a cutting pipeline cannot take the decisions.
+TEST(HapticRealtime, DecisionsNeedAModelThatCuts) {
+  Scene scene = blockScene();
+  scene.models.cutting = false;
+  auto sim = makeMetaballSimulation(scene, BackendKind::Cpu, Precision::Float32);
+  CuttingTool tool([](const TipContact&) { return ForceResult{}; }, scene.material.cutting, Vec3d{0, 0, 0.015},
+                   Vec3d{0, 0, 1});
+  ScriptedDevice device(throughStroke(), ScriptedDevice::Mode::kByTime, 3.3);
+  RealtimeHapticCutSession session(device, tool, RealtimeCutConfig{});
+  EXPECT_THROW(session.applyDecisions(*sim), InputError);
+  RealtimeCutConfig bad;
+  bad.blade_length_m = 0.0;
+  EXPECT_THROW(RealtimeHapticCutSession(device, tool, bad), InputError);
+}
+
+}  // namespace
+}  // namespace inc

@@ -1,0 +1,60 @@
+// Test fixture: the dissection tests' block, a 6 x 4 x 3 cm box of 1 cm metaballs cut straight through by a scalpel.
+#pragma once
+
+#include "host/scene/scene.h"
+#include "host/sim/simulation_model.h"
+
+namespace inc::cuttest {
+
+// No gravity, nothing fixed, E = 20 kPa with damping 20 / s, 2 PBD substeps of 5 iterations, 3 lattice cells per
+// converted sphere, 2 exchanges per frame. A vertical 8 cm blade sweeps the plane y = 2 mm from x = -5 cm at 0.05 s
+// to x = +5 cm at `leave_s` (it leaves the tissue then).
+inline Scene cutBlockScene(double leave_s) {
+  Scene s;
+  s.file = "<test:cut_block>";
+  s.geometry.kind = GeometrySpec::Kind::Box;
+  s.geometry.size = Vec3d(0.06, 0.04, 0.03);
+  s.geometry.spacing = 0.01;
+  s.material.youngs_modulus = 2.0e4;
+  s.material.damping = 20.0;
+  s.models.pbd_metaballs = true;
+  s.models.cutting = true;
+  s.solver.gravity = Vec3d(0, 0, 0);
+  s.solver.substeps = 2;
+  s.pbd.iterations = 5;
+  s.cutting.samples_per_diameter = 3;
+  s.cutting.exchanges_per_frame = 2;
+  ToolSpec t;
+  t.name = "scalpel";
+  t.kind = "scalpel";
+  t.length = 0.08;
+  t.path = {{0.05, Vec3d(-0.05, 0.002, 0.0), Vec3d(0, 0, 1)}, {leave_s, Vec3d(0.05, 0.002, 0.0), Vec3d(0, 0, 1)}};
+  s.tools = {t};
+  return s;
+}
+
+// The same block named `file` (for error messages), falling under gravity or, without it, at rest.
+inline Scene cutBlockScene(double leave_s, bool gravity, const char* file) {
+  Scene s = cutBlockScene(leave_s);
+  s.file = file;
+  if (gravity) s.solver.gravity = Vec3d(0, 0, -9.81);
+  return s;
+}
+
+// The block for a mouse scalpel: the scripted one moved past any test's frames (100 s on).
+inline Scene mouseCutBlockScene(bool gravity, const char* file) {
+  Scene s = cutBlockScene(0.15, gravity, file);
+  s.tools[0].path = {{100.0, Vec3d(-0.05, 0.002, 0.0), Vec3d(0, 0, 1)}, {101.0, Vec3d(0.05, 0.002, 0.0), Vec3d(0, 0, 1)}};
+  return s;
+}
+
+// A mouse scalpel event (the phase and tip are the caller's): a vertical 8 cm blade, as the scripted one.
+inline ToolEvent mouseScalpel() {
+  ToolEvent e;
+  e.kind = ToolKind::Cut;
+  e.axis = Vec3d(0, 0, -1);
+  e.blade_length_m = 0.08;
+  return e;
+}
+
+}  // namespace inc::cuttest
