@@ -62,6 +62,7 @@ struct FramePathFacts {
   int grid_resident_blocks = 0;   // planGrid: the grid frame's resident blocks (0: no cooperative launch)
 };
 
+// The first of the four paths (the list at the top of this file) whose conditions hold.
 template <typename T>
 FramePath chooseFramePath(const PbdStepParams<T>& p, const FramePathFacts& f) {
   const bool jacobi = p.solver == PbdSolverKind::Jacobi;
