@@ -18,40 +18,7 @@ namespace inc::cuda {
 // and a barrier in hardware (barrier.cluster), and its CTAs read and write each other's shared memory
 // (distributed shared memory), so positions never leave the SMs during the frame. Measured (docs/pbd.md) it
 // wins up to ~250 spheres; above, the per-iteration latency of its phases costs more than the launches save.
-//
-// Layout: CTA r projects the constraints [c_split[b][r], c_split[b][r+1]) of block b (their slots are the
-// contiguous range [s_split[b][r], s_split[b][r+1])) and writes their slot corrections into its own shared
-// memory; it owns the particles [r * chunk, (r + 1) * chunk) and gathers their corrections from the CTAs that
-// computed them (remote shared-memory reads), then writes the new positions into every CTA's replica. The
-// physics calls, their arguments and the gather's summation order are those of the per-launch path, so the
-// two paths compute the same numbers.
-constexpr int kMaxClusterCtas = 16;
-constexpr int kClusterThreads = 1024;
-
-struct ClusterSplit {
-  int ctas = 1;
-  int chunk = 0;      // particles per CTA (the last may own fewer)
-  int max_share = 0;  // most slots any CTA projects in any block (its slot buffer)
-  int c_split[kMaxFusedBlocks][kMaxClusterCtas + 1] = {};
-  int s_split[kMaxFusedBlocks][kMaxClusterCtas + 1] = {};
-  // Per block, in the order of particle_slots: where that slot's correction lives, packed as
-  // (CTA << 24) | index in that CTA's slot buffer (planned on the host: no search in the gather).
-  const std::int32_t* slot_home[kMaxFusedBlocks] = {};
-  long long* profile = nullptr;  // diagnostics: SM cycles per phase kind, per CTA (kClusterProfileSlots each)
-};
-
-// Phase kinds of the cycle profile: 0 substep start (predict, kinematic, broadcast, barrier); then per block b
-// 1 + 4b: projection, 2 + 4b: barrier after it, 3 + 4b: gather (+ attachments and contacts after the last
-// block) and broadcast, 4 + 4b: barrier after it.
-constexpr int kClusterProfileSlots = 1 + 4 * kMaxFusedBlocks;
-
-// Dynamic shared memory per CTA: rotations, positions, inverse masses, masses, radii of every particle and the
-// CTA's slot buffer.
-template <typename T>
-inline std::size_t clusterStageBytes(int n, int max_share) {
-  return std::size_t(n) * (sizeof(pbd::Quat<T>) + sizeof(Vec3<T>) + 3 * sizeof(T)) +
-         std::size_t(max_share) * sizeof(Vec3<T>);
-}
+// The work's layout over the CTAs: ClusterSplit (kernels/pbd_frame_data.cuh).
 
 // Launch configuration of a cluster of `ctas` CTAs (the grid is one cluster), for the occupancy query and the
 // launch alike.
