@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "host/pbd_model.h"
+#include "model/pbd_model.h"
 #include "kernels/bulk_upload.h"
 #include "kernels/cuda_check.h"
 #include "kernels/device_buffer.h"

@@ -28,7 +28,7 @@
 
 #include <algorithm>
 
-#include "host/pbd_model.h"
+#include "model/pbd_model.h"
 #include "kernels/pbd_frame_data.cuh"
 
 namespace inc::cuda {
