@@ -665,9 +665,11 @@ void GridNeighborSearch<T>::query(const std::vector<Vec3<T>>& queries, T radius,
   run(queries.data(), queries.size(), std::vector<T>{radius}, false, false, out);
 }
 
+namespace {
+
+// Radii: one, or one per query, each finite and >= 0; queries other than the built points finite.
 template <typename T>
-void GridNeighborSearch<T>::run(const Vec3<T>* queries, std::size_t nq, const std::vector<T>& radii, bool self,
-                                bool storage, NeighborLists& out) const {
+void checkQueries(const Vec3<T>* queries, std::size_t nq, const std::vector<T>& radii, bool self) {
   if (radii.size() != 1 && radii.size() != nq)
     throw InputError("", "radii", "expected 1 radius or one per query (" + std::to_string(nq) + "), got " +
                                       std::to_string(radii.size()));
@@ -681,6 +683,88 @@ void GridNeighborSearch<T>::run(const Vec3<T>* queries, std::size_t nq, const st
     for (std::size_t i = 0; i < nq; ++i)
       if (!neighborPointFinite(queries[i]))
         throw InputError("", "queries[" + std::to_string(i) + "]", "position " + describe(queries[i]) + " is not finite");
+}
+
+// The queries split into `count` blocks (one per thread): block b is [begin(b), begin(b + 1)).
+struct QueryBlocks {
+  std::int64_t count;
+  std::size_t nq;
+  std::size_t begin(std::int64_t b) const { return std::size_t(b * std::int64_t(nq) / count); }
+};
+
+// Each block of queries appends its sorted rows to its own buffer and records their lengths. Returns false
+// where a block ran out of memory (its buffer is then dropped; exceptions must not leave the OpenMP region).
+template <typename T>
+bool queryAllBlocks(const QueryJob<T>& job, const QueryBlocks& qb, std::vector<detail::IndexBuffer>& buffers) {
+  std::vector<char> out_of_memory(std::size_t(qb.count), 0);
+  const bool avx2 = neighborScanUsesAvx2();
+  parallelFor(qb.count, [&](std::int64_t b) {
+    detail::IndexBuffer& buf = buffers[std::size_t(b)];
+    buf.size = 0;
+    try {
+#if INC_NEIGHBOR_AVX2
+      if (avx2) {
+        queryBlockAvx2(job, qb.begin(b), qb.begin(b + 1), buf);
+        return;
+      }
+#endif
+      queryBlockPortable(job, qb.begin(b), qb.begin(b + 1), buf);
+    } catch (const std::bad_alloc&) {
+      out_of_memory[std::size_t(b)] = 1;
+      buf = detail::IndexBuffer{};
+    }
+  });
+  (void)avx2;
+  return std::find(out_of_memory.begin(), out_of_memory.end(), 1) == out_of_memory.end();
+}
+
+// Block b holds rows [i0, i1) back to back: its offsets are a running sum from its base, its buffer one copy.
+void placeBlockRows(const QueryBlocks& qb, const std::vector<std::int64_t>& block_base,
+                    const std::vector<detail::IndexBuffer>& buffers, NeighborLists& out) {
+  std::int64_t* const offsets = out.offsets.data();
+  std::int32_t* const indices = out.indices.data();
+  parallelFor(qb.count, [&](std::int64_t b) {
+    std::int64_t at = block_base[std::size_t(b)];
+    for (std::size_t i = qb.begin(b); i < qb.begin(b + 1); ++i) offsets[i + 1] = at += offsets[i + 1];
+    const detail::IndexBuffer& buf = buffers[std::size_t(b)];
+    if (buf.size) std::memcpy(indices + block_base[std::size_t(b)], buf.data.get(), buf.size * sizeof(std::int32_t));
+  });
+}
+
+// Original-order rows (row q = perm[i] for query i): a prefix sum over q (chunk sums, then each chunk's running
+// sum from its base), then each block copies its rows to their places.
+void placeScatteredRows(const QueryBlocks& qb, const std::vector<std::int32_t>& perm,
+                        const std::vector<detail::IndexBuffer>& buffers, NeighborLists& out) {
+  std::int64_t* const offsets = out.offsets.data();
+  std::int32_t* const indices = out.indices.data();
+  std::vector<std::int64_t> chunk_base(std::size_t(qb.count) + 1, 0);
+  parallelFor(qb.count, [&](std::int64_t b) {
+    std::int64_t sum = 0;
+    for (std::size_t q = qb.begin(b); q < qb.begin(b + 1); ++q) sum += offsets[q + 1];
+    chunk_base[std::size_t(b) + 1] = sum;
+  });
+  for (std::int64_t b = 0; b < qb.count; ++b) chunk_base[std::size_t(b) + 1] += chunk_base[std::size_t(b)];
+  parallelFor(qb.count, [&](std::int64_t b) {
+    std::int64_t at = chunk_base[std::size_t(b)];
+    for (std::size_t q = qb.begin(b); q < qb.begin(b + 1); ++q) offsets[q + 1] = at += offsets[q + 1];
+  });
+  parallelFor(qb.count, [&](std::int64_t b) {
+    const std::int32_t* src = buffers[std::size_t(b)].data.get();
+    for (std::size_t i = qb.begin(b); i < qb.begin(b + 1); ++i) {
+      const std::size_t q = std::size_t(perm[i]);
+      const std::size_t k = std::size_t(offsets[q + 1] - offsets[q]);
+      std::memcpy(indices + offsets[q], src, k * sizeof(std::int32_t));
+      src += k;
+    }
+  });
+}
+
+}  // namespace
+
+template <typename T>
+void GridNeighborSearch<T>::run(const Vec3<T>* queries, std::size_t nq, const std::vector<T>& radii, bool self,
+                                bool storage, NeighborLists& out) const {
+  checkQueries(queries, nq, radii, self);
 
   // Every entry of offsets and indices is written below: resizing a reused `out` to the same sizes writes
   // nothing, and nothing is zeroed twice.
@@ -707,38 +791,18 @@ void GridNeighborSearch<T>::run(const Vec3<T>* queries, std::size_t nq, const st
   // One pass: each block of queries (one per thread, in storage order for self-queries, for locality) appends
   // its sorted rows to its own buffer and records their lengths; a prefix sum places the buffers. The GPU
   // counts first instead, because it cannot grow buffers; the lists are the same.
-  const std::int64_t blocks = std::max<std::int64_t>(1, std::min<std::int64_t>(std::int64_t(nq), threadCount()));
-  auto blockBegin = [&](std::int64_t b) { return std::size_t(b * std::int64_t(nq) / blocks); };
+  const QueryBlocks qb{std::max<std::int64_t>(1, std::min<std::int64_t>(std::int64_t(nq), threadCount())), nq};
   std::unique_lock<std::mutex> lock(scratch_.mutex, std::try_to_lock);
   std::vector<detail::IndexBuffer> own;
   std::vector<detail::IndexBuffer>& buffers = lock.owns_lock() ? scratch_.blocks : own;
-  if (buffers.size() < std::size_t(blocks)) buffers.resize(std::size_t(blocks));
-  std::vector<char> out_of_memory(std::size_t(blocks), 0);  // exceptions must not leave the OpenMP region
-  const bool avx2 = neighborScanUsesAvx2();
-  parallelFor(blocks, [&](std::int64_t b) {
-    detail::IndexBuffer& buf = buffers[std::size_t(b)];
-    buf.size = 0;
-    try {
-#if INC_NEIGHBOR_AVX2
-      if (avx2) {
-        queryBlockAvx2(job, blockBegin(b), blockBegin(b + 1), buf);
-        return;
-      }
-#endif
-      queryBlockPortable(job, blockBegin(b), blockBegin(b + 1), buf);
-    } catch (const std::bad_alloc&) {
-      out_of_memory[std::size_t(b)] = 1;
-      buf = detail::IndexBuffer{};
-    }
-  });
-  (void)avx2;
-  bool failed = std::find(out_of_memory.begin(), out_of_memory.end(), 1) != out_of_memory.end();
-  std::vector<std::int64_t> block_base(std::size_t(blocks) + 1, 0);
-  for (std::int64_t b = 0; b < blocks; ++b)
+  if (buffers.size() < std::size_t(qb.count)) buffers.resize(std::size_t(qb.count));
+  bool failed = !queryAllBlocks(job, qb, buffers);
+  std::vector<std::int64_t> block_base(std::size_t(qb.count) + 1, 0);
+  for (std::int64_t b = 0; b < qb.count; ++b)
     block_base[std::size_t(b) + 1] = block_base[std::size_t(b)] + std::int64_t(buffers[std::size_t(b)].size);
   if (!failed) {
     try {
-      out.indices.resize(std::size_t(block_base[std::size_t(blocks)]));
+      out.indices.resize(std::size_t(block_base[std::size_t(qb.count)]));
     } catch (const std::bad_alloc&) {
       failed = true;
     }
@@ -748,40 +812,10 @@ void GridNeighborSearch<T>::run(const Vec3<T>* queries, std::size_t nq, const st
     throw InputError("", "radius", "the neighbour lists of " + std::to_string(nq) +
                                        " queries do not fit in memory; use a smaller radius");
   }
-  std::int64_t* const offsets = out.offsets.data();
-  std::int32_t* const indices = out.indices.data();
-  if (!scattered) {
-    // Block b holds rows [i0, i1) back to back: its offsets are a running sum from its base, its buffer one copy.
-    parallelFor(blocks, [&](std::int64_t b) {
-      std::int64_t at = block_base[std::size_t(b)];
-      for (std::size_t i = blockBegin(b); i < blockBegin(b + 1); ++i) offsets[i + 1] = at += offsets[i + 1];
-      const detail::IndexBuffer& buf = buffers[std::size_t(b)];
-      if (buf.size) std::memcpy(indices + block_base[std::size_t(b)], buf.data.get(), buf.size * sizeof(std::int32_t));
-    });
-    return;
-  }
-  // Original-order rows: a prefix sum over q (chunk sums, then each chunk's running sum from its base), then
-  // each block copies its rows to their places.
-  std::vector<std::int64_t> chunk_base(std::size_t(blocks) + 1, 0);
-  parallelFor(blocks, [&](std::int64_t b) {
-    std::int64_t sum = 0;
-    for (std::size_t q = blockBegin(b); q < blockBegin(b + 1); ++q) sum += offsets[q + 1];
-    chunk_base[std::size_t(b) + 1] = sum;
-  });
-  for (std::int64_t b = 0; b < blocks; ++b) chunk_base[std::size_t(b) + 1] += chunk_base[std::size_t(b)];
-  parallelFor(blocks, [&](std::int64_t b) {
-    std::int64_t at = chunk_base[std::size_t(b)];
-    for (std::size_t q = blockBegin(b); q < blockBegin(b + 1); ++q) offsets[q + 1] = at += offsets[q + 1];
-  });
-  parallelFor(blocks, [&](std::int64_t b) {
-    const std::int32_t* src = buffers[std::size_t(b)].data.get();
-    for (std::size_t i = blockBegin(b); i < blockBegin(b + 1); ++i) {
-      const std::size_t q = std::size_t(perm_[i]);
-      const std::size_t k = std::size_t(offsets[q + 1] - offsets[q]);
-      std::memcpy(indices + offsets[q], src, k * sizeof(std::int32_t));
-      src += k;
-    }
-  });
+  if (scattered)
+    placeScatteredRows(qb, perm_, buffers, out);
+  else
+    placeBlockRows(qb, block_base, buffers, out);
 }
 
 void setNeighborScanPortable(bool portable_only) { g_scan_portable_only = portable_only; }

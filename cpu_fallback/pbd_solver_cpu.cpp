@@ -595,103 +595,29 @@ class PbdCpuBackend final : public PbdBackend<T> {
   void frame(const Team& t, const PbdStepParams<T>& p, const PbdFrameInput<T>& in, const pbd::SolveContext<T>& ctx,
              FrameTimes& tm) {
     const bool lead = t.lead();
-    const std::int64_t ni = std::int64_t(model_.size());
     const T dt = ctx.dt;
-    const T damp = std::exp(-p.damping * dt);
-    const T inv_dt = T(1) / dt;
-    Vec3<T>* x = state_.positions.data();
-    Vec3<T>* v = state_.velocities.data();
-    const T* r = state_.radii.data();
-    const std::vector<T>& inset = model_.contact_inset;  // empty: the balls meet the static colliders
-    const int nt = int(in.tools_from.size());
-    const std::int64_t na = std::int64_t(in.attach_ids.size());
     pbd::GoalCorrection<T>* goals = ctx.jacobi || goals_distinct_
                                         ? goal_scratch_.data() + std::size_t(t.id()) * std::max<std::size_t>(max_cluster_, 1)
                                         : nullptr;
     Clock::time_point t0;
 
-    const std::vector<Vec3<T>>& kin_from = in.kinematic_from_positions ? kinematic_from_ : in.kinematic_from;
-    const bool cheb = p.chebyshev_rho > T(0);
     T cheb_weight = T(1);  // every thread walks the same weights (pbd::chebyshevIteration)
     for (int s = 0; s < p.substeps; ++s) {
       const T t_start = T(s) / T(p.substeps), t_end = T(s + 1) / T(p.substeps);
       if (lead) t0 = Clock::now();
-      // Prediction; kinematic particles (w = 0: prediction only records x_prev) are then placed on their path.
-      for (std::int64_t i = t.begin(ni), i1 = t.end(ni); i < i1; ++i) {
-        pbd::predictParticle(x[i], v[i], x_prev_[i], w_[i], p.gravity, damp, dt);
-        const std::int32_t k = kinematic_of_[i];
-        if (k >= 0) x[i] = pbd::lerp(kin_from[k], in.kinematic_to[k], t_end);
-      }
-      for (auto& l : lambda_) {
-        const std::int64_t m = std::int64_t(l.size());
-        std::fill(l.begin() + t.begin(m), l.begin() + t.end(m), Vec3<T>());
-      }
-      std::fill(attach_lambda_.begin() + t.begin(na), attach_lambda_.begin() + t.end(na), Vec3<T>());
-      if (cheb) startChebyshev(t, ni);
+      predictSubstep(t, p, in, dt, t_end);
       t.barrier();
       if (lead) tm.predict += msSince(t0);
 
       for (int it = 0; it < p.iterations; ++it) {
         if (lead) t0 = Clock::now();
-        bool particle_phase = false;  // the last phase was per particle (the next per-particle one needs no barrier)
-        for (std::size_t bi = 0; bi < model_.blocks.size(); ++bi) {
-          const auto& b = model_.blocks[bi];
-          if (!b.solve) continue;
-          const pbd::BlockView<T>& view = views_[bi];
-          if (particle_phase) t.barrier();
-          if (ctx.jacobi) {
-            const std::int32_t nc = std::int32_t(b.count());
-            std::int32_t q0 = std::int32_t(t.begin(nc)), q1 = std::int32_t(t.end(nc));
-            if (t.size() == split_parts_ && t.id() < split_parts_) {
-              q0 = jacobi_split_[bi][std::size_t(t.id())];
-              q1 = jacobi_split_[bi][std::size_t(t.id()) + 1];
-            }
-            projectRange(view, nullptr, q0, q1, ctx, goals);
-            t.barrier();
-            for (std::int64_t i = t.begin(ni), i1 = t.end(ni); i < i1; ++i) x[i] += pbd::gatherCorrection(view, std::int32_t(i));
-            particle_phase = true;
-          } else {
-            const ConstraintColoring& col = b.coloring;
-            for (int k = 0; k < col.colorCount(); ++k) {
-              const std::int32_t c0 = col.color_offsets[k], c1 = col.color_offsets[k + 1];
-              std::int32_t q0 = c0 + std::int32_t(t.begin(c1 - c0)), q1 = c0 + std::int32_t(t.end(c1 - c0));
-              if (t.size() == split_parts_ && t.id() < split_parts_) {
-                const std::int32_t* sp = &color_split_[bi][std::size_t(k) * std::size_t(split_parts_ + 1) + std::size_t(t.id())];
-                q0 = c0 + sp[0];
-                q1 = c0 + sp[1];
-              }
-              projectRange(view, col.order.data(), q0, q1, ctx, goals);
-              t.barrier();
-            }
-            particle_phase = false;
-          }
-        }
-        if (na > 0) {
-          if (particle_phase) t.barrier();
-          for (std::int64_t k = t.begin(na), k1 = t.end(na); k < k1; ++k) {
-            const std::int32_t id = in.attach_ids[k];
-            pbd::projectAttachment(x[id], w_[id], pbd::lerp(in.attach_from[k], in.attach_to[k], t_end),
-                                   in.attach_compliance[k], p.xpbd, dt, attach_lambda_[k]);
-          }
-          t.barrier();
-        }
+        const bool particle_phase = projectBlocks(t, ctx, goals);
+        projectAttachments(t, p, in, dt, t_end, particle_phase);
         if (lead) {
           tm.constraints += msSince(t0);
           t0 = Clock::now();
         }
-        // Chebyshev: every projection of the iteration is done (the gather's or the attachments' barrier), so the
-        // multipliers are blended here, and each position before its contacts (as the CUDA contact kernels do).
-        const pbd::ChebyshevMode mode =
-            cheb ? pbd::chebyshevIteration(it, p.iterations, p.chebyshev_rho, cheb_weight) : pbd::ChebyshevMode::Off;
-        const bool on = mode != pbd::ChebyshevMode::Off;
-        if (on) blendMultipliers(t, na, cheb_weight, mode);
-        for (std::int64_t i = t.begin(ni), i1 = t.end(ni); i < i1; ++i)
-          x[i] = pbd::endIteration(x[i], w_[i] > T(0), on ? &cheb_.x1[i] : nullptr, on ? &cheb_.x2[i] : nullptr,
-                                   cheb_weight, mode, [&](const Vec3<T>& q) {
-                                     return pbd::resolveContacts(q, r[i], inset.empty() ? T(0) : inset[i], &x_prev_[i], model_.planes.data(), int(model_.planes.size()),
-                                                                 model_.boxes.data(), int(model_.boxes.size()),
-                                                                 in.tools_from.data(), in.tools_to.data(), nt, t_start, t_end);
-                                   });
+        finishIteration(t, p, in, it, t_start, t_end, cheb_weight);
         // The next iteration's projections read every particle.
         if (it + 1 < p.iterations) t.barrier();
         if (lead) tm.collisions += msSince(t0);
@@ -699,7 +625,7 @@ class PbdCpuBackend final : public PbdBackend<T> {
 
       // Velocities: the same particles as the contacts just resolved and the next prediction (no barrier).
       if (lead) t0 = Clock::now();
-      for (std::int64_t i = t.begin(ni), i1 = t.end(ni); i < i1; ++i) v[i] = (x[i] - x_prev_[i]) * inv_dt;
+      updateVelocities(t, T(1) / dt);
       if (lead) tm.velocities += msSince(t0);
     }
     t.barrier();
@@ -707,9 +633,7 @@ class PbdCpuBackend final : public PbdBackend<T> {
     // Rotations for skinning when the shape-matching block is only kept for them.
     if (model_.rotation_block >= 0 && !model_.blocks[model_.rotation_block].solve) {
       if (lead) t0 = Clock::now();
-      const pbd::BlockView<T>& view = views_[std::size_t(model_.rotation_block)];
-      for (std::int64_t c = t.begin(view.count), c1 = t.end(view.count); c < c1; ++c)
-        pbd::updateClusterRotation(view, int(c), ctx);
+      updateSkinningRotations(t, ctx);
       if (lead) tm.constraints += msSince(t0);
     }
 
@@ -717,8 +641,136 @@ class PbdCpuBackend final : public PbdBackend<T> {
     updateRadii(t, p, in);
     if (lead) tm.volume += msSince(t0);
 
-    // Residuals of the distance constraints (after the last substep, with its multipliers), summed in order by
-    // summarize().
+    distanceResiduals(t, p, dt);
+  }
+
+  // Substep start: prediction, kinematic (w = 0: prediction only records x_prev) particles then placed on their
+  // path; every multiplier back to zero; the Chebyshev iterate one back.
+  void predictSubstep(const Team& t, const PbdStepParams<T>& p, const PbdFrameInput<T>& in, T dt, T t_end) {
+    const std::int64_t ni = std::int64_t(model_.size());
+    const std::int64_t na = std::int64_t(in.attach_ids.size());
+    const T damp = std::exp(-p.damping * dt);
+    Vec3<T>* x = state_.positions.data();
+    Vec3<T>* v = state_.velocities.data();
+    const std::vector<Vec3<T>>& kin_from = in.kinematic_from_positions ? kinematic_from_ : in.kinematic_from;
+    for (std::int64_t i = t.begin(ni), i1 = t.end(ni); i < i1; ++i) {
+      pbd::predictParticle(x[i], v[i], x_prev_[i], w_[i], p.gravity, damp, dt);
+      const std::int32_t k = kinematic_of_[i];
+      if (k >= 0) x[i] = pbd::lerp(kin_from[k], in.kinematic_to[k], t_end);
+    }
+    for (auto& l : lambda_) {
+      const std::int64_t m = std::int64_t(l.size());
+      std::fill(l.begin() + t.begin(m), l.begin() + t.end(m), Vec3<T>());
+    }
+    std::fill(attach_lambda_.begin() + t.begin(na), attach_lambda_.begin() + t.end(na), Vec3<T>());
+    if (p.chebyshev_rho > T(0)) startChebyshev(t, ni);
+  }
+
+  // One iteration's projections of every solved block: Jacobi (project, then gather per particle) or Gauss-Seidel
+  // colour by colour. Returns whether the last phase was per particle (the next per-particle one needs no barrier).
+  bool projectBlocks(const Team& t, const pbd::SolveContext<T>& ctx, pbd::GoalCorrection<T>* goals) {
+    bool particle_phase = false;
+    for (std::size_t bi = 0; bi < model_.blocks.size(); ++bi) {
+      if (!model_.blocks[bi].solve) continue;
+      if (particle_phase) t.barrier();
+      if (ctx.jacobi) {
+        projectJacobiBlock(t, bi, ctx, goals);
+        particle_phase = true;
+      } else {
+        projectColoredBlock(t, bi, ctx, goals);
+        particle_phase = false;
+      }
+    }
+    return particle_phase;
+  }
+
+  void projectJacobiBlock(const Team& t, std::size_t bi, const pbd::SolveContext<T>& ctx, pbd::GoalCorrection<T>* goals) {
+    const std::int64_t ni = std::int64_t(model_.size());
+    Vec3<T>* x = state_.positions.data();
+    const pbd::BlockView<T>& view = views_[bi];
+    const std::int32_t nc = std::int32_t(model_.blocks[bi].count());
+    std::int32_t q0 = std::int32_t(t.begin(nc)), q1 = std::int32_t(t.end(nc));
+    if (t.size() == split_parts_ && t.id() < split_parts_) {
+      q0 = jacobi_split_[bi][std::size_t(t.id())];
+      q1 = jacobi_split_[bi][std::size_t(t.id()) + 1];
+    }
+    projectRange(view, nullptr, q0, q1, ctx, goals);
+    t.barrier();
+    for (std::int64_t i = t.begin(ni), i1 = t.end(ni); i < i1; ++i) x[i] += pbd::gatherCorrection(view, std::int32_t(i));
+  }
+
+  void projectColoredBlock(const Team& t, std::size_t bi, const pbd::SolveContext<T>& ctx, pbd::GoalCorrection<T>* goals) {
+    const pbd::BlockView<T>& view = views_[bi];
+    const ConstraintColoring& col = model_.blocks[bi].coloring;
+    for (int k = 0; k < col.colorCount(); ++k) {
+      const std::int32_t c0 = col.color_offsets[k], c1 = col.color_offsets[k + 1];
+      std::int32_t q0 = c0 + std::int32_t(t.begin(c1 - c0)), q1 = c0 + std::int32_t(t.end(c1 - c0));
+      if (t.size() == split_parts_ && t.id() < split_parts_) {
+        const std::int32_t* sp = &color_split_[bi][std::size_t(k) * std::size_t(split_parts_ + 1) + std::size_t(t.id())];
+        q0 = c0 + sp[0];
+        q1 = c0 + sp[1];
+      }
+      projectRange(view, col.order.data(), q0, q1, ctx, goals);
+      t.barrier();
+    }
+  }
+
+  // The attachments (grasped points pulled towards their tool), after the blocks.
+  void projectAttachments(const Team& t, const PbdStepParams<T>& p, const PbdFrameInput<T>& in, T dt, T t_end,
+                          bool particle_phase) {
+    const std::int64_t na = std::int64_t(in.attach_ids.size());
+    if (na <= 0) return;
+    Vec3<T>* x = state_.positions.data();
+    if (particle_phase) t.barrier();
+    for (std::int64_t k = t.begin(na), k1 = t.end(na); k < k1; ++k) {
+      const std::int32_t id = in.attach_ids[k];
+      pbd::projectAttachment(x[id], w_[id], pbd::lerp(in.attach_from[k], in.attach_to[k], t_end),
+                             in.attach_compliance[k], p.xpbd, dt, attach_lambda_[k]);
+    }
+    t.barrier();
+  }
+
+  // Chebyshev: every projection of the iteration is done (the gather's or the attachments' barrier), so the
+  // multipliers are blended here, and each position before its contacts (as the CUDA contact kernels do).
+  void finishIteration(const Team& t, const PbdStepParams<T>& p, const PbdFrameInput<T>& in, int it, T t_start, T t_end,
+                       T& cheb_weight) {
+    const std::int64_t ni = std::int64_t(model_.size());
+    const std::int64_t na = std::int64_t(in.attach_ids.size());
+    const int nt = int(in.tools_from.size());
+    Vec3<T>* x = state_.positions.data();
+    const T* r = state_.radii.data();
+    const std::vector<T>& inset = model_.contact_inset;  // empty: the balls meet the static colliders
+    const bool cheb = p.chebyshev_rho > T(0);
+    const pbd::ChebyshevMode mode =
+        cheb ? pbd::chebyshevIteration(it, p.iterations, p.chebyshev_rho, cheb_weight) : pbd::ChebyshevMode::Off;
+    const bool on = mode != pbd::ChebyshevMode::Off;
+    if (on) blendMultipliers(t, na, cheb_weight, mode);
+    for (std::int64_t i = t.begin(ni), i1 = t.end(ni); i < i1; ++i)
+      x[i] = pbd::endIteration(x[i], w_[i] > T(0), on ? &cheb_.x1[i] : nullptr, on ? &cheb_.x2[i] : nullptr,
+                               cheb_weight, mode, [&](const Vec3<T>& q) {
+                                 return pbd::resolveContacts(q, r[i], inset.empty() ? T(0) : inset[i], &x_prev_[i], model_.planes.data(), int(model_.planes.size()),
+                                                             model_.boxes.data(), int(model_.boxes.size()),
+                                                             in.tools_from.data(), in.tools_to.data(), nt, t_start, t_end);
+                               });
+  }
+
+  void updateVelocities(const Team& t, T inv_dt) {
+    const std::int64_t ni = std::int64_t(model_.size());
+    const Vec3<T>* x = state_.positions.data();
+    Vec3<T>* v = state_.velocities.data();
+    for (std::int64_t i = t.begin(ni), i1 = t.end(ni); i < i1; ++i) v[i] = (x[i] - x_prev_[i]) * inv_dt;
+  }
+
+  void updateSkinningRotations(const Team& t, const pbd::SolveContext<T>& ctx) {
+    const pbd::BlockView<T>& view = views_[std::size_t(model_.rotation_block)];
+    for (std::int64_t c = t.begin(view.count), c1 = t.end(view.count); c < c1; ++c)
+      pbd::updateClusterRotation(view, int(c), ctx);
+  }
+
+  // Residuals of the distance constraints (after the last substep, with its multipliers), summed in order by
+  // summarize().
+  void distanceResiduals(const Team& t, const PbdStepParams<T>& p, T dt) {
+    const Vec3<T>* x = state_.positions.data();
     std::size_t off = 0;
     for (std::size_t bi = 0; bi < model_.blocks.size(); ++bi) {
       if (model_.blocks[bi].kind != PbdConstraintKind::Distance || !model_.blocks[bi].solve) continue;

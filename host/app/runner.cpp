@@ -63,6 +63,122 @@ std::string describe(long frame, const GuardVerdict& v) {
   return s.str();
 }
 
+// The scene with the command line's backend and precision overrides; rejects bad run lengths.
+Scene sceneForRun(const Scene& scene_in, const RunOptions& opt) {
+  Scene scene = scene_in;
+  if (opt.backend) scene.solver.backend = *opt.backend;
+  if (opt.precision) scene.solver.precision = *opt.precision;
+  if (opt.frames == 0 || (opt.frames < 0 && opt.frames != -1))
+    throw InputError("", "--steps", "must be a positive number of frames");
+  if (opt.seconds != -1.0 && !(opt.seconds > 0.0 && std::isfinite(opt.seconds)))
+    throw InputError("", "--seconds", "must be a positive, finite number of seconds");
+  return scene;
+}
+
+// --steps, else --seconds, else the scene's duration, in frames of frame_dt (at least one).
+long framesRequested(const Scene& scene, const RunOptions& opt) {
+  const double dt = scene.solver.frame_dt;
+  const double seconds = opt.seconds > 0 ? opt.seconds : scene.duration;
+  return opt.frames > 0 ? opt.frames : std::max(1L, long(std::llround(seconds / dt)));
+}
+
+fs::path createOutputFolder(const std::string& dir) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw InputError(dir, "--out", "cannot create the output folder: " + ec.message());
+  return fs::path(dir);
+}
+
+// The guards' shared energy floor, summed over the models; each model's start is its first checkpoint.
+double energyFloorAndCheckpoint(const std::vector<std::unique_ptr<SimulationModel>>& models, const Scene& scene) {
+  std::vector<Vec3d> pts;
+  double floor = 0.0;
+  for (const auto& m : models) {
+    m->currentPositions(pts);
+    floor += sceneEnergyFloor(scene, pts);
+    m->saveCheckpoint();
+  }
+  return floor;
+}
+
+// Advances model k by one frame under its guard. A failed check rolls back and retries once with half the step;
+// a model that still fails is restored to its last good state and the failure goes into `sum`. Metrics are
+// written for the first model, and for a failing one.
+void advanceGuarded(SimulationModel& m, NumericalGuard& guard, std::size_t k, long f, double dt, const RunOptions& opt,
+                    MetricsCsv* csv, RunSummary& sum) {
+  const auto fs0 = std::chrono::steady_clock::now();
+  FrameReport r = m.advance(dt);
+  GuardVerdict v = guard.check(r);
+  if (!v.ok && opt.retry_once) {
+    // Roll back to the last good state and retry once with half the step.
+    if (!opt.quiet) std::fprintf(stderr, "\nguard: %s; rolling back and retrying with half the step\n",
+                                 describe(f, v).c_str());
+    m.restoreCheckpoint();
+    m.scaleTimeStep(0.5);
+    ++sum.retries;
+    r = m.advance(dt);
+    v = guard.check(r);
+  }
+  const double wall_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - fs0).count();
+  if (!v.ok) {
+    sum.failed = true;
+    sum.failure = "model " + m.name() + ", " + describe(f, v);
+    m.restoreCheckpoint();  // the last good state is what goes to disk
+    if (csv) csv->write(f, double(f) * dt, wall_ms, r);
+    return;
+  }
+  m.saveCheckpoint();
+  sum.total_substeps += r.substeps;
+  sum.max_displacement = std::max(sum.max_displacement, r.max_displacement);
+  sum.final_total_energy = r.kinetic_energy + r.elastic_energy + r.potential_energy;
+  if (csv && k == 0) csv->write(f, double(f) * dt, wall_ms, r);
+}
+
+// The frame loop: every model advances each frame until one fails; periodic states go to `out`. Sets the frames
+// done and the wall time in `sum`.
+void runFrames(const std::vector<std::unique_ptr<SimulationModel>>& models, std::vector<NumericalGuard>& guards,
+               const Scene& scene, const RunOptions& opt, const fs::path& out, MetricsCsv* csv, bool paced,
+               Progress& progress, RunSummary& sum) {
+  const double dt = scene.solver.frame_dt;
+  const auto t0 = std::chrono::steady_clock::now();
+  for (long f = 1; f <= sum.frames_requested && !sum.failed; ++f) {
+    // A haptics run is real time: the device moves in wall time, so frame f starts no earlier than (f - 1) dt.
+    if (paced) std::this_thread::sleep_until(t0 + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                                      std::chrono::duration<double>(double(f - 1) * dt)));
+    for (std::size_t k = 0; k < models.size() && !sum.failed; ++k)
+      advanceGuarded(*models[k], guards[k], k, f, dt, opt, csv, sum);
+    if (sum.failed) break;
+    sum.frames_done = f;
+    if (scene.output.every_frames > 0 && f % scene.output.every_frames == 0) {
+      char stem[32];
+      std::snprintf(stem, sizeof stem, "frame_%06ld", f);
+      writeState(models, scene, out, stem);
+    }
+    progress.update(f);
+  }
+  sum.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// Stops the haptic loop and keeps its statistics, recordings and the global model's final surface.
+void finishHaptics(HapticSceneModel& haptic, const Scene& scene, const fs::path& out, RunSummary& sum) {
+  SceneHaptics& h = haptic.haptics();
+  h.stop();
+  sum.haptic = h.summary();
+  for (std::size_t k = 0; k < h.handCount(); ++k) sum.haptic_stats.push_back(h.stats(k));
+  if (scene.haptics.record_trajectory) (void)h.writeRecordings(out.string());
+  // The global model's organ, displaced by its last step (the tools' loads at the end of the run).
+  if (h.globalModel() && scene.output.mesh_obj)
+    writeObj((out / "final_haptic_organ_surface.obj").string(), h.globalModel()->deformedMesh());
+}
+
+void writeSummaryFile(const fs::path& out, const RunSummary& sum) {
+  std::FILE* s = std::fopen((out / "summary.txt").string().c_str(), "w");
+  if (s) {
+    std::fprintf(s, "%s\n", sum.line().c_str());
+    std::fclose(s);
+  }
+}
+
 }  // namespace
 
 std::string RunSummary::line() const {
@@ -82,23 +198,11 @@ std::string RunSummary::line() const {
 }
 
 RunSummary runScene(const Scene& scene_in, const RunOptions& opt, const ModelFactory& factory) {
-  Scene scene = scene_in;
-  if (opt.backend) scene.solver.backend = *opt.backend;
-  if (opt.precision) scene.solver.precision = *opt.precision;
-  if (opt.frames == 0 || (opt.frames < 0 && opt.frames != -1))
-    throw InputError("", "--steps", "must be a positive number of frames");
-  if (opt.seconds != -1.0 && !(opt.seconds > 0.0 && std::isfinite(opt.seconds)))
-    throw InputError("", "--seconds", "must be a positive, finite number of seconds");
-
+  const Scene scene = sceneForRun(scene_in, opt);
   RunSummary sum;
   const double dt = scene.solver.frame_dt;
-  const double seconds = opt.seconds > 0 ? opt.seconds : scene.duration;
-  sum.frames_requested = opt.frames > 0 ? opt.frames : std::max(1L, long(std::llround(seconds / dt)));
-
-  std::error_code ec;
-  fs::create_directories(opt.out_dir, ec);
-  if (ec) throw InputError(opt.out_dir, "--out", "cannot create the output folder: " + ec.message());
-  const fs::path out(opt.out_dir);
+  sum.frames_requested = framesRequested(scene, opt);
+  const fs::path out = createOutputFolder(opt.out_dir);
 
   const BackendChoice choice = resolveBackend(scene.solver.backend);
   sum.backend_note = choice.note;
@@ -113,72 +217,14 @@ RunSummary runScene(const Scene& scene_in, const RunOptions& opt, const ModelFac
   haptic_options.quiet = opt.quiet;
   HapticSceneModel* haptic = attachSceneHaptics(models, scene, haptic_options);
 
-  std::vector<Vec3d> pts;
-  double floor = 0.0;
-  for (const auto& m : models) {
-    m->currentPositions(pts);
-    floor += sceneEnergyFloor(scene, pts);
-    m->saveCheckpoint();
-  }
+  const double floor = energyFloorAndCheckpoint(models, scene);
   std::vector<NumericalGuard> guards(models.size(), NumericalGuard(scene.solver.energy_bound, floor));
   std::unique_ptr<MetricsCsv> csv;
   if (scene.output.metrics_csv) csv = std::make_unique<MetricsCsv>((out / "metrics.csv").string());
 
   Progress progress("incision run " + scene.name, sum.frames_requested, opt.quiet);
-  const auto t0 = std::chrono::steady_clock::now();
-  for (long f = 1; f <= sum.frames_requested && !sum.failed; ++f) {
-    // A haptics run is real time: the device moves in wall time, so frame f starts no earlier than (f - 1) dt.
-    if (haptic) std::this_thread::sleep_until(t0 + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                                       std::chrono::duration<double>(double(f - 1) * dt)));
-    for (std::size_t k = 0; k < models.size() && !sum.failed; ++k) {
-      SimulationModel& m = *models[k];
-      const auto fs0 = std::chrono::steady_clock::now();
-      FrameReport r = m.advance(dt);
-      GuardVerdict v = guards[k].check(r);
-      if (!v.ok && opt.retry_once) {
-        // Roll back to the last good state and retry once with half the step.
-        if (!opt.quiet) std::fprintf(stderr, "\nguard: %s; rolling back and retrying with half the step\n",
-                                     describe(f, v).c_str());
-        m.restoreCheckpoint();
-        m.scaleTimeStep(0.5);
-        ++sum.retries;
-        r = m.advance(dt);
-        v = guards[k].check(r);
-      }
-      const double wall_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - fs0).count();
-      if (!v.ok) {
-        sum.failed = true;
-        sum.failure = "model " + m.name() + ", " + describe(f, v);
-        m.restoreCheckpoint();  // the last good state is what goes to disk
-        if (csv) csv->write(f, double(f) * dt, wall_ms, r);
-        break;
-      }
-      m.saveCheckpoint();
-      sum.total_substeps += r.substeps;
-      sum.max_displacement = std::max(sum.max_displacement, r.max_displacement);
-      sum.final_total_energy = r.kinetic_energy + r.elastic_energy + r.potential_energy;
-      if (csv && k == 0) csv->write(f, double(f) * dt, wall_ms, r);
-    }
-    if (sum.failed) break;
-    sum.frames_done = f;
-    if (scene.output.every_frames > 0 && f % scene.output.every_frames == 0) {
-      char stem[32];
-      std::snprintf(stem, sizeof stem, "frame_%06ld", f);
-      writeState(models, scene, out, stem);
-    }
-    progress.update(f);
-  }
-  sum.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (haptic) {
-    SceneHaptics& h = haptic->haptics();
-    h.stop();
-    sum.haptic = h.summary();
-    for (std::size_t k = 0; k < h.handCount(); ++k) sum.haptic_stats.push_back(h.stats(k));
-    if (scene.haptics.record_trajectory) (void)h.writeRecordings(out.string());
-    // The global model's organ, displaced by its last step (the tools' loads at the end of the run).
-    if (h.globalModel() && scene.output.mesh_obj)
-      writeObj((out / "final_haptic_organ_surface.obj").string(), h.globalModel()->deformedMesh());
-  }
+  runFrames(models, guards, scene, opt, out, csv.get(), haptic != nullptr, progress, sum);
+  if (haptic) finishHaptics(*haptic, scene, out, sum);
   sum.simulated_s = double(sum.frames_done) * dt;
   progress.finish(sum.failed ? "stopped" : "");
   for (const auto& m : models) {
@@ -187,11 +233,7 @@ RunSummary runScene(const Scene& scene_in, const RunOptions& opt, const ModelFac
     sum.memory.device_bytes += mr.device_bytes;
   }
   writeState(models, scene, out, sum.failed ? "last_good" : "final");
-  std::FILE* s = std::fopen((out / "summary.txt").string().c_str(), "w");
-  if (s) {
-    std::fprintf(s, "%s\n", sum.line().c_str());
-    std::fclose(s);
-  }
+  writeSummaryFile(out, sum);
   return sum;
 }
 

@@ -156,9 +156,11 @@ std::vector<std::array<int, 2>> findSelfIntersections(const TriangleMesh& mesh, 
   return found;
 }
 
-PackInputReport preparePackInput(TriangleMesh& mesh, const std::string& file, const std::string& key,
-                                 double max_self_intersecting_fraction) {
-  PackInputReport rep;
+namespace {
+
+// What no repair can fix, checked before anything else reads the mesh: no geometry, non-finite coordinates,
+// vertex indices out of range.
+void checkIndicesAndCoordinates(const TriangleMesh& mesh, const std::string& file, const std::string& key) {
   if (mesh.vertices.empty() || mesh.triangles.empty())
     throw InputError(file, key, "empty mesh: a closed surface with at least 4 triangles is needed");
   for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
@@ -171,8 +173,13 @@ PackInputReport preparePackInput(TriangleMesh& mesh, const std::string& file, co
         throw InputError(file, key + ".face " + std::to_string(t),
                          "vertex index " + std::to_string(mesh.triangles[t][std::size_t(k)]) + " out of range [0, " +
                              std::to_string(nv) + ")");
+}
 
-  // Repair 1: weld bit-identical duplicates (STL-style meshes repeat every vertex per face).
+// Repair 1: weld bit-identical duplicates (STL-style meshes repeat every vertex per face); the triangles are
+// re-indexed, the vertex list is kept. Repair 2: drop triangles whose corners repeat an index (zero area, no
+// orientation).
+void weldDuplicatesAndDropDegenerate(TriangleMesh& mesh, PackInputReport& rep) {
+  const int nv = int(mesh.vertices.size());
   std::map<std::tuple<double, double, double>, int> first;
   std::vector<int> remap(static_cast<std::size_t>(nv));
   for (int i = 0; i < nv; ++i) {
@@ -181,7 +188,6 @@ PackInputReport preparePackInput(TriangleMesh& mesh, const std::string& file, co
     remap[std::size_t(i)] = it->second;
     if (!inserted) ++rep.welded_vertices;
   }
-  // Repair 2: drop triangles whose corners repeat an index (zero area, no orientation).
   std::vector<std::array<int, 3>> kept;
   kept.reserve(mesh.triangles.size());
   for (auto tri : mesh.triangles) {
@@ -190,9 +196,10 @@ PackInputReport preparePackInput(TriangleMesh& mesh, const std::string& file, co
     kept.push_back(tri);
   }
   mesh.triangles.swap(kept);
-  if (mesh.triangles.size() < 4) throw InputError(file, key, "fewer than 4 non-degenerate triangles: no volume");
+}
 
-  // Edge topology: every undirected edge must have exactly two triangles traversing it in opposite directions.
+// Edge topology: every undirected edge must have exactly two triangles traversing it in opposite directions.
+void checkEdgeTopology(const TriangleMesh& mesh, const std::string& file, const std::string& key) {
   struct DirectedEdge { int lo, hi, forward, tri; };
   std::vector<DirectedEdge> edges;
   edges.reserve(mesh.triangles.size() * 3);
@@ -232,8 +239,12 @@ PackInputReport preparePackInput(TriangleMesh& mesh, const std::string& file, co
   if (inconsistent)
     throw InputError(file, key, "inconsistent orientation: " + std::to_string(inconsistent) + " edge(s), first " +
                                     first_inconsistent);
+}
 
-  // Volume by the divergence theorem; an inward-oriented surface is flipped (safe: orientation is consistent).
+// Volume by the divergence theorem; an inward-oriented surface is flipped (safe: orientation is consistent).
+// Also counts the zero-area triangles.
+void orientOutwardAndMeasure(TriangleMesh& mesh, const std::string& file, const std::string& key,
+                             PackInputReport& rep) {
   double six_v = 0.0;
   Aabb box;
   for (const auto& p : mesh.vertices) box.grow(p);
@@ -260,28 +271,34 @@ PackInputReport preparePackInput(TriangleMesh& mesh, const std::string& file, co
                           mesh.vertices[std::size_t(t[2])] - mesh.vertices[std::size_t(t[0])]);
     if (norm(n) <= 1e-14 * norm2(e)) ++rep.zero_area_triangles;
   }
+}
 
+// Rejects self-intersection beyond the tolerated fraction of faces; counts the tolerated faces in `rep`.
+void checkSelfIntersections(const TriangleMesh& mesh, const std::string& file, const std::string& key,
+                            double max_self_intersecting_fraction, PackInputReport& rep) {
   const std::size_t allowed_faces =
       std::size_t(std::max(0.0, max_self_intersecting_fraction) * double(mesh.triangles.size()));
   // Enough pairs to know whether the involved faces exceed the allowance (each pair adds at most two).
   const auto pairs = findSelfIntersections(mesh, std::max<std::size_t>(4, allowed_faces + 1));
-  if (!pairs.empty()) {
-    std::vector<int> faces;
-    for (const auto& pr : pairs) { faces.push_back(pr[0]); faces.push_back(pr[1]); }
-    std::sort(faces.begin(), faces.end());
-    faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
-    if (faces.size() > allowed_faces || pairs.size() > allowed_faces) {
-      std::ostringstream s;
-      s << "self-intersecting surface: faces " << pairs[0][0] << " and " << pairs[0][1] << " intersect";
-      if (pairs.size() > 1) s << " (and at least " << pairs.size() - 1 << " more pair(s))";
-      s << "; not repaired: resolving intersections changes the shape";
-      if (max_self_intersecting_fraction > 0.0)
-        s << " (more than the tolerated fraction " << max_self_intersecting_fraction << " of faces)";
-      throw InputError(file, key, s.str());
-    }
-    rep.self_intersecting_faces = int(faces.size());
+  if (pairs.empty()) return;
+  std::vector<int> faces;
+  for (const auto& pr : pairs) { faces.push_back(pr[0]); faces.push_back(pr[1]); }
+  std::sort(faces.begin(), faces.end());
+  faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
+  if (faces.size() > allowed_faces || pairs.size() > allowed_faces) {
+    std::ostringstream s;
+    s << "self-intersecting surface: faces " << pairs[0][0] << " and " << pairs[0][1] << " intersect";
+    if (pairs.size() > 1) s << " (and at least " << pairs.size() - 1 << " more pair(s))";
+    s << "; not repaired: resolving intersections changes the shape";
+    if (max_self_intersecting_fraction > 0.0)
+      s << " (more than the tolerated fraction " << max_self_intersecting_fraction << " of faces)";
+    throw InputError(file, key, s.str());
   }
+  rep.self_intersecting_faces = int(faces.size());
+}
 
+// One line listing the repairs made or tolerated, "" when none.
+std::string describeRepairs(const PackInputReport& rep) {
   std::ostringstream r;
   const char* sep = "";
   if (rep.welded_vertices) { r << sep << "welded " << rep.welded_vertices << " duplicate vertices"; sep = "; "; }
@@ -291,7 +308,21 @@ PackInputReport preparePackInput(TriangleMesh& mesh, const std::string& file, co
     r << sep << "tolerated " << rep.self_intersecting_faces << " locally self-intersecting faces";
     sep = "; ";
   }
-  rep.repairs = r.str();
+  return r.str();
+}
+
+}  // namespace
+
+PackInputReport preparePackInput(TriangleMesh& mesh, const std::string& file, const std::string& key,
+                                 double max_self_intersecting_fraction) {
+  PackInputReport rep;
+  checkIndicesAndCoordinates(mesh, file, key);
+  weldDuplicatesAndDropDegenerate(mesh, rep);
+  if (mesh.triangles.size() < 4) throw InputError(file, key, "fewer than 4 non-degenerate triangles: no volume");
+  checkEdgeTopology(mesh, file, key);
+  orientOutwardAndMeasure(mesh, file, key, rep);
+  checkSelfIntersections(mesh, file, key, max_self_intersecting_fraction, rep);
+  rep.repairs = describeRepairs(rep);
   return rep;
 }
 

@@ -64,59 +64,62 @@ NeighborLists buildMlsRestNeighbors(const std::vector<Vec3<T>>& rest, T radius) 
   return grid.querySelf(radius);
 }
 
-template <typename T>
-MlsModel<T> buildMlsModel(const MlsBuildInput& in) {
-  validateMlsBuildInput(in);
-  const std::size_t n = in.rest_positions.size();
-  MlsModel<T> md;
-  md.source = in.source;
-  md.material = in.material;
-  md.safety = in.safety;
+namespace {
 
-  // Store positions relative to the centroid: float32 rest differences X_j - X_i then keep ~7 digits
-  // relative to the spacing instead of relative to the distance from the scene origin.
+// Rest positions relative to their centroid: float32 rest differences X_j - X_i then keep ~7 digits relative to
+// the spacing instead of relative to the distance from the scene origin.
+template <typename T>
+void setRestAboutCentroid(MlsModel<T>& md, const std::vector<Vec3d>& positions) {
+  const std::size_t n = positions.size();
   Vec3d c;
-  for (const auto& p : in.rest_positions) c += p;
+  for (const auto& p : positions) c += p;
   md.origin = c * (1.0 / double(n));
   md.rest.resize(n);
-  for (std::size_t i = 0; i < n; ++i) md.rest[i] = Vec3<T>(in.rest_positions[i] - md.origin);
+  for (std::size_t i = 0; i < n; ++i) md.rest[i] = Vec3<T>(positions[i] - md.origin);
+}
 
-  const double spacing = in.spacing;
-  const double h = in.support_factor * spacing;
-  md.spacing = T(spacing);
-  md.support = T(h);
-  const T h_t = md.support;
-  if (in.neighbors.offsets.empty()) {
-    md.neighbors = buildMlsRestNeighbors(md.rest, h_t);
-  } else {
-    const NeighborLists& l = in.neighbors;
-    require(l.offsets.size() == n + 1 && l.offsets.front() == 0 && std::size_t(l.offsets.back()) == l.indices.size(), in,
-            "neighbors", "CSR offsets must hold one entry per particle plus one, from 0 to the index count");
-    for (std::size_t i = 0; i < n; ++i)
-      for (std::int64_t p = l.offsets[i]; p < l.offsets[i + 1]; ++p) {
-        const std::int32_t j = l.indices[std::size_t(p)];
-        if (!(j >= 0 && std::size_t(j) < n && std::size_t(j) != i))
-          require(false, in, "neighbors", "particle " + std::to_string(i) + ": neighbour index out of range or itself");
-      }
-    md.neighbors = l;
-  }
+// The caller's rest neighbourhoods, checked; without them, the closed ball of radius h from the grid search.
+template <typename T>
+NeighborLists restNeighbors(const MlsBuildInput& in, const std::vector<Vec3<T>>& rest, T h) {
+  if (in.neighbors.offsets.empty()) return buildMlsRestNeighbors(rest, h);
+  const std::size_t n = rest.size();
+  const NeighborLists& l = in.neighbors;
+  require(l.offsets.size() == n + 1 && l.offsets.front() == 0 && std::size_t(l.offsets.back()) == l.indices.size(), in,
+          "neighbors", "CSR offsets must hold one entry per particle plus one, from 0 to the index count");
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::int64_t p = l.offsets[i]; p < l.offsets[i + 1]; ++p) {
+      const std::int32_t j = l.indices[std::size_t(p)];
+      if (!(j >= 0 && std::size_t(j) < n && std::size_t(j) != i))
+        require(false, in, "neighbors", "particle " + std::to_string(i) + ": neighbour index out of range or itself");
+    }
+  return l;
+}
 
+// Per-particle rest quantities kept in double until they are stored in precision T.
+struct RestQuantities {
+  std::vector<double> mass, density, volume, condition;
+};
+
+// Densities, volumes and A_i^{-1} in double from the (precision-T) rest positions; the weights use the
+// precision-T support so that they match what the passes evaluate. Fills md.moment_inverse and md.degeneracy.
+template <typename T>
+RestQuantities restQuantities(MlsModel<T>& md, const MlsBuildInput& in) {
+  const std::size_t n = md.rest.size();
   const double rho0 = in.material.density;
-  std::vector<double> mass(n);
-  for (std::size_t i = 0; i < n; ++i) mass[i] = in.masses.empty() ? rho0 * spacing * spacing * spacing : in.masses[i];
-  md.kind = in.kinds.empty() ? std::vector<std::uint8_t>(n, kMlsFree) : in.kinds;
-
-  // Densities, volumes and A_i^{-1} in double from the (precision-T) rest positions; the weights use the
-  // precision-T support so that they match what the passes evaluate.
-  std::vector<double> density(n), volume(n), condition(n);
-  std::vector<int> weighted(n);
+  const double spacing = in.spacing;
+  RestQuantities q;
+  q.mass.resize(n);
+  for (std::size_t i = 0; i < n; ++i) q.mass[i] = in.masses.empty() ? rho0 * spacing * spacing * spacing : in.masses[i];
+  q.density.resize(n);
+  q.volume.resize(n);
+  q.condition.resize(n);
   md.moment_inverse.resize(n);
   md.degeneracy.resize(n);
-  const double hd = double(h_t);
+  const double hd = double(md.support);
   const double w0 = mlsKernelWeight(0.0, hd);
   cpu::parallelFor(std::int64_t(n), [&](std::int64_t i) {
     const Vec3d xi(md.rest[std::size_t(i)]);
-    double rho = mass[std::size_t(i)] * w0, nominal = mass[std::size_t(i)] / rho0 * w0;
+    double rho = q.mass[std::size_t(i)] * w0, nominal = q.mass[std::size_t(i)] / rho0 * w0;
     Mat3d a;
     int count = 0;
     for (std::int64_t p = md.neighbors.offsets[std::size_t(i)]; p < md.neighbors.offsets[std::size_t(i) + 1]; ++p) {
@@ -124,31 +127,43 @@ MlsModel<T> buildMlsModel(const MlsBuildInput& in) {
       const Vec3d xij = Vec3d(md.rest[std::size_t(j)]) - xi;
       const double w = mlsKernelWeight(norm2(xij), hd);
       if (w > 0) ++count;
-      rho += mass[std::size_t(j)] * w;
-      nominal += mass[std::size_t(j)] / rho0 * w;
+      rho += q.mass[std::size_t(j)] * w;
+      nominal += q.mass[std::size_t(j)] / rho0 * w;
       accumulateMomentMatrix(a, xij, w);  // eq. 6
     }
-    density[std::size_t(i)] = in.volume_estimate == MlsVolumeEstimate::ShepardKernelSum ? rho / nominal : rho;
-    volume[std::size_t(i)] = mass[std::size_t(i)] / density[std::size_t(i)];
+    q.density[std::size_t(i)] = in.volume_estimate == MlsVolumeEstimate::ShepardKernelSum ? rho / nominal : rho;
+    q.volume[std::size_t(i)] = q.mass[std::size_t(i)] / q.density[std::size_t(i)];
     const MomentInverse<double> inv = regularisedMomentInverse(a, count, in.condition_limit);
     md.moment_inverse[std::size_t(i)] = Mat3<T>(inv.inverse);
     md.degeneracy[std::size_t(i)] = inv.flags;
-    condition[std::size_t(i)] = inv.condition;
-    weighted[std::size_t(i)] = count;
+    q.condition[std::size_t(i)] = inv.condition;
   });
+  return q;
+}
 
+template <typename T>
+void storeRestQuantities(MlsModel<T>& md, const RestQuantities& q) {
+  const std::size_t n = q.mass.size();
   md.mass.resize(n);
   md.density.resize(n);
   md.volume.resize(n);
-  MlsModelStats& s = md.stats;
+  for (std::size_t i = 0; i < n; ++i) {
+    md.mass[i] = T(q.mass[i]);
+    md.density[i] = T(q.density[i]);
+    md.volume[i] = T(q.volume[i]);
+  }
+}
+
+// Counts of degenerate and constrained particles, neighbourhood sizes, density range and totals.
+template <typename T>
+MlsModelStats restStats(const MlsModel<T>& md, const RestQuantities& q) {
+  const std::size_t n = q.mass.size();
+  MlsModelStats s;
   s.particles = std::int64_t(n);
   s.min_neighbors = std::numeric_limits<std::int64_t>::max();
   s.min_density = std::numeric_limits<double>::infinity();
   s.max_density = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
-    md.mass[i] = T(mass[i]);
-    md.density[i] = T(density[i]);
-    md.volume[i] = T(volume[i]);
     const std::uint8_t f = md.degeneracy[i];
     s.isolated += (f & kMlsIsolated) ? 1 : 0;
     s.few_neighbors += (f & kMlsFewNeighbors) ? 1 : 0;
@@ -162,13 +177,35 @@ MlsModel<T> buildMlsModel(const MlsBuildInput& in) {
     s.min_neighbors = std::min(s.min_neighbors, cnt);
     s.max_neighbors = std::max(s.max_neighbors, cnt);
     s.mean_neighbors += double(cnt);
-    if (std::isfinite(condition[i])) s.max_condition = std::max(s.max_condition, condition[i]);
-    s.min_density = std::min(s.min_density, density[i]);
-    s.max_density = std::max(s.max_density, density[i]);
-    s.total_mass += mass[i];
-    s.total_volume += volume[i];
+    if (std::isfinite(q.condition[i])) s.max_condition = std::max(s.max_condition, q.condition[i]);
+    s.min_density = std::min(s.min_density, q.density[i]);
+    s.max_density = std::max(s.max_density, q.density[i]);
+    s.total_mass += q.mass[i];
+    s.total_volume += q.volume[i];
   }
   s.mean_neighbors /= double(n);
+  return s;
+}
+
+}  // namespace
+
+template <typename T>
+MlsModel<T> buildMlsModel(const MlsBuildInput& in) {
+  validateMlsBuildInput(in);
+  const std::size_t n = in.rest_positions.size();
+  MlsModel<T> md;
+  md.source = in.source;
+  md.material = in.material;
+  md.safety = in.safety;
+  setRestAboutCentroid(md, in.rest_positions);
+  md.spacing = T(in.spacing);
+  md.support = T(in.support_factor * in.spacing);
+  md.neighbors = restNeighbors(in, md.rest, md.support);
+  md.kind = in.kinds.empty() ? std::vector<std::uint8_t>(n, kMlsFree) : in.kinds;
+
+  const RestQuantities q = restQuantities(md, in);
+  storeRestQuantities(md, q);
+  md.stats = restStats(md, q);
 
   const MlsCoefficients<double> cd = mlsCoefficients(in.material);
   md.coeffs.mu = T(cd.mu);
@@ -177,7 +214,7 @@ MlsModel<T> buildMlsModel(const MlsBuildInput& in) {
   md.coeffs.damping = T(cd.damping);
   md.gravity = Vec3<T>(in.gravity);
   // The lightest particle (lowest rho_i) sets the fastest wave.
-  s.stable_dt = mlsStableTimeStep(cd.mu, cd.lambda, cd.k_volume, s.min_density, spacing);
+  md.stats.stable_dt = mlsStableTimeStep(cd.mu, cd.lambda, cd.k_volume, md.stats.min_density, in.spacing);
   return md;
 }
 

@@ -48,21 +48,20 @@ void validateMetaballs(const MetaballModel& mb) {
 bool insideBox(const Vec3d& p, const FixedRegion& r) {
   return p.x >= r.min.x && p.x <= r.max.x && p.y >= r.min.y && p.y <= r.max.y && p.z >= r.min.z && p.z <= r.max.z;
 }
-}  // namespace
 
-template <typename T>
-PbdModel<T> buildMetaballPbdModel(const MetaballModel& mb, const MetaballPbdOptions& opt) {
-  validateMetaballs(mb);
+void validateMetaballOptions(const MetaballPbdOptions& opt) {
   const char* f = "metaball options";
   if (!(opt.youngs_modulus > 0)) throw InputError(f, "youngs_modulus", "must be > 0");
   if (opt.stretch_compliance < 0 || opt.laplacian_compliance < 0 || opt.shape_compliance < 0)
     throw InputError(f, "compliance", "must be >= 0");
   if (!(opt.pbd_stiffness >= 0 && opt.pbd_stiffness <= 1)) throw InputError(f, "pbd_stiffness", "must be in [0, 1]");
   if (opt.volume_samples != 0 && opt.volume_samples < 8) throw InputError(f, "volume_samples", "0 or >= 8");
+}
 
+// One particle per sphere; a sphere whose centre lies in a fixed box gets zero inverse mass.
+template <typename T>
+void setSphereParticles(PbdModel<T>& m, const MetaballModel& mb, const std::vector<FixedRegion>& fixed_regions) {
   const std::size_t n = mb.size();
-  const double E = opt.youngs_modulus;
-  PbdModel<T> m;
   m.rest_positions.resize(n);
   m.masses.resize(n);
   m.inv_mass.resize(n);
@@ -72,11 +71,15 @@ PbdModel<T> buildMetaballPbdModel(const MetaballModel& mb, const MetaballPbdOpti
     m.masses[i] = T(mb.masses[i]);
     m.rest_radii[i] = T(mb.rest_radii[i]);
     bool fixed = false;
-    for (const FixedRegion& r : opt.fixed) fixed = fixed || insideBox(mb.rest_centers[i], r);
+    for (const FixedRegion& r : fixed_regions) fixed = fixed || insideBox(mb.rest_centers[i], r);
     m.inv_mass[i] = fixed ? T(0) : T(1.0 / mb.masses[i]);
   }
-  // A support that holds nothing lets the organ fall: say so instead (a coarse packing can leave a thin
-  // clamp box between sphere centres).
+}
+
+// A support that holds nothing lets the organ fall: say so instead (a coarse packing can leave a thin
+// clamp box between sphere centres).
+void requireFixedBoxesHoldSpheres(const MetaballModel& mb, const MetaballPbdOptions& opt) {
+  const std::size_t n = mb.size();
   for (std::size_t k = 0; opt.require_fixed_held && k < opt.fixed.size(); ++k) {
     double nearest = 1e300;
     bool held = false;
@@ -93,15 +96,25 @@ PbdModel<T> buildMetaballPbdModel(const MetaballModel& mb, const MetaballPbdOpti
                        "the box holds no sphere centre (the nearest is " + std::to_string(nearest * 1e3) +
                            " mm outside); enlarge it or use more spheres");
   }
-  // Neighbour lists from the links (ascending).
-  std::vector<std::vector<std::int32_t>> nbr(n);
+}
+
+// Neighbour lists from the links (ascending).
+std::vector<std::vector<std::int32_t>> linkNeighbors(const MetaballModel& mb) {
+  std::vector<std::vector<std::int32_t>> nbr(mb.size());
   for (const auto& e : mb.links) {
     nbr[e[0]].push_back(e[1]);
     nbr[e[1]].push_back(e[0]);
   }
   for (auto& l : nbr) std::sort(l.begin(), l.end());
+  return nbr;
+}
 
-  // Shape-matching clusters {i} u N(i) (solved first: it updates the rotations the Laplacian uses).
+// Shape-matching clusters {i} u N(i) (solved first: it updates the rotations the Laplacian uses).
+template <typename T>
+PbdConstraintBlock<T> shapeMatchingBlock(const MetaballModel& mb, const std::vector<std::vector<std::int32_t>>& nbr,
+                                         const MetaballPbdOptions& opt) {
+  const std::size_t n = mb.size();
+  const double E = opt.youngs_modulus;
   PbdConstraintBlock<T> shape;
   shape.kind = PbdConstraintKind::ShapeMatching;
   shape.solve = opt.shape_matching;
@@ -129,27 +142,35 @@ PbdModel<T> buildMetaballPbdModel(const MetaballModel& mb, const MetaballPbdOpti
     }
     shape.offsets.push_back(std::int32_t(shape.ids.size()));
   }
-  m.blocks.push_back(std::move(shape));
-  m.rotation_block = 0;
+  return shape;
+}
 
-  if (opt.laplacian) {
-    PbdConstraintBlock<T> lap;
-    lap.kind = PbdConstraintKind::Laplacian;
-    lap.stiffness = T(opt.pbd_stiffness);
-    for (std::size_t i = 0; i < n; ++i) {
-      if (nbr[i].empty()) continue;
-      Vec3d mean;
-      for (std::int32_t j : nbr[i]) mean += mb.rest_centers[j];
-      mean *= 1.0 / double(nbr[i].size());
-      lap.ids.push_back(std::int32_t(i));
-      lap.ids.insert(lap.ids.end(), nbr[i].begin(), nbr[i].end());
-      lap.offsets.push_back(std::int32_t(lap.ids.size()));
-      lap.rest_vec.push_back(Vec3<T>(mb.rest_centers[i] - mean));
-      lap.compliance.push_back(T(opt.laplacian_compliance > 0 ? opt.laplacian_compliance : 1.0 / (E * mb.rest_radii[i])));
-    }
-    m.blocks.push_back(std::move(lap));
+// Laplacian coordinates: each sphere's offset from the mean of its neighbours.
+template <typename T>
+PbdConstraintBlock<T> laplacianBlock(const MetaballModel& mb, const std::vector<std::vector<std::int32_t>>& nbr,
+                                     const MetaballPbdOptions& opt) {
+  const double E = opt.youngs_modulus;
+  PbdConstraintBlock<T> lap;
+  lap.kind = PbdConstraintKind::Laplacian;
+  lap.stiffness = T(opt.pbd_stiffness);
+  for (std::size_t i = 0; i < mb.size(); ++i) {
+    if (nbr[i].empty()) continue;
+    Vec3d mean;
+    for (std::int32_t j : nbr[i]) mean += mb.rest_centers[j];
+    mean *= 1.0 / double(nbr[i].size());
+    lap.ids.push_back(std::int32_t(i));
+    lap.ids.insert(lap.ids.end(), nbr[i].begin(), nbr[i].end());
+    lap.offsets.push_back(std::int32_t(lap.ids.size()));
+    lap.rest_vec.push_back(Vec3<T>(mb.rest_centers[i] - mean));
+    lap.compliance.push_back(T(opt.laplacian_compliance > 0 ? opt.laplacian_compliance : 1.0 / (E * mb.rest_radii[i])));
   }
+  return lap;
+}
 
+// One distance constraint per link; the default compliance is that of a rod of the mean radius.
+template <typename T>
+PbdConstraintBlock<T> linkDistanceBlock(const MetaballModel& mb, const MetaballPbdOptions& opt) {
+  const double E = opt.youngs_modulus;
   PbdConstraintBlock<T> dist;
   dist.kind = PbdConstraintKind::Distance;
   dist.stiffness = T(opt.pbd_stiffness);
@@ -163,21 +184,30 @@ PbdModel<T> buildMetaballPbdModel(const MetaballModel& mb, const MetaballPbdOpti
     const double rbar = 0.5 * (mb.rest_radii[e[0]] + mb.rest_radii[e[1]]);
     dist.compliance.push_back(T(opt.stretch_compliance > 0 ? opt.stretch_compliance : d / (E * kPi * rbar * rbar)));
   }
-  m.blocks.push_back(std::move(dist));
+  return dist;
+}
 
-  // Volume preservation: linked spheres are the overlapping ones.
+// Volume preservation: linked spheres are the overlapping ones.
+template <typename T>
+void setOverlapsFromLinks(PbdModel<T>& m, const std::vector<std::vector<std::int32_t>>& nbr) {
   m.overlap_offsets.assign(1, 0);
-  for (std::size_t i = 0; i < n; ++i) {
-    m.overlap_ids.insert(m.overlap_ids.end(), nbr[i].begin(), nbr[i].end());
+  for (const auto& l : nbr) {
+    m.overlap_ids.insert(m.overlap_ids.end(), l.begin(), l.end());
     m.overlap_offsets.push_back(std::int32_t(m.overlap_ids.size()));
   }
+}
+
+// The scene's static colliders, and how deep inside each sphere they meet the organ's surface.
+template <typename T>
+void setStaticContacts(PbdModel<T>& m, const MetaballModel& mb, const MetaballPbdOptions& opt) {
+  const std::size_t n = mb.size();
   const StaticColliders colliders = staticColliders(opt.colliders);
   for (const auto& p : colliders.planes) m.planes.push_back({Vec3<T>(p.normal), T(p.offset), T(p.friction)});
   for (const auto& b : colliders.boxes) m.boxes.push_back({Vec3<T>(b.min), Vec3<T>(b.max), T(b.friction)});
   // Where a ball bulges beyond the organ's surface (by up to a quarter lattice spacing on flat faces, more on curved
   // ones) the static colliders meet the surface: inset = radius - depth of the centre, clamped to [0, radius].
   if (!opt.known_contact_insets.empty() && opt.known_contact_insets.size() != n)
-    throw InputError(f, "known_contact_insets", "must hold one entry per sphere (or none)");
+    throw InputError("metaball options", "known_contact_insets", "must hold one entry per sphere (or none)");
   if (!opt.colliders.empty() && opt.surface_depth) {
     m.contact_inset.resize(n);
     for (std::size_t i = 0; i < n; ++i) {
@@ -189,9 +219,27 @@ PbdModel<T> buildMetaballPbdModel(const MetaballModel& mb, const MetaballPbdOpti
       m.contact_inset[i] = T(std::min(mb.rest_radii[i], std::max(0.0, mb.rest_radii[i] - depth)));
     }
   }
+}
+
+}  // namespace
+
+template <typename T>
+PbdModel<T> buildMetaballPbdModel(const MetaballModel& mb, const MetaballPbdOptions& opt) {
+  validateMetaballs(mb);
+  validateMetaballOptions(opt);
+  PbdModel<T> m;
+  setSphereParticles(m, mb, opt.fixed);
+  requireFixedBoxesHoldSpheres(mb, opt);
+  const std::vector<std::vector<std::int32_t>> nbr = linkNeighbors(mb);
+  m.blocks.push_back(shapeMatchingBlock<T>(mb, nbr, opt));
+  m.rotation_block = 0;
+  if (opt.laplacian) m.blocks.push_back(laplacianBlock<T>(mb, nbr, opt));
+  m.blocks.push_back(linkDistanceBlock<T>(mb, opt));
+  setOverlapsFromLinks(m, nbr);
+  setStaticContacts(m, mb, opt);
   finalizePbdModel(m, opt.coloring);
-  if (!opt.known_cell_volumes.empty() && opt.known_cell_volumes.size() != n)
-    throw InputError(f, "known_cell_volumes", "must hold one entry per sphere (or none)");
+  if (!opt.known_cell_volumes.empty() && opt.known_cell_volumes.size() != mb.size())
+    throw InputError("metaball options", "known_cell_volumes", "must hold one entry per sphere (or none)");
   if (opt.volume_samples > 0)
     computeRestCellVolumes(m, opt.volume_samples, opt.known_cell_volumes.empty() ? nullptr : &opt.known_cell_volumes);
   return m;

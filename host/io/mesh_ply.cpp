@@ -207,6 +207,110 @@ std::size_t minBinaryBytes(const PlyElement& e) {
   return n;
 }
 
+// Which properties of an element the reader uses: vertex coordinates x, y, z and the face index list.
+struct ElementRole {
+  bool is_vertex = false, is_face = false;
+  int ix = -1, iy = -1, iz = -1, ilist = -1;  // property indices, -1 when unused
+};
+
+// Finds the properties of the vertex and face elements and checks their declarations.
+ElementRole elementRole(const PlyElement& e, const std::string& file) {
+  ElementRole r;
+  r.is_vertex = e.name == "vertex";
+  r.is_face = e.name == "face";
+  if (r.is_vertex) {
+    r.ix = findProperty(e, "x");
+    r.iy = findProperty(e, "y");
+    r.iz = findProperty(e, "z");
+    if (r.ix < 0 || r.iy < 0 || r.iz < 0) throw InputError(file, "header", "element vertex lacks property x, y or z");
+    for (int i : {r.ix, r.iy, r.iz})
+      if (e.props[i].is_list) throw InputError(file, "header", "vertex property " + e.props[i].name + " is a list");
+    if (e.count > static_cast<unsigned long long>(std::numeric_limits<int>::max()))
+      throw InputError(file, "header", "too many vertices (" + std::to_string(e.count) + ") for 32-bit indices");
+  }
+  if (r.is_face) {
+    r.ilist = findProperty(e, "vertex_indices");
+    if (r.ilist < 0) r.ilist = findProperty(e, "vertex_index");
+    if (r.ilist < 0 || !e.props[r.ilist].is_list)
+      throw InputError(file, "header", "element face lacks the list property vertex_indices");
+    if (!plyIntegral(e.props[r.ilist].type))
+      throw InputError(file, "header", "face vertex_indices must have an integer type");
+  }
+  return r;
+}
+
+// Rejects counts the body cannot hold before reserving anything for them.
+void requireBodyHolds(const PlyElement& e, PlyFormat format, const PlyBody& body, const std::string& file) {
+  const std::size_t min_bytes =
+      e.props.empty() ? 0 : (format == PlyFormat::Ascii ? 2 * e.props.size() - 1 : minBinaryBytes(e));
+  if (min_bytes > 0 && e.count > body.remaining() / min_bytes + 1) {
+    throw InputError(file, "element " + e.name,
+                     "the header declares " + std::to_string(e.count) + " " + e.name + " elements but the file is " +
+                         "too short to hold them (truncated?)");
+  }
+}
+
+[[noreturn]] void throwReadFailure(PlyBody::Status s, const PlyBody& body, const PlyProperty& p,
+                                   const std::string& file, const std::string& where) {
+  if (s == PlyBody::Status::End) throw InputError(file, where, "unexpected end of file (truncated data)");
+  throw InputError(file, where, "'" + body.badToken() + "' is not a valid " + p.name + " value");
+}
+
+// Reads one list property; its values are appended to `polygon` when it is the face's index list.
+void readListProperty(PlyBody& body, const PlyProperty& p, PlyFormat format, bool indices, std::vector<int>& polygon,
+                      const std::string& file, const std::string& where) {
+  double v = 0;
+  PlyBody::Status s = body.read(p.count_type, v);
+  if (s != PlyBody::Status::Ok) throwReadFailure(s, body, p, file, where);
+  if (!(v >= 0)) throw InputError(file, where, "invalid list length " + std::to_string(static_cast<long long>(v)));
+  const std::size_t len = static_cast<std::size_t>(v);
+  const std::size_t item = format == PlyFormat::Ascii ? 2 : plySize(p.type);
+  if (len > body.remaining() / item + 1) throw InputError(file, where, "unexpected end of file (truncated data)");
+  for (std::size_t j = 0; j < len; ++j) {
+    s = body.read(p.type, v);
+    if (s != PlyBody::Status::Ok) throwReadFailure(s, body, p, file, where);
+    if (indices) {
+      if (v < 0 || v > std::numeric_limits<int>::max())
+        throw InputError(file, where, "vertex index " + std::to_string(static_cast<long long>(v)) + " is out of range");
+      polygon.push_back(static_cast<int>(v));
+    }
+  }
+  if (indices && len < 3)
+    throw InputError(file, where, "a face needs at least 3 vertices, got " + std::to_string(len));
+}
+
+// Reads every property of one element instance: the coordinates go to xyz, the face's indices to polygon.
+void readInstance(PlyBody& body, const PlyElement& e, const ElementRole& role, PlyFormat format, double xyz[3],
+                  std::vector<int>& polygon, const std::string& file, const std::string& where) {
+  for (std::size_t pi = 0; pi < e.props.size(); ++pi) {
+    const PlyProperty& p = e.props[pi];
+    if (p.is_list) {
+      readListProperty(body, p, format, static_cast<int>(pi) == role.ilist, polygon, file, where);
+      continue;
+    }
+    double v = 0;
+    const PlyBody::Status s = body.read(p.type, v);
+    if (s != PlyBody::Status::Ok) throwReadFailure(s, body, p, file, where);
+    if (static_cast<int>(pi) == role.ix) xyz[0] = v;
+    if (static_cast<int>(pi) == role.iy) xyz[1] = v;
+    if (static_cast<int>(pi) == role.iz) xyz[2] = v;
+  }
+}
+
+// Face indices refer to vertices that exist; `tri_face` names each triangle's face in the file.
+void requireIndicesInRange(const TriangleMesh& mesh, const std::vector<std::size_t>& tri_face, const std::string& file) {
+  const int n = static_cast<int>(mesh.vertices.size());
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    for (int c = 0; c < 3; ++c) {
+      if (mesh.triangles[t][c] >= n) {
+        throw InputError(file, "face " + std::to_string(tri_face[t]),
+                         "vertex index " + std::to_string(mesh.triangles[t][c]) + " is out of range (the file has " +
+                             std::to_string(n) + " vertices)");
+      }
+    }
+  }
+}
+
 }  // namespace
 
 TriangleMesh readPly(const std::string& bytes, const std::string& file) {
@@ -218,84 +322,24 @@ TriangleMesh readPly(const std::string& bytes, const std::string& file) {
   std::vector<int> polygon;
 
   for (const PlyElement& e : h.elements) {
-    const bool is_vertex = e.name == "vertex";
-    const bool is_face = e.name == "face";
-    const std::string singular = is_vertex ? "vertex" : (is_face ? "face" : e.name);
-    int ix = -1, iy = -1, iz = -1, ilist = -1;
-    if (is_vertex) {
-      have_vertex = true;
-      ix = findProperty(e, "x");
-      iy = findProperty(e, "y");
-      iz = findProperty(e, "z");
-      if (ix < 0 || iy < 0 || iz < 0) throw InputError(file, "header", "element vertex lacks property x, y or z");
-      for (int i : {ix, iy, iz})
-        if (e.props[i].is_list) throw InputError(file, "header", "vertex property " + e.props[i].name + " is a list");
-      if (e.count > static_cast<unsigned long long>(std::numeric_limits<int>::max()))
-        throw InputError(file, "header", "too many vertices (" + std::to_string(e.count) + ") for 32-bit indices");
-    }
-    if (is_face) {
-      have_face = true;
-      ilist = findProperty(e, "vertex_indices");
-      if (ilist < 0) ilist = findProperty(e, "vertex_index");
-      if (ilist < 0 || !e.props[ilist].is_list)
-        throw InputError(file, "header", "element face lacks the list property vertex_indices");
-      if (!plyIntegral(e.props[ilist].type))
-        throw InputError(file, "header", "face vertex_indices must have an integer type");
-    }
-    // Reject counts the body cannot hold before reserving anything for them.
-    const std::size_t min_bytes =
-        e.props.empty() ? 0 : (h.format == PlyFormat::Ascii ? 2 * e.props.size() - 1 : minBinaryBytes(e));
-    if (min_bytes > 0 && e.count > body.remaining() / min_bytes + 1) {
-      throw InputError(file, "element " + e.name,
-                       "the header declares " + std::to_string(e.count) + " " + e.name + " elements but the file is " +
-                           "too short to hold them (truncated?)");
-    }
-    if (is_vertex) mesh.vertices.reserve(e.count);
+    const ElementRole role = elementRole(e, file);
+    have_vertex = have_vertex || role.is_vertex;
+    have_face = have_face || role.is_face;
+    const std::string singular = role.is_vertex ? "vertex" : (role.is_face ? "face" : e.name);
+    requireBodyHolds(e, h.format, body, file);
+    if (role.is_vertex) mesh.vertices.reserve(e.count);
 
     for (unsigned long long k = 0; k < e.count; ++k) {
       const std::string where = singular + " " + std::to_string(k);
       double xyz[3] = {0, 0, 0};
       polygon.clear();
-      for (std::size_t pi = 0; pi < e.props.size(); ++pi) {
-        const PlyProperty& p = e.props[pi];
-        auto fail = [&](PlyBody::Status s) {
-          if (s == PlyBody::Status::End) throw InputError(file, where, "unexpected end of file (truncated data)");
-          throw InputError(file, where, "'" + body.badToken() + "' is not a valid " + p.name + " value");
-        };
-        double v = 0;
-        if (p.is_list) {
-          PlyBody::Status s = body.read(p.count_type, v);
-          if (s != PlyBody::Status::Ok) fail(s);
-          if (!(v >= 0)) throw InputError(file, where, "invalid list length " + std::to_string(static_cast<long long>(v)));
-          const std::size_t len = static_cast<std::size_t>(v);
-          const std::size_t item = h.format == PlyFormat::Ascii ? 2 : plySize(p.type);
-          if (len > body.remaining() / item + 1) throw InputError(file, where, "unexpected end of file (truncated data)");
-          const bool indices = static_cast<int>(pi) == ilist;
-          for (std::size_t j = 0; j < len; ++j) {
-            s = body.read(p.type, v);
-            if (s != PlyBody::Status::Ok) fail(s);
-            if (indices) {
-              if (v < 0 || v > std::numeric_limits<int>::max())
-                throw InputError(file, where, "vertex index " + std::to_string(static_cast<long long>(v)) + " is out of range");
-              polygon.push_back(static_cast<int>(v));
-            }
-          }
-          if (indices && len < 3)
-            throw InputError(file, where, "a face needs at least 3 vertices, got " + std::to_string(len));
-        } else {
-          const PlyBody::Status s = body.read(p.type, v);
-          if (s != PlyBody::Status::Ok) fail(s);
-          if (static_cast<int>(pi) == ix) xyz[0] = v;
-          if (static_cast<int>(pi) == iy) xyz[1] = v;
-          if (static_cast<int>(pi) == iz) xyz[2] = v;
-        }
-      }
-      if (is_vertex) {
+      readInstance(body, e, role, h.format, xyz, polygon, file, where);
+      if (role.is_vertex) {
         const Vec3d x(xyz[0], xyz[1], xyz[2]);
         if (!isFinite(x)) throw InputError(file, where, "coordinate is not finite (NaN or infinite)");
         mesh.vertices.push_back(x);
       }
-      if (is_face) {
+      if (role.is_face) {
         fanTriangulate(polygon, mesh.triangles);
         tri_face.resize(mesh.triangles.size(), static_cast<std::size_t>(k));
       }
@@ -303,17 +347,7 @@ TriangleMesh readPly(const std::string& bytes, const std::string& file) {
   }
   if (!have_vertex) throw InputError(file, "header", "no vertex element");
   if (!have_face) throw InputError(file, "header", "no face element (a point cloud is not a surface mesh)");
-
-  const int n = static_cast<int>(mesh.vertices.size());
-  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
-    for (int c = 0; c < 3; ++c) {
-      if (mesh.triangles[t][c] >= n) {
-        throw InputError(file, "face " + std::to_string(tri_face[t]),
-                         "vertex index " + std::to_string(mesh.triangles[t][c]) + " is out of range (the file has " +
-                             std::to_string(n) + " vertices)");
-      }
-    }
-  }
+  requireIndicesInRange(mesh, tri_face, file);
   return mesh;
 }
 

@@ -49,57 +49,132 @@ int cmdDevices() {
   return 0;
 }
 
+int cmdScenes() {
+  for (const auto& e : inc::embeddedScenes())
+    std::printf("%-16s %s%s\n", e.name, e.summary,
+                std::string(e.name) == inc::defaultEmbeddedScene().name ? " (default)" : "");
+  return 0;
+}
+
+struct RunArgs {
+  std::string scene, backend, precision, out_dir = "out";
+  long steps = -1;
+  double seconds = -1.0;
+  bool quiet = false;
+};
+
+CLI::App* addRunCommand(CLI::App& app, RunArgs& a) {
+  auto* run = app.add_subcommand("run", "Run a scene headless and write its outputs");
+  run->add_option("scene", a.scene, "Scene file (JSON) or embedded scene name; default: the embedded default");
+  auto* o_steps = run->add_option("--steps", a.steps, "Number of frames to run");
+  run->add_option("--seconds", a.seconds, "Simulated seconds to run")->excludes(o_steps);
+  run->add_option("--backend", a.backend, "auto | cuda | cpu (overrides the scene)");
+  run->add_option("--precision", a.precision, "float32 | float64 (overrides the scene)");
+  run->add_option("--out", a.out_dir, "Output folder (PLY/OBJ/VTK, metrics.csv, summary.txt)");
+  run->add_flag("--quiet", a.quiet, "No progress output");
+  return run;
+}
+
+int cmdRun(const RunArgs& a) {
+  const inc::Scene scene = resolveScene(a.scene);
+  inc::RunOptions opt;
+  opt.frames = a.steps;
+  opt.seconds = a.seconds;
+  opt.out_dir = a.out_dir;
+  opt.quiet = a.quiet;
+  if (!a.backend.empty()) opt.backend = inc::parseBackend(a.backend);
+  if (!a.precision.empty()) {
+    if (a.precision == "float32") opt.precision = inc::Precision::Float32;
+    else if (a.precision == "float64") opt.precision = inc::Precision::Float64;
+    else throw inc::InputError("", "--precision", "unknown precision '" + a.precision + "' (float32 or float64)");
+  }
+  const inc::RunSummary sum = inc::runScene(scene, opt);
+  std::printf("incision: %s: %s\n", scene.name.c_str(), sum.line().c_str());
+  std::printf("incision: outputs in %s\n", a.out_dir.c_str());
+  return sum.failed ? inc::kExitSimulationFailed : 0;
+}
+
+struct ViewArgs {
+  std::string scene, backend, screenshot, camera;
+  int frames = 0;
+  bool splats = false;
+};
+
+CLI::App* addViewCommand(CLI::App& app, ViewArgs& a) {
+  auto* view = app.add_subcommand("view", "Show a scene in the interactive viewer (GLFW + Dear ImGui)");
+  view->add_option("scene", a.scene, "Scene file (JSON) or embedded scene name; default: the embedded default");
+  view->add_option("--backend", a.backend, "auto | cuda | cpu (overrides the scene)");
+  view->add_option("--frames", a.frames, "Scripted run: draw N frames, then exit")->check(CLI::NonNegativeNumber);
+  view->add_option("--screenshot", a.screenshot, "PNG written after the last scripted frame");
+  view->add_flag("--splats", a.splats, "Start with point splats instead of the shaded surface");
+  view->add_option("--camera", a.camera,
+                   "First view: YAW,PITCH[,DISTANCE] (degrees about the up axis, degrees above the horizontal, metres "
+                   "from the framed centre; default: the framing's)");
+  return view;
+}
+
+int cmdView(const ViewArgs& a) {
+  inc::cli::ViewCommandOptions vo;
+  if (!a.backend.empty()) vo.backend = inc::parseBackend(a.backend);
+  vo.frames = a.frames;
+  vo.screenshot = a.screenshot;
+  vo.splats = a.splats;
+  if (!a.camera.empty()) vo.camera = inc::parseCameraAngles(a.camera);
+  return inc::cli::runViewCommand(resolveScene(a.scene), vo);
+}
+
+struct TradeoffArgs {
+  std::string scene, budgets = "1,16", out_dir = "tradeoff", backend, models, cost = "wall";
+  bool quick = false;
+};
+
+CLI::App* addTradeoffCommand(CLI::App& app, TradeoffArgs& a) {
+  auto* tradeoff = app.add_subcommand("tradeoff", "Sweep the scene's model knobs: ms per frame vs error (CSV, table, plot)");
+  tradeoff->add_option("scene", a.scene,
+                       "Scene file (JSON) or embedded scene name; default: the embedded beam (analytic reference)");
+  tradeoff->add_option("--budget-ms", a.budgets, "Comma list of frame budgets in ms for the Pareto tables");
+  tradeoff->add_option("--out", a.out_dir, "Output folder (tradeoff.csv, tradeoff.md, tradeoff.png)");
+  tradeoff->add_option("--backend", a.backend, "auto | cuda | cpu (default cpu)");
+  tradeoff->add_option("--models", a.models, "Comma list (mls,pbd,mfs) swept instead of the scene's models");
+  tradeoff->add_flag("--quick", a.quick, "Few settings, short runs (checks it runs)");
+  tradeoff->add_option("--cost", a.cost, "wall | cpu: the time the Pareto tables use (cpu: process CPU time)");
+  return tradeoff;
+}
+
+int cmdTradeoff(const TradeoffArgs& a) {
+  inc::cli::TradeoffCommandOptions to;
+  to.sweep.budgets_ms = inc::parseBudgets(a.budgets);
+  to.sweep.quick = a.quick;
+  if (!a.backend.empty()) to.sweep.backend = inc::parseBackend(a.backend);
+  to.out_dir = a.out_dir;
+  to.models = a.models;
+  to.cost = a.cost;
+  return inc::cli::runTradeoffCommand(resolveScene(a.scene.empty() ? "beam" : a.scene), to);
+}
+
+int cmdValidate(const std::string& path) {
+  const inc::Scene s = inc::loadSceneFile(path);
+  std::printf("%s: ok (%s)\n", path.c_str(), s.name.c_str());
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"Incision: GPU-first soft-tissue simulation for surgical training"};
   app.require_subcommand(1);
 
-  std::string scene_arg, backend = "", precision = "", out_dir = "out";
-  long steps = -1;
-  double seconds = -1.0;
-  bool quiet = false;
-  auto* run = app.add_subcommand("run", "Run a scene headless and write its outputs");
-  run->add_option("scene", scene_arg, "Scene file (JSON) or embedded scene name; default: the embedded default");
-  auto* o_steps = run->add_option("--steps", steps, "Number of frames to run");
-  run->add_option("--seconds", seconds, "Simulated seconds to run")->excludes(o_steps);
-  run->add_option("--backend", backend, "auto | cuda | cpu (overrides the scene)");
-  run->add_option("--precision", precision, "float32 | float64 (overrides the scene)");
-  run->add_option("--out", out_dir, "Output folder (PLY/OBJ/VTK, metrics.csv, summary.txt)");
-  run->add_flag("--quiet", quiet, "No progress output");
-
-  std::string view_arg, view_backend, screenshot, view_camera;
-  int view_frames = 0;
-  bool view_splats = false;
-  auto* view = app.add_subcommand("view", "Show a scene in the interactive viewer (GLFW + Dear ImGui)");
-  view->add_option("scene", view_arg, "Scene file (JSON) or embedded scene name; default: the embedded default");
-  view->add_option("--backend", view_backend, "auto | cuda | cpu (overrides the scene)");
-  view->add_option("--frames", view_frames, "Scripted run: draw N frames, then exit")->check(CLI::NonNegativeNumber);
-  view->add_option("--screenshot", screenshot, "PNG written after the last scripted frame");
-  view->add_flag("--splats", view_splats, "Start with point splats instead of the shaded surface");
-  view->add_option("--camera", view_camera,
-                   "First view: YAW,PITCH[,DISTANCE] (degrees about the up axis, degrees above the horizontal, metres "
-                   "from the framed centre; default: the framing's)");
-
+  RunArgs run_args;
+  auto* run = addRunCommand(app, run_args);
+  ViewArgs view_args;
+  auto* view = addViewCommand(app, view_args);
   std::string validate_arg;
   auto* validate = app.add_subcommand("validate", "Load and check a scene file; print what it switches on");
   validate->add_option("scene", validate_arg, "Scene file (JSON)")->required();
-
   auto* scenes = app.add_subcommand("scenes", "List the embedded scenes");
   auto* devices = app.add_subcommand("devices", "Report the CUDA devices and haptic device drivers this build can use");
-
-  std::string tradeoff_arg, tradeoff_budgets = "1,16", tradeoff_out = "tradeoff", tradeoff_backend, tradeoff_models,
-      tradeoff_cost = "wall";
-  bool tradeoff_quick = false;
-  auto* tradeoff = app.add_subcommand("tradeoff", "Sweep the scene's model knobs: ms per frame vs error (CSV, table, plot)");
-  tradeoff->add_option("scene", tradeoff_arg,
-                       "Scene file (JSON) or embedded scene name; default: the embedded beam (analytic reference)");
-  tradeoff->add_option("--budget-ms", tradeoff_budgets, "Comma list of frame budgets in ms for the Pareto tables");
-  tradeoff->add_option("--out", tradeoff_out, "Output folder (tradeoff.csv, tradeoff.md, tradeoff.png)");
-  tradeoff->add_option("--backend", tradeoff_backend, "auto | cuda | cpu (default cpu)");
-  tradeoff->add_option("--models", tradeoff_models, "Comma list (mls,pbd,mfs) swept instead of the scene's models");
-  tradeoff->add_flag("--quick", tradeoff_quick, "Few settings, short runs (checks it runs)");
-  tradeoff->add_option("--cost", tradeoff_cost, "wall | cpu: the time the Pareto tables use (cpu: process CPU time)");
+  TradeoffArgs tradeoff_args;
+  auto* tradeoff = addTradeoffCommand(app, tradeoff_args);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -108,54 +183,11 @@ int main(int argc, char** argv) {
 
   try {
     if (*devices) return cmdDevices();
-    if (*scenes) {
-      for (const auto& e : inc::embeddedScenes())
-        std::printf("%-16s %s%s\n", e.name, e.summary,
-                    std::string(e.name) == inc::defaultEmbeddedScene().name ? " (default)" : "");
-      return 0;
-    }
-    if (*validate) {
-      const inc::Scene s = inc::loadSceneFile(validate_arg);
-      std::printf("%s: ok (%s)\n", validate_arg.c_str(), s.name.c_str());
-      return 0;
-    }
-    if (*view) {
-      inc::cli::ViewCommandOptions vo;
-      if (!view_backend.empty()) vo.backend = inc::parseBackend(view_backend);
-      vo.frames = view_frames;
-      vo.screenshot = screenshot;
-      vo.splats = view_splats;
-      if (!view_camera.empty()) vo.camera = inc::parseCameraAngles(view_camera);
-      return inc::cli::runViewCommand(resolveScene(view_arg), vo);
-    }
-    if (*tradeoff) {
-      inc::cli::TradeoffCommandOptions to;
-      to.sweep.budgets_ms = inc::parseBudgets(tradeoff_budgets);
-      to.sweep.quick = tradeoff_quick;
-      if (!tradeoff_backend.empty()) to.sweep.backend = inc::parseBackend(tradeoff_backend);
-      to.out_dir = tradeoff_out;
-      to.models = tradeoff_models;
-      to.cost = tradeoff_cost;
-      return inc::cli::runTradeoffCommand(resolveScene(tradeoff_arg.empty() ? "beam" : tradeoff_arg), to);
-    }
-    if (*run) {
-      const inc::Scene scene = resolveScene(scene_arg);
-      inc::RunOptions opt;
-      opt.frames = steps;
-      opt.seconds = seconds;
-      opt.out_dir = out_dir;
-      opt.quiet = quiet;
-      if (!backend.empty()) opt.backend = inc::parseBackend(backend);
-      if (!precision.empty()) {
-        if (precision == "float32") opt.precision = inc::Precision::Float32;
-        else if (precision == "float64") opt.precision = inc::Precision::Float64;
-        else throw inc::InputError("", "--precision", "unknown precision '" + precision + "' (float32 or float64)");
-      }
-      const inc::RunSummary sum = inc::runScene(scene, opt);
-      std::printf("incision: %s: %s\n", scene.name.c_str(), sum.line().c_str());
-      std::printf("incision: outputs in %s\n", out_dir.c_str());
-      return sum.failed ? inc::kExitSimulationFailed : 0;
-    }
+    if (*scenes) return cmdScenes();
+    if (*validate) return cmdValidate(validate_arg);
+    if (*view) return cmdView(view_args);
+    if (*tradeoff) return cmdTradeoff(tradeoff_args);
+    if (*run) return cmdRun(run_args);
   } catch (const inc::InputError& e) {
     std::fprintf(stderr, "incision: error: %s\n", e.what());
     return inc::kExitBadInput;
