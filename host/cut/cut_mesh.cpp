@@ -106,18 +106,13 @@ int earClip(const std::vector<std::array<double, 2>>& p, std::vector<int> poly, 
   return forced;
 }
 
-}  // namespace
-
-CutMeshResult splitMeshByPlane(const TriangleMesh& mesh, const Vec3d& point, const Vec3d& normal_in) {
-  const double nl = norm(normal_in);
-  if (!(nl > 0.0) || !isFinite(point)) throw InputError("cut", "plane", "normal must be non-zero and finite");
-  const Vec3d n = normal_in * (1.0 / nl);
+// Signed distances of the vertices from the plane (point, unit n). No vertex may lie within `snap` of the plane,
+// else the split leaves slivers next to it: the plane is shifted along n by 3 snap steps until it clears every
+// vertex (a sub-micrometre move of the cut for organ sizes; deterministic).
+std::vector<double> clearedPlaneDistances(const TriangleMesh& mesh, const Vec3d& point, const Vec3d& n) {
   const std::size_t nv = mesh.vertices.size();
   double size = 0.0;
   for (const auto& v : mesh.vertices) size = std::max(size, norm(v - point));
-  // No vertex may lie within `snap` of the plane, else the split leaves slivers next to it: the plane is
-  // shifted along n by 3 snap steps until it clears every vertex (a sub-micrometre move of the cut for organ
-  // sizes; deterministic).
   const double snap = 1e-7 * std::max(size, 1e-12);
   double shift = 0.0;
   std::vector<double> s(nv);
@@ -132,94 +127,135 @@ CutMeshResult splitMeshByPlane(const TriangleMesh& mesh, const Vec3d& point, con
   }
   for (std::size_t i = 0; i < nv; ++i)
     if (std::fabs(s[i]) < snap) s[i] = s[i] < 0 ? -snap : snap;  // dense vertices after 64 shifts: push off
-  // Contour vertices, one per crossed edge, numbered after the mesh vertices.
-  std::map<Edge, int> cut_vertex;
-  std::vector<Vec3d> contour;
-  const auto cutOf = [&](int a, int b) {
+  return s;
+}
+
+// Contour vertices, one per crossed edge, numbered after the mesh vertices (shared by both pieces).
+class ContourVertices {
+ public:
+  ContourVertices(const TriangleMesh& mesh, const std::vector<double>& s) : mesh_(mesh), s_(s) {}
+  int of(int a, int b) {
     const Edge k = key(a, b);
-    auto it = cut_vertex.find(k);
-    if (it != cut_vertex.end()) return it->second;
-    const double t = s[k.first] / (s[k.first] - s[k.second]);
-    contour.push_back(mesh.vertices[k.first] + (mesh.vertices[k.second] - mesh.vertices[k.first]) * t);
-    const int id = int(nv + contour.size() - 1);
-    cut_vertex.emplace(k, id);
+    auto it = cut_vertex_.find(k);
+    if (it != cut_vertex_.end()) return it->second;
+    const double t = s_[k.first] / (s_[k.first] - s_[k.second]);
+    contour_.push_back(mesh_.vertices[k.first] + (mesh_.vertices[k.second] - mesh_.vertices[k.first]) * t);
+    const int id = int(mesh_.vertices.size() + contour_.size() - 1);
+    cut_vertex_.emplace(k, id);
     return id;
-  };
+  }
+  const std::vector<Vec3d>& points() const { return contour_; }
+
+ private:
+  const TriangleMesh& mesh_;
+  const std::vector<double>& s_;
+  std::map<Edge, int> cut_vertex_;
+  std::vector<Vec3d> contour_;
+};
+
+// The triangles of the piece on the `sign` side of the plane, crossed triangles clipped; `next` receives the cap
+// edges from -> to (reverse of the boundary the clipped triangles leave).
+void clipPiece(const TriangleMesh& mesh, const std::vector<double>& s, int sign, ContourVertices& cuts,
+               std::vector<std::array<int, 3>>& tris, std::map<int, int>& next) {
+  for (const auto& t : mesh.triangles) {
+    std::array<bool, 3> in;
+    for (int k = 0; k < 3; ++k) in[k] = (s[t[k]] > 0.0) == (sign > 0);
+    const int count = int(in[0]) + int(in[1]) + int(in[2]);
+    if (count == 3) {
+      tris.push_back(t);
+      continue;
+    }
+    if (count == 0) continue;
+    // Rotate so the lone vertex (inside for count 1, outside for count 2) comes first, keeping orientation.
+    int r0 = 0;
+    for (int k = 0; k < 3; ++k)
+      if (in[k] == (count == 1)) r0 = k;
+    const int a = t[r0], b = t[(r0 + 1) % 3], c = t[(r0 + 2) % 3];
+    const int xab = cuts.of(a, b), xca = cuts.of(c, a);
+    if (count == 1) {
+      tris.push_back({a, xab, xca});
+      next[xca] = xab;  // the triangle runs xab -> xca along the cut; the wall runs the other way
+    } else {
+      tris.push_back({xab, b, c});
+      tris.push_back({xab, c, xca});
+      next[xab] = xca;  // triangle edge xca -> xab
+    }
+  }
+}
+
+// The piece's cut wall: each closed contour of `next`, projected on the plane with a basis (u, w) such that
+// u x w = wall normal (-sign * n, outward for this piece); the loops then run counter-clockwise. Counts its loops
+// and forced ears into r.
+std::vector<std::array<int, 3>> capPiece(const std::map<int, int>& next, const std::vector<Vec3d>& contour,
+                                         std::size_t nv, const Vec3d& point, const Vec3d& n, int sign,
+                                         CutMeshResult& r) {
+  const Vec3d wall_n = n * double(-sign);
+  const Vec3d helper = std::fabs(wall_n.x) < 0.9 ? Vec3d(1, 0, 0) : Vec3d(0, 1, 0);
+  Vec3d u = cross(helper, wall_n);
+  u *= 1.0 / norm(u);
+  const Vec3d w = cross(wall_n, u);
+  std::vector<std::array<double, 2>> p2(nv + contour.size());
+  for (std::size_t i = 0; i < contour.size(); ++i) {
+    const Vec3d d = contour[i] - point;
+    p2[nv + i] = {dot(d, u), dot(d, w)};
+  }
+  std::map<int, bool> used;
+  int loops = 0;
+  std::vector<std::array<int, 3>> wall;
+  for (const auto& e : next) {
+    if (used[e.first]) continue;
+    std::vector<int> loop;
+    int v = e.first;
+    while (!used[v]) {
+      used[v] = true;
+      loop.push_back(v);
+      auto it = next.find(v);
+      if (it == next.end()) throw InputError("cut", "mesh", "the surface is not closed along the cut (open contour)");
+      v = it->second;
+    }
+    ++loops;
+    if (loop.size() < 3) continue;
+    r.forced_ears += earClip(p2, loop, wall);
+  }
+  r.contour_loops = std::max(r.contour_loops, loops);
+  r.wall_triangles += int(wall.size());
+  return wall;
+}
+
+// The piece as a mesh of the vertices it uses only.
+void compactPiece(std::vector<std::array<int, 3>>& tris, const TriangleMesh& mesh, const std::vector<Vec3d>& contour,
+                  TriangleMesh& out) {
+  const std::size_t nv = mesh.vertices.size();
+  std::vector<int> remap(nv + contour.size(), -1);
+  for (auto& t : tris) {
+    for (int k = 0; k < 3; ++k) {
+      int& id = remap[t[k]];
+      if (id < 0) {
+        id = int(out.vertices.size());
+        out.vertices.push_back(t[k] < int(nv) ? mesh.vertices[t[k]] : contour[t[k] - nv]);
+      }
+      t[k] = id;
+    }
+    out.triangles.push_back(t);
+  }
+}
+
+}  // namespace
+
+CutMeshResult splitMeshByPlane(const TriangleMesh& mesh, const Vec3d& point, const Vec3d& normal_in) {
+  const double nl = norm(normal_in);
+  if (!(nl > 0.0) || !isFinite(point)) throw InputError("cut", "plane", "normal must be non-zero and finite");
+  const Vec3d n = normal_in * (1.0 / nl);
+  const std::vector<double> s = clearedPlaneDistances(mesh, point, n);
+  ContourVertices cuts(mesh, s);
   CutMeshResult r;
   for (int sign : {+1, -1}) {
     std::vector<std::array<int, 3>> tris;
-    std::map<int, int> next;  // cap edges from -> to (reverse of the boundary the clipped triangles leave)
-    for (const auto& t : mesh.triangles) {
-      std::array<bool, 3> in;
-      for (int k = 0; k < 3; ++k) in[k] = (s[t[k]] > 0.0) == (sign > 0);
-      const int count = int(in[0]) + int(in[1]) + int(in[2]);
-      if (count == 3) {
-        tris.push_back(t);
-        continue;
-      }
-      if (count == 0) continue;
-      // Rotate so the lone vertex (inside for count 1, outside for count 2) comes first, keeping orientation.
-      int r0 = 0;
-      for (int k = 0; k < 3; ++k)
-        if (in[k] == (count == 1)) r0 = k;
-      const int a = t[r0], b = t[(r0 + 1) % 3], c = t[(r0 + 2) % 3];
-      const int xab = cutOf(a, b), xca = cutOf(c, a);
-      if (count == 1) {
-        tris.push_back({a, xab, xca});
-        next[xca] = xab;  // the triangle runs xab -> xca along the cut; the wall runs the other way
-      } else {
-        tris.push_back({xab, b, c});
-        tris.push_back({xab, c, xca});
-        next[xab] = xca;  // triangle edge xca -> xab
-      }
-    }
-    // Walls: each closed contour, projected on the plane with a basis (u, w) such that u x w = wall normal
-    // (-sign * n, outward for this piece); the loops then run counter-clockwise.
-    const Vec3d wall_n = n * double(-sign);
-    const Vec3d helper = std::fabs(wall_n.x) < 0.9 ? Vec3d(1, 0, 0) : Vec3d(0, 1, 0);
-    Vec3d u = cross(helper, wall_n);
-    u *= 1.0 / norm(u);
-    const Vec3d w = cross(wall_n, u);
-    std::vector<std::array<double, 2>> p2(nv + contour.size());
-    for (std::size_t i = 0; i < contour.size(); ++i) {
-      const Vec3d d = contour[i] - point;
-      p2[nv + i] = {dot(d, u), dot(d, w)};
-    }
-    std::map<int, bool> used;
-    int loops = 0;
-    std::vector<std::array<int, 3>> wall;
-    for (const auto& e : next) {
-      if (used[e.first]) continue;
-      std::vector<int> loop;
-      int v = e.first;
-      while (!used[v]) {
-        used[v] = true;
-        loop.push_back(v);
-        auto it = next.find(v);
-        if (it == next.end()) throw InputError("cut", "mesh", "the surface is not closed along the cut (open contour)");
-        v = it->second;
-      }
-      ++loops;
-      if (loop.size() < 3) continue;
-      r.forced_ears += earClip(p2, loop, wall);
-    }
-    r.contour_loops = std::max(r.contour_loops, loops);
-    r.wall_triangles += int(wall.size());
+    std::map<int, int> next;
+    clipPiece(mesh, s, sign, cuts, tris, next);
+    const std::vector<std::array<int, 3>> wall = capPiece(next, cuts.points(), mesh.vertices.size(), point, n, sign, r);
     tris.insert(tris.end(), wall.begin(), wall.end());
-    // Compact to the vertices this piece uses.
-    TriangleMesh& out = sign > 0 ? r.positive : r.negative;
-    std::vector<int> remap(nv + contour.size(), -1);
-    for (auto& t : tris) {
-      for (int k = 0; k < 3; ++k) {
-        int& id = remap[t[k]];
-        if (id < 0) {
-          id = int(out.vertices.size());
-          out.vertices.push_back(t[k] < int(nv) ? mesh.vertices[t[k]] : contour[t[k] - nv]);
-        }
-        t[k] = id;
-      }
-      out.triangles.push_back(t);
-    }
+    compactPiece(tris, mesh, cuts.points(), sign > 0 ? r.positive : r.negative);
   }
   return r;
 }

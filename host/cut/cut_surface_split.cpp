@@ -208,23 +208,49 @@ class Splitter {
   // cuts nothing. Coincident vertices (the two walls of an earlier cut) are decided together, so the crossing
   // curves on coincident walls coincide.
   void classifyVertices() {
-    const std::size_t nv = m_.vertices.size();
-    const double tau = opt_.snap_fraction;
-    side_.resize(nv);
-    proj_.resize(nv);
-    // Outward (area-weighted) vertex normals: a vertex lying on the swept surface takes the side of the
-    // material below the mesh there, so a blade lying on a face cuts nothing.
-    std::vector<Vec3d> vertex_normal(nv);
+    side_.resize(m_.vertices.size());
+    proj_.resize(m_.vertices.size());
+    VertexSnap snap;
+    snap.vertex_normal = outwardVertexNormals();
+    const double longest = measureEdges(snap.shortest);
+    labelVertices(snap, longest);
+    groupCoincidentVertices(snap);
+    findSnapCandidates(snap);
+    settleSnaps(snap);
+  }
+
+  // classifyVertices' working state, phase to phase.
+  struct VertexSnap {
+    std::vector<Vec3d> vertex_normal;   // outward, area-weighted
+    std::vector<double> shortest;       // per vertex: its shortest edge
+    std::vector<std::vector<int>> groups;  // coincident vertices
+    std::vector<int> group_of;
+    std::vector<char> cand;             // per group: a snap candidate
+    std::vector<char> ok_over_strip;    // per candidate group: lies over the strip, away from its outline
+    std::vector<std::vector<std::pair<int, int>>> links;  // umbrella rings (neighbours in cyclic order)
+  };
+
+  // Outward (area-weighted) vertex normals: a vertex lying on the swept surface takes the side of the
+  // material below the mesh there, so a blade lying on a face cuts nothing.
+  std::vector<Vec3d> outwardVertexNormals() const {
+    std::vector<Vec3d> vertex_normal(m_.vertices.size());
     for (const auto& t : m_.triangles) {
       const Vec3d n = cross(m_.vertices[std::size_t(t[1])] - m_.vertices[std::size_t(t[0])],
                             m_.vertices[std::size_t(t[2])] - m_.vertices[std::size_t(t[0])]);
       for (int v : t) vertex_normal[std::size_t(v)] += n;
     }
-    const auto materialSide = [&](int v, double fallback) {
-      const double facing = dot(vertex_normal[std::size_t(v)], proj_[std::size_t(v)].normal);
-      return facing > 0.0 ? -1 : (facing < 0.0 ? 1 : (fallback >= 0.0 ? 1 : -1));
-    };
-    std::vector<double> shortest(nv, std::numeric_limits<double>::infinity());
+    return vertex_normal;
+  }
+
+  int materialSide(const VertexSnap& snap, int v, double fallback) const {
+    const double facing = dot(snap.vertex_normal[std::size_t(v)], proj_[std::size_t(v)].normal);
+    return facing > 0.0 ? -1 : (facing < 0.0 ? 1 : (fallback >= 0.0 ? 1 : -1));
+  }
+
+  // Each vertex's shortest edge and neighbours (adj_); returns the longest edge.
+  double measureEdges(std::vector<double>& shortest) {
+    const std::size_t nv = m_.vertices.size();
+    shortest.assign(nv, std::numeric_limits<double>::infinity());
     adj_.assign(nv, {});
     double longest = 0.0;
     for (const auto& e : edges_) {
@@ -235,8 +261,14 @@ class Splitter {
         adj_[std::size_t(e[k])].push_back(e[1 - k]);
       }
     }
-    // Vertices farther than two edges from the strip's box take no part in any crossing or snap (an edge that
-    // meets the strip has both ends within one edge of it): they are labelled later, only if needed.
+    return longest;
+  }
+
+  // The first labels: the side of each vertex's projection onto the sweep (a vertex on it: the material side).
+  // Vertices farther than two edges from the strip's box take no part in any crossing or snap (an edge that
+  // meets the strip has both ends within one edge of it): they are labelled later, only if needed.
+  void labelVertices(const VertexSnap& snap, double longest) {
+    const std::size_t nv = m_.vertices.size();
     far_.assign(nv, 0);
     for (std::size_t v = 0; v < nv; ++v) {
       const Vec3d& x = m_.vertices[v];
@@ -252,96 +284,111 @@ class Splitter {
         continue;
       }
       proj_[v] = projectOntoSweep(s_, dom_, query_, x);
-      side_[v] = std::fabs(proj_[v].offset) <= 1e-12 * size_ ? materialSide(int(v), proj_[v].offset)
+      side_[v] = std::fabs(proj_[v].offset) <= 1e-12 * size_ ? materialSide(snap, int(v), proj_[v].offset)
                                                                : (proj_[v].offset >= 0.0 ? 1 : -1);
     }
-    // Groups of coincident vertices.
+  }
+
+  // Groups of coincident vertices.
+  void groupCoincidentVertices(VertexSnap& snap) const {
+    const std::size_t nv = m_.vertices.size();
     std::vector<int> order(nv);
     std::iota(order.begin(), order.end(), 0);
     std::sort(order.begin(), order.end(), [&](int a, int b) {
       return lexLess(m_.vertices[std::size_t(a)], m_.vertices[std::size_t(b)]) ||
              (!lexLess(m_.vertices[std::size_t(b)], m_.vertices[std::size_t(a)]) && a < b);
     });
-    std::vector<std::vector<int>> groups;
     for (std::size_t i = 0; i < nv;) {
       std::size_t j = i + 1;
       while (j < nv && norm2(m_.vertices[std::size_t(order[j])] - m_.vertices[std::size_t(order[i])]) == 0.0) ++j;
-      groups.emplace_back(order.begin() + std::ptrdiff_t(i), order.begin() + std::ptrdiff_t(j));
+      snap.groups.emplace_back(order.begin() + std::ptrdiff_t(i), order.begin() + std::ptrdiff_t(j));
       i = j;
     }
-    std::vector<int> group_of(nv);
-    for (std::size_t g = 0; g < groups.size(); ++g)
-      for (int v : groups[g]) group_of[std::size_t(v)] = int(g);
-    const auto offset = [&](int v) { return proj_[std::size_t(v)].offset; };
-    // Candidates: some crossing within snap_fraction of the vertex.
-    std::vector<char> cand(groups.size(), 0);
-    for (std::size_t g = 0; g < groups.size(); ++g)
-      for (int v : groups[g])
+    snap.group_of.resize(nv);
+    for (std::size_t g = 0; g < snap.groups.size(); ++g)
+      for (int v : snap.groups[g]) snap.group_of[std::size_t(v)] = int(g);
+  }
+
+  // Candidates: some crossing within snap_fraction of the vertex; and whether each lies over the strip.
+  void findSnapCandidates(VertexSnap& snap) const {
+    const double tau = opt_.snap_fraction;
+    snap.cand.assign(snap.groups.size(), 0);
+    for (std::size_t g = 0; g < snap.groups.size(); ++g)
+      for (int v : snap.groups[g])
         for (int w : adj_[std::size_t(v)]) {
           if (side_[std::size_t(v)] == side_[std::size_t(w)] || far_[std::size_t(v)] || far_[std::size_t(w)]) continue;
-          const double a = std::fabs(offset(v)), b = std::fabs(offset(w));
-          if (a < tau * (a + b)) cand[g] = 1;
+          const double a = std::fabs(proj_[std::size_t(v)].offset), b = std::fabs(proj_[std::size_t(w)].offset);
+          if (a < tau * (a + b)) snap.cand[g] = 1;
         }
     // Umbrella rings (neighbours in cyclic order) for the one-run-each check.
-    std::vector<std::vector<std::pair<int, int>>> links(nv);
+    snap.links.resize(m_.vertices.size());
     for (const auto& t : m_.triangles)
-      for (int k = 0; k < 3; ++k) links[std::size_t(t[k])].push_back({t[(k + 1) % 3], t[(k + 2) % 3]});
-    const auto twoRuns = [&](int v) {
-      auto& l = links[std::size_t(v)];
-      std::sort(l.begin(), l.end());
-      std::vector<int> ring;
-      int cur = l.front().first;
-      for (std::size_t k = 0; k < l.size(); ++k) {
-        ring.push_back(cur);
-        const auto it = std::lower_bound(l.begin(), l.end(), std::pair<int, int>{cur, std::numeric_limits<int>::min()});
-        cur = it->second;
-      }
-      std::vector<int> signs;
-      for (int w : ring)
-        if (side_[std::size_t(w)] != 0) signs.push_back(side_[std::size_t(w)]);
-      int changes = 0;
-      for (std::size_t k = 0; k < signs.size(); ++k) changes += signs[k] != signs[(k + 1) % signs.size()];
-      return changes == 2;
-    };
+      for (int k = 0; k < 3; ++k) snap.links[std::size_t(t[k])].push_back({t[(k + 1) % 3], t[(k + 2) % 3]});
     const auto outlineDistance = [&](const Vec2d& uv) {
       const Vec2d q = outlinePoint(dom_, outlinePosition(dom_, uv));
       return std::hypot(q[0] - uv[0], q[1] - uv[1]);
     };
-    std::vector<char> ok_over_strip(groups.size(), 0);
-    for (std::size_t g = 0; g < groups.size(); ++g) {
-      if (!cand[g]) continue;
-      const int v = groups[g].front();
-      ok_over_strip[g] = insideOutline(dom_, proj_[std::size_t(v)].uv) &&
-                         outlineDistance(proj_[std::size_t(v)].uv) > 0.5 * shortest[std::size_t(v)];
+    snap.ok_over_strip.assign(snap.groups.size(), 0);
+    for (std::size_t g = 0; g < snap.groups.size(); ++g) {
+      if (!snap.cand[g]) continue;
+      const int v = snap.groups[g].front();
+      snap.ok_over_strip[g] = insideOutline(dom_, proj_[std::size_t(v)].uv) &&
+                              outlineDistance(proj_[std::size_t(v)].uv) > 0.5 * snap.shortest[std::size_t(v)];
     }
-    // Released: the majority side of the neighbours; with none decided, the material side.
-    const auto unsnap = [&](std::size_t g) {
-      cand[g] = 0;
-      int vote = 0;
-      for (int v : groups[g])
-        for (int w : adj_[std::size_t(v)]) vote += side_[std::size_t(w)];
-      const int own = materialSide(groups[g].front(), offset(groups[g].front()));
-      for (int v : groups[g]) side_[std::size_t(v)] = vote > 0 ? 1 : (vote < 0 ? -1 : own);
-    };
+  }
+
+  // Whether the labels around v (its umbrella ring in cyclic order) form one + run and one - run.
+  bool twoRuns(VertexSnap& snap, int v) const {
+    auto& l = snap.links[std::size_t(v)];
+    std::sort(l.begin(), l.end());
+    std::vector<int> ring;
+    int cur = l.front().first;
+    for (std::size_t k = 0; k < l.size(); ++k) {
+      ring.push_back(cur);
+      const auto it = std::lower_bound(l.begin(), l.end(), std::pair<int, int>{cur, std::numeric_limits<int>::min()});
+      cur = it->second;
+    }
+    std::vector<int> signs;
+    for (int w : ring)
+      if (side_[std::size_t(w)] != 0) signs.push_back(side_[std::size_t(w)]);
+    int changes = 0;
+    for (std::size_t k = 0; k < signs.size(); ++k) changes += signs[k] != signs[(k + 1) % signs.size()];
+    return changes == 2;
+  }
+
+  // Released: the majority side of the neighbours; with none decided, the material side.
+  void unsnap(VertexSnap& snap, std::size_t g) {
+    snap.cand[g] = 0;
+    int vote = 0;
+    for (int v : snap.groups[g])
+      for (int w : adj_[std::size_t(v)]) vote += side_[std::size_t(w)];
+    const int own = materialSide(snap, snap.groups[g].front(), proj_[std::size_t(snap.groups[g].front())].offset);
+    for (int v : snap.groups[g]) side_[std::size_t(v)] = vote > 0 ? 1 : (vote < 0 ? -1 : own);
+  }
+
+  // The candidates snap onto the cut; those that would leave a triangle of three snapped corners (the farthest
+  // corner goes), lie off the strip or break the one-run-each rule are released, until nothing changes.
+  void settleSnaps(VertexSnap& snap) {
+    const auto offset = [&](int v) { return proj_[std::size_t(v)].offset; };
     for (int round = 0; round < 16; ++round) {
-      for (std::size_t g = 0; g < groups.size(); ++g)
-        if (cand[g])
-          for (int v : groups[g]) side_[std::size_t(v)] = 0;
+      for (std::size_t g = 0; g < snap.groups.size(); ++g)
+        if (snap.cand[g])
+          for (int v : snap.groups[g]) side_[std::size_t(v)] = 0;
       bool changed = false;
       for (const auto& t : m_.triangles) {
         if (side_[std::size_t(t[0])] != 0 || side_[std::size_t(t[1])] != 0 || side_[std::size_t(t[2])] != 0) continue;
         int far = t[0];  // a triangle of three snapped corners would lie in the cut: release the farthest one
         for (int v : t)
           if (std::fabs(offset(v)) > std::fabs(offset(far)) || (std::fabs(offset(v)) == std::fabs(offset(far)) && v > far)) far = v;
-        unsnap(std::size_t(group_of[std::size_t(far)]));
+        unsnap(snap, std::size_t(snap.group_of[std::size_t(far)]));
         changed = true;
       }
-      for (std::size_t g = 0; g < groups.size(); ++g) {
-        if (!cand[g]) continue;
-        bool ok = ok_over_strip[g];
-        for (int v : groups[g]) ok = ok && twoRuns(v);
+      for (std::size_t g = 0; g < snap.groups.size(); ++g) {
+        if (!snap.cand[g]) continue;
+        bool ok = snap.ok_over_strip[g];
+        for (int v : snap.groups[g]) ok = ok && twoRuns(snap, v);
         if (!ok) {
-          unsnap(g);
+          unsnap(snap, g);
           changed = true;
         }
       }
@@ -736,17 +783,38 @@ class Splitter {
   SurfaceSplit assemble() {
     SurfaceSplit out;
     out.split = true;
-    TriangleMesh& mesh = out.mesh;
-    mesh.vertices = m_.vertices;
+    out.mesh.vertices = m_.vertices;
     out.vertex_side.assign(m_.vertices.size(), 0);
     out.binding_probe = m_.vertices;
-    const auto addVertex = [&](const Vec3d& x, int side, const Vec3d& probe) {
-      mesh.vertices.push_back(x);
-      out.vertex_side.push_back(std::int8_t(side));
-      out.binding_probe.push_back(probe);
-      return int(mesh.vertices.size()) - 1;
-    };
     std::vector<char> seeded(m_.vertices.size(), 0);
+    addNodeVertices(out, seeded);
+    const std::vector<std::array<int, 2>> interior = addWallInteriorVertices(out);
+    addSurfacePieces(out);
+    addWalls(out, interior);
+    out.wall_triangles = int(2 * wall_.triangles.size());
+    out.contour_loops = int(loops_.size());
+    out.chord_splits = wall_.chord_splits;
+    out.wall_spacing_m = h_;
+    labelInputVertices(out, seeded);
+    // An input vertex lying on the swept surface looks from just off it, on its side (a segment from a point on
+    // the surface would count as crossing it towards either side).
+    for (std::size_t v = 0; v < m_.vertices.size(); ++v)
+      if (!seeded[v] && std::fabs(proj_[v].offset) < probe_eps_)
+        out.binding_probe[v] = m_.vertices[v] + proj_[v].normal * (2.0 * probe_eps_ * out.vertex_side[v]);
+    checkSplitMesh(out);
+    return out;
+  }
+
+  static int addVertex(SurfaceSplit& out, const Vec3d& x, int side, const Vec3d& probe) {
+    out.mesh.vertices.push_back(x);
+    out.vertex_side.push_back(std::int8_t(side));
+    out.binding_probe.push_back(probe);
+    return int(out.mesh.vertices.size()) - 1;
+  }
+
+  // The nodes' output vertices: a copy per side of a crossing (an input vertex on the cut is the + copy, `seeded`),
+  // one of a pierce or front point.
+  void addNodeVertices(SurfaceSplit& out, std::vector<char>& seeded) {
     for (auto& n : nodes_) {
       if (n.kind == NodeKind::Crossing || n.kind == NodeKind::OnVertex) {
         // Binding probes just off the strip on each side (a crossing may sit up to snap_fraction of an edge off it).
@@ -757,9 +825,9 @@ class Splitter {
           out.binding_probe[std::size_t(n.vertex)] = p.closest + p.normal * probe_eps_;
           seeded[std::size_t(n.vertex)] = 1;
         } else {
-          n.v_plus = addVertex(n.x, 1, p.closest + p.normal * probe_eps_);
+          n.v_plus = addVertex(out, n.x, 1, p.closest + p.normal * probe_eps_);
         }
-        n.v_minus = addVertex(n.x, -1, p.closest - p.normal * probe_eps_);
+        n.v_minus = addVertex(out, n.x, -1, p.closest - p.normal * probe_eps_);
         ++out.crossings;
       } else {
         // Just ahead of the strip's outline (the front point may lie up to snap_fraction of an edge inside it),
@@ -767,23 +835,31 @@ class Splitter {
         Vec2d outward;
         const Vec2d q = outlinePoint(dom_, n.s, &outward);
         const Vec3d probe = liftFromDomain(s_, dom_, {q[0] + 10.0 * probe_eps_ * outward[0], q[1] + 10.0 * probe_eps_ * outward[1]});
-        n.v_plus = n.v_minus = addVertex(n.x, 0, probe);
+        n.v_plus = n.v_minus = addVertex(out, n.x, 0, probe);
         ++(n.kind == NodeKind::Pierce ? out.pierce_points : out.front_points);
       }
     }
-    const int nn = int(nodes_.size());
+  }
+
+  // The wall triangulation's interior points, one copy per side: {+, -} output vertices each.
+  std::vector<std::array<int, 2>> addWallInteriorVertices(SurfaceSplit& out) const {
     std::vector<std::array<int, 2>> interior(wall_.interior_uv.size());
     for (std::size_t i = 0; i < interior.size(); ++i) {
       const Vec3d x = liftFromDomain(s_, dom_, wall_.interior_uv[i]);
       const SweepProjection p = projectOntoSweep(s_, dom_, query_, x);
-      interior[i] = {addVertex(x, 1, x + p.normal * probe_eps_), addVertex(x, -1, x - p.normal * probe_eps_)};
+      interior[i] = {addVertex(out, x, 1, x + p.normal * probe_eps_), addVertex(out, x, -1, x - p.normal * probe_eps_)};
     }
+    return interior;
+  }
+
+  // Untouched triangles keep their order; each crossed triangle is replaced by its pieces.
+  void addSurfacePieces(SurfaceSplit& out) const {
+    TriangleMesh& mesh = out.mesh;
     const auto cornerVertex = [&](const Corner& c) {
       if (c.vertex >= 0) return c.vertex;
       const Node& n = nodes_[std::size_t(c.node)];
       return c.side < 0 ? n.v_minus : n.v_plus;
     };
-    // Untouched triangles keep their order; each crossed triangle is replaced by its pieces.
     std::size_t piece = 0;
     out.min_split_angle_deg = 180.0;
     out.min_split_area_m2 = std::numeric_limits<double>::infinity();
@@ -803,6 +879,12 @@ class Splitter {
         out.min_split_area_m2 = std::min(out.min_split_area_m2, triangleArea(a, b, c));
       }
     }
+  }
+
+  // The cut walls, one per side, from the wall triangulation (flagged in out.wall).
+  void addWalls(SurfaceSplit& out, const std::vector<std::array<int, 2>>& interior) const {
+    TriangleMesh& mesh = out.mesh;
+    const int nn = int(nodes_.size());
     out.wall.assign(mesh.triangles.size(), 0);
     const auto wallVertex = [&](int id, int side) {
       if (id >= nn) return interior[std::size_t(id - nn)][side > 0 ? 0 : 1];
@@ -823,25 +905,18 @@ class Splitter {
       out.min_wall_angle_deg = std::min(out.min_wall_angle_deg, triangleMinAngleDeg(a, b, c));
       out.min_wall_area_m2 = std::min(out.min_wall_area_m2, triangleArea(a, b, c));
     }
-    out.wall_triangles = int(2 * wall_.triangles.size());
-    out.contour_loops = int(loops_.size());
-    out.chord_splits = wall_.chord_splits;
-    out.wall_spacing_m = h_;
-    labelInputVertices(out, seeded);
-    // An input vertex lying on the swept surface looks from just off it, on its side (a segment from a point on
-    // the surface would count as crossing it towards either side).
-    for (std::size_t v = 0; v < m_.vertices.size(); ++v)
-      if (!seeded[v] && std::fabs(proj_[v].offset) < probe_eps_)
-        out.binding_probe[v] = m_.vertices[v] + proj_[v].normal * (2.0 * probe_eps_ * out.vertex_side[v]);
-    const MeshReport rep = analyzeMesh(mesh);
+  }
+
+  // The split surface must be closed, oriented, without degenerate triangles and manifold at every vertex.
+  static void checkSplitMesh(SurfaceSplit& out) {
+    const MeshReport rep = analyzeMesh(out.mesh);
     if (!rep.closed() || rep.inconsistent_edges != 0 || rep.degenerate_triangles != 0)
       throw CutInconsistent("the split surface is not closed and oriented (boundary " + std::to_string(rep.boundary_edges) +
                             ", non-manifold " + std::to_string(rep.non_manifold_edges) + ", inconsistent " +
                             std::to_string(rep.inconsistent_edges) + ", degenerate " + std::to_string(rep.degenerate_triangles) + ")");
-    const int bad_vertices = nonManifoldVertexCount(mesh);
+    const int bad_vertices = nonManifoldVertexCount(out.mesh);
     if (bad_vertices != 0) throw CutInconsistent(std::to_string(bad_vertices) + " non-manifold vertices after the split");
     out.components = rep.components;
-    return out;
   }
 
   // Input vertices take the side of the nearest new vertex over the split mesh's edges (never through the cut
