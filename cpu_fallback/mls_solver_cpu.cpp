@@ -23,7 +23,7 @@ double msSince(std::chrono::steady_clock::time_point t0) {
 // work (and far more on a loaded machine). Gather passes give identical results either way.
 constexpr std::int64_t kSerialBelow = 2048;
 
-// The substep loop runs on a team (one parallel region per frame, a barrier between passes, cpu_fallback/team.h)
+// The substep loop runs on a team (one parallel region per frame, a barrier between passes, base/team.h)
 // with one thread per this many particles: a pass costs ~0.1-0.2 us per particle, a barrier ~0.5 us.
 constexpr std::int64_t kParticlesPerThread = 256;
 

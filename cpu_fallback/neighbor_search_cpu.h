@@ -39,7 +39,7 @@ struct QueryScratch {
 };
 }  // namespace detail
 
-// Build once per point configuration, query many times. Lists follow host/neighbor_lists.h: per query,
+// Build once per point configuration, query many times. Lists follow model/neighbor_lists.h: per query,
 // ascending original point index, closed ball (d^2 <= r^2 via distance2Exact), self-queries leave q out.
 // Bad input (non-finite point, query or radius; cell size <= 0) throws InputError naming the entry.
 template <typename T>

@@ -14,7 +14,7 @@ namespace inc::cuda {
 // capture is ended and dropped so the stream stays usable, and the exception goes on.
 template <typename Record>
 void captureGraph(cudaStream_t stream, cudaGraphExec_t& exec, Record&& record) {
-  // No worker's device load may run while the capture is open (host/device_capture_lock.h).
+  // No worker's device load may run while the capture is open (model/device_capture_lock.h).
   const std::lock_guard<std::mutex> lock(deviceCaptureMutex());
   INC_CUDA(cudaStreamBeginCapture(stream, cudaStreamCaptureModeThreadLocal));
   cudaGraph_t graph = nullptr;

@@ -22,7 +22,7 @@ struct alignas(4 * sizeof(T)) Packed4 {
   T v[4];
 };
 
-// Device copy of host/neighbor_lists.h: row q is indices[offsets[q] .. offsets[q + 1]), ascending original
+// Device copy of model/neighbor_lists.h: row q is indices[offsets[q] .. offsets[q + 1]), ascending original
 // point index, closed ball (distance2Exact <= r * r), self-queries leave q out.
 struct DeviceNeighborLists {
   DeviceBuffer<std::int64_t> offsets;  // queries + 1

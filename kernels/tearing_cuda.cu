@@ -88,7 +88,7 @@ __global__ void triangleKernel(tear::SheetView<T> s, int nt, const std::uint8_t*
 }
 
 // ----------------------------------------------------------------------------------------------
-// Device-resident rebuild (host/tearing_rebuild.h runs the same steps on the CPU as the reference).
+// Device-resident rebuild (host/tear/tearing_rebuild.h runs the same steps on the CPU as the reference).
 
 // Corner h of the triangle list: key its particle, value its triangle (sorted: particle -> triangles).
 __global__ void cornerKernel(const std::int32_t* tris, int nh, std::uint32_t* key, std::int32_t* tri) {
@@ -159,7 +159,7 @@ __global__ void csrFromSorted64Kernel(int n, const std::uint64_t* sorted, int co
   offsets[p] = std::int32_t(tear::lowerBound<std::uint64_t>(sorted, count, std::uint64_t(p) << bits));
 }
 
-// Per-particle rebuild (physics/tearing_rebuild.h; rebuildTearFans in host/tearing_rebuild.h is its CPU
+// Per-particle rebuild (physics/tearing_rebuild.h; rebuildTearFans in host/tear/tearing_rebuild.h is its CPU
 // reference). A particle -> items CSR from the items' particles key[0 .. m) (the corners' vertices, or the bending
 // slots' particles): counts by integer atomics (exact, so deterministic), a scan, placement of item / per through
 // atomic cursors (any order within a row: the triangle of a corner, per = 3; the slot itself, per = 1), then
@@ -628,7 +628,7 @@ class TearResident {
   }
 
   // The adjacency and the PBD blocks from the device triangles, per particle (rebuildTearFans in
-  // host/tearing_rebuild.h, steps 1-5; step 5 is commitBlockIncidence).
+  // host/tear/tearing_rebuild.h, steps 1-5; step 5 is commitBlockIncidence).
   template <typename Stage>
   void rebuildFans(Stage& stage) {
     const int n = n_, nh = 3 * nt_;
@@ -735,7 +735,7 @@ class TearResident {
   }
 
   // The older path (TearModelOptions::device_sorted_rebuild): the adjacency and the PBD blocks from the device
-  // triangles by radix sorts (rebuildTearSorted in host/tearing_rebuild.h, steps 1-4).
+  // triangles by radix sorts (rebuildTearSorted in host/tear/tearing_rebuild.h, steps 1-4).
   template <typename Stage>
   void rebuildSorted(Stage& stage) {
     const int n = n_, nh = 3 * nt_;

@@ -14,7 +14,7 @@ namespace inc::pbd {
 
 enum : int { kDistance = 0, kBending = 1, kTetVolume = 2, kLaplacian = 3, kShapeMatching = 4 };
 
-// Raw view of one constraint block (host or device pointers); see host/pbd_model.h for the meaning.
+// Raw view of one constraint block (host or device pointers); see model/pbd_model.h for the meaning.
 template <typename T>
 struct BlockView {
   int kind = kDistance;

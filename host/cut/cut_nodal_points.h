@@ -44,7 +44,7 @@ std::vector<Vec3d> sampleSphere(const Vec3d& centre, double radius, int n, const
 // directed entries dropped.
 NeighborLists visibleSupports(const std::vector<Vec3d>& positions, double support_radius,
                               const std::vector<const SweptSurface*>& cuts, std::size_t* removed = nullptr);
-// A stroke's supports kept up to date as points and strips are added, equal to this: host/cut_stroke_supports.h.
+// A stroke's supports kept up to date as points and strips are added, equal to this: host/cut/cut_stroke_supports.h.
 
 // The spheres the swept surface enters are removed and replaced by nodal points on a lattice of cell size
 // 2 r / samples_per_diameter inside each sphere (cell centres with |x - c| < r; the centre alone when the lattice
@@ -76,7 +76,7 @@ struct RepackOptions {
   double support_factor = 2.0;     // h = support_factor * point spacing for the supports of the classification
 };
 
-// Re-packs the nodal points into spheres by Algorithm 1 (host/cut_repack.h, packNodalPoints): the points are
+// Re-packs the nodal points into spheres by Algorithm 1 (host/cut/cut_repack.h, packNodalPoints): the points are
 // grouped by the components of their visibility-filtered supports (radius support_factor * points.spacing; pairs
 // crossing `surface` or an earlier cut dropped), each group's boundary / medial / middle points classified, the
 // medial points down-sampled with the spacing of eq. 14, radius = distance to the nearest boundary point, small

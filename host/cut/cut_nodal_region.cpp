@@ -46,7 +46,7 @@ NodalRegion::NodalRegion(const MetaballModel& base, const NodalRegionSettings& s
     const auto& e = base_.links[l];
     const double d = base_.link_rest_lengths[l];
     const double rbar = 0.5 * (base_.rest_radii[std::size_t(e[0])] + base_.rest_radii[std::size_t(e[1])]);
-    // The PBD link's compliance (host/pbd_builders.cpp) as a Hooke spring: k = 1 / alpha (N/m).
+    // The PBD link's compliance (host/assembly/pbd_builders.cpp) as a Hooke spring: k = 1 / alpha (N/m).
     const double alpha = s.stretch_compliance > 0 ? s.stretch_compliance : d / (s.youngs_modulus * kPi * rbar * rbar);
     adjacency_[std::size_t(e[0])].push_back({e[1], d, 1.0 / alpha});
     adjacency_[std::size_t(e[1])].push_back({e[0], d, 1.0 / alpha});

@@ -34,7 +34,7 @@ struct NodalRegionSettings {
   Precision precision = Precision::Float32;
   std::vector<FixedRegion> fixed;      // a sphere whose rest centre lies inside is fixed: so are its points
   double youngs_modulus = 3.0e3;       // Pa: link stiffness k = 1 / alpha with alpha as the PBD links
-  double stretch_compliance = 0.0;     // m/N; 0: alpha = d / (E pi rbar^2) (host/pbd_builders.h)
+  double stretch_compliance = 0.0;     // m/N; 0: alpha = d / (E pi rbar^2) (host/assembly/pbd_builders.h)
   std::function<bool(const Vec3d&)> inside;  // the tissue: points are sampled only inside it (empty: everywhere)
   StaticColliders colliders;           // the scene's planes and boxes: the points stay out of them
 };

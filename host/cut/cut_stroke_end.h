@@ -51,7 +51,7 @@ struct StrokeEndResult {
 };
 
 // For tests: when set, the dissection's idle-priority tasks (a stroke's end, a surface opening;
-// host/dissection_simulation.cpp) first call it on their worker, so a test can hold them as a busy machine would
+// host/sim/dissection_simulation.cpp) first call it on their worker, so a test can hold them as a busy machine would
 // starve them. Empty in normal use.
 inline std::function<void()>& idleWorkerGate() {
   static std::function<void()> gate;

@@ -128,7 +128,7 @@ class CellGrid {
 }  // namespace
 
 StrokeSupports::StrokeSupports(double h, std::vector<const SweptSurface*> earlier) : h_(h), earlier_(std::move(earlier)) {
-  reach_ = h * (1.0 + 1e-9) + 1e-12;  // as visibleSupports (host/cut_nodal_points.cpp)
+  reach_ = h * (1.0 + 1e-9) + 1e-12;  // as visibleSupports (host/cut/cut_nodal_points.cpp)
   clear();
 }
 

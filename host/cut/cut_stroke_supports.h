@@ -10,7 +10,7 @@
 
 namespace inc {
 
-// The lists visibleSupports (host/cut_nodal_points.h) gives for the points and the cuts (the earlier cuts and the
+// The lists visibleSupports (host/cut/cut_nodal_points.h) gives for the points and the cuts (the earlier cuts and the
 // stroke so far), updated as points are appended and the stroke grows instead of recomputed: a conversion then
 // costs in the new points and the new strip, not in every point. The result is the same lists bit for bit
 // (offsets, indices, order) and the same count of dropped entries; tests/cut/test_cut_stroke_supports.cpp compares

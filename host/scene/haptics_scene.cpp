@@ -191,7 +191,7 @@ HapticsSpec readHapticsSpec(const ObjectReader& top, const std::string& base_dir
     r.fail("local_spacing_m", "is too fine for local_radius_m (more than 64 shells: the local model would have "
                               "tens of thousands of nodes)" + got(h.local_spacing_m));
   h.record_trajectory = r.boolean("record_trajectory", h.record_trajectory);
-  readGlobalModelKeys(r, base_dir, fixed, h);  // host/haptics/global_organ_mesh.h
+  readGlobalModelKeys(r, base_dir, fixed, h);  // host/scene/global_organ_mesh.h
   return h;
 }
 

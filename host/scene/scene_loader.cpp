@@ -230,7 +230,7 @@ PbdSpec readPbd(const ObjectReader& top) {
   p.xpbd = r.boolean("xpbd", p.xpbd);
   p.solver = r.choice("solver", p.solver, {"jacobi", "gauss_seidel"});
   p.chebyshev_rho = r.number("chebyshev_rho", p.chebyshev_rho);
-  try {  // the solver's own rule (host/pbd_model.h), reported at this key
+  try {  // the solver's own rule (model/pbd_model.h), reported at this key
     checkChebyshevRho(p.chebyshev_rho, parsePbdSolver(p.solver, "", ""), "", "");
   } catch (const InputError& e) {
     r.fail("chebyshev_rho", e.reason());
@@ -541,7 +541,7 @@ Scene parseScene(const std::string& json_text, const std::string& file_label, co
   s.output = readOutput(top);
   s.tearing = readTearing(top);
   s.cutting = readCutting(top);
-  s.haptics = readHapticsSpec(top, base_dir, s.models, s.fixed);  // host/haptics/haptics_scene.h
+  s.haptics = readHapticsSpec(top, base_dir, s.models, s.fixed);  // host/scene/haptics_scene.h
   return s;
 }
 

@@ -325,8 +325,8 @@ MemoryReport DissectionSimulation<T>::memory() const {
 }
 
 // The viewer's layers: spheres, fixed spheres, the spheres the graspers and the mouse hold
-// (host/pbd_render_layers.h), the swept surfaces of the applied cuts and of the stroke in progress carried by the
-// spheres (host/dissection_render_layers.h), and, while a stroke is in the tissue, the nodal points where the
+// (host/sim/pbd_render_layers.h), the swept surfaces of the applied cuts and of the stroke in progress carried by the
+// spheres (host/sim/dissection_render_layers.h), and, while a stroke is in the tissue, the nodal points where the
 // MLS solver has them now (they go back to zero when the stroke ends).
 template <typename T>
 void DissectionSimulation<T>::renderLayers(RenderLayers& out) const {
@@ -366,7 +366,7 @@ void DissectionSimulation<T>::renderLayers(RenderLayers& out) const {
   if (coupled() && active_->region->solver()) active_->region->solver()->positions(out.nodal_points);
 }
 
-// Grasp & drag (host/interactive_tool.h) and the mouse scalpel (mouseStroke). A conversion changes the sphere
+// Grasp & drag (host/sim/interactive_tool.h) and the mouse scalpel (mouseStroke). A conversion changes the sphere
 // indices, so it releases any grasp.
 template <typename T>
 ToolResult DissectionSimulation<T>::applyTool(const ToolEvent& e) {

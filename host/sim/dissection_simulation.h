@@ -24,11 +24,11 @@ namespace inc {
 //  - each frame is cutting.exchanges_per_frame coupling intervals: the points advance by MLS (the solver of the
 //    scene's backend) with the interface spheres' PBD springs acting on their points (eqs. 11-12), then the PBD
 //    spheres advance with each interface sphere moved to the mean displacement of its points (eq. 13).
-// When it leaves: the cut spheres' points are re-packed by Algorithm 1 (host/cut_repack.h), interface spheres
+// When it leaves: the cut spheres' points are re-packed by Algorithm 1 (host/cut/cut_repack.h), interface spheres
 // return to PBD with their eq. 13 state, links never cross a cut, the surface is split along the swept surface
-// whatever its shape (curved, partial: a slit; CGAL walls, host/cut_surface_state.h) at every cut, the skin
+// whatever its shape (curved, partial: a slit; CGAL walls, host/cut/cut_surface_state.h) at every cut, the skin
 // re-bound across no cut (cutWallTriangles() flags the walls); the nodal points go back to zero. That work runs on
-// idle-priority workers (host/cut_stroke_end.h) and is applied cutting.stroke_end_frames frames after the blade
+// idle-priority workers (host/cut/cut_stroke_end.h) and is applied cutting.stroke_end_frames frames after the blade
 // leaves, the points simulated meanwhile (0: in that frame). With cutting.blade_radius_m > 0 the blade is also a
 // contact capsule for the spheres and the nodal points while it is in the tissue. With cutting.open_surface_frames
 // N > 0 the surface is also split along the sweep so far on a worker while the blade is in, shown N frames later

@@ -29,11 +29,11 @@
 
 namespace inc::dissection {
 
-// PBD metaballs cut by scalpel strokes (host/dissection_simulation.h says what it does). Its members live by
-// concern: the frame and the SimulationModel interface (host/dissection_simulation.cpp), strokes
-// (host/dissection_stroke.cpp), conversions (host/dissection_conversion.cpp), a stroke's end
-// (host/dissection_stroke_end.cpp), the coupled frame (host/dissection_coupled_frame.cpp), the surface
-// (host/dissection_surface.cpp) and the frame report (host/dissection_report.cpp). Each file instantiates its
+// PBD metaballs cut by scalpel strokes (host/sim/dissection_simulation.h says what it does). Its members live by
+// concern: the frame and the SimulationModel interface (host/sim/dissection_simulation.cpp), strokes
+// (host/sim/dissection_stroke.cpp), conversions (host/sim/dissection_conversion.cpp), a stroke's end
+// (host/sim/dissection_stroke_end.cpp), the coupled frame (host/sim/dissection_coupled_frame.cpp), the surface
+// (host/sim/dissection_surface.cpp) and the frame report (host/sim/dissection_report.cpp). Each file instantiates its
 // members for float and double.
 template <typename T>
 class DissectionSimulation final : public SimulationModel {
@@ -94,7 +94,7 @@ class DissectionSimulation final : public SimulationModel {
     BladePose from, to;
   };
 
-  // --- Set-up (host/dissection_simulation.cpp) -----------------------------------------------------------
+  // --- Set-up (host/sim/dissection_simulation.cpp) -----------------------------------------------------------
   void readTools();
   void setPbdParams();
   void buildOrgan();
@@ -102,7 +102,7 @@ class DissectionSimulation final : public SimulationModel {
   void measureReferenceSphere();
   void installFirstModel();
 
-  // --- The frame (host/dissection_simulation.cpp) --------------------------------------------------------
+  // --- The frame (host/sim/dissection_simulation.cpp) --------------------------------------------------------
   void startFrameTimers();
   void applyDueWork(double t0);
   void takeMouseBlade();
@@ -121,12 +121,12 @@ class DissectionSimulation final : public SimulationModel {
   bool bladeContact() const { return frame_blade_.on && scene_.cutting.blade_radius_m > 0.0; }
   void appendBladeInput(PbdFrameInput<T>& in) const;
 
-  // --- The PBD model (host/dissection_simulation.cpp) ----------------------------------------------------
+  // --- The PBD model (host/sim/dissection_simulation.cpp) ----------------------------------------------------
   MetaballPbdOptions pbdOptions(std::vector<double> known_cell_volumes, bool require_fixed_held) const;
   void installSpheres(MetaballModel m, PbdModel<T> built, const std::vector<Vec3d>& x, const std::vector<Vec3d>& v,
                       const std::vector<std::int32_t>& old_to_new, bool preloaded = false);
 
-  // --- Strokes (host/dissection_stroke.cpp) --------------------------------------------------------------
+  // --- Strokes (host/sim/dissection_stroke.cpp) --------------------------------------------------------------
   void scriptedStrokes(double t0, double t1);
   void beginStroke(const BladePose& pose, int scripted);
   void extendStroke(const BladePose& pose);
@@ -135,7 +135,7 @@ class DissectionSimulation final : public SimulationModel {
   void mouseStroke(const ToolEvent& e, const std::vector<Vec3d>& x, ToolResult& res);
   std::vector<const SweptSurface*> earlierCuts() const;
 
-  // --- Conversions (host/dissection_conversion.cpp) ------------------------------------------------------
+  // --- Conversions (host/sim/dissection_conversion.cpp) ------------------------------------------------------
   void launchConversion(std::unique_ptr<PendingConversion<T>> pc, std::vector<std::int32_t> hit);
   void applyConversion();
   void transferConversion(PendingConversion<T>& pc, NodalRegion& region, const std::vector<ConvertedSphereState>& st);
@@ -146,7 +146,7 @@ class DissectionSimulation final : public SimulationModel {
   void preloadStrokePbd(StrokePbdPlan<T>& plan);
   void installStrokePbd(StrokePbdPlan<T>& p);
 
-  // --- A stroke's end (host/dissection_stroke_end.cpp) ---------------------------------------------------
+  // --- A stroke's end (host/sim/dissection_stroke_end.cpp) ---------------------------------------------------
   void endStroke();
   StrokeEndInput strokeEndInput(const ActiveStroke& a) const;
   void applyStrokeEnd();
@@ -154,12 +154,12 @@ class DissectionSimulation final : public SimulationModel {
   void installCutSurface(StrokeEndResult& r);
   void recordCut(ActiveStroke& a, StrokeEndResult& r);
 
-  // --- The surface (host/dissection_surface.cpp) ---------------------------------------------------------
+  // --- The surface (host/sim/dissection_surface.cpp) ---------------------------------------------------------
   void bindSurface();
   Vec3d skinSphereDisplacement(std::int32_t s, const Vec3d& p) const;
   void openSurface(double t0);
 
-  // --- The coupled frame, section 5.3 (host/dissection_coupled_frame.cpp) -------------------------------
+  // --- The coupled frame, section 5.3 (host/sim/dissection_coupled_frame.cpp) -------------------------------
   void coupledFrame(double frame_dt, const PbdFrameInput<T>& in, FrameOutcome& out);
   PbdStepParams<T> exchangeParams(double dt) const;
   InterfaceAnchors interfaceAnchors() const;
@@ -167,7 +167,7 @@ class DissectionSimulation final : public SimulationModel {
   PbdFrameInput<T> exchangeInput(int e, int K, const PbdFrameInput<T>& in, InterfaceAnchors& anchors);
   bool advanceSpheres(int e, int K, const PbdStepParams<T>& p, const PbdFrameInput<T>& ie, FrameOutcome& out);
 
-  // --- The frame report (host/dissection_report.cpp) -----------------------------------------------------
+  // --- The frame report (host/sim/dissection_report.cpp) -----------------------------------------------------
   void reportStages(FrameReport& rep, const FrameOutcome& out) const;
   void reportFailure(FrameReport& rep, const FrameOutcome& out) const;
   void report(FrameReport& rep, const MlsFrameStats& mls, int exchanges) const;

@@ -48,7 +48,7 @@ template class StrokeEndWorkers<float>;
 template class StrokeEndWorkers<double>;
 
 // The blade leaves. Every heavy part of a stroke's end works in the rest configuration (Algorithm 1 on the
-// points' rest positions, the new PBD model's build, the surface split, the skin binding: host/cut_stroke_end.h),
+// points' rest positions, the new PBD model's build, the surface split, the skin binding: host/cut/cut_stroke_end.h),
 // so it starts now on a worker and is applied cutting.stroke_end_frames frames later, the nodal points and
 // spheres simulated meanwhile as during the stroke; the state transfer (applyStrokeEnd) reads the state then.
 // A fixed frame count, not "when the worker is done", keeps runs deterministic. 0 frames: applied now.

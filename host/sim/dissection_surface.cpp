@@ -8,7 +8,7 @@
 namespace inc::dissection {
 
 // Binds the surface to the spheres. After a cut each vertex binds only to spheres it sees without crossing
-// any cut (no skin weight across a swept surface; host/cut_surface_state.h).
+// any cut (no skin weight across a swept surface; host/cut/cut_surface_state.h).
 template <typename T>
 void DissectionSimulation<T>::bindSurface() {
   skin_rest_centres_ = spheres_.rest_centers;

@@ -11,7 +11,7 @@
 namespace inc {
 
 namespace {
-constexpr double kGraspCompliance = 1.0e-6;  // m/N, as the scripted grasper (host/metaball_simulation.cpp)
+constexpr double kGraspCompliance = 1.0e-6;  // m/N, as the scripted grasper (host/sim/metaball_simulation.cpp)
 }
 
 ToolResult PbdMouseGrasp::apply(const ToolEvent& e, const std::vector<Vec3d>& centres,

@@ -210,7 +210,7 @@ class MetaballSimulation final : public SimulationModel {
     saved_graspers_ = graspers_;
   }
   ToolSupport toolSupport() const override { return {true, false}; }
-  // Grasp & drag with the mouse (host/interactive_tool.h); cutting belongs to the dissection model.
+  // Grasp & drag with the mouse (host/sim/interactive_tool.h); cutting belongs to the dissection model.
   ToolResult applyTool(const ToolEvent& e) override {
     if (e.kind != ToolKind::Grasp) return SimulationModel::applyTool(e);
     std::vector<Vec3d> c(model_.size());
@@ -247,7 +247,7 @@ class MetaballSimulation final : public SimulationModel {
     return true;
   }
   // The viewer's layers: every sphere, the fixed ones, and per grasp (scripted graspers, the mouse) the held
-  // spheres, the attachment forces on them and the reaction on the tool (host/pbd_render_layers.h).
+  // spheres, the attachment forces on them and the reaction on the tool (host/sim/pbd_render_layers.h).
   void renderLayers(RenderLayers& out) const override {
     out = RenderLayers{};
     out.colliders = collider_mesh_;

@@ -19,7 +19,7 @@ void appendPbdSpheres(const PbdState<T>& s, RenderLayers& out) {
   }
 }
 
-// The spheres a fixed region holds: inverse mass 0 (host/pbd_builders.cpp: rest centre inside a fixed box).
+// The spheres a fixed region holds: inverse mass 0 (host/assembly/pbd_builders.cpp: rest centre inside a fixed box).
 template <typename T>
 void appendPbdFixed(const PbdModel<T>& m, const PbdState<T>& s, RenderLayers& out) {
   for (std::size_t i = 0; i < m.size(); ++i)

@@ -1,4 +1,4 @@
-// Tests for findNeighbors (host/neighbor_search.h) on the CPU backend: cell-size choice, options, bad input.
+// Tests for findNeighbors (host/backends/neighbor_search.h) on the CPU backend: cell-size choice, options, bad input.
 #include <gtest/gtest.h>
 
 #include <limits>

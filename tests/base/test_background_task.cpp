@@ -1,4 +1,4 @@
-// BackgroundTask (host/background_task.h): tasks run on another thread, one after another; wait() returns after the task and rethrows what it threw.
+// BackgroundTask (base/background_task.h): tasks run on another thread, one after another; wait() returns after the task and rethrows what it threw.
 #include <gtest/gtest.h>
 
 #include <atomic>

@@ -1,4 +1,4 @@
-// The CPU team of threads (cpu_fallback/team.h): multi-phase steps give the serial result, a stalled barrier
+// The CPU team of threads (base/team.h): multi-phase steps give the serial result, a stalled barrier
 // hands the rest of the step to the lead thread, and the runner backs off to one thread after a stall.
 #include <gtest/gtest.h>
 

@@ -59,7 +59,7 @@ TEST(CutSequence, TwentyCutsKeepMassBoundTheSphereCountAndCloseEveryPiece) {
     cuts.push_back(s);
     EXPECT_NEAR(totalMass(m) / mass0, 1.0, 1e-12) << "cut " << k;
     // Bounded: the re-packing keeps each group within its mass budget (merging small spheres, Algorithm 1 in
-    // host/cut_repack.h); asserted within 5 x the original 480 (measured: 513 after 20 slices 4.7 mm apart).
+    // host/cut/cut_repack.h); asserted within 5 x the original 480 (measured: 513 after 20 slices 4.7 mm apart).
     EXPECT_LT(m.size(), 5 * n0) << "cut " << k << " cut spheres " << r.cut.size() << " points " << r.points.size();
     std::vector<TriangleMesh> next;
     for (const auto& piece : pieces) {

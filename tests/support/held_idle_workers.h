@@ -1,4 +1,4 @@
-// Test fixture: holds the dissection's idle-priority tasks (idleWorkerGate, host/cut_stroke_end.h) as a busy machine
+// Test fixture: holds the dissection's idle-priority tasks (idleWorkerGate, host/cut/cut_stroke_end.h) as a busy machine
 // would starve them.
 #pragma once
 
