@@ -20,6 +20,7 @@
 #include "host/pbd_model.h"
 #include "host/runner.h"
 #include "host/scene_loader.h"
+#include "tests/temp_dir.h"
 
 namespace inc::stability {
 
@@ -251,7 +252,8 @@ inline void compressionCase(BackendKind be, bool mls) {
   RunOptions o;
   o.frames = 6;
   o.quiet = true;
-  o.out_dir = (std::filesystem::temp_directory_path() / (std::string("incision_stab_") + (mls ? "mls" : "pbd"))).string();
+  const test::TempDir out(std::string("stab_") + (mls ? "mls" : "pbd"));
+  o.out_dir = out.str();
   const RunSummary sum = inc::runScene(s, o);
   if (sum.failed) {
     EXPECT_NE(sum.failure.find("particle"), std::string::npos) << sum.failure;
@@ -261,7 +263,6 @@ inline void compressionCase(BackendKind be, bool mls) {
     EXPECT_TRUE(std::isfinite(sum.final_total_energy));
     EXPECT_LE(sum.max_displacement, 2.0 * s.geometry.size.x) << "compressed bar: a particle flew off";
   }
-  std::filesystem::remove_all(o.out_dir);
 }
 
 // MLS: a particle alone 10 cm from the bar (as after a cut) gets a zero inverse (no strain), is counted
