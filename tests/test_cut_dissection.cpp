@@ -8,7 +8,7 @@
 #include "host/dissection_simulation.h"
 #include "host/input_error.h"
 #include "host/scene_loader.h"
-#include "test_paths.h"
+#include "tests/repo_paths.h"
 
 namespace inc {
 namespace {
@@ -131,7 +131,7 @@ TEST(CutDissection, MissingScalpelOrCuttingFlagIsAnInputError) {
 // cells per diameter (8 points each; the scene asks for 3), exchanges twice per frame (the scene: 4) and takes 5
 // PBD iterations (the scene: 10); everything else is the scene file's.
 TEST(CutDissection, LiverCutSceneCutsACurvedPathAndTheGrasperOpensIt) {
-  Scene s = loadSceneFile(std::string(INCISION_SOURCE_DIR) + "/scenes/liver_cut.json");
+  Scene s = loadSceneFile(test::sourcePath("scenes/liver_cut.json"));
   s.cutting.samples_per_diameter = 2;
   s.cutting.exchanges_per_frame = 2;
   s.pbd.iterations = 5;

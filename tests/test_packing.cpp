@@ -15,7 +15,7 @@
 #include "host/metaball_pack_bvh.h"
 #include "host/metaball_packing.h"
 #include "host/organ_shapes.h"
-#include "test_paths.h"
+#include "tests/repo_paths.h"
 #include "tests/temp_dir.h"
 
 namespace inc {
@@ -224,7 +224,7 @@ TEST(Packing, CacheHitsMissesAndCorruption) {
 }
 
 TEST(Packing, RealOrganMeshes) {
-  const std::string dir = std::string(INCISION_SHARED_DIR) + "/organs/";
+  const std::string dir = test::sharedPath("organs/");
   bool any = false;
   for (const char* name : {"liver2.obj", "liver-smooth.obj"}) {
     const std::string path = dir + name;

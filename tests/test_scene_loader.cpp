@@ -12,7 +12,7 @@
 #include "host/input_error.h"
 #include "host/scene_json.h"
 #include "host/scene_loader.h"
-#include "test_paths.h"
+#include "tests/repo_paths.h"
 
 using namespace inc;
 namespace fs = std::filesystem;
@@ -694,7 +694,7 @@ TEST_F(SceneLoader, DocumentedExamplesLoad) {
 // Real organ meshes (skipped when the shared folder is absent)
 
 TEST(SceneLoaderOrgans, SharedOrganMeshLoadsAsGeometry) {
-  const fs::path organs = fs::path(INCISION_SHARED_DIR) / "organs";
+  const fs::path organs = fs::path(test::sharedPath("organs"));
   const fs::path liver = organs / "liver2.obj";
   if (!fs::exists(liver)) GTEST_SKIP() << liver << " is absent";
   json j = minimal();

@@ -18,6 +18,7 @@
 #include "viewer/gl_window.h"
 #include "viewer/viewer_app.h"
 #include "test_paths.h"
+#include "tests/repo_paths.h"
 
 namespace inc::viewer {
 namespace {
@@ -559,7 +560,7 @@ TEST_F(ViewerApp, ToolUnderCursorSitsOnSurfaceAndCollides) {
 // A real liver surface (../shared/organs, skipped when absent) with a cut slot: the picture shows tissue and
 // the cut walls. Set INCISION_DOC_SCREENSHOT=PATH to also write the picture there (docs/images/viewer.png).
 TEST_F(ViewerApp, CutLiverShowsTissueAndCutWalls) {
-  const std::string path = std::string(INCISION_SHARED_DIR) + "/organs/liver-smooth.obj";
+  const std::string path = test::sharedPath("organs/liver-smooth.obj");
   if (!std::filesystem::exists(path)) GTEST_SKIP() << "organ mesh absent: " << path;
   TriangleMesh liver = loadMesh(path);
   for (auto& v : liver.vertices) v = v * 0.01;  // the file is in centimetres
