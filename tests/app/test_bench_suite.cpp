@@ -10,11 +10,12 @@
 
 #include <unistd.h>
 #include "test_paths.h"
+#include "tests/support/repo_paths.h"
 
 namespace fs = std::filesystem;
 
 TEST(BenchSuite, QuickCpuRunProducesMergedCsvTableAndPlots) {
-  const std::string bin = INCISION_BINARY_DIR, src = INCISION_SOURCE_DIR;
+  const std::string bin = INCISION_BINARY_DIR, src = inc::test::sourceDir();
   for (const char* b : {"bench_neighbors", "bench_mls", "bench_pbd", "bench_scaling"})
     if (!fs::exists(fs::path(bin) / b)) GTEST_SKIP() << b << " not built (cmake --build build builds it)";
   // One folder per process: two checkouts running their suites at once must not share it.

@@ -10,6 +10,7 @@
 #include "model/input_error.h"
 #include "host/sim/numerical_guard.h"
 #include "host/app/runner.h"
+#include "tests/support/temp_dir.h"
 
 using namespace inc;
 namespace fs = std::filesystem;
@@ -85,12 +86,6 @@ Scene oscillatorScene() {
   return s;
 }
 
-fs::path freshDir(const std::string& name) {
-  fs::path d = fs::temp_directory_path() / ("incision_test_runner_" + name);
-  fs::remove_all(d);
-  return d;
-}
-
 int countLines(const fs::path& p) {
   std::ifstream in(p);
   int n = 0;
@@ -101,7 +96,8 @@ int countLines(const fs::path& p) {
 }  // namespace
 
 TEST(Runner, RunsTheRequestedFramesAndWritesOutputs) {
-  const fs::path dir = freshDir("ok");
+  const test::TempDir tmp("runner_ok");
+  const fs::path& dir = tmp.path();
   RunOptions opt;
   opt.frames = 25;
   opt.out_dir = dir.string();
@@ -125,7 +121,8 @@ TEST(Runner, RunsTheRequestedFramesAndWritesOutputs) {
 TEST(Runner, SecondsSelectTheFrameCount) {
   RunOptions opt;
   opt.seconds = 0.05;
-  opt.out_dir = freshDir("seconds").string();
+  const test::TempDir tmp("runner_seconds");
+  opt.out_dir = tmp.str();
   opt.quiet = true;
   auto factory = [](const Scene&, BackendKind) {
     std::vector<std::unique_ptr<SimulationModel>> m;
@@ -138,7 +135,8 @@ TEST(Runner, SecondsSelectTheFrameCount) {
 TEST(Runner, GuardRetriesWithHalfTheStepAndRecovers) {
   RunOptions opt;
   opt.frames = 10;
-  opt.out_dir = freshDir("retry").string();
+  const test::TempDir tmp("runner_retry");
+  opt.out_dir = tmp.str();
   opt.quiet = true;
   auto factory = [](const Scene&, BackendKind) {
     std::vector<std::unique_ptr<SimulationModel>> m;
@@ -153,7 +151,8 @@ TEST(Runner, GuardRetriesWithHalfTheStepAndRecovers) {
 }
 
 TEST(Runner, NaNStopsWithStageParticleAndKeepsLastGoodState) {
-  const fs::path dir = freshDir("nan");
+  const test::TempDir tmp("runner_nan");
+  const fs::path& dir = tmp.path();
   RunOptions opt;
   opt.frames = 20;
   opt.out_dir = dir.string();
@@ -178,7 +177,8 @@ TEST(Runner, NaNStopsWithStageParticleAndKeepsLastGoodState) {
 
 TEST(Runner, BadOptionsAreInputErrors) {
   RunOptions opt;
-  opt.out_dir = freshDir("bad").string();
+  const test::TempDir tmp("runner_bad");
+  opt.out_dir = tmp.str();
   opt.quiet = true;
   opt.seconds = -2.0;
   auto factory = [](const Scene&, BackendKind) { return std::vector<std::unique_ptr<SimulationModel>>{}; };

@@ -12,7 +12,7 @@
 #include "host/app/runner.h"
 #include "host/scene/scene_loader.h"
 #include "host/app/tradeoff.h"
-#include "test_paths.h"
+#include "tests/support/repo_paths.h"
 
 using namespace inc;
 
@@ -28,7 +28,7 @@ Scene smallBeam() {
 }
 
 // scenes/hanging_bar.json: a 2 x 2 x 8 cm bar clamped at its top face (4 mm spacing, 500 particles).
-Scene hangingBar() { return loadSceneFile(std::string(INCISION_SOURCE_DIR) + "/scenes/hanging_bar.json"); }
+Scene hangingBar() { return loadSceneFile(test::sourcePath("scenes/hanging_bar.json")); }
 
 const TradeoffRow* findRow(const TradeoffResult& r, const std::string& model, const std::string& knob) {
   for (const TradeoffRow& x : r.rows)

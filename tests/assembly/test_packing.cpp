@@ -15,7 +15,8 @@
 #include "host/assembly/metaball_pack_bvh.h"
 #include "host/assembly/metaball_packing.h"
 #include "host/assembly/organ_shapes.h"
-#include "test_paths.h"
+#include "tests/support/repo_paths.h"
+#include "tests/support/temp_dir.h"
 
 namespace inc {
 namespace {
@@ -188,8 +189,8 @@ TEST(Packing, CacheHitsMissesAndCorruption) {
   const TriangleMesh mesh = makeSphereMesh(0.04, 6);
   PackingOptions o = smallOptions(40);
   o.samples = 3000;
-  const std::string path = (std::filesystem::temp_directory_path() / "incision_test_packing_cache.pack").string();
-  std::filesystem::remove(path);
+  const test::TempDir tmp("packing_cache");
+  const std::string path = tmp.file("cache.pack");
   const PackedOrgan a = loadOrBuildPack(mesh, o, path);
   EXPECT_FALSE(a.report.from_cache);
   ASSERT_TRUE(std::filesystem::exists(path));
@@ -216,7 +217,6 @@ TEST(Packing, CacheHitsMissesAndCorruption) {
   const PackedOrgan c = loadOrBuildPack(mesh, o, path);
   EXPECT_FALSE(c.report.from_cache);
   EXPECT_TRUE(loadOrBuildPack(mesh, o, path).report.from_cache);
-  std::filesystem::remove(path);
   EXPECT_EQ(defaultPackCachePath("scenes/liver.obj"), "scenes/liver.obj.pack");
   const std::string line = describePack(c.report);
   EXPECT_NE(line.find(std::to_string(c.report.spheres) + " spheres"), std::string::npos) << line;
@@ -224,7 +224,7 @@ TEST(Packing, CacheHitsMissesAndCorruption) {
 }
 
 TEST(Packing, RealOrganMeshes) {
-  const std::string dir = std::string(INCISION_SHARED_DIR) + "/organs/";
+  const std::string dir = test::sharedPath("organs/");
   bool any = false;
   for (const char* name : {"liver2.obj", "liver-smooth.obj"}) {
     const std::string path = dir + name;

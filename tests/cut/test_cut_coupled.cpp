@@ -8,6 +8,7 @@
 #include "host/sim/dissection_simulation.h"
 #include "model/input_error.h"
 #include "host/scene/scene_loader.h"
+#include "tests/support/cut_block_scene.h"
 
 namespace inc {
 namespace {
@@ -26,16 +27,7 @@ ToolSpec scalpel(const std::string& name, std::vector<ToolKeyframe> path, double
 // A 6 x 4 x 3 cm block of 1 cm metaballs without gravity. The scalpel (vertical 8 cm blade) enters at x = -5 cm
 // in the plane y = 2 mm, reaches x = 0 at 0.15 s and stays in the tissue until `leave_s` (a partial cut held open).
 Scene blockScene(double leave_s) {
-  Scene s;
-  s.file = "<test:coupled_block>";
-  s.geometry.kind = GeometrySpec::Kind::Box;
-  s.geometry.size = Vec3d(0.06, 0.04, 0.03);
-  s.geometry.spacing = 0.01;
-  s.models.pbd_metaballs = true;
-  s.models.cutting = true;
-  s.solver.gravity = Vec3d(0, 0, 0);
-  s.solver.substeps = 2;
-  s.pbd.iterations = 5;
+  Scene s = cuttest::dissectionBlock("<test:coupled_block>");
   s.cutting.samples_per_diameter = 3;
   s.cutting.exchanges_per_frame = 2;
   s.tools = {scalpel("scalpel", {{0.05, Vec3d(-0.05, 0.002, 0.0), Vec3d(0, 0, 1)},

@@ -8,7 +8,8 @@
 #include "host/sim/dissection_simulation.h"
 #include "model/input_error.h"
 #include "host/scene/scene_loader.h"
-#include "test_paths.h"
+#include "tests/support/cut_block_scene.h"
+#include "tests/support/repo_paths.h"
 
 namespace inc {
 namespace {
@@ -16,22 +17,8 @@ namespace {
 // A 6 x 4 x 3 cm block of 1 cm metaballs without gravity; a scalpel with an 8 cm vertical blade crosses it
 // along x in the plane y = 2 mm during 0.05 s .. 0.15 s.
 Scene blockCutScene() {
-  Scene s;
-  s.file = "<test:block_cut>";
-  s.geometry.kind = GeometrySpec::Kind::Box;
-  s.geometry.size = Vec3d(0.06, 0.04, 0.03);
-  s.geometry.spacing = 0.01;
-  s.models.pbd_metaballs = true;
-  s.models.cutting = true;
-  s.solver.gravity = Vec3d(0, 0, 0);
-  s.solver.substeps = 2;
-  s.pbd.iterations = 5;
-  ToolSpec t;
-  t.name = "scalpel";
-  t.kind = "scalpel";
-  t.length = 0.08;
-  t.path = {{0.05, Vec3d(-0.05, 0.002, 0.0), Vec3d(0, 0, 1)}, {0.15, Vec3d(0.05, 0.002, 0.0), Vec3d(0, 0, 1)}};
-  s.tools = {t};
+  Scene s = cuttest::dissectionBlock("<test:block_cut>");
+  s.tools = {cuttest::straightScalpel(0.05, 0.15)};
   return s;
 }
 
@@ -131,7 +118,7 @@ TEST(CutDissection, MissingScalpelOrCuttingFlagIsAnInputError) {
 // cells per diameter (8 points each; the scene asks for 3), exchanges twice per frame (the scene: 4) and takes 5
 // PBD iterations (the scene: 10); everything else is the scene file's.
 TEST(CutDissection, LiverCutSceneCutsACurvedPathAndTheGrasperOpensIt) {
-  Scene s = loadSceneFile(std::string(INCISION_SOURCE_DIR) + "/scenes/liver_cut.json");
+  Scene s = loadSceneFile(test::sourcePath("scenes/liver_cut.json"));
   s.cutting.samples_per_diameter = 2;
   s.cutting.exchanges_per_frame = 2;
   s.pbd.iterations = 5;

@@ -6,6 +6,7 @@
 #include "host/cut/cut_surface_state.h"
 #include "host/sim/dissection_simulation.h"
 #include "host/assembly/organ_shapes.h"
+#include "tests/support/cut_block_scene.h"
 #include "tests/support/cut_fixtures.h"
 #include "tests/support/cut_surface_fixtures.h"
 
@@ -64,20 +65,8 @@ TEST(CutSurfaceSkin, NoSkinWeightCrossesAPartialThenACurvedCut) {
 // The block of test_cut_dissection.cpp (6 x 4 x 3 cm, 1 cm spheres, no gravity) cut by a vertical blade whose
 // centre runs along an arc of radius 6.5 cm (keyframes every 0.1 rad) from angle pi/2 + 0.7 to `end`.
 Scene arcCutScene(double end_angle) {
-  Scene s;
-  s.file = "<test:arc_cut>";
-  s.geometry.kind = GeometrySpec::Kind::Box;
-  s.geometry.size = Vec3d(0.06, 0.04, 0.03);
-  s.geometry.spacing = 0.01;
-  s.models.pbd_metaballs = true;
-  s.models.cutting = true;
-  s.solver.gravity = Vec3d(0, 0, 0);
-  s.solver.substeps = 2;
-  s.pbd.iterations = 5;
-  ToolSpec t;
-  t.name = "scalpel";
-  t.kind = "scalpel";
-  t.length = 0.08;
+  Scene s = cuttest::dissectionBlock("<test:arc_cut>");
+  ToolSpec t = cuttest::scalpel({});
   const double a0 = kPi / 2 + 0.7;
   const int n = int(std::lround((a0 - end_angle) / 0.1));
   for (int k = 0; k <= n; ++k) {

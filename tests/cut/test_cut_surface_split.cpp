@@ -11,7 +11,7 @@
 #include "model/input_error.h"
 #include "host/assembly/organ_shapes.h"
 #include "tests/support/cut_surface_fixtures.h"
-#include "test_paths.h"
+#include "tests/support/repo_paths.h"
 
 namespace inc {
 namespace {
@@ -327,8 +327,7 @@ TEST(CutSurfaceSplit, TwentySuccessiveCutsMixingPlanarAndCurvedStayClosedAndMani
 
 TEST(CutSurfaceSplit, RealLiverCutAlongACurveGivesClosedPieces) {
   // INCISION_SHARED_DIR in the environment overrides the checkout's ../shared (worktrees live elsewhere).
-  const char* env = std::getenv("INCISION_SHARED_DIR");
-  const std::string path = std::string(env ? env : INCISION_SHARED_DIR) + "/organs/liver-smooth.obj";
+  const std::string path = test::sharedPath("organs/liver-smooth.obj");
   if (!std::ifstream(path).good()) GTEST_SKIP() << "no " << path << " (shared organ meshes absent)";
   TriangleMesh liver = loadMesh(path);
   requireClosedMesh(liver, path, "mesh");

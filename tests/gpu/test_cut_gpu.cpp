@@ -7,14 +7,15 @@
 #include <cmath>
 #include <string>
 
-#include "cpu_fallback/neighbor_bruteforce.h"
 #include "host/backends/solver_factory.h"
+#include "cpu_fallback/neighbor_bruteforce.h"
 #include "host/cut/cut_nodal_points.h"
 #include "host/sim/dissection_simulation.h"
 #include "model/mls_solver.h"
 #include "host/scene/scene_loader.h"
 #include "kernels/cut_cuda.h"
 #include "kernels/device_info.h"
+#include "tests/support/cut_block_scene.h"
 #include "tests/support/cut_fixtures.h"
 #include "tests/support/mls_test_scenes.h"
 
@@ -257,15 +258,7 @@ TEST(CutGpu, ReplacedMlsSolverRunsAsANewOne) {
 // the next.
 void expectSameDissectionOnBothBackends(const std::string& solver, double blade_radius = 0.0, int stroke_end_frames = 0,
                                         int conversion_delay_frames = 0, double blade_friction = 0.0) {
-  Scene s;
-  s.file = "<gpu test:dissection parity>";
-  s.geometry.kind = GeometrySpec::Kind::Box;
-  s.geometry.size = Vec3d(0.06, 0.04, 0.03);
-  s.geometry.spacing = 0.01;
-  s.models.pbd_metaballs = true;
-  s.models.cutting = true;
-  s.solver.substeps = 2;
-  s.pbd.iterations = 5;
+  Scene s = cuttest::dissectionBlock("<gpu test:dissection parity>", true);
   s.pbd.solver = solver;
   s.cutting.samples_per_diameter = 3;
   s.cutting.exchanges_per_frame = 2;
@@ -274,13 +267,9 @@ void expectSameDissectionOnBothBackends(const std::string& solver, double blade_
   s.cutting.conversion_delay_frames = conversion_delay_frames;
   s.cutting.blade_friction = blade_friction;
   s.fixed = {{Vec3d(-1, -1, -1), Vec3d(1, 1, -0.008)}};  // the bottom layer of centres (z = -0.01)
-  ToolSpec t;
-  t.name = "scalpel";
-  t.kind = "scalpel";
-  t.length = 0.08;
-  t.path = {{0.05, Vec3d(-0.05, 0.002, 0.0), Vec3d(0, 0, 1)}, {0.2, Vec3d(0.05, 0.002, 0.0), Vec3d(0, 0, 1)},
-            {0.3, Vec3d(0.05, 0.002, 0.0), Vec3d(0, 0, 1)}};
-  s.tools = {t};
+  s.tools = {cuttest::scalpel({{0.05, Vec3d(-0.05, 0.002, 0.0), Vec3d(0, 0, 1)},
+                               {0.2, Vec3d(0.05, 0.002, 0.0), Vec3d(0, 0, 1)},
+                               {0.3, Vec3d(0.05, 0.002, 0.0), Vec3d(0, 0, 1)}})};
   auto cpu = makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64);
   auto gpu = makeDissectionSimulation(s, BackendKind::Cuda, Precision::Float64);
   ASSERT_EQ(gpu->backend(), BackendKind::Cuda);

@@ -361,7 +361,7 @@ TEST(PbdGpu, SkippedWithoutCuda) { GTEST_SKIP() << "built without CUDA"; }
 #if INCISION_HAVE_CUDA
 #include "host/sim/metaball_simulation.h"
 #include "host/scene/scene_loader.h"
-#include "test_paths.h"
+#include "tests/support/repo_paths.h"
 
 // The shipped grasp scene on the CUDA backend: 100 frames, finite, grasped, and within 1 mm of the CPU run
 // (float32; the tool path and grasp selection are identical host code).
@@ -369,7 +369,7 @@ TEST(PbdGpu, LiverGraspSceneMatchesCpuAfter100Frames) {
   if (!haveDevice()) {
     GTEST_SKIP() << "no CUDA device";
   }
-  const Scene s = loadSceneFile(std::string(INCISION_SOURCE_DIR) + "/scenes/liver_grasp.json");
+  const Scene s = loadSceneFile(test::sourcePath("scenes/liver_grasp.json"));
   auto cpu = makeMetaballSimulation(s, BackendKind::Cpu, Precision::Float32);
   auto gpu = makeMetaballSimulation(s, BackendKind::Cuda, Precision::Float32);
   ASSERT_EQ(gpu->backend(), BackendKind::Cuda);
@@ -398,7 +398,7 @@ TEST(PbdGpu, LiverGraspSceneMatchesCpuAfter100Frames) {
 TEST(PbdGpu, LiverDropSceneCollidersMatchCpu) {
   if (!haveDevice()) GTEST_SKIP() << "no CUDA device";
   for (const char* solver : {"jacobi", "gauss_seidel"}) {
-    Scene s = loadSceneFile(std::string(INCISION_SOURCE_DIR) + "/scenes/liver_drop.json");
+    Scene s = loadSceneFile(test::sourcePath("scenes/liver_drop.json"));
     s.pbd.solver = solver;
     auto cpu = makeMetaballSimulation(s, BackendKind::Cpu, Precision::Float64);
     auto gpu = makeMetaballSimulation(s, BackendKind::Cuda, Precision::Float64);

@@ -19,7 +19,7 @@
 #include "host/io/mesh.h"
 #include "host/app/runner.h"
 #include "host/scene/scene_loader.h"
-#include "test_paths.h"
+#include "tests/support/repo_paths.h"
 
 namespace inc {
 namespace {
@@ -413,7 +413,7 @@ TEST(HapticRunner, GlobalBemModelGivesTheHybridCouplingsForce) {
 // two (metrics.csv's last row), the summary reports the loop and the decisions.
 TEST(HapticRunner, ShippedHapticCuttingSceneCutsTheBlock) {
   const fs::path dir = scratch("cut");
-  Scene s = loadSceneFile(std::string(INCISION_SOURCE_DIR) + "/scenes/haptic_cut_block.json");
+  Scene s = loadSceneFile(test::sourcePath("scenes/haptic_cut_block.json"));
   s.output.particles_ply = s.output.mesh_obj = false;
   RunOptions opt;
   opt.backend = BackendKind::Cpu;

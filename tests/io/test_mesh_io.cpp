@@ -13,7 +13,7 @@
 
 #include "model/input_error.h"
 #include "host/io/mesh.h"
-#include "test_paths.h"
+#include "tests/support/repo_paths.h"
 
 using namespace inc;
 namespace fs = std::filesystem;
@@ -427,7 +427,7 @@ TEST_F(MeshIo, StlErrorsNameTheFacet) {
 // The shared organ meshes (skipped when ../shared/organs is absent).
 
 void checkOrgan(const char* name) {
-  const std::string path = std::string(INCISION_SHARED_DIR) + "/organs/" + name;
+  const std::string path = test::sharedPath(std::string("organs/") + name);
   if (!fs::exists(path)) GTEST_SKIP() << path << " is absent (shared organ meshes are not committed)";
   TriangleMesh m = loadMesh(path);
   const MeshReport r = analyzeMesh(m);

@@ -7,6 +7,7 @@
 #include "tests/support/cut_fixtures.h"
 #include "host/cut/cut_swept_surface.h"
 #include "model/input_error.h"
+#include "physics/cut_geometry.h"
 
 namespace inc {
 namespace {
@@ -67,6 +68,34 @@ TEST(CutGeometry, SegmentCrossingAndSideMatchAnalytic) {
     }
   }
   EXPECT_GT(crossings, 200);
+}
+
+// cut::segmentCrossesTriangle itself, on the CPU (the CUDA path calls it directly; the CPU's swept-surface query
+// pre-filters by side first, which would hide a segment read as a ray). Triangle (0,0,0), (1,0,0), (0,1,0) in
+// z = 0: the closed segment crosses only when its ends lie on both sides of (or on) the plane over the triangle.
+TEST(CutGeometry, SegmentCrossesTriangleOnlyBetweenItsEnds) {
+  const Vec3d a(0, 0, 0), b(1, 0, 0), c(0, 1, 0);
+  struct Case {
+    const char* what;
+    Vec3d p, q;
+    bool crosses;
+  };
+  const Case cases[] = {
+      {"passes through", {0.2, 0.2, 1.0}, {0.2, 0.2, -1.0}, true},
+      {"slanted, passes through", {-0.5, 0.25, 0.5}, {1.5, 0.25, -0.5}, true},
+      {"ends on the triangle", {0.2, 0.2, 1.0}, {0.2, 0.2, 0.0}, true},
+      {"starts on the triangle", {0.2, 0.2, 0.0}, {0.2, 0.2, -1.0}, true},
+      {"stops short above", {0.2, 0.2, 1.0}, {0.2, 0.2, 0.1}, false},
+      {"slanted, stops short", {-0.5, 0.25, 0.5}, {0.3, 0.25, 0.1}, false},
+      {"starts beyond, below", {0.2, 0.2, -0.1}, {0.2, 0.2, -1.0}, false},
+      {"passes beside", {0.8, 0.8, 1.0}, {0.8, 0.8, -1.0}, false},
+      {"lies in the plane", {-0.5, 0.2, 0.0}, {1.5, 0.2, 0.0}, false},
+  };
+  for (const Case& k : cases) {
+    EXPECT_EQ(cut::segmentCrossesTriangle(k.p, k.q, a, b, c), k.crosses) << k.what;
+    EXPECT_EQ(cut::segmentCrossesTriangle(k.q, k.p, a, b, c), k.crosses) << k.what << ", reversed";
+    EXPECT_EQ(cut::segmentCrossesTriangle(k.p, k.q, a, c, b), k.crosses) << k.what << ", other winding";
+  }
 }
 
 TEST(CutGeometry, BadBladeIsAnInputError) {

@@ -11,6 +11,7 @@
 #include "host/assembly/metaball_packing.h"
 #include "host/assembly/organ_shapes.h"
 #include "host/assembly/skin_binding.h"
+#include "physics/skinning.h"
 
 namespace inc {
 namespace {
@@ -166,6 +167,33 @@ TEST(SkinBinding, BadInput) {
   MetaballModel zero = p.model;
   zero.rest_radii[3] = 0.0;
   EXPECT_THROW(bindSkin(liverMesh(), zero, 4), InputError);
+}
+
+// The falloff w = (1 - e / rho)^2 against hand-computed weights: a vertex at the origin and four spheres of radius
+// 1 cm on the x axis at 5, 7, 10 and 16 cm have surface distances d = 4, 6, 9 and 15 cm; k = 3 binds the first three
+// with e = d - 4 cm = 0, 2, 5 cm, and the fourth (unbound) sets rho = 11 cm. Raw weights 1, (9/11)^2, (6/11)^2, i.e.
+// 121 : 81 : 36 over 238 once normalised (a linear falloff would give 11 : 9 : 6 over 26).
+TEST(SkinBinding, WeightsFallOffAsTheSquareOfTheDistanceMargin) {
+  EXPECT_EQ(skin::bindWeight(0.0, 0.11), 1.0);
+  EXPECT_NEAR(skin::bindWeight(0.25, 1.0), 0.5625, 1e-15);
+  EXPECT_NEAR(skin::bindWeight(0.75, 1.0), 0.0625, 1e-15);
+  EXPECT_EQ(skin::bindWeight(1.0, 1.0), 0.0);
+  EXPECT_EQ(skin::bindWeight(1.5, 1.0), 0.0);  // beyond the first unbound sphere: nothing
+  EXPECT_EQ(skin::bindWeight(0.3, 0.0), 1.0);  // all candidates equally near: equal weights after normalisation
+
+  MetaballModel line;
+  line.rest_centers = {{0.05, 0, 0}, {0.07, 0, 0}, {0.10, 0, 0}, {0.16, 0, 0}};
+  line.rest_radii = {0.01, 0.01, 0.01, 0.01};
+  line.masses = {1, 1, 1, 1};
+  TriangleMesh mesh;
+  mesh.vertices = {{0, 0, 0}, {0, 0.001, 0}, {0, 0, 0.001}};
+  mesh.triangles = {{0, 1, 2}};
+  const SkinBinding b = bindSkin(mesh, line, 3);
+  const double want[3] = {121.0 / 238.0, 81.0 / 238.0, 36.0 / 238.0};
+  for (int j = 0; j < 3; ++j) {
+    EXPECT_EQ(b.sphere[std::size_t(j)], j);
+    EXPECT_NEAR(b.weight[std::size_t(j)], want[j], 1e-12) << "slot " << j;
+  }
 }
 
 TEST(SkinBinding, FewerSpheresThanSlots) {

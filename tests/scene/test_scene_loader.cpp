@@ -9,11 +9,11 @@
 
 #include <nlohmann/json.hpp>
 
-#include "model/input_error.h"
 #include "host/backends/backend_choice.h"
+#include "model/input_error.h"
 #include "host/scene/scene_json.h"
 #include "host/scene/scene_loader.h"
-#include "test_paths.h"
+#include "tests/support/repo_paths.h"
 
 using namespace inc;
 namespace fs = std::filesystem;
@@ -695,7 +695,7 @@ TEST_F(SceneLoader, DocumentedExamplesLoad) {
 // Real organ meshes (skipped when the shared folder is absent)
 
 TEST(SceneLoaderOrgans, SharedOrganMeshLoadsAsGeometry) {
-  const fs::path organs = fs::path(INCISION_SHARED_DIR) / "organs";
+  const fs::path organs = fs::path(test::sharedPath("organs"));
   const fs::path liver = organs / "liver2.obj";
   if (!fs::exists(liver)) GTEST_SKIP() << liver << " is absent";
   json j = minimal();

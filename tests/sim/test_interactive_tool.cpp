@@ -10,6 +10,7 @@
 #include "host/sim/interactive_tool.h"
 #include "host/sim/metaball_simulation.h"
 #include "host/sim/mls_simulation.h"
+#include "tests/support/cut_block_scene.h"
 
 namespace inc {
 namespace {
@@ -18,27 +19,13 @@ constexpr double kDt = 1.0 / 60.0;
 
 // A 6 x 4 x 3 cm block (1 cm lattice) clamped at x < -2 cm, no gravity: what is pulled and let go springs back.
 Scene blockScene(bool cutting) {
-  Scene s;
-  s.file = "<test:tool_block>";
-  s.geometry.kind = GeometrySpec::Kind::Box;
-  s.geometry.size = Vec3d(0.06, 0.04, 0.03);
-  s.geometry.spacing = 0.01;
+  Scene s = cuttest::dissectionBlock("<test:tool_block>");
   s.material.youngs_modulus = 2.0e4;
   s.material.damping = 20.0;
-  s.models.pbd_metaballs = true;
   s.models.cutting = cutting;
-  s.solver.gravity = Vec3d(0, 0, 0);
-  s.solver.substeps = 2;
   s.pbd.iterations = 10;
   s.fixed = {{Vec3d(-1, -1, -1), Vec3d(-0.02, 1, 1)}};
-  if (cutting) {  // the scripted scalpel runs long after these tests end
-    ToolSpec t;
-    t.name = "scalpel";
-    t.kind = "scalpel";
-    t.length = 0.08;
-    t.path = {{100.0, Vec3d(-0.05, 0.002, 0.0), Vec3d(0, 0, 1)}, {101.0, Vec3d(0.05, 0.002, 0.0), Vec3d(0, 0, 1)}};
-    s.tools = {t};
-  }
+  if (cutting) s.tools = {cuttest::parkedScalpel()};  // the scripted scalpel runs long after these tests end
   return s;
 }
 

@@ -8,7 +8,7 @@
 #include "host/sim/metaball_simulation.h"
 #include "host/assembly/pbd_builders.h"
 #include "host/scene/scene_loader.h"
-#include "test_paths.h"
+#include "tests/support/repo_paths.h"
 
 using namespace inc;
 
@@ -147,7 +147,7 @@ TEST(MetaballSimulation, BadSettingsAreInputErrors) {
 // The shipped scene loads, fills to a liver-sized sphere count (the paper's Table 1 case is 570) and its
 // grasper catches the front edge.
 TEST(MetaballSimulation, LiverGraspSceneRunsAndGrasps) {
-  const Scene s = loadSceneFile(std::string(INCISION_SOURCE_DIR) + "/scenes/liver_grasp.json");
+  const Scene s = loadSceneFile(test::sourcePath("scenes/liver_grasp.json"));
   ASSERT_TRUE(s.models.pbd_metaballs);
   auto sim = makeMetaballSimulation(s, BackendKind::Cpu, Precision::Float32);
   EXPECT_GT(sim->particleCount(), 450u);

@@ -457,6 +457,50 @@ TEST(MlsValidation, StiffeningUsesTheLargestEigenvalueNotItsBound) {
   EXPECT_NEAR(mlsStiffeningOf(gf, MlsCoefficients<float>{0.f, 0.f, 1.f, 0.f}), c * c, 1e-5 * c * c);
 }
 
+TEST(MlsValidation, StiffeningWithoutTheVolumePenaltyIsTheSvkTangent) {
+  // Volume penalty off, uniaxial stretch F = diag(1.5, 1, 1): C = F^T F has c = 2.25, so the stiffening is SVK's
+  // (3 c - 1) / 2 = 2.875 alone (the penalty's c^2 = 5.06 must not enter). Green strain E = diag(0.625, 0, 0),
+  // S = diag((2 mu + lambda) E_xx, lambda E_xx, lambda E_xx), P = F S, psi = (mu + lambda / 2) E_xx^2.
+  // Checked point-wise and through the stress pass of a block whose every particle sees the same gradient.
+  MlsBuildInput in = blockInput(6, 5, 5, 0.01, 0.2);
+  ASSERT_FALSE(in.material.volume_preservation);
+  MlsModel<double> model = buildMlsModel<double>(in);
+  ASSERT_EQ(model.coeffs.k_volume, 0.0);
+  const double mu = 1.0e4 / (2 * 1.3), lambda = 1.0e4 * 0.3 / (1.3 * 0.4);  // E = 10 kPa, nu = 0.3
+  EXPECT_NEAR(model.coeffs.mu, mu, 1e-12 * mu);
+  EXPECT_NEAR(model.coeffs.lambda, lambda, 1e-12 * lambda);  // nothing moved to the (absent) penalty
+  const double stretch = 1.5, exx = 0.625, stiffening = 2.875;
+  const double psi = (mu + 0.5 * lambda) * exx * exx;
+  Mat3d g;
+  g.m[0][0] = stretch - 1;
+  EXPECT_NEAR(mlsStiffeningOf(g, model.coeffs), stiffening, 1e-12);
+  const MlsStressPoint<double> sp = mlsStressPoint(g, model.coeffs);
+  const double p_xx = stretch * (2 * mu + lambda) * exx, p_yy = lambda * exx;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) {
+      const double want = r != c ? 0.0 : r == 0 ? p_xx : p_yy;
+      EXPECT_NEAR(sp.piola.m[r][c], want, 1e-9 * p_xx) << "P(" << r << ", " << c << ")";
+    }
+  EXPECT_NEAR(sp.energy_density, psi, 1e-12 * psi);
+
+  MlsState<double> state;
+  state.resize(model.size());
+  std::vector<double> k(model.size(), 0.0);
+  MlsView<double> view = makeMlsView(model, state);
+  view.stiffening = k.data();
+  for (std::size_t i = 0; i < model.size(); ++i) state.displacement[i] = Vec3d((stretch - 1) * model.rest[i].x, 0, 0);
+  int regular = 0;
+  for (std::int64_t i = 0; i < view.n; ++i) {
+    mlsStressPass(view, i);
+    if (model.degeneracy[std::size_t(i)] != kMlsRegular) continue;
+    ++regular;
+    EXPECT_NEAR(k[std::size_t(i)], stiffening, 1e-9) << "particle " << i;
+    const double v = model.volume[std::size_t(i)];
+    EXPECT_NEAR(state.energy[std::size_t(i)], v * psi, 1e-9 * v * psi) << "particle " << i;
+  }
+  EXPECT_GT(regular, 0);
+}
+
 TEST(MlsValidation, StretchedBodiesTakeSmallerSteps) {
   // A homogeneous stretch F: mlsStiffening = max((3 c - 1)/2, c^2) with c the largest eigenvalue of F^T F
   // (exact for a diagonal F), 1 for a rigid rotation; advance() divides the rest-state limit by its sqrt.

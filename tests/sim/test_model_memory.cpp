@@ -1,11 +1,11 @@
 // A scene pays only for the models it switches on: a PBD-only scene builds and allocates nothing of MLS.
 #include <gtest/gtest.h>
 
-#include <filesystem>
 
 #include "host/scene/embedded_scenes.h"
 #include "host/app/runner.h"
 #include "host/scene/scene_loader.h"
+#include "tests/support/temp_dir.h"
 
 using namespace inc;
 
@@ -46,7 +46,8 @@ TEST(ModelMemory, PbdOnlySceneBuildsNoMlsModelAndItsMemoryIsThePbdModelsAlone) {
   o.frames = 2;
   o.quiet = true;
   o.backend = BackendKind::Cpu;
-  o.out_dir = (std::filesystem::temp_directory_path() / "incision_model_memory").string();
+  const test::TempDir out("model_memory");
+  o.out_dir = out.str();
   const RunSummary s = runScene(beam(false, true), o);
   EXPECT_FALSE(s.failed) << s.failure;
   EXPECT_EQ(s.model_names, "pbd_metaballs");
@@ -60,5 +61,4 @@ TEST(ModelMemory, PbdOnlySceneBuildsNoMlsModelAndItsMemoryIsThePbdModelsAlone) {
   EXPECT_EQ(sb.model_names, "mls+pbd_metaballs");
   EXPECT_EQ(sb.memory.host_bytes, sm.memory.host_bytes + s.memory.host_bytes);
   EXPECT_GT(sb.memory.host_bytes, s.memory.host_bytes);
-  std::filesystem::remove_all(o.out_dir);
 }

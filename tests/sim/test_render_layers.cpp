@@ -10,6 +10,7 @@
 #include "host/sim/metaball_simulation.h"
 #include "host/sim/mls_simulation.h"
 #include "host/sim/tearing_simulation.h"
+#include "tests/support/cut_block_scene.h"
 
 using namespace inc;
 
@@ -180,24 +181,11 @@ TEST(RenderLayers, MlsClampAndGraspForcesBalanceTheWeightAtRest) {
 // and go back to zero (none reported; since the merge of s6-cut-mls the nodal points live only while the blade is
 // in the tissue, where before they were the last cut's, skinned) and the applied cut's swept surface is.
 TEST(RenderLayers, DissectionSweptSurfaceAndNodalPointsFollowTheCut) {
-  Scene s;
-  s.file = "<test:render_layers_cut>";
-  s.geometry.kind = GeometrySpec::Kind::Box;
-  s.geometry.size = Vec3d(0.06, 0.04, 0.03);
-  s.geometry.spacing = 0.01;
-  s.models.pbd_metaballs = true;
-  s.models.cutting = true;
-  s.solver.substeps = 2;
-  s.pbd.iterations = 5;
+  Scene s = cuttest::dissectionBlock("<test:render_layers_cut>", true);
   s.cutting.samples_per_diameter = 3;
   s.cutting.exchanges_per_frame = 2;
   s.fixed = {{Vec3d(-1, -1, -1), Vec3d(1, 0.002, 1)}};
-  ToolSpec t;  // the scene's scripted scalpel never runs here (its path starts at t = 100 s)
-  t.name = "scalpel";
-  t.kind = "scalpel";
-  t.length = 0.08;
-  t.path = {{100.0, Vec3d(-0.05, 0.002, 0.0), Vec3d(0, 0, 1)}, {101.0, Vec3d(0.05, 0.002, 0.0), Vec3d(0, 0, 1)}};
-  s.tools = {t};
+  s.tools = {cuttest::parkedScalpel()};  // the scene's scripted scalpel never runs here
   auto m = makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64);
   RenderLayers l;
   m->renderLayers(l);

@@ -8,23 +8,15 @@
 #include "host/sim/dissection_simulation.h"
 #include "host/haptics/haptic_cut_session.h"
 #include "host/haptics/mfs_local.h"
+#include "tests/support/cut_block_scene.h"
 
 namespace inc::hapticreplay {
 
 // A 6 x 4 x 3 cm block of 1 cm metaballs without gravity, cut only by the haptic device (no scripted
 // scalpel); the cutting thresholds come from the scene's material.
 inline Scene blockScene() {
-  Scene s;
-  s.file = "<test:haptic_block>";
-  s.geometry.kind = GeometrySpec::Kind::Box;
-  s.geometry.size = Vec3d(0.06, 0.04, 0.03);
-  s.geometry.spacing = 0.01;
-  s.models.pbd_metaballs = true;
-  s.models.cutting = true;
+  Scene s = cuttest::dissectionBlock("<test:haptic_block>");
   s.models.haptics = true;
-  s.solver.gravity = Vec3d(0, 0, 0);
-  s.solver.substeps = 2;
-  s.pbd.iterations = 5;
   s.material.youngs_modulus = 3e3;
   s.material.cutting.press_n = 0.02;     // F_p
   s.material.cutting.static_n = 0.008;   // F_s

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "host/backends/solver_factory.h"
 #include "host/scene/embedded_scenes.h"
@@ -20,6 +21,7 @@
 #include "model/pbd_model.h"
 #include "host/app/runner.h"
 #include "host/scene/scene_loader.h"
+#include "tests/support/temp_dir.h"
 
 namespace inc::stability {
 
@@ -58,15 +60,18 @@ struct Outcome {
   double max_gravity_work = 0.0;  // J, max -U_gravity seen (work done by gravity)
   double max_displacement = 0.0;  // m
   double last_displacement = 0.0;
+  std::vector<double> displacement;  // m, max displacement frame by frame
 };
 
-// Runs `frames` frames (or until `wall_s` seconds of wall time when > 0) and checks every report: finite,
-// or a failure that names its stage and a particle (then stops). Never a silent NaN.
-inline Outcome runModel(SimulationModel& m, double frame_dt, int frames, double wall_s = 0.0) {
+// Runs `frames` frames (or until `wall_s` seconds of wall time when > 0, but at least `min_frames`) and checks
+// every report: finite, or a failure that names its stage and a particle (then stops). Never a silent NaN.
+inline Outcome runModel(SimulationModel& m, double frame_dt, int frames, double wall_s = 0.0, int min_frames = 0) {
   Outcome o;
   const auto t0 = std::chrono::steady_clock::now();
   for (int f = 0; f < frames; ++f) {
-    if (wall_s > 0 && std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > wall_s) break;
+    if (wall_s > 0 && f >= min_frames &&
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > wall_s)
+      break;
     const FrameReport r = m.advance(frame_dt);
     if (!r.finite) {
       EXPECT_FALSE(r.failure_stage.empty()) << "a non-finite frame must name its stage";
@@ -82,6 +87,7 @@ inline Outcome runModel(SimulationModel& m, double frame_dt, int frames, double 
     o.max_gravity_work = std::max(o.max_gravity_work, -r.potential_energy);
     o.max_displacement = std::max(o.max_displacement, r.max_displacement);
     o.last_displacement = r.max_displacement;
+    o.displacement.push_back(r.max_displacement);
     ++o.frames;
   }
   return o;
@@ -247,7 +253,8 @@ inline void compressionCase(BackendKind be, bool mls) {
   RunOptions o;
   o.frames = 6;
   o.quiet = true;
-  o.out_dir = (std::filesystem::temp_directory_path() / (std::string("incision_stab_") + (mls ? "mls" : "pbd"))).string();
+  const test::TempDir out(std::string("stab_") + (mls ? "mls" : "pbd"));
+  o.out_dir = out.str();
   const RunSummary sum = inc::runScene(s, o);
   if (sum.failed) {
     EXPECT_NE(sum.failure.find("particle"), std::string::npos) << sum.failure;
@@ -257,7 +264,6 @@ inline void compressionCase(BackendKind be, bool mls) {
     EXPECT_TRUE(std::isfinite(sum.final_total_energy));
     EXPECT_LE(sum.max_displacement, 2.0 * s.geometry.size.x) << "compressed bar: a particle flew off";
   }
-  std::filesystem::remove_all(o.out_dir);
 }
 
 // MLS: a particle alone 10 cm from the bar (as after a cut) gets a zero inverse (no strain), is counted
@@ -317,21 +323,35 @@ inline void pbdIsolatedCase(BackendKind be) {
   EXPECT_NEAR(drop, 9.81 * dt * dt * n * (n + 1) / 2.0, 1e-12);
 }
 
-// Soak: as many frames as fit in `wall_s` seconds; stays bounded and, damped, settles: the last frame's
-// max displacement is within 10 % of the largest seen and the energy bound holds throughout.
+// Soak: as many frames as fit in `wall_s` seconds, and at least 40 (0.67 s: the damping of 20 / s lets amplitudes
+// decay as exp(-10 t), to 0.1 % by then). It stays bounded (energy and drift bounds throughout) and settles:
+//  - over the last 10 frames the max displacement varies by less than 2 % of its last value (measured at frame 40:
+//    MLS 0.7 %, PBD 0.2 %); a drift or an oscillation the damping does not remove fails this;
+//  - the largest displacement is at most twice the settled one: gravity switched on at rest is a step load, and a
+//    damped linear oscillator overshoots its static deflection by less than 100 %. Measured: MLS peaks at 1.56x the
+//    settled sag (6.62 mm against 4.25 mm; damping ratio about 0.16 at the bar's first mode, ~10 Hz), PBD at 1.10x
+//    (46.3 mm against 42.2 mm). A "within 10 % of the peak" bound would be wrong for the MLS bar.
 inline void soakCase(BackendKind be, bool mls, double wall_s, int max_frames) {
+  constexpr int kSettleFrames = 40, kTailFrames = 10;
   Scene s = bar(mls, 1.0e5, 0.45);
   s.material.damping = 20.0;
   std::vector<std::unique_ptr<SimulationModel>> models = createSceneModels(s, be);
   ASSERT_EQ(models.size(), 1u);
-  const Outcome o = runModel(*models[0], s.solver.frame_dt, max_frames, wall_s);
-  EXPECT_FALSE(o.reported_failure) << o.failure;
+  const Outcome o = runModel(*models[0], s.solver.frame_dt, max_frames, wall_s, kSettleFrames);
+  ASSERT_FALSE(o.reported_failure) << o.failure;
   expectBounded(o, s, std::string(mls ? "mls" : "pbd") + " soak");
-  EXPECT_GE(o.frames, 5);
-  EXPECT_LE(o.last_displacement, o.max_displacement);
-  EXPECT_GE(o.last_displacement, 0.5 * o.max_displacement) << "settled sag collapsed: drift";
-  std::printf("[soak] %s: %d frames of %.4f s in %.1f s wall, max displacement %.3g m, last %.3g m\n",
-              mls ? "mls" : "pbd", o.frames, s.solver.frame_dt, wall_s, o.max_displacement, o.last_displacement);
+  ASSERT_GE(o.frames, std::min(max_frames, kSettleFrames));
+  ASSERT_GE(o.frames, kTailFrames);
+  const auto tail = std::minmax_element(o.displacement.end() - kTailFrames, o.displacement.end());
+  EXPECT_LE(*tail.second - *tail.first, 0.02 * o.last_displacement)
+      << "not settled after " << o.frames << " frames: the last " << kTailFrames << " span " << *tail.first << " to "
+      << *tail.second << " m";
+  EXPECT_GE(o.last_displacement, 0.5 * o.max_displacement)
+      << "peak " << o.max_displacement << " m more than twice the settled " << o.last_displacement << " m";
+  std::printf("[soak] %s: %d frames of %.4f s in %.1f s wall, max displacement %.3g m, last %.3g m (last %d frames "
+              "within %.2f %%)\n",
+              mls ? "mls" : "pbd", o.frames, s.solver.frame_dt, wall_s, o.max_displacement, o.last_displacement,
+              kTailFrames, 100 * (*tail.second - *tail.first) / o.last_displacement);
 }
 
 }  // namespace inc::stability

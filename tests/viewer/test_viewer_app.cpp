@@ -14,10 +14,12 @@
 #include "model/input_error.h"
 #include "viewer/orbit_camera.h"
 #include "host/io/mesh.h"
+#include "tests/support/cut_block_scene.h"
 #include "tests/support/viewer_test_model.h"
 #include "viewer/gl_window.h"
 #include "viewer/viewer_app.h"
 #include "test_paths.h"
+#include "tests/support/repo_paths.h"
 
 namespace inc::viewer {
 namespace {
@@ -104,22 +106,9 @@ TEST_F(ViewerApp, CutSceneShowsCutWallColour) {
 // scene without the cut shows none.
 TEST_F(ViewerApp, RealCutSceneShowsCutWallColour) {
   for (bool cut : {false, true}) {
-    Scene s;
-    s.file = "<test:viewer_cut_block>";
-    s.geometry.kind = GeometrySpec::Kind::Box;
-    s.geometry.size = Vec3d(0.06, 0.04, 0.03);
-    s.geometry.spacing = 0.01;
-    s.models.pbd_metaballs = true;
-    s.models.cutting = true;
-    s.solver.substeps = 2;
-    s.pbd.iterations = 5;
+    Scene s = cuttest::dissectionBlock("<test:viewer_cut_block>", true);
     s.fixed = {{Vec3d(-1, -1, -1), Vec3d(1, 0.002, 1)}};
-    ToolSpec t;  // the scene's scripted scalpel never runs here (its path starts at t = 100 s)
-    t.name = "scalpel";
-    t.kind = "scalpel";
-    t.length = 0.08;
-    t.path = {{100.0, Vec3d(-0.05, 0.002, 0.0), Vec3d(0, 0, 1)}, {101.0, Vec3d(0.05, 0.002, 0.0), Vec3d(0, 0, 1)}};
-    s.tools = {t};
+    s.tools = {cuttest::parkedScalpel()};  // the scene's scripted scalpel never runs here
     std::unique_ptr<SimulationModel> m = makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float32);
     if (cut) {
       ToolEvent e;
@@ -153,22 +142,8 @@ TEST_F(ViewerApp, RealCutSceneShowsCutWallColour) {
 
 // A 6 x 4 x 3 cm dissection block (1 cm metaballs), no gravity; its scripted scalpel never runs (t >= 100 s).
 std::unique_ptr<SimulationModel> dissectionBlock() {
-  Scene s;
-  s.file = "<test:viewer_mouse_block>";
-  s.geometry.kind = GeometrySpec::Kind::Box;
-  s.geometry.size = Vec3d(0.06, 0.04, 0.03);
-  s.geometry.spacing = 0.01;
-  s.models.pbd_metaballs = true;
-  s.models.cutting = true;
-  s.solver.gravity = Vec3d(0, 0, 0);
-  s.solver.substeps = 2;
-  s.pbd.iterations = 5;
-  ToolSpec t;
-  t.name = "scalpel";
-  t.kind = "scalpel";
-  t.length = 0.08;
-  t.path = {{100.0, Vec3d(-0.05, 0.002, 0.0), Vec3d(0, 0, 1)}, {101.0, Vec3d(0.05, 0.002, 0.0), Vec3d(0, 0, 1)}};
-  s.tools = {t};
+  Scene s = cuttest::dissectionBlock("<test:viewer_mouse_block>");
+  s.tools = {cuttest::parkedScalpel()};
   return makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float32);
 }
 
@@ -559,7 +534,7 @@ TEST_F(ViewerApp, ToolUnderCursorSitsOnSurfaceAndCollides) {
 // A real liver surface (../shared/organs, skipped when absent) with a cut slot: the picture shows tissue and
 // the cut walls. Set INCISION_DOC_SCREENSHOT=PATH to also write the picture there (docs/images/viewer.png).
 TEST_F(ViewerApp, CutLiverShowsTissueAndCutWalls) {
-  const std::string path = std::string(INCISION_SHARED_DIR) + "/organs/liver-smooth.obj";
+  const std::string path = test::sharedPath("organs/liver-smooth.obj");
   if (!std::filesystem::exists(path)) GTEST_SKIP() << "organ mesh absent: " << path;
   TriangleMesh liver = loadMesh(path);
   for (auto& v : liver.vertices) v = v * 0.01;  // the file is in centimetres

@@ -7,7 +7,7 @@
 
 #include "model/input_error.h"
 #include "host/scene/scene_loader.h"
-#include "test_paths.h"
+#include "tests/support/repo_paths.h"
 #include "viewer/scene_knobs.h"
 #include "viewer/sim_runner.h"
 
@@ -104,7 +104,7 @@ TEST(ViewerSceneKnobs, PbdSolverKnobsAndTheChebyshevRule) {
 // reaches the scene copy the factory builds from, and the rebuilt model takes it (the edited delay shows as frames
 // with a stroke end pending). Only cutting scenes have them.
 TEST(ViewerSceneKnobs, CuttingKnobsReachTheModel) {
-  Scene s = loadSceneFile(std::string(INCISION_SOURCE_DIR) + "/scenes/steak_cut.json");
+  Scene s = loadSceneFile(test::sourcePath("scenes/steak_cut.json"));
   s.solver.backend = BackendKind::Cpu;
   const SceneViewerSetup setup = makeSceneViewerSetup(s);
   const auto& k = setup.knobs;
