@@ -662,8 +662,8 @@ TEST_F(SceneLoader, MeshScaleMustBePositiveAndSpacingMustFit) {
 // The examples in docs/scene-format.md are valid scenes
 
 TEST_F(SceneLoader, DocumentedExamplesLoad) {
-  const fs::path doc = fs::path(__FILE__).parent_path().parent_path() / "docs" / "scene-format.md";
-  if (!fs::exists(doc)) GTEST_SKIP() << doc << " is absent (tests built away from the source tree)";
+  const fs::path doc = inc::test::sourcePath("docs/scene-format.md");
+  ASSERT_TRUE(fs::exists(doc)) << doc << " is absent (set INCISION_SOURCE_DIR to the source tree)";
   std::ifstream in(doc);
   std::string line, block;
   std::vector<std::string> blocks;
