@@ -58,15 +58,15 @@ std::string num(double v) { return scene_json::formatNumber(v); }
 
 }  // namespace
 
-BemCacheKey bemCacheKey(const TriangleMesh& mesh, const std::vector<BemBc>& supports, const BemMaterial& material,
+BemCacheKey bemCacheKey(const TriangleMesh& mesh, const std::vector<BemBc>& supports, const Material& material,
                         double local_radius_m, double local_spacing_m) {
   BemCacheKey k;
   k.mesh_hash = hashBytes(mesh.vertices.data(), mesh.vertices.size() * sizeof(Vec3d));
   k.mesh_hash = hashBytes(mesh.triangles.data(), mesh.triangles.size() * sizeof(mesh.triangles[0]), k.mesh_hash);
   k.supports_hash = hashBytes(supports.data(), supports.size() * sizeof(BemBc));
   k.elements = mesh.triangles.size();
-  k.youngs_pa = material.youngs_pa;
-  k.poisson = material.poisson;
+  k.youngs_pa = material.youngs_modulus_pa;
+  k.poisson = material.poisson_ratio;
   k.local_radius_m = local_radius_m;
   k.local_spacing_m = local_spacing_m;
   return k;

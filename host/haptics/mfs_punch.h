@@ -34,6 +34,6 @@ struct MfsPunchResult {
 };
 
 // Builds the cloud and the model, condenses, times `ticks` haptic ticks. Throws InputError for a bad spec.
-MfsPunchResult mfsFlatPunch(const MfsPunchSpec& spec, const MfsMaterial& material);
+MfsPunchResult mfsFlatPunch(const MfsPunchSpec& spec, const Material& material);
 
 }  // namespace inc

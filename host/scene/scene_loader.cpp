@@ -14,6 +14,7 @@
 
 #include "host/scene/cutting_scene.h"
 #include "host/scene/haptics_scene.h"
+#include "host/scene/material_checks.h"
 #include "model/input_error.h"
 #include "host/io/mesh.h"
 #include "model/pbd_model.h"
@@ -167,21 +168,17 @@ GeometrySpec readGeometry(const ObjectReader& top, const std::string& base_dir) 
   return s;
 }
 
-MaterialSpec readMaterial(const ObjectReader& top) {
-  MaterialSpec m;
-  if (!top.has("material")) return m;
+// material.*: the numbers read with their types checked, then the ranges by the one Material validation.
+void readMaterial(const ObjectReader& top, Material& m, CutThresholds<double>& cutting) {
+  if (!top.has("material")) return;
   const ObjectReader r = top.object("material");
   r.allowOnly({"youngs_modulus_pa", "poisson_ratio", "density_kg_m3", "damping_per_s", "cutting"});
-  m.youngs_modulus = positive(r, "youngs_modulus_pa", m.youngs_modulus);
+  m.youngs_modulus_pa = r.number("youngs_modulus_pa", m.youngs_modulus_pa);
   m.poisson_ratio = r.number("poisson_ratio", m.poisson_ratio);
-  if (!(m.poisson_ratio > -1 && m.poisson_ratio < 0.5)) {
-    r.fail("poisson_ratio", "must lie in the open interval (-1, 0.5)" + got(m.poisson_ratio) +
-                                "; 0.5 (incompressible) and -1 make the bulk or shear modulus infinite");
-  }
-  m.density = positive(r, "density_kg_m3", m.density);
-  m.damping = nonNegative(r, "damping_per_s", m.damping);
-  if (r.has("cutting")) m.cutting = readCutThresholds(r.object("cutting"));  // host/haptics/cutting_force_model.h
-  return m;
+  m.density_kg_m3 = r.number("density_kg_m3", m.density_kg_m3);
+  m.damping_per_s = r.number("damping_per_s", m.damping_per_s);
+  validateMaterial(m, r.file(), r.path());  // host/scene/material_checks.h
+  if (r.has("cutting")) cutting = readCutThresholds(r.object("cutting"));  // host/scene/cutting_scene.h
 }
 
 ModelsSpec readModels(const ObjectReader& top) {
@@ -530,7 +527,7 @@ Scene parseScene(const std::string& json_text, const std::string& file_label, co
   s.duration = positive(top, "duration_s", s.duration);
   // Sections in the order a reader of the file expects the first error to be reported.
   s.geometry = readGeometry(top, base_dir);
-  s.material = readMaterial(top);
+  readMaterial(top, s.material, s.cut_thresholds);
   s.models = readModels(top);
   s.mls = readMls(top);
   s.pbd = readPbd(top);
@@ -596,11 +593,11 @@ std::string sceneToJson(const Scene& s) {
   g["seed"] = s.geometry.seed;
   j["geometry"] = g;
 
-  j["material"] = J{{"youngs_modulus_pa", s.material.youngs_modulus},
+  j["material"] = J{{"youngs_modulus_pa", s.material.youngs_modulus_pa},
                     {"poisson_ratio", s.material.poisson_ratio},
-                    {"density_kg_m3", s.material.density},
-                    {"damping_per_s", s.material.damping},
-                    {"cutting", cutThresholdsJson(s.material.cutting)}};
+                    {"density_kg_m3", s.material.density_kg_m3},
+                    {"damping_per_s", s.material.damping_per_s},
+                    {"cutting", cutThresholdsJson(s.cut_thresholds)}};
   j["models"] = J{{"mls", s.models.mls},
                   {"pbd_metaballs", s.models.pbd_metaballs},
                   {"cutting", s.models.cutting},

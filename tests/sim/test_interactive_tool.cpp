@@ -23,8 +23,8 @@ Scene blockScene(bool cutting) {
   s.geometry.kind = GeometrySpec::Kind::Box;
   s.geometry.size = Vec3d(0.06, 0.04, 0.03);
   s.geometry.spacing = 0.01;
-  s.material.youngs_modulus = 2.0e4;
-  s.material.damping = 20.0;
+  s.material.youngs_modulus_pa = 2.0e4;
+  s.material.damping_per_s = 20.0;
   s.models.pbd_metaballs = true;
   s.models.cutting = cutting;
   s.solver.gravity = Vec3d(0, 0, 0);
@@ -122,7 +122,7 @@ TEST(InteractiveTool, MlsGraspPinsAndDragsNodes) {
   s.models = {};
   s.models.mls = true;
   s.geometry.spacing = 0.0075;
-  s.material.damping = 40.0;
+  s.material.damping_per_s = 40.0;
   s.solver.substeps = 0;
   s.solver.safety = 0.8;
   auto m = makeMlsSimulation(s, BackendKind::Cpu, Precision::Float64);

@@ -15,8 +15,8 @@ inline Scene cutBlockScene(double leave_s) {
   s.geometry.kind = GeometrySpec::Kind::Box;
   s.geometry.size = Vec3d(0.06, 0.04, 0.03);
   s.geometry.spacing = 0.01;
-  s.material.youngs_modulus = 2.0e4;
-  s.material.damping = 20.0;
+  s.material.youngs_modulus_pa = 2.0e4;
+  s.material.damping_per_s = 20.0;
   s.models.pbd_metaballs = true;
   s.models.cutting = true;
   s.solver.gravity = Vec3d(0, 0, 0);
