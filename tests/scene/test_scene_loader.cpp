@@ -662,7 +662,7 @@ TEST_F(SceneLoader, MeshScaleMustBePositiveAndSpacingMustFit) {
 // The examples in docs/scene-format.md are valid scenes
 
 TEST_F(SceneLoader, DocumentedExamplesLoad) {
-  const fs::path doc = fs::path(__FILE__).parent_path().parent_path() / "docs" / "scene-format.md";
+  const fs::path doc = fs::path(INCISION_SOURCE_DIR) / "docs" / "scene-format.md";
   if (!fs::exists(doc)) GTEST_SKIP() << doc << " is absent (tests built away from the source tree)";
   std::ifstream in(doc);
   std::string line, block;
