@@ -10,8 +10,8 @@
 
 namespace inc {
 
-double flatPunchForce(double radius_m, double youngs_pa, double poisson, double indentation_m) {
-  return 2.0 * radius_m * youngs_pa * indentation_m / (1.0 - poisson * poisson);
+double flatPunchForce(double radius_m, double youngs_modulus_pa, double poisson_ratio, double indentation_m) {
+  return 2.0 * radius_m * youngs_modulus_pa * indentation_m / (1.0 - poisson_ratio * poisson_ratio);
 }
 
 MfsPunchResult mfsFlatPunch(const MfsPunchSpec& p, const Material& material) {
