@@ -79,8 +79,8 @@ Scene liverScene(int target, double length_m, double leave_s, int samples, const
   s.geometry.radii = Vec3d(0.09, 0.06, 0.035);
   const double volume = 4.0 / 3.0 * 3.141592653589793 * 0.09 * 0.06 * 0.035;
   s.geometry.spacing = std::cbrt(volume / target);
-  s.material.youngs_modulus = 5e3;
-  s.material.damping = 4.0;
+  s.material.youngs_modulus_pa = 5e3;
+  s.material.damping_per_s = 4.0;
   s.models.pbd_metaballs = true;
   s.models.cutting = true;
   s.solver.substeps = 4;

@@ -52,10 +52,10 @@ MlsBuildInput cubeInput(std::int64_t n) {
   MlsBuildInput in;
   in.rest_positions = sampleBox(Vec3d(0, 0, 0), Vec3d(side * s, side * s, side * s), LatticeSpec{s, 0.1, 3});
   in.spacing = s;
-  in.material.youngs_modulus = 1e4;
+  in.material.youngs_modulus_pa = 1e4;
   in.material.poisson_ratio = 0.45;
-  in.material.density = 1000;
-  in.material.damping = 1.0;
+  in.material.density_kg_m3 = 1000;
+  in.material.damping_per_s = 1.0;
   in.kinds.resize(in.rest_positions.size());
   const double x0 = -0.5 * side * s + s;
   for (std::size_t i = 0; i < in.kinds.size(); ++i) in.kinds[i] = in.rest_positions[i].x < x0 ? kMlsFixed : kMlsFree;

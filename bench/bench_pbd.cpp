@@ -46,7 +46,7 @@ PbdModel<T> blockModel(std::int64_t n, Vec3d& size) {
   size = Vec3d((nx - 1) * kSpacing, (ny - 1) * kSpacing, (ny - 1) * kSpacing);
   const MetaballModel mb = makeLatticeMetaballs(Vec3d(0, 0, 0), size, kSpacing, 0.75, 1060.0);
   MetaballPbdOptions opt;
-  opt.youngs_modulus = 5.0e3;
+  opt.youngs_modulus_pa = 5.0e3;
   opt.volume_samples = 32;
   FixedRegion r;
   r.min = Vec3d(-1, -1, -1);

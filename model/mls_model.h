@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "model/material.h"
 #include "model/neighbor_lists.h"
 #include "physics/mls_elasticity.h"
 #include "physics/mls_integrate.h"
@@ -14,11 +15,8 @@
 
 namespace inc {
 
-struct MlsMaterial {
-  double youngs_modulus = 3.0e3;     // Pa, > 0
-  double poisson_ratio = 0.45;       // (-1, 0.5)
-  double density = 1060.0;           // kg/m^3, > 0 (rest density of the material)
-  double damping = 1.0;              // 1/s, mass-proportional, >= 0
+// The material of an MLS body: the scene's Material (model/material.h) and the volume penalty only MLS has.
+struct MlsMaterial : Material {
   bool volume_preservation = true;   // penalty k_v/2 (det F - 1)^2
   double volume_stiffness = 1.0;     // k_v as a multiple of the bulk modulus, >= 0
 };

@@ -172,9 +172,9 @@ int runDigest(const Options& opt) {
   auto sim = makeDissectionSimulation(scene, BackendKind::Cpu, Precision::Float64);
   const std::unique_ptr<HapticDevice> device = makeSceneHapticDevice(scene, 0);
   const TissuePlane plane = sceneTissuePlane(scene, *sim);
-  const TipStiffness tip = mfsTipStiffness(MfsMaterial{scene.material.youngs_modulus, scene.material.poisson_ratio},
-                                           scene.haptics.local_radius_m, scene.haptics.local_spacing_m, plane.normal);
-  CuttingTool tool(tipElastic(tip), scene.material.cutting, plane.point_m, plane.normal);
+  const TipStiffness tip =
+      mfsTipStiffness(scene.material, scene.haptics.local_radius_m, scene.haptics.local_spacing_m, plane.normal);
+  CuttingTool tool(tipElastic(tip), scene.cut_thresholds, plane.point_m, plane.normal);
   HapticCutSessionConfig cfg;
   cfg.frame_dt_s = scene.solver.frame_dt;
   cfg.blade_length_m = hand.blade_length_m;

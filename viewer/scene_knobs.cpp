@@ -54,9 +54,9 @@ ModelFactory sceneModelFactory(std::shared_ptr<Scene> sc) {
 
 void addMaterialKnobs(const std::shared_ptr<Scene>& sc, std::vector<ViewerKnob>& out) {
   const Scene& s = *sc;
-  const double e = s.material.youngs_modulus > 0 ? s.material.youngs_modulus : 1.0e4;
+  const double e = s.material.youngs_modulus_pa > 0 ? s.material.youngs_modulus_pa : 1.0e4;
   out.push_back(sliderKnob("Material", "Young's modulus [Pa]", e / 100.0, e * 100.0, e, true, false,
-                           [sc](double v) { sc->material.youngs_modulus = v; }));
+                           [sc](double v) { sc->material.youngs_modulus_pa = v; }));
   if (s.models.mls)
     out.push_back(sliderKnob("Material", "Poisson ratio", 0.0, 0.49, s.material.poisson_ratio, false, false,
                              [sc](double v) { sc->material.poisson_ratio = v; }));

@@ -36,7 +36,7 @@ double sceneEnergyFloor(const Scene& scene, const std::vector<Vec3d>& positions)
   const double L = std::max(norm(ext), 1e-6);
   const double vol = std::max(ext.x, 1e-3 * L) * std::max(ext.y, 1e-3 * L) * std::max(ext.z, 1e-3 * L);
   const double g = std::max(norm(scene.solver.gravity), 1.0);
-  return scene.material.density * vol * g * L;
+  return scene.material.density_kg_m3 * vol * g * L;
 }
 
 void writeState(const std::vector<std::unique_ptr<SimulationModel>>& models, const Scene& scene,

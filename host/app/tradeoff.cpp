@@ -220,12 +220,13 @@ void sweepMfs(const Scene& scene, bool quick, bool cpu_cost, TradeoffResult& res
       spec.radius_m = t.radius;
       break;
     }
-  const MfsMaterial material{scene.material.youngs_modulus, scene.material.poisson_ratio};
+  const Material& material = scene.material;
   const double delta = 1e-3 * spec.radius_m;
-  const double reference = flatPunchForce(spec.radius_m, material.youngs_pa, material.poisson, delta);
+  const double reference = flatPunchForce(spec.radius_m, material.youngs_modulus_pa, material.poisson_ratio, delta);
   res.references.push_back("mfs: flat rigid punch on a half-space, F = 2 a E delta / (1 - nu^2) (a = " +
                            fmt(spec.radius_m * 1e3) + " mm, delta = " + fmt(delta * 1e6) + " um, E = " +
-                           fmt(material.youngs_pa) + " Pa, nu = " + fmt(material.poisson) + "): " + fmt(reference) +
+                           fmt(material.youngs_modulus_pa) + " Pa, nu = " + fmt(material.poisson_ratio) +
+                           "): " + fmt(reference) +
                            " N; MFS half-ball of radius " + fmt(spec.domain_over_radius) +
                            " a held at its outer shell; cost: ms per haptic tick");
   for (int shells : quick ? std::vector<int>{1} : std::vector<int>{1, 2, 3, 4}) {
@@ -297,7 +298,7 @@ TradeoffResult runTradeoff(const Scene& scene, const TradeoffOptions& opt) {
     // Critical damping of the first mode the load excites (mass-proportional damping leaves the static answer
     // unchanged and damps every mode at the same rate c / 2 = omega_1) and 8 / omega_1 s: the transient is
     // then below 0.3 % of the static answer.
-    base.material.damping = 2.0 * ac.omega1;
+    base.material.damping_per_s = 2.0 * ac.omega1;
     frames = int(std::ceil(8.0 / ac.omega1 / base.solver.frame_dt));
   } else {
     frames = int(std::ceil(std::min(base.duration, 0.25) / base.solver.frame_dt));
@@ -305,8 +306,9 @@ TradeoffResult runTradeoff(const Scene& scene, const TradeoffOptions& opt) {
   if (opt.quick) frames = std::min(frames, 4);
   frames = std::max(frames, opt.quick ? 2 : 4);  // at least 3 timed frames outside --quick
   const std::string settle = std::to_string(frames) + " frames, damping " +
-                             (ac.kind != AnalyticCase::Kind::None ? "2 omega_1 = " + fmt(base.material.damping) + " 1/s"
-                                                                  : fmt(base.material.damping) + " 1/s (the scene's)");
+                             (ac.kind != AnalyticCase::Kind::None
+                                  ? "2 omega_1 = " + fmt(base.material.damping_per_s) + " 1/s"
+                                  : fmt(base.material.damping_per_s) + " 1/s (the scene's)");
   const std::string strain_note =
       ac.max_strain > 0.05 ? " (largest strain " + fmt(100.0 * ac.max_strain) + " %: beyond linear theory)" : "";
 

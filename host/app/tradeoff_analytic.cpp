@@ -18,16 +18,17 @@ std::string mm(double m) {
 
 }  // namespace
 
-double eulerBernoulliTipDeflection(double length, double width, double height, double youngs, double density,
-                                   double gravity) {
-  const double q = density * gravity * width * height;      // N/m
-  const double I = width * height * height * height / 12.0;  // m^4
-  return q * std::pow(length, 4) / (8.0 * youngs * I);
+double eulerBernoulliTipDeflection(double length, double width, double height, double youngs_modulus_pa,
+                                   double density_kg_m3, double gravity) {
+  const double q = density_kg_m3 * gravity * width * height;  // N/m
+  const double I = width * height * height * height / 12.0;   // m^4
+  return q * std::pow(length, 4) / (8.0 * youngs_modulus_pa * I);
 }
 
-double hangingBarDisplacement(double s, double length, double youngs, double density, double gravity) {
+double hangingBarDisplacement(double s, double length, double youngs_modulus_pa, double density_kg_m3,
+                              double gravity) {
   // d/ds (E du/ds) = -rho g, u(0) = 0, E du/ds (L) = 0 (free end).
-  return density * gravity * (2.0 * length * s - s * s) / (2.0 * youngs);
+  return density_kg_m3 * gravity * (2.0 * length * s - s * s) / (2.0 * youngs_modulus_pa);
 }
 
 AnalyticCase detectAnalyticCase(const Scene& s) {
@@ -47,7 +48,7 @@ AnalyticCase detectAnalyticCase(const Scene& s) {
     }
   if (nonzero != 1) return c;
   const double gmag = std::abs(comp(gr, gaxis));
-  const double E = s.material.youngs_modulus, rho = s.material.density;
+  const double E = s.material.youngs_modulus_pa, rho = s.material.density_kg_m3;
   // The fixed box covers the whole section across `axis` and one end of it (less than half the length).
   auto coversSection = [&](int axis) {
     for (int k = 0; k < 3; ++k)

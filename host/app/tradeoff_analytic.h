@@ -36,12 +36,13 @@ AnalyticCase detectAnalyticCase(const Scene& scene);
 
 // The Euler-Bernoulli cantilever tip deflection q L^4 / (8 E I) under own weight (q = rho g b h,
 // I = b h^3 / 12), in m. L free length, b width (y), h height (along gravity).
-double eulerBernoulliTipDeflection(double length, double width, double height, double youngs, double density,
-                                   double gravity);
+double eulerBernoulliTipDeflection(double length, double width, double height, double youngs_modulus_pa,
+                                   double density_kg_m3, double gravity);
 
 // Axial displacement (m, along gravity) at distance s below the clamp of a bar of free length L hanging under
 // its own weight, in uniaxial stress: sigma(s) = rho g (L - s), u(s) = rho g (2 L s - s^2) / (2 E).
-double hangingBarDisplacement(double s, double length, double youngs, double density, double gravity);
+double hangingBarDisplacement(double s, double length, double youngs_modulus_pa, double density_kg_m3,
+                              double gravity);
 
 // The observable of an analytic case from rest and current positions: the mean displacement along
 // `axis` (sign `down`) of the particles within a quarter spacing of the free end (the last layer).

@@ -7,6 +7,7 @@
 
 #include "cpu_fallback/neighbor_search_cpu.h"
 #include "base/parallel.h"
+#include "host/scene/material_checks.h"
 #include "model/input_error.h"
 
 namespace inc {
@@ -30,11 +31,7 @@ void validateMlsBuildInput(const MlsBuildInput& in) {
           "mls.support_factor", "must lie in [1.2, 4] (h = factor * spacing)");
   require(finite(in.condition_limit) && in.condition_limit > 1.0, in, "mls.condition_limit", "must be > 1");
   const MlsMaterial& m = in.material;
-  require(finite(m.youngs_modulus) && m.youngs_modulus > 0, in, "material.youngs_modulus_pa", "must be > 0");
-  require(finite(m.poisson_ratio) && m.poisson_ratio > -1.0 && m.poisson_ratio < 0.5, in,
-          "material.poisson_ratio", "must lie in (-1, 0.5)");
-  require(finite(m.density) && m.density > 0, in, "material.density_kg_m3", "must be > 0");
-  require(finite(m.damping) && m.damping >= 0, in, "material.damping_per_s", "must be >= 0");
+  validateMaterial(m, in.source);  // the scene's own check: an MLS build also comes from tests and tools
   require(finite(m.volume_stiffness) && m.volume_stiffness >= 0, in, "mls.volume_stiffness", "must be >= 0");
   require(finite(in.safety) && in.safety > 0 && in.safety <= 1, in, "solver.safety", "must lie in (0, 1]");
   require(finite(in.gravity.x) && finite(in.gravity.y) && finite(in.gravity.z), in, "solver.gravity_m_s2",
@@ -54,7 +51,8 @@ void validateMlsBuildInput(const MlsBuildInput& in) {
 }
 
 MlsCoefficients<double> mlsCoefficients(const MlsMaterial& m) {
-  return mlsSplitCoefficients(m.youngs_modulus, m.poisson_ratio, m.volume_preservation, m.volume_stiffness, m.damping);
+  return mlsSplitCoefficients(m.youngs_modulus_pa, m.poisson_ratio, m.volume_preservation, m.volume_stiffness,
+                              m.damping_per_s);
 }
 
 template <typename T>
@@ -105,7 +103,7 @@ struct RestQuantities {
 template <typename T>
 RestQuantities restQuantities(MlsModel<T>& md, const MlsBuildInput& in) {
   const std::size_t n = md.rest.size();
-  const double rho0 = in.material.density;
+  const double rho0 = in.material.density_kg_m3;
   const double spacing = in.spacing;
   RestQuantities q;
   q.mass.resize(n);

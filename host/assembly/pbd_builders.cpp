@@ -7,6 +7,7 @@
 #include <string>
 
 #include "model/input_error.h"
+#include "host/scene/material_checks.h"
 #include "host/scene/scene_colliders.h"
 #include "physics/pbd_constraints.h"
 
@@ -51,7 +52,7 @@ bool insideBox(const Vec3d& p, const FixedRegion& r) {
 
 void validateMetaballOptions(const MetaballPbdOptions& opt) {
   const char* f = "metaball options";
-  if (!(opt.youngs_modulus > 0)) throw InputError(f, "youngs_modulus", "must be > 0");
+  validateYoungsModulus(opt.youngs_modulus_pa, opt.file);  // host/scene/material_checks.h
   if (opt.stretch_compliance < 0 || opt.laplacian_compliance < 0 || opt.shape_compliance < 0)
     throw InputError(f, "compliance", "must be >= 0");
   if (!(opt.pbd_stiffness >= 0 && opt.pbd_stiffness <= 1)) throw InputError(f, "pbd_stiffness", "must be in [0, 1]");
@@ -114,7 +115,7 @@ template <typename T>
 PbdConstraintBlock<T> shapeMatchingBlock(const MetaballModel& mb, const std::vector<std::vector<std::int32_t>>& nbr,
                                          const MetaballPbdOptions& opt) {
   const std::size_t n = mb.size();
-  const double E = opt.youngs_modulus;
+  const double E = opt.youngs_modulus_pa;
   PbdConstraintBlock<T> shape;
   shape.kind = PbdConstraintKind::ShapeMatching;
   shape.solve = opt.shape_matching;
@@ -149,7 +150,7 @@ PbdConstraintBlock<T> shapeMatchingBlock(const MetaballModel& mb, const std::vec
 template <typename T>
 PbdConstraintBlock<T> laplacianBlock(const MetaballModel& mb, const std::vector<std::vector<std::int32_t>>& nbr,
                                      const MetaballPbdOptions& opt) {
-  const double E = opt.youngs_modulus;
+  const double E = opt.youngs_modulus_pa;
   PbdConstraintBlock<T> lap;
   lap.kind = PbdConstraintKind::Laplacian;
   lap.stiffness = T(opt.pbd_stiffness);
@@ -170,7 +171,7 @@ PbdConstraintBlock<T> laplacianBlock(const MetaballModel& mb, const std::vector<
 // One distance constraint per link; the default compliance is that of a rod of the mean radius.
 template <typename T>
 PbdConstraintBlock<T> linkDistanceBlock(const MetaballModel& mb, const MetaballPbdOptions& opt) {
-  const double E = opt.youngs_modulus;
+  const double E = opt.youngs_modulus_pa;
   PbdConstraintBlock<T> dist;
   dist.kind = PbdConstraintKind::Distance;
   dist.stiffness = T(opt.pbd_stiffness);

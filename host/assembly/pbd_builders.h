@@ -14,7 +14,7 @@
 namespace inc {
 
 struct MetaballPbdOptions {
-  double youngs_modulus = 3.0e3;     // Pa: sets the compliances below that are left at 0
+  double youngs_modulus_pa = 3.0e3;  // Material::youngs_modulus_pa: sets the compliances below that are left at 0
   double stretch_compliance = 0.0;   // m/N per link; 0: d_ij / (E pi rbar^2) (a rod of the spheres' mean radius)
   double laplacian_compliance = 0.0; // m/N per sphere; 0: 1 / (E r_i)
   double shape_compliance = 0.0;     // m/N per cluster member; 0: n_j / (E r_j), n_j = clusters holding j

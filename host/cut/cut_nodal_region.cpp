@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "host/backends/solver_factory.h"
+#include "host/scene/material_checks.h"
 #include "base/parallel.h"
 #include "host/cut/cut_nodal_points.h"
 #include "model/device_capture_lock.h"
@@ -34,7 +35,7 @@ NodalRegion::NodalRegion(const MetaballModel& base, const NodalRegionSettings& s
   if (s.samples_per_diameter < 1 || s.samples_per_diameter > 64)
     throw InputError(s.mls.source, "cutting.samples_per_diameter", "must be in [1, 64]");
   if (s.backend == BackendKind::Auto) throw InputError(s.mls.source, "solver.backend", "the nodal region needs a resolved backend");
-  if (!(s.youngs_modulus > 0)) throw InputError(s.mls.source, "material.youngs_modulus_pa", "must be > 0");
+  validateMaterial(s.mls.material, s.mls.source);  // the links below divide by E
   r_.role.assign(base_.size(), SphereRole::Pbd);
   double rmean = 0.0;
   for (double r : base_.rest_radii) rmean += r / double(std::max<std::size_t>(1, base_.size()));
@@ -47,7 +48,8 @@ NodalRegion::NodalRegion(const MetaballModel& base, const NodalRegionSettings& s
     const double d = base_.link_rest_lengths[l];
     const double rbar = 0.5 * (base_.rest_radii[std::size_t(e[0])] + base_.rest_radii[std::size_t(e[1])]);
     // The PBD link's compliance (host/assembly/pbd_builders.cpp) as a Hooke spring: k = 1 / alpha (N/m).
-    const double alpha = s.stretch_compliance > 0 ? s.stretch_compliance : d / (s.youngs_modulus * kPi * rbar * rbar);
+    const double alpha =
+        s.stretch_compliance > 0 ? s.stretch_compliance : d / (s.mls.material.youngs_modulus_pa * kPi * rbar * rbar);
     adjacency_[std::size_t(e[0])].push_back({e[1], d, 1.0 / alpha});
     adjacency_[std::size_t(e[1])].push_back({e[0], d, 1.0 / alpha});
   }

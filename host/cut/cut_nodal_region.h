@@ -29,11 +29,11 @@ enum class SphereRole : std::uint8_t { Pbd = 0, Interface = 1, Cut = 2 };
 
 struct NodalRegionSettings {
   int samples_per_diameter = 4;        // lattice cells across a converted sphere's (mean) diameter
-  MlsBuildInput mls;                   // material, support_factor, condition_limit, gravity, safety, source
+  MlsBuildInput mls;                   // material, support_factor, condition_limit, gravity, safety, source; its
+                                       // youngs_modulus_pa also sets the links: k = 1 / alpha as the PBD links
   BackendKind backend = BackendKind::Cpu;  // resolved (Cpu or Cuda)
   Precision precision = Precision::Float32;
   std::vector<FixedRegion> fixed;      // a sphere whose rest centre lies inside is fixed: so are its points
-  double youngs_modulus = 3.0e3;       // Pa: link stiffness k = 1 / alpha with alpha as the PBD links
   double stretch_compliance = 0.0;     // m/N; 0: alpha = d / (E pi rbar^2) (host/assembly/pbd_builders.h)
   std::function<bool(const Vec3d&)> inside;  // the tissue: points are sampled only inside it (empty: everywhere)
   StaticColliders colliders;           // the scene's planes and boxes: the points stay out of them

@@ -22,7 +22,7 @@ constexpr char kMagic[8] = {'I', 'N', 'C', 'B', 'E', 'M', 'C', '2'};
 struct Header {
   char magic[8];
   std::uint64_t mesh_hash, supports_hash, elements;
-  double youngs_pa, poisson, local_radius_m, local_spacing_m;
+  double youngs_modulus_pa, poisson_ratio, local_radius_m, local_spacing_m;
   std::uint64_t table_bytes, table_hash, inverse_bytes, inverse_hash;
 };
 
@@ -58,15 +58,15 @@ std::string num(double v) { return scene_json::formatNumber(v); }
 
 }  // namespace
 
-BemCacheKey bemCacheKey(const TriangleMesh& mesh, const std::vector<BemBc>& supports, const BemMaterial& material,
+BemCacheKey bemCacheKey(const TriangleMesh& mesh, const std::vector<BemBc>& supports, const Material& material,
                         double local_radius_m, double local_spacing_m) {
   BemCacheKey k;
   k.mesh_hash = hashBytes(mesh.vertices.data(), mesh.vertices.size() * sizeof(Vec3d));
   k.mesh_hash = hashBytes(mesh.triangles.data(), mesh.triangles.size() * sizeof(mesh.triangles[0]), k.mesh_hash);
   k.supports_hash = hashBytes(supports.data(), supports.size() * sizeof(BemBc));
   k.elements = mesh.triangles.size();
-  k.youngs_pa = material.youngs_pa;
-  k.poisson = material.poisson;
+  k.youngs_modulus_pa = material.youngs_modulus_pa;
+  k.poisson_ratio = material.poisson_ratio;
   k.local_radius_m = local_radius_m;
   k.local_spacing_m = local_spacing_m;
   return k;
@@ -98,9 +98,9 @@ BemCacheRead readBemCache(const std::string& path, const BemCacheKey& key, Organ
     out.note = "the cache was built for another organ mesh";
     return out;
   }
-  if (h.youngs_pa != key.youngs_pa || h.poisson != key.poisson) {
-    out.note = "the cache was built for E = " + num(h.youngs_pa) + " Pa, nu = " + num(h.poisson) + " (now " +
-               num(key.youngs_pa) + " Pa, " + num(key.poisson) + ")";
+  if (h.youngs_modulus_pa != key.youngs_modulus_pa || h.poisson_ratio != key.poisson_ratio) {
+    out.note = "the cache was built for E = " + num(h.youngs_modulus_pa) + " Pa, nu = " + num(h.poisson_ratio) +
+               " (now " + num(key.youngs_modulus_pa) + " Pa, " + num(key.poisson_ratio) + ")";
     return out;
   }
   if (h.supports_hash != key.supports_hash) {
@@ -151,8 +151,8 @@ void writeBemCache(const std::string& path, const BemCacheKey& key, const OrganC
   h.mesh_hash = key.mesh_hash;
   h.supports_hash = key.supports_hash;
   h.elements = E;
-  h.youngs_pa = key.youngs_pa;
-  h.poisson = key.poisson;
+  h.youngs_modulus_pa = key.youngs_modulus_pa;
+  h.poisson_ratio = key.poisson_ratio;
   h.local_radius_m = key.local_radius_m;
   h.local_spacing_m = key.local_spacing_m;
   h.table_bytes = tableBytes(E);

@@ -18,10 +18,10 @@ struct BemCacheKey {
   std::uint64_t mesh_hash = 0;      // the scaled vertices and triangles, bytewise
   std::uint64_t supports_hash = 0;  // the base conditions, one per element
   std::uint64_t elements = 0;
-  double youngs_pa = 0.0, poisson = 0.0;
+  double youngs_modulus_pa = 0.0, poisson_ratio = 0.0;
   double local_radius_m = 0.0, local_spacing_m = 0.0;
 };
-BemCacheKey bemCacheKey(const TriangleMesh& mesh, const std::vector<BemBc>& supports, const BemMaterial& material,
+BemCacheKey bemCacheKey(const TriangleMesh& mesh, const std::vector<BemBc>& supports, const Material& material,
                         double local_radius_m, double local_spacing_m);
 
 // The contact table of an organ with E elements (host/haptics/global_organ_model.h): for a tip touching element e,

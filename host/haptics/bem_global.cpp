@@ -6,6 +6,7 @@
 #include <cmath>
 #include <map>
 
+#include "host/scene/material_checks.h"
 #include "model/input_error.h"
 #include "physics/kelvin.h"
 
@@ -168,13 +169,12 @@ TriangleMesh uvSphereMesh(double radius_m, int bands, int segments) {
   return m;
 }
 
-BemModel::BemModel(const TriangleMesh& mesh, const BemMaterial& material, const Progress& progress) : mesh_(mesh) {
+BemModel::BemModel(const TriangleMesh& mesh, const Material& material, const Progress& progress) : mesh_(mesh) {
   const char* f = "<bem model>";
-  if (!(material.youngs_pa > 0.0) || !std::isfinite(material.youngs_pa)) throw InputError(f, "youngs_pa", "must be > 0");
-  if (!(material.poisson > -1.0 && material.poisson < 0.5)) throw InputError(f, "poisson", "must be in (-1, 0.5)");
+  validateMaterial(material, f);  // E and nu (the global model uses no density or damping)
   if (mesh.triangles.size() < 4) throw InputError(f, "mesh", "needs a closed mesh of at least 4 triangles");
-  shear_pa_ = material.youngs_pa / (2.0 * (1.0 + material.poisson));
-  nu_ = material.poisson;
+  shear_pa_ = material.youngs_modulus_pa / (2.0 * (1.0 + material.poisson_ratio));
+  nu_ = material.poisson_ratio;
   const auto t0 = std::chrono::steady_clock::now();
   const int E = int(mesh.triangles.size());
   for (int j = 0; j < E; ++j) {

@@ -8,14 +8,10 @@
 #include <Eigen/Dense>
 
 #include "host/io/mesh.h"
+#include "model/material.h"
 #include "host/scene/global_organ_mesh.h"  // BemBc: an element's boundary condition
 
 namespace inc {
-
-struct BemMaterial {
-  double youngs_pa = 3.0e3;
-  double poisson = 0.45;
-};
 
 // Sphere meshes for tests and benchmarks: icosahedron subdivided `level` times (20 * 4^level
 // triangles); latitude-longitude sphere with `bands` x `segments` (2 * segments * (bands - 1)).
@@ -30,7 +26,7 @@ TriangleMesh uvSphereMesh(double radius_m, int bands, int segments);
 class BemModel {
  public:
   using Progress = std::function<void(double fraction)>;
-  BemModel(const TriangleMesh& mesh, const BemMaterial& material, const Progress& progress = {});
+  BemModel(const TriangleMesh& mesh, const Material& material, const Progress& progress = {});
 
   int elementCount() const { return int(centroids_.size()); }
   const std::vector<Vec3d>& centroids() const { return centroids_; }

@@ -39,12 +39,12 @@ class PhaseBar {
 // For every element: the coupled tool stiffness and the organ's surface response (a held element: the local
 // model alone, no response).
 OrganContactTable contactTable(BemModel& bem, const std::vector<BemBc>& supports, const HemisphereCloudSpec& local,
-                               const BemMaterial& material, const BemModel::Progress& progress) {
+                               const Material& material, const BemModel::Progress& progress) {
   const int E = bem.elementCount();
   OrganContactTable t;
   t.stiffness = Eigen::MatrixXd::Zero(9, E);
   t.surface = Eigen::MatrixXd::Zero(3 * E, 3 * E);
-  HybridHapticModel hybrid(bem, local, MfsMaterial{material.youngs_pa, material.poisson});
+  HybridHapticModel hybrid(bem, local, material);
   for (int e = 0; e < E; ++e) {
     Eigen::Matrix3d k;
     if (supports[std::size_t(e)] == BemBc::kDisplacement) {

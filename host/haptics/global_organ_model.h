@@ -21,7 +21,7 @@ namespace inc {
 struct GlobalOrganSetup {
   TriangleMesh mesh;              // metres, checked (loadGlobalOrganMesh)
   std::vector<BemBc> supports;    // one per element (organSupports): held elements carry displacement zero
-  BemMaterial material;
+  Material material;
   HemisphereCloudSpec local;      // the tip's MFS cloud (haptics.local_*)
   std::string cache_path;         // "": no cache
   bool quiet = false;             // no progress bar

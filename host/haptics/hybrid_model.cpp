@@ -26,7 +26,7 @@ double secondsSince(std::chrono::steady_clock::time_point t0) {
 }  // namespace
 
 HybridHapticModel::HybridHapticModel(BemModel& global, const HemisphereCloudSpec& local_spec,
-                                     const MfsMaterial& material)
+                                     const Material& material)
     : global_(global), local_(mfsTipModel(local_spec, material)) {  // K_bb factorised once: the cloud moves with
                                                                    // the contact, its stiffness does not
   setUp();

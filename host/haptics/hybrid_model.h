@@ -40,7 +40,7 @@ class HybridHapticModel {
  public:
   // Tip tool: the cloud's tip node (singular weight, eq. 5) is prescribed in x, y, z; the outer shell is
   // coupled. Throws InputError for a bad spec.
-  HybridHapticModel(BemModel& global, const HemisphereCloudSpec& local_spec, const MfsMaterial& material);
+  HybridHapticModel(BemModel& global, const HemisphereCloudSpec& local_spec, const Material& material);
   // Any local tool: a local model whose roles are set (e.g. a flat punch: the z DOFs of the face nodes
   // prescribed), shared between organs and contacts (its K_bb factorisation does not depend on them).
   // Coupled DOFs must keep away from the contact point (more than a quarter of the cloud's radius).

@@ -8,6 +8,7 @@
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
 
+#include "host/scene/material_checks.h"
 #include "model/input_error.h"
 #include "physics/mls_weight.h"
 
@@ -183,17 +184,16 @@ struct MfsLocalModel::Impl {
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
 };
 
-MfsLocalModel::MfsLocalModel(MfsCloud cloud, const MfsMaterial& material)
+MfsLocalModel::MfsLocalModel(MfsCloud cloud, const Material& material)
     : cloud_(std::move(cloud)), material_(material), impl_(std::make_unique<Impl>()) {
   const char* f = "<mfs model>";
-  if (!(material_.youngs_pa > 0.0) || !std::isfinite(material_.youngs_pa)) throw InputError(f, "youngs_pa", "must be > 0");
-  if (!(material_.poisson > -1.0 && material_.poisson < 0.5)) throw InputError(f, "poisson", "must be in (-1, 0.5)");
+  validateMaterial(material_, f);  // E and nu (the local model uses no density or damping)
   const int N = int(cloud_.nodes.size());
   if (N < 4 || cloud_.support_m.size() != std::size_t(N) || cloud_.singular.size() != std::size_t(N) ||
       cloud_.quad_points.size() != cloud_.quad_weights_m3.size())
     throw InputError(f, "cloud", "inconsistent node/quadrature arrays");
   const auto t0 = std::chrono::steady_clock::now();
-  const double E = material_.youngs_pa, nu = material_.poisson;
+  const double E = material_.youngs_modulus_pa, nu = material_.poisson_ratio;
   const double lambda = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)), mu = E / (2.0 * (1.0 + nu));
 
   for (int J = 0; J < N; ++J)
@@ -310,7 +310,7 @@ Eigen::VectorXd MfsLocalModel::freeDisplacement(const Eigen::VectorXd& u_a, cons
 
 double MfsLocalModel::energyNorm(const Eigen::VectorXd& u) const { return u.dot(impl_->K * u); }
 
-std::shared_ptr<MfsLocalModel> mfsTipModel(const HemisphereCloudSpec& spec, const MfsMaterial& material,
+std::shared_ptr<MfsLocalModel> mfsTipModel(const HemisphereCloudSpec& spec, const Material& material,
                                            bool coupled_moves) {
   HemisphereCloud c = hemisphereCloud(spec);
   c.cloud.singular[0] = 1;  // eq. 5: the tip node interpolates the prescribed displacement

@@ -7,14 +7,10 @@
 
 #include <Eigen/Dense>
 
+#include "model/material.h"
 #include "physics/vec3.h"
 
 namespace inc {
-
-struct MfsMaterial {
-  double youngs_pa = 3.0e3;
-  double poisson = 0.45;
-};
 
 // Nodes (each the centre of a sphere of radius support_m) and the quadrature of the covered volume.
 struct MfsCloud {
@@ -69,7 +65,7 @@ enum class DofRole : std::uint8_t {
 class MfsLocalModel {
  public:
   static constexpr int kSingularPower = 2;  // p of eq. 5
-  MfsLocalModel(MfsCloud cloud, const MfsMaterial& material);
+  MfsLocalModel(MfsCloud cloud, const Material& material);
   ~MfsLocalModel();
 
   // dof_roles: one per DOF (3 per node, x y z). Factorises K_bb (sparse LDLT) and precomputes the
@@ -98,7 +94,7 @@ class MfsLocalModel {
  private:
   struct Impl;
   MfsCloud cloud_;
-  MfsMaterial material_;
+  Material material_;
   std::unique_ptr<Impl> impl_;
   std::vector<int> a_, b_, c_;
   Eigen::MatrixXd s_aa_, s_ac_, g_a_, g_c_;
@@ -107,7 +103,7 @@ class MfsLocalModel {
 
 // The tip tool's local model: the cloud of `spec` with the tip node's singular weight (eq. 5), its x, y, z
 // prescribed and the outer shell coupled (held at zero when coupled_moves is false), factorised once.
-std::shared_ptr<MfsLocalModel> mfsTipModel(const HemisphereCloudSpec& spec, const MfsMaterial& material,
+std::shared_ptr<MfsLocalModel> mfsTipModel(const HemisphereCloudSpec& spec, const Material& material,
                                            bool coupled_moves = true);
 
 }  // namespace inc

@@ -10,11 +10,11 @@
 
 namespace inc {
 
-double flatPunchForce(double radius_m, double youngs_pa, double poisson, double indentation_m) {
-  return 2.0 * radius_m * youngs_pa * indentation_m / (1.0 - poisson * poisson);
+double flatPunchForce(double radius_m, double youngs_modulus_pa, double poisson_ratio, double indentation_m) {
+  return 2.0 * radius_m * youngs_modulus_pa * indentation_m / (1.0 - poisson_ratio * poisson_ratio);
 }
 
-MfsPunchResult mfsFlatPunch(const MfsPunchSpec& p, const MfsMaterial& material) {
+MfsPunchResult mfsFlatPunch(const MfsPunchSpec& p, const Material& material) {
   const char* f = "<mfs punch>";
   if (!(p.radius_m > 0.0) || !std::isfinite(p.radius_m)) throw InputError(f, "radius_m", "must be > 0");
   if (p.contact_shells < 1 || p.contact_shells > 12) throw InputError(f, "contact_shells", "must be in [1, 12]");
@@ -49,7 +49,7 @@ MfsPunchResult mfsFlatPunch(const MfsPunchSpec& p, const MfsMaterial& material) 
   const Eigen::VectorXd ua = Eigen::VectorXd::Constant(Eigen::Index(m.prescribedDofs().size()), -delta);
   const Eigen::VectorXd uc = Eigen::VectorXd::Zero(Eigen::Index(m.coupledDofs().size()));
   r.force_n = -m.reactionForce(ua, uc).sum();  // pushed down: the tool applies a -z force on the tissue
-  r.analytic_n = flatPunchForce(a, material.youngs_pa, material.poisson, delta);
+  r.analytic_n = flatPunchForce(a, material.youngs_modulus_pa, material.poisson_ratio, delta);
   // A haptic tick is eq. 6's f_a = S_aa U_a + S_ac U_c; timed in batches of 8 (the clock costs ~20 ns).
   constexpr int kBatch = 8;
   std::vector<double> wall, cpu;

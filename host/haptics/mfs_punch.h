@@ -7,7 +7,7 @@ namespace inc {
 
 // Force (N) of a flat rigid frictionless cylindrical punch of radius a pressed delta into an elastic
 // half-space (Sneddon 1965; Boussinesq): F = 2 a E delta / (1 - nu^2).
-double flatPunchForce(double radius_m, double youngs_pa, double poisson, double indentation_m);
+double flatPunchForce(double radius_m, double youngs_modulus_pa, double poisson_ratio, double indentation_m);
 
 // The punch problem on a hemisphereCloud: the punch face is the surface nodes of the first `contact_shells`
 // shells (inner spacing a / (contact_shells + 0.5), so the punch edge lies midway between the last contact
@@ -34,6 +34,6 @@ struct MfsPunchResult {
 };
 
 // Builds the cloud and the model, condenses, times `ticks` haptic ticks. Throws InputError for a bad spec.
-MfsPunchResult mfsFlatPunch(const MfsPunchSpec& spec, const MfsMaterial& material);
+MfsPunchResult mfsFlatPunch(const MfsPunchSpec& spec, const Material& material);
 
 }  // namespace inc

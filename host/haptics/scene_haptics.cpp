@@ -137,7 +137,7 @@ std::unique_ptr<GlobalOrganModel> sceneGlobalModel(const Scene& scene, const Tis
                          " m from the tissue plane's point (its box is " + scene_json::formatNumber(diag) +
                          " m across): is global_mesh_scale right, and is it the mesh of this organ?");
   setup.supports = organSupports(setup.mesh, scene.fixed);
-  setup.material = BemMaterial{scene.material.youngs_modulus, scene.material.poisson_ratio};
+  setup.material = scene.material;
   setup.local.inner_spacing_m = h.local_spacing_m;
   setup.local.inner_shells = 2;  // as mfsTipStiffness: the held and the coupled local model are the same cloud
   setup.local.radius_m = h.local_radius_m;
@@ -158,8 +158,7 @@ SceneHaptics::SceneHaptics(const Scene& scene, const SimulationModel& model, Sce
   if (options.clock && h.devices.size() > 1)
     throw InputError(scene.file, "haptics.devices", "one test clock cannot drive several loop threads");
   plane_ = sceneTissuePlane(scene, model);
-  tip_ = mfsTipStiffness(MfsMaterial{scene.material.youngs_modulus, scene.material.poisson_ratio}, h.local_radius_m,
-                         h.local_spacing_m, plane_.normal);
+  tip_ = mfsTipStiffness(scene.material, h.local_radius_m, h.local_spacing_m, plane_.normal);
   const long scalpel = scalpelHand(scene, model);
   if (h.global_model == "bem") organ_ = sceneGlobalModel(scene, plane_, int(h.devices.size()), options.quiet);
   // Every device is built before any loop exists: a device that cannot be opened starts nothing.
@@ -174,7 +173,7 @@ SceneHaptics::SceneHaptics(const Scene& scene, const SimulationModel& model, Sce
     c.scalpel = long(k) == scalpel;
     c.plane = plane_;
     c.elastic = organ_ ? organ_->contactElastic(int(k)) : tipElastic(tip_);
-    c.cut = scene.material.cutting;
+    c.cut = scene.cut_thresholds;
     c.blade_length_m = d.blade_length_m;
     c.blade_axis_device = d.blade_axis;
     c.loop = loopConfig(scene, d, options.record_s);

@@ -8,7 +8,7 @@
 
 namespace inc {
 
-TipStiffness mfsTipStiffness(const MfsMaterial& material, double radius_m, double spacing_m, const Vec3d& n) {
+TipStiffness mfsTipStiffness(const Material& material, double radius_m, double spacing_m, const Vec3d& n) {
   const char* f = "<tip stiffness>";
   if (!(radius_m > 0.0) || !(spacing_m > 0.0) || !(spacing_m <= 0.5 * radius_m))
     throw InputError(f, "local_spacing_m", "needs 0 < spacing <= radius / 2");

@@ -21,7 +21,7 @@ struct TipStiffness {
 };
 // A hemisphereCloud of radius_m with inner shells spacing_m apart (2 inner shells, then growing), the tip node with
 // the singular weight of eq. 5, the outer shell held. Throws InputError for a bad size.
-TipStiffness mfsTipStiffness(const MfsMaterial& material, double radius_m, double spacing_m, const Vec3d& unit_normal);
+TipStiffness mfsTipStiffness(const Material& material, double radius_m, double spacing_m, const Vec3d& unit_normal);
 // The elastic model of a tool whose tissue is this tip stiffness alone (no global model): -K d in contact.
 CuttingTool::Elastic tipElastic(const TipStiffness& tip);
 

@@ -3,12 +3,13 @@
 
 #include <cmath>
 
+#include "host/scene/scene_keys.h"
 #include "model/input_error.h"
 
 namespace inc {
 
 CutThresholds<double> readCutThresholds(const scene_json::ObjectReader& r) {
-  r.allowOnly({"press_threshold_n", "static_friction_n", "dynamic_friction_n", "friction_n_per_m"});
+  r.allowOnly(sceneKeysUnder("material.cutting"));
   CutThresholds<double> th;
   // number() already refuses NaN / infinity and non-numbers with the key path; ranges are checked below
   // in one place (validateCutThresholds) so the haptic code and the scene agree on them.

@@ -8,6 +8,7 @@
 
 #include "host/scene/global_organ_mesh.h"
 #include "host/io/trajectory.h"
+#include "host/scene/scene_keys.h"
 #include "model/input_error.h"
 
 namespace inc {
@@ -20,18 +21,13 @@ using scene_json::ObjectReader;
 constexpr std::size_t kMaxDevices = 4;
 
 // Keys of one device (the single-device form has them in `haptics`, the list form in each devices[i]) and keys
-// of the section shared by every device.
+// of the section shared by every device (host/scene/scene_keys.cpp).
 const std::vector<std::string>& deviceKeys() {
-  static const std::vector<std::string> k = {
-      "name",    "device", "trajectory", "playback", "udp_port", "udp_device", "openhaptics_device", "workspace_scale",
-      "workspace_offset_m", "max_force_n", "rate_hz", "max_force_rate_n_per_s", "realtime", "cpu", "tool",
-      "blade_length_m", "blade_axis"};
+  static const std::vector<std::string> k = sceneKeysUnder("haptics.devices[]");
   return k;
 }
 const std::vector<std::string>& sharedKeys() {
-  static const std::vector<std::string> k = {"devices",         "surface_point_m", "surface_normal",   "local_radius_m",
-                                             "local_spacing_m", "record_trajectory", "global_model",   "global_mesh",
-                                             "global_mesh_scale", "global_cache"};
+  static const std::vector<std::string> k = sceneKeysUnder("haptics");
   return k;
 }
 bool contains(const std::vector<std::string>& v, const std::string& s) { return std::find(v.begin(), v.end(), s) != v.end(); }

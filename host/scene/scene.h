@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "model/backend.h"
+#include "model/material.h"
 #include "physics/cutting_force.h"
 #include "physics/vec3.h"
 
@@ -22,14 +23,6 @@ struct GeometrySpec {
   double spacing = 0.005;      // m, particle spacing for meshfree sampling; > 0
   double jitter = 0.0;         // fraction of spacing, [0, 0.5): random offset of the sample lattice
   unsigned seed = 1;           // for jitter and every random choice of the scene
-};
-
-struct MaterialSpec {
-  double youngs_modulus = 3.0e3;  // Pa, > 0 (liver ~ 1-10 kPa)
-  double poisson_ratio = 0.45;    // (-1, 0.5)
-  double density = 1060.0;        // kg/m^3, > 0
-  double damping = 1.0;           // 1/s, mass-proportional damping coefficient, >= 0
-  CutThresholds<double> cutting;  // haptic cutting force model (eqs. 15-16): F_p, F_s, F_d (N), friction (N/m)
 };
 
 // Which models the scene switches on; a scene pays only for those.
@@ -100,7 +93,7 @@ struct TearingRegionSpec {
 
 struct TearingSpec {
   std::string criterion = "tresca";  // "traditional" | "tresca" | "tresca_principal"
-  double k_pa = 0.0;                 // Pa, >= 0: eq. 6 modulus; 0: material.youngs_modulus
+  double k_pa = 0.0;                 // Pa, >= 0: eq. 6 modulus; 0: material.youngs_modulus_pa
   double tau_f_pa = 0.0;             // Pa, >= 0: yield shear stress; 0: 0.1 k
   double break_strain = 0.2;         // > 0: bond strain at which the traditional criterion breaks a bond
   double random_range = 0.1;         // [0, 1): relative perturbation of the debris position (the paper's 10 %)
@@ -196,7 +189,9 @@ struct Scene {
   std::string description;
   double duration = 1.0;   // s, default run length when neither --steps nor --seconds is given
   GeometrySpec geometry;
-  MaterialSpec material;
+  Material material;                   // material.{youngs_modulus_pa, poisson_ratio, density_kg_m3, damping_per_s}
+  CutThresholds<double> cut_thresholds;  // material.cutting: the haptic cutting force model (eqs. 15-16): F_p, F_s,
+                                         // F_d (N), friction (N/m); a haptic setting, so not part of Material
   ModelsSpec models;
   MlsSpec mls;
   PbdSpec pbd;

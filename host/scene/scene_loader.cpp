@@ -14,6 +14,8 @@
 
 #include "host/scene/cutting_scene.h"
 #include "host/scene/haptics_scene.h"
+#include "host/scene/material_checks.h"
+#include "host/scene/scene_keys.h"
 #include "model/input_error.h"
 #include "host/io/mesh.h"
 #include "model/pbd_model.h"
@@ -70,18 +72,6 @@ const char* kindName(GeometrySpec::Kind k) {
   return "?";
 }
 
-// Keys each geometry kind uses besides kind, spacing_m, jitter and seed.
-std::vector<std::string> kindKeys(GeometrySpec::Kind k) {
-  switch (k) {
-    case GeometrySpec::Kind::Box:
-    case GeometrySpec::Kind::Beam: return {"center_m", "size_m"};
-    case GeometrySpec::Kind::Sphere: return {"center_m", "radius_m"};
-    case GeometrySpec::Kind::Ellipsoid: return {"center_m", "radii_m"};
-    case GeometrySpec::Kind::Mesh: return {"mesh", "mesh_scale"};
-  }
-  return {};
-}
-
 // Loads and checks the mesh of a "mesh" geometry; returns its extent and volume in metres for the sampling checks.
 void checkMeshGeometry(const ObjectReader& g, const GeometrySpec& spec, double& min_extent, double& volume) {
   TriangleMesh mesh;
@@ -99,7 +89,7 @@ void checkMeshGeometry(const ObjectReader& g, const GeometrySpec& spec, double& 
 
 GeometrySpec readGeometry(const ObjectReader& top, const std::string& base_dir) {
   const ObjectReader g = top.object("geometry");
-  g.allowOnly({"kind", "center_m", "size_m", "radius_m", "radii_m", "mesh", "mesh_scale", "spacing_m", "jitter", "seed"});
+  g.allowOnly(sceneKeysUnder("geometry"));
   if (!g.has("kind")) g.fail("kind", "is required (one of: box, beam, sphere, ellipsoid, mesh)");
   const std::string kind = g.choice("kind", "", {"box", "beam", "sphere", "ellipsoid", "mesh"});
   GeometrySpec s;
@@ -110,8 +100,8 @@ GeometrySpec readGeometry(const ObjectReader& top, const std::string& base_dir) 
   if (kind == "mesh") s.kind = GeometrySpec::Kind::Mesh;
 
   // A key that belongs to another kind is a mistake the user should hear about, not a silent no-op.
-  const std::vector<std::string> own = kindKeys(s.kind);
-  for (const char* k : {"center_m", "size_m", "radius_m", "radii_m", "mesh", "mesh_scale"}) {
+  const std::vector<std::string> own = kindSpecificKeysUnder("geometry", kind);
+  for (const std::string& k : kindSpecificKeysUnder("geometry")) {
     if (g.has(k) && std::find(own.begin(), own.end(), k) == own.end()) {
       g.fail(k, std::string("is not used by geometry.kind \"") + kind + "\"");
     }
@@ -167,28 +157,24 @@ GeometrySpec readGeometry(const ObjectReader& top, const std::string& base_dir) 
   return s;
 }
 
-MaterialSpec readMaterial(const ObjectReader& top) {
-  MaterialSpec m;
-  if (!top.has("material")) return m;
+// material.*: the numbers read with their types checked, then the ranges by the one Material validation.
+void readMaterial(const ObjectReader& top, Material& m, CutThresholds<double>& cutting) {
+  if (!top.has("material")) return;
   const ObjectReader r = top.object("material");
-  r.allowOnly({"youngs_modulus_pa", "poisson_ratio", "density_kg_m3", "damping_per_s", "cutting"});
-  m.youngs_modulus = positive(r, "youngs_modulus_pa", m.youngs_modulus);
+  r.allowOnly(sceneKeysUnder("material"));
+  m.youngs_modulus_pa = r.number("youngs_modulus_pa", m.youngs_modulus_pa);
   m.poisson_ratio = r.number("poisson_ratio", m.poisson_ratio);
-  if (!(m.poisson_ratio > -1 && m.poisson_ratio < 0.5)) {
-    r.fail("poisson_ratio", "must lie in the open interval (-1, 0.5)" + got(m.poisson_ratio) +
-                                "; 0.5 (incompressible) and -1 make the bulk or shear modulus infinite");
-  }
-  m.density = positive(r, "density_kg_m3", m.density);
-  m.damping = nonNegative(r, "damping_per_s", m.damping);
-  if (r.has("cutting")) m.cutting = readCutThresholds(r.object("cutting"));  // host/haptics/cutting_force_model.h
-  return m;
+  m.density_kg_m3 = r.number("density_kg_m3", m.density_kg_m3);
+  m.damping_per_s = r.number("damping_per_s", m.damping_per_s);
+  validateMaterial(m, r.file(), r.path());  // host/scene/material_checks.h
+  if (r.has("cutting")) cutting = readCutThresholds(r.object("cutting"));  // host/scene/cutting_scene.h
 }
 
 ModelsSpec readModels(const ObjectReader& top) {
   ModelsSpec m;
   if (top.has("models")) {
     const ObjectReader r = top.object("models");
-    r.allowOnly({"mls", "pbd_metaballs", "cutting", "tearing", "haptics"});
+    r.allowOnly(sceneKeysUnder("models"));
     m.mls = r.boolean("mls", m.mls);
     m.pbd_metaballs = r.boolean("pbd_metaballs", m.pbd_metaballs);
     m.cutting = r.boolean("cutting", m.cutting);
@@ -209,7 +195,7 @@ MlsSpec readMls(const ObjectReader& top) {
   MlsSpec m;
   if (!top.has("mls")) return m;
   const ObjectReader r = top.object("mls");
-  r.allowOnly({"support_factor", "volume_preservation", "volume_stiffness", "condition_limit"});
+  r.allowOnly(sceneKeysUnder("mls"));
   m.support_factor = r.number("support_factor", m.support_factor);
   if (!(m.support_factor >= 1.2 && m.support_factor <= 4.0))
     r.fail("support_factor", "must lie in [1.2, 4]" + got(m.support_factor));
@@ -224,8 +210,7 @@ PbdSpec readPbd(const ObjectReader& top) {
   PbdSpec p;
   if (!top.has("pbd")) return p;
   const ObjectReader r = top.object("pbd");
-  r.allowOnly({"iterations", "xpbd", "solver", "chebyshev_rho", "stretch_compliance", "laplacian_compliance",
-               "volume_preservation", "target_spheres"});
+  r.allowOnly(sceneKeysUnder("pbd"));
   p.iterations = intAtLeast(r, "iterations", p.iterations, 1);
   p.xpbd = r.boolean("xpbd", p.xpbd);
   p.solver = r.choice("solver", p.solver, {"jacobi", "gauss_seidel"});
@@ -246,7 +231,7 @@ SolverSpec readSolver(const ObjectReader& top) {
   SolverSpec s;
   if (!top.has("solver")) return s;
   const ObjectReader r = top.object("solver");
-  r.allowOnly({"frame_dt_s", "substeps", "safety", "precision", "backend", "gravity_m_s2", "energy_bound"});
+  r.allowOnly(sceneKeysUnder("solver"));
   s.frame_dt = positive(r, "frame_dt_s", s.frame_dt);
   s.substeps = intAtLeast(r, "substeps", s.substeps, 0);
   s.safety = r.number("safety", s.safety);
@@ -269,7 +254,7 @@ std::vector<FixedRegion> readFixed(const ObjectReader& top) {
   if (!arr) return out;
   for (std::size_t i = 0; i < arr->size(); ++i) {
     const ObjectReader r((*arr)[i], top.file(), scene_json::indexPath(top.keyPath("fixed"), i));
-    r.allowOnly({"min_m", "max_m"});
+    r.allowOnly(sceneKeysUnder("fixed[]"));
     if (!r.has("min_m")) r.fail("min_m", "is required (the box's low corner, m)");
     if (!r.has("max_m")) r.fail("max_m", "is required (the box's high corner, m)");
     FixedRegion f;
@@ -308,7 +293,7 @@ std::vector<ColliderSpec> readColliders(const ObjectReader& top, const ModelsSpe
     if (!r.has("kind")) r.fail("kind", "is required (\"plane\" or \"box\")");
     c.kind = r.choice("kind", c.kind, {"plane", "box"});
     if (c.kind == "plane") {
-      r.allowOnly({"kind", "point_m", "normal", "friction"});
+      r.allowOnly(sceneKeysUnder("colliders[]", "plane"));
       if (!r.has("point_m")) r.fail("point_m", "is required (a point on the plane, m)");
       if (!r.has("normal")) r.fail("normal", "is required (the plane's normal, pointing to the free side)");
       c.point = r.vec3("point_m", c.point);
@@ -316,7 +301,7 @@ std::vector<ColliderSpec> readColliders(const ObjectReader& top, const ModelsSpe
       if (++planes > kMaxCollidersPerKind)
         r.fail("kind", "more than " + std::to_string(kMaxCollidersPerKind) + " planes in one scene");
     } else {
-      r.allowOnly({"kind", "min_m", "max_m", "friction"});
+      r.allowOnly(sceneKeysUnder("colliders[]", "box"));
       if (!r.has("min_m")) r.fail("min_m", "is required (the box's low corner, m)");
       if (!r.has("max_m")) r.fail("max_m", "is required (the box's high corner, m)");
       c.min = r.vec3("min_m", c.min);
@@ -347,7 +332,7 @@ std::vector<ToolSpec> readTools(const ObjectReader& top) {
   std::set<std::string> names;
   for (std::size_t i = 0; i < arr->size(); ++i) {
     const ObjectReader r((*arr)[i], top.file(), scene_json::indexPath(top.keyPath("tools"), i));
-    r.allowOnly({"name", "kind", "radius_m", "length_m", "friction", "path"});
+    r.allowOnly(sceneKeysUnder("tools[]"));
     ToolSpec t;
     t.name = r.string("name", "tool" + std::to_string(i));
     if (t.name.empty()) r.fail("name", "must not be empty");
@@ -364,7 +349,7 @@ std::vector<ToolSpec> readTools(const ObjectReader& top) {
     if (!path || path->empty()) r.fail("path", "needs at least one keyframe {\"t_s\", \"position_m\"}");
     for (std::size_t k = 0; k < path->size(); ++k) {
       const ObjectReader kr((*path)[k], r.file(), scene_json::indexPath(r.keyPath("path"), k));
-      kr.allowOnly({"t_s", "position_m", "direction"});
+      kr.allowOnly(sceneKeysUnder("tools[].path[]"));
       if (!kr.has("t_s")) kr.fail("t_s", "is required (keyframe time, s)");
       if (!kr.has("position_m")) kr.fail("position_m", "is required (tool tip position, m)");
       ToolKeyframe f;
@@ -387,7 +372,7 @@ OutputSpec readOutput(const ObjectReader& top) {
   OutputSpec o;
   if (!top.has("output")) return o;
   const ObjectReader r = top.object("output");
-  r.allowOnly({"every_frames", "particles_ply", "mesh_obj", "vtk", "metrics_csv"});
+  r.allowOnly(sceneKeysUnder("output"));
   o.every_frames = intAtLeast(r, "every_frames", o.every_frames, 0);
   o.particles_ply = r.boolean("particles_ply", o.particles_ply);
   o.mesh_obj = r.boolean("mesh_obj", o.mesh_obj);
@@ -400,7 +385,7 @@ TearingSpec readTearing(const ObjectReader& top) {
   TearingSpec t;
   if (!top.has("tearing")) return t;
   const ObjectReader r = top.object("tearing");
-  r.allowOnly({"criterion", "k_pa", "tau_f_pa", "break_strain", "random_range", "seed", "regions"});
+  r.allowOnly(sceneKeysUnder("tearing"));
   t.criterion = r.choice("criterion", t.criterion, {"traditional", "tresca", "tresca_principal"});
   t.k_pa = nonNegative(r, "k_pa", t.k_pa);
   t.tau_f_pa = nonNegative(r, "tau_f_pa", t.tau_f_pa);
@@ -416,7 +401,7 @@ TearingSpec readTearing(const ObjectReader& top) {
   if (!arr) return t;
   for (std::size_t i = 0; i < arr->size(); ++i) {
     const ObjectReader rr((*arr)[i], r.file(), scene_json::indexPath(r.keyPath("regions"), i));
-    rr.allowOnly({"min_m", "max_m", "k_pa", "tau_f_pa"});
+    rr.allowOnly(sceneKeysUnder("tearing.regions[]"));
     if (!rr.has("min_m")) rr.fail("min_m", "is required (the region's low corner, m)");
     if (!rr.has("max_m")) rr.fail("max_m", "is required (the region's high corner, m)");
     if (!rr.has("k_pa") && !rr.has("tau_f_pa")) rr.fail("k_pa", "a region needs k_pa or tau_f_pa (or both)");
@@ -447,9 +432,7 @@ CuttingSpec readCutting(const ObjectReader& top) {
   CuttingSpec c;
   if (!top.has("cutting")) return c;
   const ObjectReader r = top.object("cutting");
-  r.allowOnly({"samples_per_diameter", "exchanges_per_frame", "pbd_substeps_per_exchange", "pbd_iterations",
-               "mls_substeps_per_exchange", "repack_boundary_offset", "repack_spacing_factor", "repack_sphere_budget",
-               "stroke_end_frames", "conversion_delay_frames", "open_surface_frames", "blade_radius_m", "blade_friction"});
+  r.allowOnly(sceneKeysUnder("cutting"));
   c.samples_per_diameter = intInRange(r, "samples_per_diameter", c.samples_per_diameter, 2, 12);
   c.exchanges_per_frame = intInRange(r, "exchanges_per_frame", c.exchanges_per_frame, 1, 64);
   c.pbd_substeps_per_exchange = intInRange(r, "pbd_substeps_per_exchange", c.pbd_substeps_per_exchange, 1, 64);
@@ -521,8 +504,7 @@ std::string compactScalarArrays(const std::string& text) {
 Scene parseScene(const std::string& json_text, const std::string& file_label, const std::string& base_dir) {
   const nlohmann::json doc = scene_json::parseChecked(json_text, file_label);
   const ObjectReader top(doc, file_label, "");
-  top.allowOnly({"name", "description", "duration_s", "geometry", "material", "models", "mls", "pbd", "solver",
-                 "fixed", "tools", "colliders", "output", "tearing", "cutting", "haptics"});
+  top.allowOnly(sceneKeysUnder(""));
   Scene s;
   s.file = file_label;
   s.name = top.string("name", std::filesystem::path(file_label).stem().string());
@@ -530,7 +512,7 @@ Scene parseScene(const std::string& json_text, const std::string& file_label, co
   s.duration = positive(top, "duration_s", s.duration);
   // Sections in the order a reader of the file expects the first error to be reported.
   s.geometry = readGeometry(top, base_dir);
-  s.material = readMaterial(top);
+  readMaterial(top, s.material, s.cut_thresholds);
   s.models = readModels(top);
   s.mls = readMls(top);
   s.pbd = readPbd(top);
@@ -596,11 +578,11 @@ std::string sceneToJson(const Scene& s) {
   g["seed"] = s.geometry.seed;
   j["geometry"] = g;
 
-  j["material"] = J{{"youngs_modulus_pa", s.material.youngs_modulus},
+  j["material"] = J{{"youngs_modulus_pa", s.material.youngs_modulus_pa},
                     {"poisson_ratio", s.material.poisson_ratio},
-                    {"density_kg_m3", s.material.density},
-                    {"damping_per_s", s.material.damping},
-                    {"cutting", cutThresholdsJson(s.material.cutting)}};
+                    {"density_kg_m3", s.material.density_kg_m3},
+                    {"damping_per_s", s.material.damping_per_s},
+                    {"cutting", cutThresholdsJson(s.cut_thresholds)}};
   j["models"] = J{{"mls", s.models.mls},
                   {"pbd_metaballs", s.models.pbd_metaballs},
                   {"cutting", s.models.cutting},

@@ -66,7 +66,7 @@ void checkFixedMlsSubsteps(const Scene& scene, const MetaballModel& spheres, con
   for (double r : spheres.rest_radii) rmin = std::min(rmin, r);
   const double spacing = 2.0 * rmin / scene.cutting.samples_per_diameter;
   const MlsCoefficients<double> c = mlsCoefficients(material);
-  const double stable = mlsStableTimeStep(c.mu, c.lambda, c.k_volume, scene.material.density, spacing);
+  const double stable = mlsStableTimeStep(c.mu, c.lambda, c.k_volume, scene.material.density_kg_m3, spacing);
   const double dt = scene.solver.frame_dt / scene.cutting.exchanges_per_frame / fixed;
   if (dt > stable)
     throw InputError(scene.file, "cutting.mls_substeps_per_exchange",

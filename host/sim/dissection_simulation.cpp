@@ -75,7 +75,7 @@ void DissectionSimulation<T>::setPbdParams() {
   params_.fused_max_particles = params_.solver == PbdSolverKind::Jacobi ? 256 : 4096;
   params_.xpbd = scene_.pbd.xpbd;
   params_.gravity = Vec3<T>(scene_.solver.gravity);
-  params_.damping = T(scene_.material.damping);
+  params_.damping = T(scene_.material.damping_per_s);
   params_.volume_preservation = scene_.pbd.volume_preservation;
   params_.volume_influence = T(2.0 * scene_.geometry.spacing);
   base_substeps_ = scene_.solver.substeps > 0 ? scene_.solver.substeps : 4;
@@ -101,18 +101,12 @@ void DissectionSimulation<T>::setRegionSettings() {
   region_.precision = sizeof(T) == 8 ? Precision::Float64 : Precision::Float32;
   region_.fixed = scene_.fixed;
   region_.colliders = staticColliders(scene_.colliders);
-  region_.youngs_modulus = scene_.material.youngs_modulus;
   region_.stretch_compliance = scene_.pbd.stretch_compliance;
   MlsBuildInput& m = region_.mls;
   m.source = scene_.file;
   m.support_factor = scene_.mls.support_factor;
   m.condition_limit = scene_.mls.condition_limit;
-  m.material.youngs_modulus = scene_.material.youngs_modulus;
-  m.material.poisson_ratio = scene_.material.poisson_ratio;
-  m.material.density = scene_.material.density;
-  m.material.damping = scene_.material.damping;
-  m.material.volume_preservation = scene_.mls.volume_preservation;
-  m.material.volume_stiffness = scene_.mls.volume_stiffness;
+  m.material = MlsMaterial{scene_.material, scene_.mls.volume_preservation, scene_.mls.volume_stiffness};
   m.gravity = scene_.solver.gravity;
   m.safety = scene_.solver.safety;
 }
@@ -395,7 +389,7 @@ template <typename T>
 MetaballPbdOptions DissectionSimulation<T>::pbdOptions(std::vector<double> known_cell_volumes,
                                                        bool require_fixed_held) const {
   MetaballPbdOptions opt;
-  opt.youngs_modulus = scene_.material.youngs_modulus;
+  opt.youngs_modulus_pa = scene_.material.youngs_modulus_pa;
   opt.stretch_compliance = scene_.pbd.stretch_compliance;
   opt.laplacian_compliance = scene_.pbd.laplacian_compliance;
   opt.fixed = scene_.fixed;

@@ -2,6 +2,7 @@
 #include "host/sim/metaball_simulation.h"
 #include "host/backends/solver_factory.h"
 #include "host/assembly/metaball_pack_bvh.h"
+#include "host/scene/material_checks.h"
 #include "host/scene/scene_colliders.h"
 
 #include <algorithm>
@@ -85,8 +86,7 @@ class MetaballSimulation final : public SimulationModel {
     const std::string& f = scene.file;
     if (scene.pbd.iterations < 1) throw InputError(f, "pbd.iterations", "must be >= 1");
     if (scene.solver.substeps < 0) throw InputError(f, "solver.substeps", "must be >= 0");
-    if (!(scene.material.density > 0)) throw InputError(f, "material.density_kg_m3", "must be > 0");
-    if (!(scene.material.damping >= 0)) throw InputError(f, "material.damping_per_s", "must be >= 0");
+    validateMaterial(scene.material, f);  // a Scene built in code has not met the loader's check
     params_.solver = parsePbdSolver(scene.pbd.solver, f, "pbd.solver");
     params_.iterations = scene.pbd.iterations;
     params_.chebyshev_rho = T(checkChebyshevRho(scene.pbd.chebyshev_rho, params_.solver, f, "pbd.chebyshev_rho"));
@@ -96,7 +96,7 @@ class MetaballSimulation final : public SimulationModel {
     params_.fused_max_particles = params_.solver == PbdSolverKind::Jacobi ? 256 : 4096;
     params_.xpbd = scene.pbd.xpbd;
     params_.gravity = Vec3<T>(scene.solver.gravity);
-    params_.damping = T(scene.material.damping);
+    params_.damping = T(scene.material.damping_per_s);
     params_.volume_preservation = scene.pbd.volume_preservation;
     params_.volume_influence = T(2.0 * scene.geometry.spacing);
     max_substep_s_ = maxPbdSubstep(scene);
@@ -116,7 +116,7 @@ class MetaballSimulation final : public SimulationModel {
     checkCollidersClear(scene, mb.rest_centers, "sphere centres");
     collider_mesh_ = colliderMeshAround(scene.colliders, mb.rest_centers);
     MetaballPbdOptions opt;
-    opt.youngs_modulus = scene.material.youngs_modulus;
+    opt.youngs_modulus_pa = scene.material.youngs_modulus_pa;
     opt.stretch_compliance = scene.pbd.stretch_compliance;
     opt.laplacian_compliance = scene.pbd.laplacian_compliance;
     opt.fixed = scene.fixed;
@@ -347,12 +347,12 @@ MetaballModel buildSceneMetaballs(const Scene& scene) {
   const GeometrySpec& g = scene.geometry;
   const std::string& f = scene.file;
   if (!(std::isfinite(g.spacing) && g.spacing > 0)) throw InputError(f, "geometry.spacing_m", "must be a positive number");
-  if (!(scene.material.density > 0)) throw InputError(f, "material.density_kg_m3", "must be > 0");
+  validateMaterial(scene.material, f);
   if (scene.pbd.target_spheres > 0) {
     // The packer (paper, section 4): overlapping spheres fitted to the closed surface, masses from power cells.
     PackingOptions o;
     o.target_spheres = scene.pbd.target_spheres;
-    o.density_kg_m3 = scene.material.density;
+    o.density_kg_m3 = scene.material.density_kg_m3;
     return packOrgan(sceneSurfaceMesh(scene), o, scene.file).model;
   }
   std::vector<Vec3d> centers;
@@ -371,7 +371,7 @@ MetaballModel buildSceneMetaballs(const Scene& scene) {
   MetaballModel mb;
   mb.rest_centers = std::move(centers);
   mb.rest_radii.assign(mb.size(), kRadiusFactor * g.spacing);
-  mb.masses.assign(mb.size(), scene.material.density * g.spacing * g.spacing * g.spacing);
+  mb.masses.assign(mb.size(), scene.material.density_kg_m3 * g.spacing * g.spacing * g.spacing);
   linkOverlapping(mb);
   return mb;
 }

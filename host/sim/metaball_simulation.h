@@ -20,7 +20,7 @@ MetaballModel buildSceneMetaballs(const Scene& scene);
 
 // The PBD metaball organ of `scene` on `backend` (Auto resolves like resolveBackend) in `precision`.
 // Settings: pbd.iterations, pbd.xpbd, pbd.solver, pbd.stretch_compliance / laplacian_compliance (0: from
-// material.youngs_modulus), pbd.volume_preservation (power-cell radius adjustment near tools), material
+// material.youngs_modulus_pa), pbd.volume_preservation (power-cell radius adjustment near tools), material
 // density and damping, solver.frame_dt / substeps (0: 4) / gravity, fixed boxes, tools (probe: contact
 // capsule; grasper: catches spheres within its radius + one lattice spacing at its first keyframe, drags
 // them along its path, releases at its last keyframe; scalpel: ignored here, the cutting model owns it).

@@ -49,7 +49,7 @@ class MlsSimulation final : public SimulationModel {
     fixed_.assign(in.rest_positions.size(), 0);
     masses_.resize(in.rest_positions.size());
     for (std::size_t i = 0; i < masses_.size(); ++i) {
-      masses_[i] = in.masses.empty() ? in.material.density * in.spacing * in.spacing * in.spacing : in.masses[i];
+      masses_[i] = in.masses.empty() ? in.material.density_kg_m3 * in.spacing * in.spacing * in.spacing : in.masses[i];
       fixed_[i] = !in.kinds.empty() && in.kinds[i] == kMlsFixed ? 1 : 0;
     }
     // Refuse an unstable fixed substep count now (bad input), not in the middle of a run.
@@ -255,12 +255,7 @@ MlsBuildInput mlsBuildInputFromScene(const Scene& scene) {
   in.spacing = g.spacing;
   in.support_factor = scene.mls.support_factor;
   in.condition_limit = scene.mls.condition_limit;
-  in.material.youngs_modulus = scene.material.youngs_modulus;
-  in.material.poisson_ratio = scene.material.poisson_ratio;
-  in.material.density = scene.material.density;
-  in.material.damping = scene.material.damping;
-  in.material.volume_preservation = scene.mls.volume_preservation;
-  in.material.volume_stiffness = scene.mls.volume_stiffness;
+  in.material = MlsMaterial{scene.material, scene.mls.volume_preservation, scene.mls.volume_stiffness};
   in.gravity = scene.solver.gravity;
   in.safety = scene.solver.safety;
   in.kinds.assign(in.rest_positions.size(), kMlsFree);

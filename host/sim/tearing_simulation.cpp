@@ -48,11 +48,11 @@ TearingSceneSetup tearingSetupFromScene(const Scene& scene) {
   TearingSceneSetup s;
   const GeometrySpec& g = scene.geometry;
   const TearingSpec& ts = scene.tearing;
-  const double k = ts.k_pa > 0 ? ts.k_pa : scene.material.youngs_modulus;
+  const double k = ts.k_pa > 0 ? ts.k_pa : scene.material.youngs_modulus_pa;
   const double tau = ts.tau_f_pa > 0 ? ts.tau_f_pa : 0.1 * k;
   const double h = g.spacing;
   if (!(h > 0)) throw InputError(f, "geometry.spacing_m", "must be > 0");
-  const double rho_a = scene.material.density * h;
+  const double rho_a = scene.material.density_kg_m3 * h;
   if (g.kind == GeometrySpec::Kind::Box) {
     const int nx = int(std::floor(g.size.x / h + 1e-9)) + 1, ny = int(std::floor(g.size.y / h + 1e-9)) + 1;
     if (double(nx) * ny > 2.0e7) throw InputError(f, "geometry.spacing_m", "too many particles");
@@ -116,7 +116,7 @@ TearingSceneSetup tearingSetupFromScene(const Scene& scene) {
   s.tear.random_range = ts.random_range;
   s.model.stretch_compliance = scene.pbd.stretch_compliance;
   s.model.bending_compliance = 10.0;
-  s.damping = scene.material.damping;
+  s.damping_per_s = scene.material.damping_per_s;
   s.iterations = scene.pbd.iterations;
   if (scene.pbd.chebyshev_rho > 0)  // the tearing solve patches its model on the device, which the acceleration does not support
     throw InputError(f, "pbd.chebyshev_rho", "not supported by the tearing model (its solve is patched as it tears): use 0");
@@ -279,7 +279,7 @@ class TearingSimulation final : public SimulationModel {
     p.xpbd = s.xpbd;
     p.solver = parsePbdSolver(s.solver, scene.file, "pbd.solver");
     p.gravity = Vec3<T>(scene.solver.gravity);
-    p.damping = T(s.damping);
+    p.damping = T(s.damping_per_s);
     p.volume_preservation = false;
     return p;
   }

@@ -24,7 +24,7 @@ struct TearingSceneSetup {
   TearSheet<double> sheet;
   TearParams<double> tear;
   TearModelOptions model;
-  double damping = 1.0;
+  double damping_per_s = 1.0;  // Material::damping_per_s: the PBD solve's damping
   int iterations = 10;
   bool xpbd = true;
   std::string solver = "jacobi";

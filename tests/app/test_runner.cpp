@@ -80,7 +80,7 @@ Scene oscillatorScene() {
   s.file = "<test>";
   s.solver.backend = BackendKind::Cpu;
   s.solver.frame_dt = 0.01;
-  s.material.density = 1e7;  // makes the guard's energy scale (rho V g L) about 1e-3 J for this cloud
+  s.material.density_kg_m3 = 1e7;  // makes the guard's energy scale (rho V g L) about 1e-3 J for this cloud
   s.output.vtk = false;
   s.output.mesh_obj = false;
   return s;

@@ -148,7 +148,8 @@ TEST(Tradeoff, DetectsTheCantileverAndTheHangingBar) {
   EXPECT_EQ(hb.axis, 2);
   EXPECT_EQ(hb.down, -1.0);
   EXPECT_NEAR(hb.length_m, 0.0359 + 0.04, 1e-12);
-  EXPECT_NEAR(hb.reference_m, bar.material.density * 9.81 * hb.length_m * hb.length_m / (2.0 * bar.material.youngs_modulus),
+  EXPECT_NEAR(hb.reference_m,
+              bar.material.density_kg_m3 * 9.81 * hb.length_m * hb.length_m / (2.0 * bar.material.youngs_modulus_pa),
               1e-15);
   // Upside down (gravity +z, clamp at the bottom): still a hanging bar, measured along +z.
   Scene up = bar;
@@ -184,7 +185,7 @@ TEST(Tradeoff, HangingBarMlsDisplacementMatchesUniaxialStress) {
   Scene s = hangingBar();
   const AnalyticCase ac = detectAnalyticCase(s);
   ASSERT_EQ(ac.kind, AnalyticCase::Kind::HangingBar);
-  s.material.damping = 2.0 * ac.omega1;
+  s.material.damping_per_s = 2.0 * ac.omega1;
   auto models = createSceneModels(s, BackendKind::Cpu);
   ASSERT_EQ(models.size(), 1u);
   std::vector<Vec3d> rest, now;
@@ -192,7 +193,7 @@ TEST(Tradeoff, HangingBarMlsDisplacementMatchesUniaxialStress) {
   const int frames = int(std::ceil(8.0 / ac.omega1 / s.solver.frame_dt));
   for (int f = 0; f < frames; ++f) ASSERT_TRUE(models[0]->advance(s.solver.frame_dt).finite);
   models[0]->currentPositions(now);
-  const double top = s.fixed[0].min.z, E = s.material.youngs_modulus, rho = s.material.density;
+  const double top = s.fixed[0].min.z, E = s.material.youngs_modulus_pa, rho = s.material.density_kg_m3;
   // Layer means (the lattice layers are planes z = const).
   std::map<long, std::pair<double, int>> layers;
   for (std::size_t i = 0; i < rest.size(); ++i) {
@@ -224,7 +225,7 @@ TEST(Tradeoff, MfsPunchForceConvergesWithNodeCount) {
   // the Galerkin upper bound both stiffen, so every force is above 2 a E delta / (1 - nu^2); successive
   // refinements change it less and less (measured 1.123, 1.316, 1.373). The 12 a half-ball of the tradeoff
   // sweep gives 1.001, 1.071, 1.100, 1.120 for 1 ... 4 shells (docs/tradeoff.md).
-  const MfsMaterial m{2e5, 0.4};
+  const Material m{2e5, 0.4};
   double ratio[3];
   int nodes[3];
   for (int k = 0; k < 3; ++k) {
@@ -318,7 +319,7 @@ TEST(Tradeoff, DISABLED_HangingBarStudy) {
       s.geometry.spacing = spacing;
       s.geometry.jitter = jitter;
       const AnalyticCase ac = detectAnalyticCase(s);
-      s.material.damping = 2.0 * ac.omega1;
+      s.material.damping_per_s = 2.0 * ac.omega1;
       auto models = createSceneModels(s, BackendKind::Cpu);
       std::vector<Vec3d> rest, now;
       models[0]->currentPositions(rest);

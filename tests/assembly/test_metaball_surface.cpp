@@ -18,8 +18,8 @@ Scene ellipsoidScene(int target_spheres) {
   s.geometry.kind = GeometrySpec::Kind::Ellipsoid;
   s.geometry.radii = Vec3d(0.04, 0.03, 0.02);
   s.geometry.spacing = 0.01;
-  s.material.youngs_modulus = 5.0e3;
-  s.material.damping = 4.0;
+  s.material.youngs_modulus_pa = 5.0e3;
+  s.material.damping_per_s = 4.0;
   s.models.pbd_metaballs = true;
   s.pbd.solver = "gauss_seidel";
   s.pbd.target_spheres = target_spheres;
@@ -81,7 +81,7 @@ TEST(MetaballSurface, TargetSpheresUsesThePacker) {
   double mass = 0;
   for (double mi : mb.masses) mass += mi;
   const double volume = analyzeMesh(sceneSurfaceMesh(s)).signed_volume;
-  EXPECT_NEAR(mass, s.material.density * volume, 0.03 * s.material.density * volume);
+  EXPECT_NEAR(mass, s.material.density_kg_m3 * volume, 0.03 * s.material.density_kg_m3 * volume);
   for (const Vec3d& c : mb.rest_centers) {
     const double q = c.x * c.x / (0.04 * 0.04) + c.y * c.y / (0.03 * 0.03) + c.z * c.z / (0.02 * 0.02);
     EXPECT_LT(q, 1.0);

@@ -71,7 +71,7 @@ TEST(CutCoupled, MassIsConservedThroughSpheresPointsAndSpheres) {
   s.fixed = {{Vec3d(-1, -1, -1), Vec3d(1, 1, -0.008)}};
   auto sim = makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64);
   const double m0 = sim->advance(kDt).counters.at("mass_kg");
-  EXPECT_NEAR(m0, 0.06 * 0.04 * 0.03 * s.material.density, 1e-12);
+  EXPECT_NEAR(m0, 0.06 * 0.04 * 0.03 * s.material.density_kg_m3, 1e-12);
   bool saw_points = false;
   for (int f = 0; f < 16; ++f) {
     const FrameReport rep = sim->advance(kDt);
@@ -94,7 +94,7 @@ TEST(CutCoupled, PulledFlapReachesStaticEquilibrium) {
   s.geometry.kind = GeometrySpec::Kind::Box;
   s.geometry.size = Vec3d(0.06, 0.04, 0.06);
   s.geometry.spacing = 0.01;
-  s.material.damping = 10.0;
+  s.material.damping_per_s = 10.0;
   s.models.pbd_metaballs = true;
   s.models.cutting = true;
   s.solver.gravity = Vec3d(0, 0, 0);

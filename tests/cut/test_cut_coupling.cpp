@@ -248,7 +248,7 @@ TEST(CouplingMath, DegenerateGroupsFollowThePlainMean) {
 // sqrt(k / M), amplitude kept (leapfrog is symplectic). Period within 0.5 %, amplitude within 1 %.
 TEST(MlsCouplingGroups, GroupOnASpringOscillatesAtSqrtKOverM) {
   MlsBuildInput in = mls_test::blockInput(3, 3, 3, 0.005);
-  in.material.youngs_modulus = 1.0e3;
+  in.material.youngs_modulus_pa = 1.0e3;
   auto solver = makeMlsSolver(in, BackendKind::Cpu, Precision::Float64);
   const std::size_t n = solver->size();
   ASSERT_EQ(n, 27u);
@@ -300,7 +300,7 @@ TEST(MlsCouplingGroups, NewAnchorsRefreshOnlyTheSpringShareBitForBit) {
   // The CPU solver keeps the elastic forces when only the anchors change (a coupling exchange) and adds the new
   // springs' share; stepping on from there must equal stepping after a full recomputation of both passes.
   MlsBuildInput in = mls_test::blockInput(4, 3, 3, 0.005);
-  in.material.youngs_modulus = 1.0e3;
+  in.material.youngs_modulus_pa = 1.0e3;
   std::unique_ptr<MlsSolver> a = makeMlsSolver(in, BackendKind::Cpu, Precision::Float64);
   std::unique_ptr<MlsSolver> b = makeMlsSolver(in, BackendKind::Cpu, Precision::Float64);
   const std::size_t n = a->size();

@@ -23,12 +23,11 @@ NodalRegionSettings settings() {
   s.samples_per_diameter = 4;
   s.backend = BackendKind::Cpu;
   s.precision = Precision::Float64;
-  s.youngs_modulus = 5.0e3;
   s.mls.source = "<test region>";
-  s.mls.material.youngs_modulus = 5.0e3;
+  s.mls.material.youngs_modulus_pa = 5.0e3;
   s.mls.material.poisson_ratio = 0.45;
-  s.mls.material.density = 1000.0;
-  s.mls.material.damping = 1.0;
+  s.mls.material.density_kg_m3 = 1000.0;
+  s.mls.material.damping_per_s = 1.0;
   s.mls.gravity = Vec3d(0, 0, 0);
   return s;
 }

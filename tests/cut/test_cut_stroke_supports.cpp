@@ -62,7 +62,7 @@ TEST(CutStrokeSupports, IncrementalSupportsEqualVisibleSupportsOverACurvedStroke
   s.backend = BackendKind::Cpu;
   s.precision = Precision::Float64;
   s.mls.source = "<test stroke supports>";
-  s.mls.material.youngs_modulus = s.youngs_modulus = 5.0e3;
+  s.mls.material.youngs_modulus_pa = 5.0e3;
   s.mls.gravity = Vec3d(0, 0, 0);
   NodalRegion region(m, s, {&earlier});
   const auto atRest = [&](std::int32_t b) {

@@ -110,7 +110,7 @@ std::vector<Vec3d> hashedDisplacement(std::size_t n) {
 TEST(CutGpu, MlsCouplingGroupsMatchCpu) {
   if (noDevice()) GTEST_SKIP() << "no CUDA device";
   MlsBuildInput in = mls_test::blockInput(9, 6, 6, 0.005);
-  in.material.damping = 1.0;
+  in.material.damping_per_s = 1.0;
   auto cpu = makeMlsSolver(in, BackendKind::Cpu, Precision::Float64);
   auto gpu = makeMlsSolver(in, BackendKind::Cuda, Precision::Float64);
   const CornerGroups cg = cornerGroups(cpu->restPositions());
@@ -143,7 +143,7 @@ TEST(CutGpu, MlsCouplingGroupsMatchCpu) {
 TEST(CutGpu, MlsGraphFramesEqualTimedLaunchesBitForBit) {
   if (noDevice()) GTEST_SKIP() << "no CUDA device";
   MlsBuildInput in = mls_test::blockInput(9, 6, 6, 0.005);
-  in.material.damping = 1.0;
+  in.material.damping_per_s = 1.0;
   for (Precision prec : {Precision::Float32, Precision::Float64}) {
     auto timed = makeMlsSolver(in, BackendKind::Cuda, prec);
     auto graph = makeMlsSolver(in, BackendKind::Cuda, prec);
@@ -206,7 +206,7 @@ TEST(CutGpu, ReplacedMlsSolverRunsAsANewOne) {
   if (noDevice()) GTEST_SKIP() << "no CUDA device";
   for (Precision prec : {Precision::Float32, Precision::Float64}) {
     MlsBuildInput first = mls_test::blockInput(9, 6, 6, 0.005);
-    first.material.damping = 1.0;
+    first.material.damping_per_s = 1.0;
     std::unique_ptr<MlsSolver> reused = makeMlsSolver(first, BackendKind::Cuda, prec);
     reused->setStageTiming(false);
     const CornerGroups g0 = cornerGroups(reused->restPositions());
@@ -216,7 +216,7 @@ TEST(CutGpu, ReplacedMlsSolverRunsAsANewOne) {
     reused->advance(30.0 * reused->stableTimeStep(), 45);
     for (int shape = 0; shape < 2; ++shape) {
       MlsBuildInput next = shape == 0 ? mls_test::blockInput(12, 6, 6, 0.005) : mls_test::blockInput(9, 6, 5, 0.005);
-      next.material.damping = 2.0;
+      next.material.damping_per_s = 2.0;
       const MlsSolver* before = reused.get();
       rebuildMlsSolver(reused, next, BackendKind::Cuda, prec);
       EXPECT_EQ(reused.get(), before) << "the CUDA solver was not reused";

@@ -23,7 +23,7 @@ bool noDevice() { return inc::cuda::queryDevices().device_count == 0; }
 MlsBuildInput parityInput() {
   MlsBuildInput in = blockInput(12, 6, 6, 0.005, 0.2);
   in.material.volume_preservation = true;
-  in.material.damping = 2.0;
+  in.material.damping_per_s = 2.0;
   in.gravity = Vec3d(0, 0, -9.81);
   in.kinds.resize(in.rest_positions.size());
   for (std::size_t i = 0; i < in.kinds.size(); ++i) in.kinds[i] = in.rest_positions[i].x < -0.025 ? kMlsFixed : kMlsFree;
@@ -193,9 +193,9 @@ TEST(MlsGpu, SimulationRunsTheBeamSceneOnTheDevice) {
   s.geometry.center = Vec3d(0.04, 0, 0);
   s.geometry.size = Vec3d(0.08, 0.02, 0.02);
   s.geometry.spacing = 0.0025;
-  s.material.youngs_modulus = 2e5;
+  s.material.youngs_modulus_pa = 2e5;
   s.material.poisson_ratio = 0.4;
-  s.material.damping = 10;
+  s.material.damping_per_s = 10;
   s.models.mls = true;
   FixedRegion clamp;
   clamp.min = Vec3d(-0.001, -0.011, -0.011);

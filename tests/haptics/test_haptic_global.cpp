@@ -148,7 +148,7 @@ TEST(HapticGlobal, ContactTableIsTheHybridCoupling) {
   GlobalOrganModel organ(setup, 2);
   BemModel bem(setup.mesh, setup.material);
   bem.factorBase(setup.supports);
-  HybridHapticModel hybrid(bem, setup.local, MfsMaterial{3e3, 0.45});
+  HybridHapticModel hybrid(bem, setup.local, Material{3e3, 0.45});
   int top = 0, side = 0;
   for (int j = 0; j < bem.elementCount(); ++j) {
     if (bem.centroids()[j].z > bem.centroids()[top].z) top = j;

@@ -63,7 +63,7 @@ struct Indenter {
       if (cc.node_shell[i] == last_shell)
         for (int k = 0; k < 3; ++k) roles[3 * i + k] = DofRole::kCoupled;
     }
-    local = std::make_shared<MfsLocalModel>(cc.cloud, MfsMaterial{E, nu});
+    local = std::make_shared<MfsLocalModel>(cc.cloud, Material{E, nu});
     local->setRoles(roles);
   }
   // Prescribed u_z: -delta + r^2 / (2 R_i) for a sphere of radius R_i, -delta for a flat punch (R_i = 0).

@@ -46,9 +46,8 @@ double counter(const FrameReport& r, const char* name) {
 TEST(HapticRealtime, ThreadedCuttingSessionCutsTheBlockInTwo) {
   const Scene scene = blockScene();
   auto sim = makeDissectionSimulation(scene, BackendKind::Cpu, Precision::Float32);
-  const TipStiffness tip = mfsTipStiffness(MfsMaterial{scene.material.youngs_modulus, scene.material.poisson_ratio},
-                                           0.008, 0.002, Vec3d{0, 0, 1});
-  CuttingTool tool(tipElastic(tip), scene.material.cutting,
+  const TipStiffness tip = mfsTipStiffness(scene.material, 0.008, 0.002, Vec3d{0, 0, 1});
+  CuttingTool tool(tipElastic(tip), scene.cut_thresholds,
                    Vec3d{0, 0, 0.015}, Vec3d{0, 0, 1});
   ScriptedDevice device(throughStroke(), ScriptedDevice::Mode::kByTime, 3.3);
   RealtimeCutConfig cfg;
@@ -93,7 +92,7 @@ TEST(HapticRealtime, DecisionsNeedAModelThatCuts) {
   Scene scene = blockScene();
   scene.models.cutting = false;
   auto sim = makeMetaballSimulation(scene, BackendKind::Cpu, Precision::Float32);
-  CuttingTool tool([](const TipContact&) { return ForceResult{}; }, scene.material.cutting, Vec3d{0, 0, 0.015},
+  CuttingTool tool([](const TipContact&) { return ForceResult{}; }, scene.cut_thresholds, Vec3d{0, 0, 0.015},
                    Vec3d{0, 0, 1});
   ScriptedDevice device(throughStroke(), ScriptedDevice::Mode::kByTime, 3.3);
   RealtimeHapticCutSession session(device, tool, RealtimeCutConfig{});

@@ -277,8 +277,8 @@ TEST(HapticRunner, TwoScriptedDevicesRunTwoLoopsWithTheirOwnContacts) {
   EXPECT_GE(lastCsvValue(csv, "haptic_missed"), 0.0);
   EXPECT_GE(lastCsvValue(csv, "haptic1_missed"), 0.0);
   // Each hand's model force is its own contact: -K (tip - entry point), the entry point on the plane above its tip.
-  const TipStiffness k = mfsTipStiffness(MfsMaterial{scene.material.youngs_modulus, scene.material.poisson_ratio},
-                                         scene.haptics.local_radius_m, scene.haptics.local_spacing_m, Vec3d{0, 0, 1});
+  const TipStiffness k =
+      mfsTipStiffness(scene.material, scene.haptics.local_radius_m, scene.haptics.local_spacing_m, Vec3d{0, 0, 1});
   const LastTick left = lastTick(opt.out_dir, "left"), right = lastTick(opt.out_dir, "right");
   ASSERT_NEAR(left.position.z, 0.008, 1e-12);  // both trajectories ended before the run did
   ASSERT_NEAR(right.position.z, 0.009, 1e-12);
@@ -380,7 +380,7 @@ TEST(HapticRunner, GlobalBemModelGivesTheHybridCouplingsForce) {
   local.inner_spacing_m = s.haptics.local_spacing_m;
   local.inner_shells = 2;
   local.radius_m = s.haptics.local_radius_m;
-  HybridHapticModel hybrid(bem, local, MfsMaterial{3e3, 0.45});
+  HybridHapticModel hybrid(bem, local, Material{3e3, 0.45});
   hybrid.touch(top);
   const Vec3d d = n * -2e-3;
   hybrid.globalStep(d, 0.0);

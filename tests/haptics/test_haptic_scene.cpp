@@ -46,14 +46,14 @@ TEST(HapticScene, CutThresholdsAreReadAndDriveTheModel) {
                                                {"friction_n_per_m", 400.0}})
                                  .dump(),
                              kFile, ".");
-  EXPECT_EQ(s.material.cutting.press_n, 2.5);
-  EXPECT_EQ(s.material.cutting.static_n, 1.25);
-  EXPECT_EQ(s.material.cutting.dynamic_n, 0.5);
-  EXPECT_EQ(s.material.cutting.friction_per_depth_n_per_m, 400.0);
+  EXPECT_EQ(s.cut_thresholds.press_n, 2.5);
+  EXPECT_EQ(s.cut_thresholds.static_n, 1.25);
+  EXPECT_EQ(s.cut_thresholds.dynamic_n, 0.5);
+  EXPECT_EQ(s.cut_thresholds.friction_per_depth_n_per_m, 400.0);
   // The model uses the scene's values: a normal force of 2 N (< F_p = 2.5 N) does not let the blade in, so
   // a tangential 1.3 N (> F_s) does not cut; 2.6 N does, then 1.3 N cuts; 0.6 N (in the band) keeps cutting
   // with friction 400 N/m x 2 mm = 0.8 N; 0.49 N (< F_d) stops.
-  CuttingForceModel m(s.material.cutting, s.file);
+  CuttingForceModel m(s.cut_thresholds, s.file);
   const Vec3d n{0, 0, 1}, v{0.01, 0, 0};
   EXPECT_EQ(m.tick({1.3, 0, -2.0}, n, v, 2e-3).machine.state, CutState::kPressing);
   EXPECT_EQ(m.tick({0.0, 0, -2.6}, n, v, 2e-3).machine.state, CutState::kPressing);
@@ -67,21 +67,21 @@ TEST(HapticScene, CutThresholdsAreReadAndDriveTheModel) {
 TEST(HapticScene, CutThresholdsDefaultAndRoundTrip) {
   const Scene d = parseScene(R"({"geometry": {"kind": "box"}, "models": {"mls": true}})", kFile, ".");
   const CutThresholds<double> def;
-  EXPECT_EQ(d.material.cutting.press_n, def.press_n);
-  EXPECT_EQ(d.material.cutting.static_n, def.static_n);
-  EXPECT_EQ(d.material.cutting.dynamic_n, def.dynamic_n);
-  EXPECT_EQ(d.material.cutting.friction_per_depth_n_per_m, def.friction_per_depth_n_per_m);
+  EXPECT_EQ(d.cut_thresholds.press_n, def.press_n);
+  EXPECT_EQ(d.cut_thresholds.static_n, def.static_n);
+  EXPECT_EQ(d.cut_thresholds.dynamic_n, def.dynamic_n);
+  EXPECT_EQ(d.cut_thresholds.friction_per_depth_n_per_m, def.friction_per_depth_n_per_m);
   // Partial object: the others keep their defaults. Written and read back exactly (1/3 N has no short form).
   const Scene s = parseScene(sceneWithCutting({{"static_friction_n", 1.0 / 3.0}, {"press_threshold_n", 0.0}}).dump(),
                              kFile, ".");
-  EXPECT_EQ(s.material.cutting.static_n, 1.0 / 3.0);
-  EXPECT_EQ(s.material.cutting.press_n, 0.0);
-  EXPECT_EQ(s.material.cutting.dynamic_n, def.dynamic_n);
+  EXPECT_EQ(s.cut_thresholds.static_n, 1.0 / 3.0);
+  EXPECT_EQ(s.cut_thresholds.press_n, 0.0);
+  EXPECT_EQ(s.cut_thresholds.dynamic_n, def.dynamic_n);
   const Scene r = parseScene(sceneToJson(s), kFile, ".");
-  EXPECT_EQ(r.material.cutting.press_n, s.material.cutting.press_n);
-  EXPECT_EQ(r.material.cutting.static_n, s.material.cutting.static_n);
-  EXPECT_EQ(r.material.cutting.dynamic_n, s.material.cutting.dynamic_n);
-  EXPECT_EQ(r.material.cutting.friction_per_depth_n_per_m, s.material.cutting.friction_per_depth_n_per_m);
+  EXPECT_EQ(r.cut_thresholds.press_n, s.cut_thresholds.press_n);
+  EXPECT_EQ(r.cut_thresholds.static_n, s.cut_thresholds.static_n);
+  EXPECT_EQ(r.cut_thresholds.dynamic_n, s.cut_thresholds.dynamic_n);
+  EXPECT_EQ(r.cut_thresholds.friction_per_depth_n_per_m, s.cut_thresholds.friction_per_depth_n_per_m);
 }
 
 TEST(HapticScene, BadCutThresholdsNameFileAndKey) {

@@ -9,7 +9,7 @@
 namespace inc {
 namespace {
 
-const MfsMaterial kTissue{3e3, 0.45};
+const Material kTissue{3e3, 0.45};
 
 double maxAbs(const TipStiffness& k) {
   double m = 0.0;

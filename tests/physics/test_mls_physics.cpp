@@ -313,7 +313,7 @@ TEST(MlsForces, VectorPairSumsMatchThePortableLoopBitForBit) {
   if (!cpu::mlsPairSumsUseAvx2()) GTEST_SKIP() << "no AVX2 on this CPU: only the portable loops exist here";
   MlsBuildInput in = blockInput(9, 8, 7, 0.01, 0.3);
   in.material.volume_preservation = true;
-  in.material.damping = 2.0;
+  in.material.damping_per_s = 2.0;
   in.gravity = Vec3d(0, 0, -9.81);
   std::vector<Vec3d> u;
   std::vector<Vec3d> f[2], x[2];

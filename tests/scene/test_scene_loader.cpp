@@ -71,10 +71,10 @@ void expectSceneEq(const Scene& a, const Scene& b) {
   EXPECT_EQ(ga.spacing, gb.spacing);
   EXPECT_EQ(ga.jitter, gb.jitter);
   EXPECT_EQ(ga.seed, gb.seed);
-  EXPECT_EQ(a.material.youngs_modulus, b.material.youngs_modulus);
+  EXPECT_EQ(a.material.youngs_modulus_pa, b.material.youngs_modulus_pa);
   EXPECT_EQ(a.material.poisson_ratio, b.material.poisson_ratio);
-  EXPECT_EQ(a.material.density, b.material.density);
-  EXPECT_EQ(a.material.damping, b.material.damping);
+  EXPECT_EQ(a.material.density_kg_m3, b.material.density_kg_m3);
+  EXPECT_EQ(a.material.damping_per_s, b.material.damping_per_s);
   EXPECT_EQ(a.models.mls, b.models.mls);
   EXPECT_EQ(a.models.pbd_metaballs, b.models.pbd_metaballs);
   EXPECT_EQ(a.models.cutting, b.models.cutting);
@@ -484,10 +484,10 @@ TEST(SceneLoaderDefaults, MinimalSceneTakesEveryDefault) {
   // The documented values themselves (docs/scene-format.md), so that a change of scene.h is noticed here.
   EXPECT_EQ(s.duration, 1.0);
   EXPECT_EQ(s.geometry.spacing, 0.005);
-  EXPECT_EQ(s.material.youngs_modulus, 3.0e3);
+  EXPECT_EQ(s.material.youngs_modulus_pa, 3.0e3);
   EXPECT_EQ(s.material.poisson_ratio, 0.45);
-  EXPECT_EQ(s.material.density, 1060.0);
-  EXPECT_EQ(s.material.damping, 1.0);
+  EXPECT_EQ(s.material.density_kg_m3, 1060.0);
+  EXPECT_EQ(s.material.damping_per_s, 1.0);
   EXPECT_EQ(s.solver.frame_dt, 1.0 / 60.0);
   EXPECT_EQ(s.solver.substeps, 0);
   EXPECT_EQ(s.solver.precision, Precision::Float32);
@@ -504,7 +504,7 @@ TEST(SceneLoaderDefaults, FullSceneReadsEveryKey) {
   EXPECT_EQ(s.geometry.kind, GeometrySpec::Kind::Ellipsoid);
   EXPECT_EQ(s.geometry.radii.y, 0.04);
   EXPECT_EQ(s.geometry.seed, 77u);
-  EXPECT_EQ(s.material.youngs_modulus, 4500.5);
+  EXPECT_EQ(s.material.youngs_modulus_pa, 4500.5);
   EXPECT_TRUE(s.models.cutting && s.models.haptics);
   EXPECT_EQ(s.pbd.solver, "gauss_seidel");
   EXPECT_EQ(s.solver.precision, Precision::Float64);

@@ -215,7 +215,7 @@ TEST(SceneColliders, APbdSphereSlidesOrSticksAsCoulombSays) {
 // 2.5 mm/s, 1.3 mm by then).
 double slideDownMlsSlope(double angle, double mu) {
   MlsBuildInput in = mls_test::blockInput(4, 4, 4, 0.005);
-  in.material.youngs_modulus = 1.0e5;
+  in.material.youngs_modulus_pa = 1.0e5;
   in.gravity = Vec3d(0, 0, -9.81);
   const Vec3d n(std::sin(angle), 0.0, std::cos(angle)), down(std::cos(angle), 0.0, -std::sin(angle));
   for (Vec3d& x : in.rest_positions) x = down * x.x + Vec3d(0, x.y, 0) + n * x.z;  // its bottom face on the slope
@@ -258,7 +258,7 @@ double slideOfTheOrgan(double mu) {
                        "c.json", ".");
   const double a = M_PI / 9;
   s.solver.gravity = Vec3d(9.81 * std::sin(a), 0, -9.81 * std::cos(a));
-  s.material.damping = 0.0;
+  s.material.damping_per_s = 0.0;
   auto m = makeMetaballSimulation(s, BackendKind::Cpu, Precision::Float64);
   std::vector<Vec3d> x0, x;
   m->currentPositions(x0);
@@ -291,7 +291,7 @@ double lowest(const std::vector<Vec3d>& x) {
 TEST(MlsStaticContact, AFallingMlsBlockStopsOnTheFloor) {
   MlsBuildInput in = mls_test::blockInput(4, 4, 4, 0.005);
   in.gravity = Vec3d(0, 0, -9.81);
-  in.material.damping = 5.0;
+  in.material.damping_per_s = 5.0;
   const double floor_z = -0.02;  // the block's lowest points sit at -0.0075
   for (const bool with_floor : {false, true}) {
     auto s = makeMlsSolver(in, BackendKind::Cpu, Precision::Float64);

@@ -20,8 +20,8 @@ constexpr double kDt = 1.0 / 60.0;
 // A 6 x 4 x 3 cm block (1 cm lattice) clamped at x < -2 cm, no gravity: what is pulled and let go springs back.
 Scene blockScene(bool cutting) {
   Scene s = cuttest::dissectionBlock("<test:tool_block>");
-  s.material.youngs_modulus = 2.0e4;
-  s.material.damping = 20.0;
+  s.material.youngs_modulus_pa = 2.0e4;
+  s.material.damping_per_s = 20.0;
   s.models.cutting = cutting;
   s.pbd.iterations = 10;
   s.fixed = {{Vec3d(-1, -1, -1), Vec3d(-0.02, 1, 1)}};
@@ -109,7 +109,7 @@ TEST(InteractiveTool, MlsGraspPinsAndDragsNodes) {
   s.models = {};
   s.models.mls = true;
   s.geometry.spacing = 0.0075;
-  s.material.damping = 40.0;
+  s.material.damping_per_s = 40.0;
   s.solver.substeps = 0;
   s.solver.safety = 0.8;
   auto m = makeMlsSimulation(s, BackendKind::Cpu, Precision::Float64);

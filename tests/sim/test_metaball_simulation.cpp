@@ -24,8 +24,8 @@ Scene graspScene() {
   s.geometry.center = Vec3d(0.03, 0, 0);
   s.geometry.size = Vec3d(0.06, 0.04, 0.02);
   s.geometry.spacing = 0.01;
-  s.material.youngs_modulus = 2.0e4;
-  s.material.damping = 5.0;
+  s.material.youngs_modulus_pa = 2.0e4;
+  s.material.damping_per_s = 5.0;
   s.models.pbd_metaballs = true;
   s.pbd.iterations = 10;
   s.pbd.solver = "gauss_seidel";
@@ -51,7 +51,7 @@ TEST(MetaballSimulation, LatticeFillOfABoxHasItsMassAndOverlapLinks) {
   ASSERT_EQ(mb.size(), 6u * 4u * 2u);
   double mass = 0;
   for (double m : mb.masses) mass += m;
-  EXPECT_NEAR(mass, s.material.density * 0.06 * 0.04 * 0.02, 1e-12);
+  EXPECT_NEAR(mass, s.material.density_kg_m3 * 0.06 * 0.04 * 0.02, 1e-12);
   // radius 0.75 s: face (s) and edge (1.41 s) neighbours overlap, corner (1.73 s) ones do not.
   std::size_t face = 0, edge = 0;
   for (std::size_t l = 0; l < mb.links.size(); ++l) {

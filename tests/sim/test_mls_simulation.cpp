@@ -22,10 +22,10 @@ Scene beamScene() {
   s.geometry.center = Vec3d(0.04, 0, 0);
   s.geometry.size = Vec3d(0.08, 0.02, 0.02);
   s.geometry.spacing = 0.005;
-  s.material.youngs_modulus = 2e5;
+  s.material.youngs_modulus_pa = 2e5;
   s.material.poisson_ratio = 0.4;
-  s.material.density = 1060;
-  s.material.damping = 10;
+  s.material.density_kg_m3 = 1060;
+  s.material.damping_per_s = 10;
   s.models.mls = true;
   s.solver.frame_dt = 1.0 / 60.0;
   FixedRegion clamp;

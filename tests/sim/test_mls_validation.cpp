@@ -93,10 +93,10 @@ double cantileverTipDeflection(double spacing, double length, double b, double y
   in.rest_positions = sampleBox(Vec3d(0, 0, 0), Vec3d(nx * spacing, nb * spacing, nb * spacing), LatticeSpec{spacing, 0.0, 1});
   in.spacing = spacing;
   in.support_factor = support_factor;
-  in.material.youngs_modulus = youngs;
+  in.material.youngs_modulus_pa = youngs;
   in.material.poisson_ratio = nu;
-  in.material.density = rho;
-  in.material.damping = 0;
+  in.material.density_kg_m3 = rho;
+  in.material.damping_per_s = 0;
   in.material.volume_preservation = true;
   in.gravity = Vec3d(0, 0, -g);
   const double x0 = -0.5 * nx * spacing;  // clamp face of the lattice block
@@ -141,7 +141,7 @@ TEST(MlsValidation, HomogeneousStretchGivesAnalyticSvkStress) {
     f(0, 1) = 0.02;
     for (std::size_t i = 0; i < model.size(); ++i) state.displacement[i] = (f - Mat3d::identity()) * model.rest[i];
     double mu, lame;
-    lameParameters(in.material.youngs_modulus, in.material.poisson_ratio, mu, lame);
+    lameParameters(in.material.youngs_modulus_pa, in.material.poisson_ratio, mu, lame);
     const Mat3d e = (transpose(f) * f - Mat3d::identity()) * 0.5;
     Mat3d p = f * (e * (2 * mu) + Mat3d::diag(lame * trace(e)));
     if (vp) {  // psi = mu E:E + (lambda - K)/2 tr(E)^2 + K/2 (J - 1)^2 (volume_stiffness 1)
@@ -340,9 +340,9 @@ TEST(MlsValidation, ExtremeMaterialsStayFiniteAndBounded) {
     for (const double youngs : {1e2, 1e5, 1e9}) {
       MlsBuildInput in = blockInput(6, 3, 3, 0.01, 0.1);
       in.material.poisson_ratio = nu;
-      in.material.youngs_modulus = youngs;
+      in.material.youngs_modulus_pa = youngs;
       in.material.volume_preservation = true;
-      in.material.damping = 5.0;
+      in.material.damping_per_s = 5.0;
       in.kinds.resize(in.rest_positions.size());
       for (std::size_t i = 0; i < in.kinds.size(); ++i) in.kinds[i] = in.rest_positions[i].x < -0.02 ? kMlsFixed : kMlsFree;
       auto solver = makeMlsSolver(in, BackendKind::Cpu, Precision::Float32);
@@ -371,10 +371,10 @@ TEST(MlsValidation, SoftBlockBeyondItsStrengthHangsWithoutBlowingUp) {
   // strongly stretched hanging shape (SVK stiffens ~100x). Every frame stays finite, the planned substeps grow
   // with the stiffening, and the energy obeys the work bound (kinetic + strain <= work of gravity).
   MlsBuildInput in = blockInput(6, 3, 3, 0.01, 0.1);
-  in.material.youngs_modulus = 1e2;
+  in.material.youngs_modulus_pa = 1e2;
   in.material.poisson_ratio = 0.0;
   in.material.volume_preservation = true;
-  in.material.damping = 5.0;
+  in.material.damping_per_s = 5.0;
   in.gravity = Vec3d(0, 0, -9.81);
   in.kinds.resize(in.rest_positions.size());
   for (std::size_t i = 0; i < in.kinds.size(); ++i) in.kinds[i] = in.rest_positions[i].x < -0.02 ? kMlsFixed : kMlsFree;
@@ -396,7 +396,7 @@ TEST(MlsValidation, PrescribedParticlesReachTheirTargetsAndRelease) {
   // the grabbed particles land exactly on their targets at the frame's end, the bar stretches (strain energy
   // > 0, interior particles move along +x); after release the layer moves freely again.
   MlsBuildInput in = blockInput(8, 3, 3, 0.01);
-  in.material.damping = 20;
+  in.material.damping_per_s = 20;
   in.kinds.resize(in.rest_positions.size());
   for (std::size_t i = 0; i < in.kinds.size(); ++i) in.kinds[i] = in.rest_positions[i].x < -0.03 ? kMlsFixed : kMlsFree;
   auto solver = makeMlsSolver(in, BackendKind::Cpu, Precision::Float64);
@@ -525,7 +525,7 @@ TEST(MlsValidation, StretchedBodiesTakeSmallerSteps) {
 
   // Released from an 80% stretch, undamped, at the full (safety 1) step: the rest-state step blows up, the
   // guarded plan (rest limit / sqrt(stiffening)) stays finite with the energy within 5%.
-  in.material.damping = 0;
+  in.material.damping_per_s = 0;
   auto guarded = makeMlsSolver(in, BackendKind::Cpu, Precision::Float64);
   auto unguarded = makeMlsSolver(in, BackendKind::Cpu, Precision::Float64);
   const std::vector<Vec3d> rest = guarded->restPositions();
@@ -578,9 +578,9 @@ TEST(MlsValidation, TenThousandStepsNearlyIncompressibleUnderGravity) {
   // substeps, every frame finite, kinetic + strain energy never above the work of gravity, volume kept.
   MlsBuildInput in = blockInput(6, 3, 3, 0.01, 0.2);
   in.material.poisson_ratio = 0.499;
-  in.material.youngs_modulus = 1e6;
+  in.material.youngs_modulus_pa = 1e6;
   in.material.volume_preservation = true;
-  in.material.damping = 2.0;
+  in.material.damping_per_s = 2.0;
   in.gravity = Vec3d(0, 0, -9.81);
   in.kinds.resize(in.rest_positions.size());
   for (std::size_t i = 0; i < in.kinds.size(); ++i) in.kinds[i] = in.rest_positions[i].x < -0.02 ? kMlsFixed : kMlsFree;

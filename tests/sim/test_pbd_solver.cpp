@@ -85,7 +85,7 @@ double settledBeamDeflection(PbdSolverKind solver, int substeps, int iterations,
   const double L = 0.05, W = 0.01, H = 0.01, s = 0.01;
   const MetaballModel mb = makeLatticeMetaballs(Vec3d(0, 0, 0), Vec3d(L, W, H), s, 0.75, 1000.0);
   MetaballPbdOptions opt;
-  opt.youngs_modulus = 2.0e4;
+  opt.youngs_modulus_pa = 2.0e4;
   opt.volume_samples = 0;
   opt.pbd_stiffness = k;
   FixedRegion r;
@@ -371,7 +371,7 @@ double unionVolume(const std::vector<Vec3d>& c, const std::vector<double>& r) {
 TEST(PbdSolver, MetaballVolumePreservationKeepsSqueezedUnionVolume) {
   const MetaballModel mb = makeLatticeMetaballs(Vec3d(0, 0, 0), Vec3d(0.04, 0.04, 0.02), 0.01, 0.75, 1000.0);
   MetaballPbdOptions opt;
-  opt.youngs_modulus = 1.0e4;
+  opt.youngs_modulus_pa = 1.0e4;
   opt.volume_samples = 128;
   FixedRegion bottom;
   bottom.min = Vec3d(-1, -1, -1);

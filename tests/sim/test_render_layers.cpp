@@ -81,7 +81,7 @@ TEST(RenderLayers, MetaballSpheresAndFixedSetMatchTheScene) {
 TEST(RenderLayers, MetaballGraspForceCarriesTheWeightAtRest) {
   Scene s = metaballBlock();
   s.pbd.solver = "gauss_seidel";
-  s.material.damping = 8.0;
+  s.material.damping_per_s = 8.0;
   auto m = makeMetaballSimulation(s, BackendKind::Cpu, Precision::Float64);
   ToolEvent e;
   e.kind = ToolKind::Grasp;
@@ -122,10 +122,10 @@ TEST(RenderLayers, MlsClampAndGraspForcesBalanceTheWeightAtRest) {
   s.geometry.center = Vec3d(0.04, 0, 0);
   s.geometry.size = Vec3d(0.08, 0.02, 0.02);
   s.geometry.spacing = 0.005;
-  s.material.youngs_modulus = 2e5;
+  s.material.youngs_modulus_pa = 2e5;
   s.material.poisson_ratio = 0.4;
-  s.material.density = 1060;
-  s.material.damping = 80;  // about critical for the first bending mode (omega ~ 44 rad/s)
+  s.material.density_kg_m3 = 1060;
+  s.material.damping_per_s = 80;  // about critical for the first bending mode (omega ~ 44 rad/s)
   s.models.mls = true;
   s.fixed = {{Vec3d(-0.001, -0.011, -0.011), Vec3d(0.0051, 0.011, 0.011)}};
   ToolSpec g;
@@ -262,8 +262,8 @@ TEST(RenderLayers, TearingSheetFixedAndHeldParticles) {
   s.geometry.center = Vec3d(0.1, 0.05, 0);
   s.geometry.size = Vec3d(0.2, 0.1, 0.002);
   s.geometry.spacing = 0.01;
-  s.material.youngs_modulus = 1.5e3;
-  s.material.density = 1100;
+  s.material.youngs_modulus_pa = 1.5e3;
+  s.material.density_kg_m3 = 1100;
   s.pbd.stretch_compliance = 2e-4;
   s.solver.gravity = Vec3d(0, 0, 0);
   s.fixed = {{Vec3d(-1, -1, -1), Vec3d(0.001, 1, 1)}};

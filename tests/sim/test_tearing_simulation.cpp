@@ -17,9 +17,9 @@ Scene sheetScene() {
   s.geometry.center = Vec3d(0.1, 0.05, 0);
   s.geometry.size = Vec3d(0.2, 0.1, 0.002);
   s.geometry.spacing = 0.01;
-  s.material.youngs_modulus = 1.5e3;  // k; tau_f = 150 Pa
-  s.material.density = 1100;
-  s.material.damping = 4;
+  s.material.youngs_modulus_pa = 1.5e3;  // k; tau_f = 150 Pa
+  s.material.density_kg_m3 = 1100;
+  s.material.damping_per_s = 4;
   s.pbd.iterations = 8;
   s.pbd.stretch_compliance = 2e-4;
   s.solver.gravity = Vec3d(0, 0, 0);

@@ -50,8 +50,8 @@ inline ToolSpec parkedScalpel() { return straightScalpel(100.0, 101.0); }
 // to x = +5 cm at `leave_s` (it leaves the tissue then).
 inline Scene cutBlockScene(double leave_s) {
   Scene s = dissectionBlock("<test:cut_block>");
-  s.material.youngs_modulus = 2.0e4;
-  s.material.damping = 20.0;
+  s.material.youngs_modulus_pa = 2.0e4;
+  s.material.damping_per_s = 20.0;
   s.cutting.samples_per_diameter = 3;
   s.cutting.exchanges_per_frame = 2;
   s.tools = {straightScalpel(0.05, leave_s)};

@@ -17,11 +17,11 @@ namespace inc::hapticreplay {
 inline Scene blockScene() {
   Scene s = cuttest::dissectionBlock("<test:haptic_block>");
   s.models.haptics = true;
-  s.material.youngs_modulus = 3e3;
-  s.material.cutting.press_n = 0.02;     // F_p
-  s.material.cutting.static_n = 0.008;   // F_s
-  s.material.cutting.dynamic_n = 0.004;  // F_d
-  s.material.cutting.friction_per_depth_n_per_m = 5.0;
+  s.material.youngs_modulus_pa = 3e3;
+  s.cut_thresholds.press_n = 0.02;     // F_p
+  s.cut_thresholds.static_n = 0.008;   // F_s
+  s.cut_thresholds.dynamic_n = 0.004;  // F_d
+  s.cut_thresholds.friction_per_depth_n_per_m = 5.0;
   return s;
 }
 
@@ -43,7 +43,7 @@ struct TipModel {
     for (int i = 1; i < N; ++i)
       if (cc.node_shell[i] == int(cc.shell_r_m.size()) - 1)
         for (int k = 0; k < 3; ++k) roles[3 * i + k] = DofRole::kCoupled;
-    m = std::make_unique<MfsLocalModel>(cc.cloud, MfsMaterial{3e3, 0.45});
+    m = std::make_unique<MfsLocalModel>(cc.cloud, Material{3e3, 0.45});
     m->setRoles(roles, false);
     zero = Eigen::VectorXd::Zero(Eigen::Index(m->coupledDofs().size()));
   }
@@ -87,7 +87,7 @@ inline SessionRun runSession(HapticDevice& device, int frames, BackendKind backe
   const Scene scene = blockScene();
   auto sim = makeDissectionSimulation(scene, backend, precision);
   const TipModel tip;
-  CuttingTool tool([&tip](const TipContact& c) { return tip(c.displacement_m); }, scene.material.cutting,
+  CuttingTool tool([&tip](const TipContact& c) { return tip(c.displacement_m); }, scene.cut_thresholds,
                    Vec3d{0, 0, 0.015}, Vec3d{0, 0, 1});
   HapticCutSessionConfig cfg;
   cfg.frame_dt_s = 0.02;

@@ -15,10 +15,10 @@ inline MlsBuildInput blockInput(int nx, int ny, int nz, double s, double jitter 
   MlsBuildInput in;
   in.rest_positions = sampleBox(center, Vec3d(nx * s, ny * s, nz * s), LatticeSpec{s, jitter, 7});
   in.spacing = s;
-  in.material.youngs_modulus = 1.0e4;
+  in.material.youngs_modulus_pa = 1.0e4;
   in.material.poisson_ratio = 0.3;
-  in.material.density = 1000.0;
-  in.material.damping = 0.0;
+  in.material.density_kg_m3 = 1000.0;
+  in.material.damping_per_s = 0.0;
   in.material.volume_preservation = false;
   in.gravity = Vec3d(0, 0, 0);
   in.source = "<test block>";

@@ -18,7 +18,7 @@ namespace inc::test {
 inline void expectDropStaysBounded(double youngs, PbdStepParams<double> p, const std::string& what) {
   const MetaballModel mb = makeLatticeMetaballs(Vec3d(0, 0, 0.02), Vec3d(0.03, 0.03, 0.05), 0.01, 0.75, 1000.0);
   MetaballPbdOptions opt;
-  opt.youngs_modulus = youngs;
+  opt.youngs_modulus_pa = youngs;
   opt.volume_samples = 0;  // radii fixed: the floor test uses the radii the contacts saw
   PbdModel<double> m = buildMetaballPbdModel<double>(mb, opt);
   m.planes.push_back(pbd::PlaneCollider<double>());

@@ -61,7 +61,7 @@ PbdModel<T> makeLatticeBeam(double length, double width, double height, double s
                             bool clamp = true, int volume_samples = 0) {
   const MetaballModel mb = makeLatticeMetaballs(Vec3d(0, 0, 0), Vec3d(length, width, height), spacing, 0.75, 1000.0);
   MetaballPbdOptions opt;
-  opt.youngs_modulus = youngs;
+  opt.youngs_modulus_pa = youngs;
   opt.volume_samples = volume_samples;
   if (clamp) {
     FixedRegion r;

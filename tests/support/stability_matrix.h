@@ -33,9 +33,9 @@ inline Scene bar(bool mls, double E = 1.0e4, double nu = 0.45) {
   s.geometry.center = {0.02, 0, 0};
   s.geometry.spacing = 0.0025;
   s.fixed = {FixedRegion{{-0.001, -0.006, -0.006}, {0.0026, 0.006, 0.006}}};
-  s.material.youngs_modulus = E;
+  s.material.youngs_modulus_pa = E;
   s.material.poisson_ratio = nu;
-  s.material.damping = 1.0;
+  s.material.damping_per_s = 1.0;
   s.models.mls = mls;
   s.models.pbd_metaballs = !mls;
   s.solver.precision = Precision::Float64;
@@ -46,7 +46,7 @@ inline Scene bar(bool mls, double E = 1.0e4, double nu = 0.45) {
 // Euler-Bernoulli static tip sag of the bar, 1.5 rho g L^4 / (E h^2) (tradeoff.h has the general form).
 inline double barSagScale(const Scene& s) {
   const double L = s.geometry.size.x, h = s.geometry.size.z;
-  return 1.5 * s.material.density * 9.81 * std::pow(L, 4) / (s.material.youngs_modulus * h * h);
+  return 1.5 * s.material.density_kg_m3 * 9.81 * std::pow(L, 4) / (s.material.youngs_modulus_pa * h * h);
 }
 
 struct Outcome {
@@ -270,7 +270,7 @@ inline void compressionCase(BackendKind be, bool mls) {
 // isolated, and falls freely: z = -g t^2 / 2 exactly (undamped), to 1e-9 m.
 inline void mlsIsolatedCase(BackendKind be) {
   Scene s = bar(true, 1.0e4, 0.45);
-  s.material.damping = 0.0;
+  s.material.damping_per_s = 0.0;
   MlsBuildInput in = mlsBuildInputFromScene(s);
   const Vec3d lone{0.02, 0.1, 0.0};
   in.rest_positions.push_back(lone);
@@ -296,7 +296,7 @@ inline void pbdIsolatedCase(BackendKind be) {
   mb.rest_radii.push_back(mb.rest_radii.back());
   mb.masses.push_back(mb.masses.back());
   MetaballPbdOptions opt;
-  opt.youngs_modulus = 1.0e4;
+  opt.youngs_modulus_pa = 1.0e4;
   opt.volume_samples = 0;
   opt.fixed = {FixedRegion{{-1, -1, -1}, {0.001, 0.011, 0.011}}};
   const PbdModel<double> model = buildMetaballPbdModel<double>(mb, opt);
@@ -334,7 +334,7 @@ inline void pbdIsolatedCase(BackendKind be) {
 inline void soakCase(BackendKind be, bool mls, double wall_s, int max_frames) {
   constexpr int kSettleFrames = 40, kTailFrames = 10;
   Scene s = bar(mls, 1.0e5, 0.45);
-  s.material.damping = 20.0;
+  s.material.damping_per_s = 20.0;
   std::vector<std::unique_ptr<SimulationModel>> models = createSceneModels(s, be);
   ASSERT_EQ(models.size(), 1u);
   const Outcome o = runModel(*models[0], s.solver.frame_dt, max_frames, wall_s, kSettleFrames);

@@ -344,7 +344,7 @@ TEST_F(ViewerApp, CutBlockShowsAllLayersTogether) {
   s.solver.gravity = Vec3d(0, 0, 0);
   s.solver.substeps = 2;
   s.pbd.iterations = 5;
-  s.material.damping = 6;
+  s.material.damping_per_s = 6;
   s.fixed = {{Vec3d(-1, 0.015, -1), Vec3d(1, 1, 1)}};
   ToolSpec t;  // the scene's scripted scalpel never runs here (its path starts at t = 100 s)
   t.name = "scalpel";

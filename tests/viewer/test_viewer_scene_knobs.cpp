@@ -23,9 +23,9 @@ Scene smallBeam() {
   s.geometry.center = Vec3d(0.04, 0, 0);
   s.geometry.size = Vec3d(0.08, 0.02, 0.02);
   s.geometry.spacing = 0.005;
-  s.material.youngs_modulus = 2.0e5;
+  s.material.youngs_modulus_pa = 2.0e5;
   s.material.poisson_ratio = 0.3;
-  s.material.damping = 150.0;
+  s.material.damping_per_s = 150.0;
   s.solver.gravity = Vec3d(0, 0, -2.0);
   s.models.mls = true;
   s.solver.substeps = 0;
@@ -165,7 +165,7 @@ TEST(ViewerSceneKnobs, YoungsModulusChangeRebuildsAndScalesTheDeflection) {
   run.latest(s, ver);
   EXPECT_EQ(s.rebuilds, 1u);
   EXPECT_EQ(s.frame, 1u);
-  EXPECT_DOUBLE_EQ(setup.scene->material.youngs_modulus, 4.0e5);
+  EXPECT_DOUBLE_EQ(setup.scene->material.youngs_modulus_pa, 4.0e5);
   const double d2 = tipDeflection(run, rest, 39);
   std::printf("tip sag %.6g m at E = 2e5 Pa, %.6g m at 4e5 Pa, ratio %.4f\n", d1, d2, d2 / d1);
   EXPECT_NEAR(d2 / d1, 0.5, 0.01) << "d1 " << d1 << " d2 " << d2;

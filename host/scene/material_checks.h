@@ -1,0 +1,20 @@
+// The one validation of a Material: the ranges docs/scene-format.md gives for material.*, with the scene's messages.
+#pragma once
+
+#include <string>
+
+#include "model/material.h"
+
+namespace inc {
+
+// Throws InputError(file, section + ".<key>", reason) for the first field out of range, in the order
+// youngs_modulus_pa, poisson_ratio, density_kg_m3, damping_per_s (NaN and infinity are out of every range).
+// The scene loader calls it with section "material"; builders that take a Material from elsewhere (tests, tools)
+// call it with their caller's file and the same section, so a bad value reads the same wherever it is caught.
+void validateMaterial(const Material& m, const std::string& file, const std::string& section = "material");
+
+// The first of those checks alone, for a builder that takes only E (MetaballPbdOptions): InputError(file, key, ...).
+void validateYoungsModulus(double youngs_modulus_pa, const std::string& file,
+                           const std::string& key = "material.youngs_modulus_pa");
+
+}  // namespace inc
