@@ -753,7 +753,7 @@ void placeScatteredRows(const QueryBlocks& qb, const std::vector<std::int32_t>& 
     for (std::size_t i = qb.begin(b); i < qb.begin(b + 1); ++i) {
       const std::size_t q = std::size_t(perm[i]);
       const std::size_t k = std::size_t(offsets[q + 1] - offsets[q]);
-      std::memcpy(indices + offsets[q], src, k * sizeof(std::int32_t));
+      if (k > 0) std::memcpy(indices + offsets[q], src, k * sizeof(std::int32_t));  // src is null for an empty chunk
       src += k;
     }
   });

@@ -2,6 +2,7 @@
 #include "cpu_fallback/pbd_solver_cpu.h"
 
 #include <algorithm>
+#include <cstring>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -173,7 +174,11 @@ constexpr std::int32_t kMaxKeptMembers = 64;  // members of a cluster whose pass
 inline F4 loadVec3(const Vec3<float>& v) {
 #if defined(__SSE2__)
   // x, y in one 8-byte load, z in a 4-byte one (the 16-byte load past z could leave the array).
-  return F4(_mm_movelh_ps(_mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(&v.x))), _mm_load_ss(&v.z)));
+  // The 8 bytes of x, y go through memcpy: a float pair is only 4-byte aligned, and dereferencing it as a double
+  // (what _mm_load_sd does) is undefined behaviour; the compiler emits the same single unaligned movsd.
+  double xy;
+  std::memcpy(&xy, &v.x, sizeof xy);
+  return F4(_mm_movelh_ps(_mm_castpd_ps(_mm_set_sd(xy)), _mm_load_ss(&v.z)));
 #else
   return F4{v.x, v.y, v.z, 0.0f};
 #endif
