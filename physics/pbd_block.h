@@ -184,7 +184,7 @@ INC_HD void projectDistanceConstraint(const BlockView<T>& b, int c, const SolveC
 }
 
 // Bending (kBend) or tet volume (four particles). The kind is a template argument so that a kernel specialised for
-// one kind carries only that kind's code (registers, hence occupancy: kernels/pbd_solver_cuda.cu).
+// one kind carries only that kind's code (registers, hence occupancy: kernels/pbd_projection_kernels.cu).
 // `id`: the constraint's four particle ids (b.ids + offsets[c], or a backend's copy of them).
 template <bool kBend, typename T, typename Emit>
 INC_HD void projectFourParticleConstraintIds(const BlockView<T>& b, int c, const SolveContext<T>& ctx,
