@@ -12,6 +12,7 @@
 #include <thread>
 #include <vector>
 
+#include "host/scene/scene_compile.h"
 #include "cpu_fallback/mls_pair_sums_cpu.h"
 #include "host/backends/backend_choice.h"
 #include "model/backend.h"
@@ -139,7 +140,7 @@ Row runCase(const std::string& kind, BackendKind backend, int target, double len
     r.solver = label;
   }
   std::map<std::string, std::vector<double>> stage_ms;
-  auto sim = makeDissectionSimulation(scene, backend, Precision::Float32);
+  auto sim = makeDissectionSimulation(compileScene(scene), backend, Precision::Float32);
   r.spheres = int(sim->particleCount());
   std::vector<double> deform, cutting, mls, exchange, pbd, convert, after, ending;
   const double dt = 1.0 / 60.0;

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "host/scene/scene_compile.h"
 #include "model/backend.h"
 #include "host/backends/backend_choice.h"
 #include "host/scene/embedded_scenes.h"
@@ -33,7 +34,7 @@ double median(std::vector<double> v) {
 Row measure(const Scene& s, BackendKind be, int frames) {
   Row r;
   r.backend = backendName(be);
-  auto models = createSceneModels(s, be);
+  auto models = createSceneModels(compileScene(s), be);
   for (const auto& m : models) {
     r.models += (r.models.empty() ? "" : "+") + m->name();
     r.particles += m->particleCount();

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "host/scene/scene_compile.h"
 #include "bench/bench_memory.h"
 #include "host/backends/backend_choice.h"
 #include "bench/mls_traffic.h"
@@ -149,7 +150,7 @@ Row frame(std::int64_t n, BackendKind be, Precision p, int repeats) {
   const double vol = g.size.x * g.size.y * g.size.z;
   s.geometry.spacing = std::cbrt(vol / double(n));
   s.solver.precision = p;
-  auto models = createSceneModels(s, be);
+  auto models = createSceneModels(compileScene(s), be);
   for (const auto& m : models) r.n += std::int64_t(m->particleCount());
   double dev_peak = deviceUsedMiB(be) - dev0;
   const bool mls_only = models.size() == 1 && models[0]->name() == "mls";

@@ -5,7 +5,7 @@ namespace inc {
 
 // One name for each quantity from the scene file to the solvers: the scene reads `material.<key>` into these
 // fields (the field name is the key), and every builder and model takes a Material or one of its fields.
-// Validated once, where it enters (host/scene/material_checks.h).
+// Validated once, where it enters (host/compiled/material_checks.h).
 struct Material {
   double youngs_modulus_pa = 3.0e3;  // Pa, > 0 (liver ~ 1-10 kPa)
   double poisson_ratio = 0.45;       // (-1, 0.5)

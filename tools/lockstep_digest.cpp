@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "host/scene/scene_compile.h"
 #include "host/sim/dissection_simulation.h"
 #include "host/haptics/haptic_cut_session.h"
 #include "host/haptics/scene_haptics.h"
@@ -169,9 +170,9 @@ int runDigest(const Options& opt) {
   const HapticDeviceSpec& hand = scene.haptics.devices.at(0);
   const int frames = opt.frames > 0 ? opt.frames : std::max(1, int(std::lround(scene.duration / scene.solver.frame_dt)));
 
-  auto sim = makeDissectionSimulation(scene, BackendKind::Cpu, Precision::Float64);
-  const std::unique_ptr<HapticDevice> device = makeSceneHapticDevice(scene, 0);
-  const TissuePlane plane = sceneTissuePlane(scene, *sim);
+  auto sim = makeDissectionSimulation(compileScene(scene), BackendKind::Cpu, Precision::Float64);
+  const std::unique_ptr<HapticDevice> device = makeSceneHapticDevice(compileScene(scene), 0);
+  const TissuePlane plane = sceneTissuePlane(compileScene(scene), *sim);
   const TipStiffness tip =
       mfsTipStiffness(scene.material, scene.haptics.local_radius_m, scene.haptics.local_spacing_m, plane.normal);
   CuttingTool tool(tipElastic(tip), scene.cut_thresholds, plane.point_m, plane.normal);

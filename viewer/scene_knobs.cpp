@@ -1,4 +1,5 @@
 // Material / Solver knobs over a shared, edited copy of the scene, and the model factory reading it.
+#include "host/scene/scene_compile.h"
 #include "viewer/scene_knobs.h"
 
 #include <algorithm>
@@ -46,7 +47,7 @@ ModelFactory sceneModelFactory(std::shared_ptr<Scene> sc) {
   return [sc]() -> std::unique_ptr<SimulationModel> {
     const BackendKind kind = resolveBackend(sc->solver.backend).kind;
     if (kind != sc->solver.backend) throw InputError(sc->file, "solver.backend", "the requested backend is not available here");
-    auto models = createSceneModels(*sc, kind);
+    auto models = createSceneModels(compileScene(*sc), kind);
     if (models.empty()) throw InputError(sc->file, "models", "the scene switches on no model to show");
     return std::move(models.front());
   };

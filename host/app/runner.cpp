@@ -1,4 +1,5 @@
 // Frame loop of `incision run`: advance, guard (rollback + one retry), metrics, periodic and final outputs.
+#include "host/scene/scene_compile.h"
 #include "host/app/runner.h"
 
 #include <algorithm>
@@ -208,14 +209,15 @@ RunSummary runScene(const Scene& scene_in, const RunOptions& opt, const ModelFac
   sum.backend_note = choice.note;
   if (!opt.quiet) std::fprintf(stderr, "%s\n", choice.note.c_str());
 
-  auto models = factory(scene, choice.kind);
+  const CompiledScene compiled = compileScene(scene);
+  auto models = factory(compiled, choice.kind);
   if (models.empty()) throw InputError(scene.file, "models", "the scene switches on no model that can run");
   for (const auto& m : models) sum.model_names += (sum.model_names.empty() ? "" : "+") + m->name();
   // models.haptics: the haptic loop starts on its own thread beside this one (docs/haptics.md); none otherwise.
   SceneHapticsOptions haptic_options;
   haptic_options.record_s = std::min(600.0, 1.5 * double(sum.frames_requested) * dt + 5.0);
   haptic_options.quiet = opt.quiet;
-  HapticSceneModel* haptic = attachSceneHaptics(models, scene, haptic_options);
+  HapticSceneModel* haptic = attachSceneHaptics(models, compiled, haptic_options);
 
   const double floor = energyFloorAndCheckpoint(models, scene);
   std::vector<NumericalGuard> guards(models.size(), NumericalGuard(scene.solver.energy_bound, floor));

@@ -44,7 +44,7 @@ struct RunSummary {
 };
 
 // Creates the models the scene switches on (createSceneModels, host/sim/model_factory.h) or a test's own.
-using ModelFactory = std::function<std::vector<std::unique_ptr<SimulationModel>>(const Scene&, BackendKind)>;
+using ModelFactory = std::function<std::vector<std::unique_ptr<SimulationModel>>(const CompiledScene&, BackendKind)>;
 
 // Runs the scene. Throws InputError for bad options; a numerical failure is returned in the summary
 // (failed == true) after the last good state has been written to out_dir.

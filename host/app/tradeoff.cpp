@@ -1,4 +1,5 @@
 // The speed/accuracy sweep: one knob at a time per model, timed frames, error vs an analytic or converged reference.
+#include "host/scene/scene_compile.h"
 #include "host/app/tradeoff.h"
 
 #include <algorithm>
@@ -51,7 +52,7 @@ Measured measure(const Scene& s, BackendKind backend, int frames, const Analytic
   std::vector<std::unique_ptr<SimulationModel>> models;
   const auto t_build = std::chrono::steady_clock::now();
   try {
-    models = createSceneModels(s, backend);
+    models = createSceneModels(compileScene(s), backend);
   } catch (const InputError& e) {
     m.finite = false;
     m.note = std::string("refused: ") + e.what();
@@ -179,7 +180,7 @@ std::vector<TradeoffSetting> tradeoffSettings(const Scene& base, const std::stri
         s.geometry.spacing *= f;
         add("spheres", "", s);  // value: the sphere count, filled in after the build
       }
-    const int n0 = packed ? base.pbd.target_spheres : int(buildSceneMetaballs(base).size());
+    const int n0 = packed ? base.pbd.target_spheres : int(buildSceneMetaballs(compileScene(base)).size());
     const std::vector<double> fractions = packed ? (quick ? std::vector<double>{0.5} : std::vector<double>{0.25, 0.5, 2.0})
                                                  : (quick ? std::vector<double>{0.25} : std::vector<double>{0.125, 0.25, 0.5, 1.0});
     for (double f : fractions) {

@@ -7,7 +7,7 @@
 
 #include "cpu_fallback/neighbor_search_cpu.h"
 #include "base/parallel.h"
-#include "host/scene/material_checks.h"
+#include "host/compiled/material_checks.h"
 #include "model/input_error.h"
 
 namespace inc {

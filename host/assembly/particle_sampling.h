@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "host/io/mesh.h"
-#include "host/scene/scene.h"
+#include "host/compiled/model_specs.h"
 #include "physics/vec3.h"
 
 namespace inc {

@@ -7,8 +7,8 @@
 #include <string>
 
 #include "model/input_error.h"
-#include "host/scene/material_checks.h"
-#include "host/scene/scene_colliders.h"
+#include "host/compiled/material_checks.h"
+#include "host/compiled/scene_colliders.h"
 #include "physics/pbd_constraints.h"
 
 namespace inc {
@@ -52,7 +52,7 @@ bool insideBox(const Vec3d& p, const FixedRegion& r) {
 
 void validateMetaballOptions(const MetaballPbdOptions& opt) {
   const char* f = "metaball options";
-  validateYoungsModulus(opt.youngs_modulus_pa, opt.file);  // host/scene/material_checks.h
+  validateYoungsModulus(opt.youngs_modulus_pa, opt.file);  // host/compiled/material_checks.h
   if (opt.stretch_compliance < 0 || opt.laplacian_compliance < 0 || opt.shape_compliance < 0)
     throw InputError(f, "compliance", "must be >= 0");
   if (!(opt.pbd_stiffness >= 0 && opt.pbd_stiffness <= 1)) throw InputError(f, "pbd_stiffness", "must be in [0, 1]");

@@ -9,7 +9,7 @@
 
 #include "host/assembly/metaball_model.h"
 #include "model/pbd_model.h"
-#include "host/scene/scene.h"
+#include "host/compiled/model_specs.h"
 
 namespace inc {
 

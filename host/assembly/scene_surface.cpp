@@ -9,7 +9,7 @@
 
 namespace inc {
 
-TriangleMesh sceneSurfaceMesh(const Scene& scene) {
+TriangleMesh sceneSurfaceMesh(const CompiledScene& scene) {
   const GeometrySpec& g = scene.geometry;
   const double h = g.spacing > 0 ? g.spacing : 0.005;
   switch (g.kind) {

@@ -2,12 +2,12 @@
 #pragma once
 
 #include "host/io/mesh.h"
-#include "host/scene/scene.h"
+#include "host/compiled/compiled_scene.h"
 
 namespace inc {
 
 // Box/beam: a subdivided box; sphere/ellipsoid: a UV sphere scaled to the radii, tessellated near
 // geometry.spacing; mesh: the file scaled by mesh_scale, required closed. Throws InputError(scene.file, key, reason).
-TriangleMesh sceneSurfaceMesh(const Scene& scene);
+TriangleMesh sceneSurfaceMesh(const CompiledScene& scene);
 
 }  // namespace inc

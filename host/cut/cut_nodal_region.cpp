@@ -10,7 +10,7 @@
 #include <stdexcept>
 
 #include "host/backends/solver_factory.h"
-#include "host/scene/material_checks.h"
+#include "host/compiled/material_checks.h"
 #include "base/parallel.h"
 #include "host/cut/cut_nodal_points.h"
 #include "model/device_capture_lock.h"

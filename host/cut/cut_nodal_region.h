@@ -14,11 +14,11 @@
 #include "host/cut/cut_repack.h"
 #include "host/cut/cut_stroke_supports.h"
 #include "host/cut/cut_swept_surface.h"
-#include "host/scene/scene_colliders.h"
+#include "host/compiled/scene_colliders.h"
 #include "host/assembly/metaball_model.h"
 #include "model/mls_model.h"
 #include "model/mls_solver.h"
-#include "host/scene/scene.h"
+#include "host/compiled/model_specs.h"
 
 namespace inc {
 

@@ -10,7 +10,7 @@
 #include <sstream>
 
 #include "model/input_error.h"
-#include "host/scene/scene_json.h"
+#include "base/format_number.h"
 
 namespace inc {
 
@@ -54,7 +54,7 @@ bool readMatrix(std::FILE* f, Eigen::MatrixXd& m, Eigen::Index rows, Eigen::Inde
   return std::fread(m.data(), sizeof(double), std::size_t(m.size()), f) == std::size_t(m.size());
 }
 
-std::string num(double v) { return scene_json::formatNumber(v); }
+std::string num(double v) { return formatNumber(v); }
 
 }  // namespace
 

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <map>
 
-#include "host/scene/material_checks.h"
+#include "host/compiled/material_checks.h"
 #include "model/input_error.h"
 #include "physics/kelvin.h"
 

@@ -9,7 +9,7 @@
 
 #include "host/io/mesh.h"
 #include "model/material.h"
-#include "host/scene/global_organ_mesh.h"  // BemBc: an element's boundary condition
+#include "host/compiled/bem_organ_mesh.h"  // BemBc: an element's boundary condition
 
 namespace inc {
 

@@ -4,7 +4,7 @@
 #include <cmath>
 
 #include "model/input_error.h"
-#include "host/scene/cutting_scene.h"
+#include "host/compiled/material_checks.h"
 
 namespace inc {
 

@@ -5,7 +5,7 @@
 
 namespace inc {
 
-HapticSceneModel::HapticSceneModel(std::unique_ptr<SimulationModel> model, const Scene& scene,
+HapticSceneModel::HapticSceneModel(std::unique_ptr<SimulationModel> model, const CompiledScene& scene,
                                    SceneHapticsOptions options)
     : model_(std::move(model)) {
   if (!model_) throw InputError(scene.file, "models.haptics", "no model for the haptic tool to touch");
@@ -37,13 +37,13 @@ void HapticSceneModel::renderLayers(RenderLayers& out) const {
   }
 }
 
-std::unique_ptr<SimulationModel> withSceneHaptics(std::unique_ptr<SimulationModel> model, const Scene& scene,
+std::unique_ptr<SimulationModel> withSceneHaptics(std::unique_ptr<SimulationModel> model, const CompiledScene& scene,
                                                   SceneHapticsOptions options) {
   if (!scene.models.haptics || !model) return model;
   return std::make_unique<HapticSceneModel>(std::move(model), scene, std::move(options));
 }
 
-HapticSceneModel* attachSceneHaptics(std::vector<std::unique_ptr<SimulationModel>>& models, const Scene& scene,
+HapticSceneModel* attachSceneHaptics(std::vector<std::unique_ptr<SimulationModel>>& models, const CompiledScene& scene,
                                      SceneHapticsOptions options) {
   if (!scene.models.haptics || models.empty()) return nullptr;
   std::size_t k = 0;

@@ -16,7 +16,7 @@ namespace inc {
 // destroyed.
 class HapticSceneModel final : public SimulationModel {
  public:
-  HapticSceneModel(std::unique_ptr<SimulationModel> model, const Scene& scene, SceneHapticsOptions options = {});
+  HapticSceneModel(std::unique_ptr<SimulationModel> model, const CompiledScene& scene, SceneHapticsOptions options = {});
   ~HapticSceneModel() override;
 
   SceneHaptics& haptics() { return *haptics_; }
@@ -44,11 +44,11 @@ class HapticSceneModel final : public SimulationModel {
 
 // The runner's and the viewer's wrapping: `model` itself when the scene does not switch on models.haptics (a
 // scene pays nothing for haptics it does not use), else a HapticSceneModel around it.
-std::unique_ptr<SimulationModel> withSceneHaptics(std::unique_ptr<SimulationModel> model, const Scene& scene,
+std::unique_ptr<SimulationModel> withSceneHaptics(std::unique_ptr<SimulationModel> model, const CompiledScene& scene,
                                                   SceneHapticsOptions options = {});
 // The runner's: wraps the model the tool touches (the first that can be cut, else the first) when the scene
 // switches on models.haptics, and returns it; nullptr (and nothing changed) otherwise.
-HapticSceneModel* attachSceneHaptics(std::vector<std::unique_ptr<SimulationModel>>& models, const Scene& scene,
+HapticSceneModel* attachSceneHaptics(std::vector<std::unique_ptr<SimulationModel>>& models, const CompiledScene& scene,
                                      SceneHapticsOptions options = {});
 
 }  // namespace inc

@@ -8,7 +8,7 @@
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
 
-#include "host/scene/material_checks.h"
+#include "host/compiled/material_checks.h"
 #include "model/input_error.h"
 #include "physics/mls_weight.h"
 

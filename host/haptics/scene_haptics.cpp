@@ -7,18 +7,17 @@
 #include <filesystem>
 #include <limits>
 
-#include "host/scene/global_organ_mesh.h"
-#include "host/scene/haptics_scene.h"
+#include "host/compiled/bem_organ_mesh.h"
 #include "host/haptics/udp_device.h"
 #include "model/input_error.h"
-#include "host/scene/scene_json.h"
+#include "base/format_number.h"
 #if INCISION_HAVE_OPENHAPTICS
 #include "host/haptics/openhaptics_device.h"
 #endif
 
 namespace inc {
 
-TissuePlane sceneTissuePlane(const Scene& scene, const SimulationModel& model) {
+TissuePlane sceneTissuePlane(const CompiledScene& scene, const SimulationModel& model) {
   TissuePlane p;
   p.normal = scene.haptics.surface_normal;
   if (scene.haptics.has_surface_point) {
@@ -39,7 +38,7 @@ TissuePlane sceneTissuePlane(const Scene& scene, const SimulationModel& model) {
   return p;
 }
 
-std::unique_ptr<HapticDevice> makeSceneHapticDevice(const Scene& scene, std::size_t index) {
+std::unique_ptr<HapticDevice> makeSceneHapticDevice(const CompiledScene& scene, std::size_t index) {
   const HapticsSpec& hs = scene.haptics;
   if (index >= hs.devices.size()) throw InputError(scene.file, "haptics.devices", "no device " + std::to_string(index));
   const HapticDeviceSpec& h = hs.devices[index];
@@ -84,7 +83,7 @@ std::unique_ptr<HapticDevice> makeSceneHapticDevice(const Scene& scene, std::siz
 
 namespace {
 
-HapticLoopConfig loopConfig(const Scene& scene, const HapticDeviceSpec& h, double record_s) {
+HapticLoopConfig loopConfig(const CompiledScene& scene, const HapticDeviceSpec& h, double record_s) {
   HapticLoopConfig c;
   c.rate_hz = h.rate_hz;
   c.max_force_rate_n_per_s = h.max_force_rate_n_per_s;
@@ -98,7 +97,7 @@ HapticLoopConfig loopConfig(const Scene& scene, const HapticDeviceSpec& h, doubl
 
 // Which device holds the scalpel on `model`: the one whose tool is "scalpel", else the first "auto" one on a
 // model that can be cut; -1: none. Throws for a scalpel on a model that cannot be cut.
-long scalpelHand(const Scene& scene, const SimulationModel& model) {
+long scalpelHand(const CompiledScene& scene, const SimulationModel& model) {
   const auto& devices = scene.haptics.devices;
   const bool can_cut = model.toolSupport().cut;
   for (std::size_t k = 0; k < devices.size(); ++k)
@@ -117,7 +116,7 @@ long scalpelHand(const Scene& scene, const SimulationModel& model) {
 // The scene's BEM organ (global_model "bem"): mesh, supports, the local model's cloud; errors name
 // haptics.global_mesh. The tissue plane's point must lie near the organ: a wrong global_mesh_scale or a mesh of
 // another organ would otherwise couple every contact to a far-away element.
-std::unique_ptr<GlobalOrganModel> sceneGlobalModel(const Scene& scene, const TissuePlane& plane, int hands, bool quiet) {
+std::unique_ptr<GlobalOrganModel> sceneGlobalModel(const CompiledScene& scene, const TissuePlane& plane, int hands, bool quiet) {
   const HapticsSpec& h = scene.haptics;
   const std::string key = "haptics.global_mesh";
   GlobalOrganSetup setup;
@@ -133,8 +132,8 @@ std::unique_ptr<GlobalOrganModel> sceneGlobalModel(const Scene& scene, const Tis
   const double diag = norm(rep.bbox_max - rep.bbox_min);
   if (norm(gap) > 0.1 * diag)
     throw InputError(scene.file, key,
-                     h.global_mesh + ": the organ mesh lies " + scene_json::formatNumber(norm(gap)) +
-                         " m from the tissue plane's point (its box is " + scene_json::formatNumber(diag) +
+                     h.global_mesh + ": the organ mesh lies " + formatNumber(norm(gap)) +
+                         " m from the tissue plane's point (its box is " + formatNumber(diag) +
                          " m across): is global_mesh_scale right, and is it the mesh of this organ?");
   setup.supports = organSupports(setup.mesh, scene.fixed);
   setup.material = scene.material;
@@ -152,7 +151,7 @@ std::unique_ptr<GlobalOrganModel> sceneGlobalModel(const Scene& scene, const Tis
 
 }  // namespace
 
-SceneHaptics::SceneHaptics(const Scene& scene, const SimulationModel& model, SceneHapticsOptions options) {
+SceneHaptics::SceneHaptics(const CompiledScene& scene, const SimulationModel& model, SceneHapticsOptions options) {
   const HapticsSpec& h = scene.haptics;
   if (h.devices.empty()) throw InputError(scene.file, "haptics.devices", "lists no device");
   if (options.clock && h.devices.size() > 1)

@@ -8,20 +8,20 @@
 #include "host/haptics/global_organ_model.h"
 #include "host/haptics/haptic_hand.h"
 #include "host/haptics/tip_contact.h"
-#include "host/scene/scene.h"
+#include "host/compiled/compiled_scene.h"
 #include "host/sim/simulation_model.h"
 
 namespace inc {
 
 // haptics.surface_point_m / surface_normal; without surface_point_m, the plane through the point of the model's
 // surface (its particles when it has none) that lies farthest along the normal (the organ's top for +z).
-TissuePlane sceneTissuePlane(const Scene& scene, const SimulationModel& model);
+TissuePlane sceneTissuePlane(const CompiledScene& scene, const SimulationModel& model);
 
 // The device haptics.devices[index] names (the single device of the single-device form: index 0): a ScriptedDevice
 // playing its trajectory (by time or by tick), a UdpDevice on 127.0.0.1:udp_port, or the OpenHaptics driver where
 // it is built. Throws InputError(scene file, its key path, reason): no trajectory for a scripted device, a port that
 // cannot be bound, a device that cannot be initialised.
-std::unique_ptr<HapticDevice> makeSceneHapticDevice(const Scene& scene, std::size_t index = 0);
+std::unique_ptr<HapticDevice> makeSceneHapticDevice(const CompiledScene& scene, std::size_t index = 0);
 
 struct SceneHapticsOptions {
   std::shared_ptr<HapticDevice> device;  // nullptr: makeSceneHapticDevice(scene, 0); else e.g. the viewer's pointer,
@@ -41,7 +41,7 @@ struct SceneHapticsOptions {
 // start(); the simulation thread calls beforeFrame / afterFrame around each advance() of the model.
 class SceneHaptics {
  public:
-  SceneHaptics(const Scene& scene, const SimulationModel& model, SceneHapticsOptions options = {});
+  SceneHaptics(const CompiledScene& scene, const SimulationModel& model, SceneHapticsOptions options = {});
   ~SceneHaptics();
   SceneHaptics(const SceneHaptics&) = delete;
   SceneHaptics& operator=(const SceneHaptics&) = delete;

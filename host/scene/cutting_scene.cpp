@@ -3,6 +3,7 @@
 
 #include <cmath>
 
+#include "host/compiled/material_checks.h"
 #include "host/scene/scene_keys.h"
 #include "model/input_error.h"
 
@@ -26,22 +27,6 @@ nlohmann::ordered_json cutThresholdsJson(const CutThresholds<double>& th) {
                                 {"static_friction_n", th.static_n},
                                 {"dynamic_friction_n", th.dynamic_n},
                                 {"friction_n_per_m", th.friction_per_depth_n_per_m}};
-}
-
-void validateCutThresholds(const CutThresholds<double>& th, const std::string& file, const std::string& key) {
-  auto got = [](double v) { return " (got " + scene_json::formatNumber(v) + ")"; };
-  auto check = [&](double v, bool ok, const char* name, const char* rule) {
-    if (!std::isfinite(v) || !ok) throw InputError(file, key + "." + name, std::string(rule) + got(v));
-  };
-  check(th.press_n, th.press_n >= 0.0, "press_threshold_n", "F_p must be finite and >= 0 N");
-  check(th.static_n, th.static_n > 0.0, "static_friction_n", "F_s must be finite and > 0 N");
-  check(th.dynamic_n, th.dynamic_n > 0.0, "dynamic_friction_n", "F_d must be finite and > 0 N");
-  check(th.friction_per_depth_n_per_m, th.friction_per_depth_n_per_m >= 0.0, "friction_n_per_m",
-        "the friction slope must be finite and >= 0 N/m");
-  if (!(th.dynamic_n < th.static_n))
-    throw InputError(file, key + ".dynamic_friction_n",
-                     "dynamic friction F_d must be below static friction F_s = " + scene_json::formatNumber(th.static_n) +
-                         " N (the hysteresis of eq. 16)" + got(th.dynamic_n));
 }
 
 }  // namespace inc

@@ -1,4 +1,5 @@
-// Scene keys of the haptic cutting force model (material.cutting): reading, validation and writing.
+// Scene keys of the haptic cutting force model (material.cutting): reading and writing (the ranges are checked
+// by validateCutThresholds, host/compiled/material_checks.h).
 #pragma once
 
 #include <string>
@@ -18,10 +19,5 @@ CutThresholds<double> readCutThresholds(const scene_json::ObjectReader& cutting)
 
 // The same keys for sceneToJson (reads back to the same values).
 nlohmann::ordered_json cutThresholdsJson(const CutThresholds<double>& th);
-
-// Throws InputError(file, key + ".<scene key>", reason) unless F_p >= 0, F_s > 0, F_d > 0, friction slope >= 0,
-// all finite, and F_d < F_s (scene keys: press_threshold_n, static_friction_n, dynamic_friction_n,
-// friction_n_per_m; docs/scene-format.md).
-void validateCutThresholds(const CutThresholds<double>& th, const std::string& file, const std::string& key);
 
 }  // namespace inc

@@ -1,30 +1,15 @@
-// The organ of a scene's BEM global model: its surface mesh (loaded, checked, scaled), supports and scene keys.
+// The scene keys of the BEM global model (haptics.global_model and its mesh and cache): reading and writing. The
+// mesh itself is loaded and checked by host/compiled/bem_organ_mesh.h.
 #pragma once
 
 #include <string>
 #include <vector>
 
-#include "host/io/mesh.h"
+#include "host/compiled/bem_organ_mesh.h"
 #include "host/scene/scene.h"
 #include "host/scene/scene_json.h"
 
 namespace inc {
-
-// The dense BEM matrices are (3E)^2 doubles each (E triangles): 162 MB at this size, and the precompute (inverse
-// and contact table) takes minutes on a CPU. A larger mesh is a render mesh by mistake.
-inline constexpr int kMaxBemElements = 1500;
-
-// The boundary condition of one boundary element: traction-free, or held (displacement zero).
-enum class BemBc : unsigned char { kTraction = 0, kDisplacement = 1 };
-
-// Loads the mesh at `path` (OBJ, PLY, STL), scales it by `scale` (metres per file unit) and checks it for the BEM:
-// closed, manifold, consistently oriented (an inward mesh is flipped), positive volume, no degenerate triangle,
-// at most kMaxBemElements triangles. Throws InputError(path, element, reason).
-TriangleMesh loadGlobalOrganMesh(const std::string& path, double scale);
-
-// The base boundary conditions: an element whose centroid lies in a fixed box (inclusive, to a rounding
-// tolerance) is held (displacement zero), every other one is traction-free.
-std::vector<BemBc> organSupports(const TriangleMesh& mesh, const std::vector<FixedRegion>& fixed);
 
 // haptics.global_model and, with "bem", global_mesh (resolved against base_dir, loaded and checked),
 // global_mesh_scale and global_cache (default: the scene file's name with .bemcache in its folder; a scene without

@@ -138,11 +138,6 @@ bool openHapticsBuilt() {
 #endif
 }
 
-std::string hapticDeviceKey(const HapticsSpec& h, std::size_t index, const std::string& key) {
-  if (!h.devices_listed) return "haptics." + key;
-  return scene_json::joinPath(scene_json::indexPath("haptics.devices", index), key);
-}
-
 HapticsSpec readHapticsSpec(const ObjectReader& top, const std::string& base_dir, const ModelsSpec& models,
                             const std::vector<FixedRegion>& fixed) {
   HapticsSpec h;

@@ -19,10 +19,6 @@ namespace inc {
 HapticsSpec readHapticsSpec(const scene_json::ObjectReader& top, const std::string& base_dir, const ModelsSpec& models,
                             const std::vector<FixedRegion>& fixed);
 
-// The key path of device `index`'s `key`: "haptics.<key>" in the single-device form, else
-// "haptics.devices[index].<key>".
-std::string hapticDeviceKey(const HapticsSpec& h, std::size_t index, const std::string& key);
-
 // The same keys for sceneToJson (reads back to the same values).
 nlohmann::ordered_json hapticsSpecJson(const HapticsSpec& h);
 

@@ -14,7 +14,7 @@
 
 #include "host/scene/cutting_scene.h"
 #include "host/scene/haptics_scene.h"
-#include "host/scene/material_checks.h"
+#include "host/compiled/material_checks.h"
 #include "host/scene/scene_keys.h"
 #include "model/input_error.h"
 #include "host/io/mesh.h"
@@ -166,7 +166,7 @@ void readMaterial(const ObjectReader& top, Material& m, CutThresholds<double>& c
   m.poisson_ratio = r.number("poisson_ratio", m.poisson_ratio);
   m.density_kg_m3 = r.number("density_kg_m3", m.density_kg_m3);
   m.damping_per_s = r.number("damping_per_s", m.damping_per_s);
-  validateMaterial(m, r.file(), r.path());  // host/scene/material_checks.h
+  validateMaterial(m, r.file(), r.path());  // host/compiled/material_checks.h
   if (r.has("cutting")) cutting = readCutThresholds(r.object("cutting"));  // host/scene/cutting_scene.h
 }
 

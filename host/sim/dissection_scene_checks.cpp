@@ -13,7 +13,7 @@ namespace inc::dissection {
 
 namespace {
 
-void checkCuttingRanges(const Scene& s) {
+void checkCuttingRanges(const CompiledScene& s) {
   const CuttingSpec& c = s.cutting;
   const auto range = [&](int v, int lo, int hi, const char* key) {
     if (v < lo || v > hi)
@@ -42,7 +42,7 @@ void checkCuttingRanges(const Scene& s) {
 
 }  // namespace
 
-void checkDissectionScene(const Scene& scene) {
+void checkDissectionScene(const CompiledScene& scene) {
   const std::string& f = scene.file;
   if (!scene.models.cutting) throw InputError(f, "models.cutting", "the dissection model needs cutting: true");
   if (!scene.models.pbd_metaballs) throw InputError(f, "models.pbd_metaballs", "cutting needs the PBD metaball organ");
@@ -59,7 +59,7 @@ void checkStrokesApart(const std::string& f, const std::vector<ScriptedStroke>& 
                                        std::to_string(strokes[k - 1].end) + " s: strokes must not overlap");
 }
 
-void checkFixedMlsSubsteps(const Scene& scene, const MetaballModel& spheres, const MlsMaterial& material) {
+void checkFixedMlsSubsteps(const CompiledScene& scene, const MetaballModel& spheres, const MlsMaterial& material) {
   const int fixed = scene.cutting.mls_substeps_per_exchange;
   if (fixed <= 0) return;
   double rmin = std::numeric_limits<double>::infinity();

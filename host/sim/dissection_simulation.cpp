@@ -15,9 +15,11 @@
 #include "base/elapsed_ms.h"
 #include "model/input_error.h"
 #include "host/sim/metaball_simulation.h"
+#include "host/sim/mls_simulation.h"
 #include "host/assembly/organ_shapes.h"
+#include "host/sim/pbd_organ_settings.h"
 #include "host/sim/pbd_render_layers.h"
-#include "host/scene/scene_colliders.h"
+#include "host/compiled/scene_colliders.h"
 #include "host/assembly/scene_surface.h"
 
 namespace inc::dissection {
@@ -25,7 +27,7 @@ namespace inc::dissection {
 // --- Set-up -----------------------------------------------------------------------------------------------
 
 template <typename T>
-DissectionSimulation<T>::DissectionSimulation(const Scene& scene, BackendKind backend) : scene_(scene) {
+DissectionSimulation<T>::DissectionSimulation(const CompiledScene& scene, BackendKind backend) : scene_(scene) {
   checkDissectionScene(scene);
   readTools();
   setPbdParams();
@@ -65,19 +67,7 @@ void DissectionSimulation<T>::readTools() {
 
 template <typename T>
 void DissectionSimulation<T>::setPbdParams() {
-  const std::string& f = scene_.file;
-  params_.solver = parsePbdSolver(scene_.pbd.solver, f, "pbd.solver");
-  params_.iterations = scene_.pbd.iterations;
-  params_.chebyshev_rho = T(checkChebyshevRho(scene_.pbd.chebyshev_rho, params_.solver, f, "pbd.chebyshev_rho"));
-  // CUDA single-block fused frame: measured on an H100 (docs/BENCHMARKS.md) it beats per-phase launches for
-  // Gauss-Seidel up to thousands of spheres, but for Jacobi only below ~300 spheres; on sm_90 Jacobi models of up
-  // to cluster_max_particles run the thread-block cluster frame instead (faster still, docs/pbd.md).
-  params_.fused_max_particles = params_.solver == PbdSolverKind::Jacobi ? 256 : 4096;
-  params_.xpbd = scene_.pbd.xpbd;
-  params_.gravity = Vec3<T>(scene_.solver.gravity);
-  params_.damping = T(scene_.material.damping_per_s);
-  params_.volume_preservation = scene_.pbd.volume_preservation;
-  params_.volume_influence = T(2.0 * scene_.geometry.spacing);
+  params_ = pbdOrganParams<T>(scene_);
   base_substeps_ = scene_.solver.substeps > 0 ? scene_.solver.substeps : 4;
 }
 
@@ -102,13 +92,7 @@ void DissectionSimulation<T>::setRegionSettings() {
   region_.fixed = scene_.fixed;
   region_.colliders = staticColliders(scene_.colliders);
   region_.stretch_compliance = scene_.pbd.stretch_compliance;
-  MlsBuildInput& m = region_.mls;
-  m.source = scene_.file;
-  m.support_factor = scene_.mls.support_factor;
-  m.condition_limit = scene_.mls.condition_limit;
-  m.material = MlsMaterial{scene_.material, scene_.mls.volume_preservation, scene_.mls.volume_stiffness};
-  m.gravity = scene_.solver.gravity;
-  m.safety = scene_.solver.safety;
+  region_.mls = mlsSolverSettings(scene_);
 }
 
 // The organ as first packed: its typical sphere sets the re-packing's budget and radius cap for every cut (a mean
@@ -388,17 +372,10 @@ ToolResult DissectionSimulation<T>::applyTool(const ToolEvent& e) {
 template <typename T>
 MetaballPbdOptions DissectionSimulation<T>::pbdOptions(std::vector<double> known_cell_volumes,
                                                        bool require_fixed_held) const {
-  MetaballPbdOptions opt;
-  opt.youngs_modulus_pa = scene_.material.youngs_modulus_pa;
-  opt.stretch_compliance = scene_.pbd.stretch_compliance;
-  opt.laplacian_compliance = scene_.pbd.laplacian_compliance;
-  opt.fixed = scene_.fixed;
-  opt.colliders = scene_.colliders;
+  MetaballPbdOptions opt = pbdOrganOptions(scene_);
   if (!scene_.colliders.empty())
     opt.surface_depth = [t = tissue_](const Vec3d& x) { return -t->signedDistance(x).distance; };
-  opt.file = scene_.file;
   opt.require_fixed_held = require_fixed_held;
-  opt.volume_samples = scene_.pbd.volume_preservation ? 64 : 0;
   opt.coloring = params_.solver == PbdSolverKind::GaussSeidel;  // Jacobi never reads it (a rebuild per conversion)
   opt.known_cell_volumes = std::move(known_cell_volumes);
   return opt;
@@ -434,7 +411,7 @@ template class DissectionSimulation<double>;
 
 namespace inc {
 
-std::unique_ptr<SimulationModel> makeDissectionSimulation(const Scene& scene, BackendKind backend, Precision precision) {
+std::unique_ptr<SimulationModel> makeDissectionSimulation(const CompiledScene& scene, BackendKind backend, Precision precision) {
   if (precision == Precision::Float64) return std::make_unique<dissection::DissectionSimulation<double>>(scene, backend);
   return std::make_unique<dissection::DissectionSimulation<float>>(scene, backend);
 }

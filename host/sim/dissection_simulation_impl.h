@@ -24,7 +24,7 @@
 #include "host/assembly/metaball_pack_bvh.h"
 #include "host/assembly/pbd_builders.h"
 #include "model/pbd_model.h"
-#include "host/scene/scene.h"
+#include "host/compiled/compiled_scene.h"
 #include "host/sim/simulation_model.h"
 
 namespace inc::dissection {
@@ -38,7 +38,7 @@ namespace inc::dissection {
 template <typename T>
 class DissectionSimulation final : public SimulationModel {
  public:
-  DissectionSimulation(const Scene& scene, BackendKind backend);
+  DissectionSimulation(const CompiledScene& scene, BackendKind backend);
 
   std::string name() const override { return "dissection"; }
   BackendKind backend() const override { return backend_->kind(); }
@@ -176,7 +176,7 @@ class DissectionSimulation final : public SimulationModel {
   void reportCuts(FrameReport& rep) const;
   void reportWork(FrameReport& rep) const;
 
-  Scene scene_;
+  CompiledScene scene_;
   std::vector<ScriptedStroke> strokes_;
   std::vector<Grasper> graspers_, saved_graspers_;
   std::vector<ToolSpec> probes_;

@@ -9,7 +9,7 @@
 #include "host/cut/cut_nodal_region.h"
 #include "host/cut/cut_swept_surface.h"
 #include "host/assembly/metaball_model.h"
-#include "host/scene/scene.h"
+#include "host/compiled/model_specs.h"
 
 namespace inc::dissection {
 

@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "model/pbd_model.h"
-#include "host/scene/scene.h"
+#include "host/compiled/model_specs.h"
 #include "physics/pbd_collision.h"
 #include "physics/vec3.h"
 

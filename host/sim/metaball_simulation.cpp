@@ -2,8 +2,8 @@
 #include "host/sim/metaball_simulation.h"
 #include "host/backends/solver_factory.h"
 #include "host/assembly/metaball_pack_bvh.h"
-#include "host/scene/material_checks.h"
-#include "host/scene/scene_colliders.h"
+#include "host/compiled/material_checks.h"
+#include "host/compiled/scene_colliders.h"
 
 #include <algorithm>
 #include <cmath>
@@ -20,6 +20,7 @@
 #include "host/assembly/particle_sampling.h"
 #include "host/assembly/pbd_builders.h"
 #include "model/pbd_model.h"
+#include "host/sim/pbd_organ_settings.h"
 #include "host/sim/pbd_render_layers.h"
 #include "physics/pbd_rotation.h"
 
@@ -34,7 +35,7 @@ constexpr int kDefaultSubsteps = 4;
 // one-substep frames were measured to fling a 40 mm bar by 0.11-1.5 m (tests/support/stability_matrix.h).
 constexpr double kMaxSagPerSubstep = 0.1;  // fraction of geometry.spacing
 
-double maxPbdSubstep(const Scene& scene) {
+double maxPbdSubstep(const CompiledScene& scene) {
   const double g = norm(scene.solver.gravity);
   return g > 0 ? std::sqrt(kMaxSagPerSubstep * scene.geometry.spacing / g) : 1.0e300;
 }
@@ -82,23 +83,12 @@ void linkOverlapping(MetaballModel& mb) {
 template <typename T>
 class MetaballSimulation final : public SimulationModel {
  public:
-  MetaballSimulation(const Scene& scene, BackendKind backend) : scene_(scene) {
+  MetaballSimulation(const CompiledScene& scene, BackendKind backend) : scene_(scene) {
     const std::string& f = scene.file;
     if (scene.pbd.iterations < 1) throw InputError(f, "pbd.iterations", "must be >= 1");
     if (scene.solver.substeps < 0) throw InputError(f, "solver.substeps", "must be >= 0");
-    validateMaterial(scene.material, f);  // a Scene built in code has not met the loader's check
-    params_.solver = parsePbdSolver(scene.pbd.solver, f, "pbd.solver");
-    params_.iterations = scene.pbd.iterations;
-    params_.chebyshev_rho = T(checkChebyshevRho(scene.pbd.chebyshev_rho, params_.solver, f, "pbd.chebyshev_rho"));
-    // CUDA single-block fused frame: measured on an H100 (docs/BENCHMARKS.md) it beats per-phase launches for
-    // Gauss-Seidel up to thousands of spheres, but for Jacobi only below ~300 spheres; on sm_90 Jacobi models of up
-    // to cluster_max_particles run the thread-block cluster frame instead (faster still, docs/pbd.md).
-    params_.fused_max_particles = params_.solver == PbdSolverKind::Jacobi ? 256 : 4096;
-    params_.xpbd = scene.pbd.xpbd;
-    params_.gravity = Vec3<T>(scene.solver.gravity);
-    params_.damping = T(scene.material.damping_per_s);
-    params_.volume_preservation = scene.pbd.volume_preservation;
-    params_.volume_influence = T(2.0 * scene.geometry.spacing);
+    validateMaterial(scene.material, f);  // a scene built in code has not met the loader's check
+    params_ = pbdOrganParams<T>(scene);
     max_substep_s_ = maxPbdSubstep(scene);
     const double fdt = scene.solver.frame_dt;
     if (scene.solver.substeps > 0 && fdt / scene.solver.substeps > max_substep_s_) {
@@ -115,20 +105,13 @@ class MetaballSimulation final : public SimulationModel {
     const MetaballModel mb = buildSceneMetaballs(scene);
     checkCollidersClear(scene, mb.rest_centers, "sphere centres");
     collider_mesh_ = colliderMeshAround(scene.colliders, mb.rest_centers);
-    MetaballPbdOptions opt;
-    opt.youngs_modulus_pa = scene.material.youngs_modulus_pa;
-    opt.stretch_compliance = scene.pbd.stretch_compliance;
-    opt.laplacian_compliance = scene.pbd.laplacian_compliance;
-    opt.fixed = scene.fixed;
-    opt.colliders = scene.colliders;
+    MetaballPbdOptions opt = pbdOrganOptions(scene);
     rest_surface_ = sceneSurfaceMesh(scene);
     std::shared_ptr<const pack::SurfaceDistance> depth;
     if (!scene.colliders.empty()) {
       depth = std::make_shared<const pack::SurfaceDistance>(rest_surface_);
       opt.surface_depth = [depth](const Vec3d& x) { return -depth->signedDistance(x).distance; };
     }
-    opt.file = f;
-    opt.volume_samples = scene.pbd.volume_preservation ? 64 : 0;
     model_ = buildMetaballPbdModel<T>(mb, opt);
     // The organ's surface rides on the spheres (linear-blend skinning, k = 4 nearest spheres).
     skin_ = skinArrays<T>(bindSkin(rest_surface_, mb, std::min<int>(4, int(mb.size())), f));
@@ -320,7 +303,7 @@ class MetaballSimulation final : public SimulationModel {
     rep.max_displacement = disp;
   }
 
-  Scene scene_;
+  CompiledScene scene_;
   PbdModel<T> model_;
   std::unique_ptr<PbdBackend<T>> backend_;
   PbdStepParams<T> params_;
@@ -343,7 +326,7 @@ class MetaballSimulation final : public SimulationModel {
 
 }  // namespace
 
-MetaballModel buildSceneMetaballs(const Scene& scene) {
+MetaballModel buildSceneMetaballs(const CompiledScene& scene) {
   const GeometrySpec& g = scene.geometry;
   const std::string& f = scene.file;
   if (!(std::isfinite(g.spacing) && g.spacing > 0)) throw InputError(f, "geometry.spacing_m", "must be a positive number");
@@ -376,7 +359,7 @@ MetaballModel buildSceneMetaballs(const Scene& scene) {
   return mb;
 }
 
-std::unique_ptr<SimulationModel> makeMetaballSimulation(const Scene& scene, BackendKind backend, Precision precision) {
+std::unique_ptr<SimulationModel> makeMetaballSimulation(const CompiledScene& scene, BackendKind backend, Precision precision) {
   if (precision == Precision::Float64) return std::make_unique<MetaballSimulation<double>>(scene, backend);
   return std::make_unique<MetaballSimulation<float>>(scene, backend);
 }

@@ -5,7 +5,7 @@
 
 #include "model/backend.h"
 #include "host/assembly/metaball_model.h"
-#include "host/scene/scene.h"
+#include "host/compiled/compiled_scene.h"
 #include "host/sim/simulation_model.h"
 
 namespace inc {
@@ -16,7 +16,7 @@ namespace inc {
 // cell centre inside the body, radius 0.75 * spacing (face and edge neighbours overlap, corner ones do not),
 // mass density * spacing^3 (so the total mass is the density times the sampled cell volume); spheres are
 // linked when they overlap (|c_i - c_j| < r_i + r_j). Throws InputError(scene.file, key, reason).
-MetaballModel buildSceneMetaballs(const Scene& scene);
+MetaballModel buildSceneMetaballs(const CompiledScene& scene);
 
 // The PBD metaball organ of `scene` on `backend` (Auto resolves like resolveBackend) in `precision`.
 // Settings: pbd.iterations, pbd.xpbd, pbd.solver, pbd.stretch_compliance / laplacian_compliance (0: from
@@ -28,6 +28,6 @@ MetaballModel buildSceneMetaballs(const Scene& scene);
 // events when profiling, else one "frame" stage), kinetic, elastic (stretch + Laplacian compliance energy
 // sum C^2 / 2 alpha), gravity potential energy, max displacement; counters: residual_max_m,
 // residual_rms_m, colors, iterations, substeps, grasped, volume_active, max_radius_ratio.
-std::unique_ptr<SimulationModel> makeMetaballSimulation(const Scene& scene, BackendKind backend, Precision precision);
+std::unique_ptr<SimulationModel> makeMetaballSimulation(const CompiledScene& scene, BackendKind backend, Precision precision);
 
 }  // namespace inc

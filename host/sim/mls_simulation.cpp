@@ -1,7 +1,7 @@
-// MlsSimulation: an MlsSolver behind the SimulationModel interface, assembled from a Scene.
+// MlsSimulation: an MlsSolver behind the SimulationModel interface, assembled from a compiled scene.
 #include "host/sim/mls_simulation.h"
 #include "host/backends/solver_factory.h"
-#include "host/scene/scene_colliders.h"
+#include "host/compiled/scene_colliders.h"
 
 #include <algorithm>
 #include <cmath>
@@ -41,7 +41,7 @@ bool insideBox(const Vec3d& p, const FixedRegion& r) {
 
 class MlsSimulation final : public SimulationModel {
  public:
-  MlsSimulation(std::unique_ptr<MlsSolver> solver, const Scene& scene, const MlsBuildInput& in)
+  MlsSimulation(std::unique_ptr<MlsSolver> solver, const CompiledScene& scene, const MlsBuildInput& in)
       : solver_(std::move(solver)), fixed_substeps_(scene.solver.substeps), tools_(scene.tools) {
     // For the viewer's layers: which particles are fixed, the masses (as makeMlsModel sets them) and gravity.
     gravity_ = in.gravity;
@@ -235,9 +235,19 @@ class MlsSimulation final : public SimulationModel {
 
 }  // namespace
 
-MlsBuildInput mlsBuildInputFromScene(const Scene& scene) {
+MlsBuildInput mlsSolverSettings(const CompiledScene& scene) {
   MlsBuildInput in;
   in.source = scene.file;
+  in.support_factor = scene.mls.support_factor;
+  in.condition_limit = scene.mls.condition_limit;
+  in.material = MlsMaterial{scene.material, scene.mls.volume_preservation, scene.mls.volume_stiffness};
+  in.gravity = scene.solver.gravity;
+  in.safety = scene.solver.safety;
+  return in;
+}
+
+MlsBuildInput mlsBuildInputFromScene(const CompiledScene& scene) {
+  MlsBuildInput in = mlsSolverSettings(scene);
   const GeometrySpec& g = scene.geometry;
   if (g.kind == GeometrySpec::Kind::Mesh) {
     if (!(std::isfinite(g.mesh_scale) && g.mesh_scale > 0))
@@ -253,11 +263,6 @@ MlsBuildInput mlsBuildInputFromScene(const Scene& scene) {
     in.rest_positions = sampleGeometry(g, scene.file);
   }
   in.spacing = g.spacing;
-  in.support_factor = scene.mls.support_factor;
-  in.condition_limit = scene.mls.condition_limit;
-  in.material = MlsMaterial{scene.material, scene.mls.volume_preservation, scene.mls.volume_stiffness};
-  in.gravity = scene.solver.gravity;
-  in.safety = scene.solver.safety;
   in.kinds.assign(in.rest_positions.size(), kMlsFree);
   for (std::size_t f = 0; f < scene.fixed.size(); ++f) {
     const FixedRegion& r = scene.fixed[f];
@@ -269,7 +274,7 @@ MlsBuildInput mlsBuildInputFromScene(const Scene& scene) {
   return in;
 }
 
-std::unique_ptr<SimulationModel> makeMlsSimulation(const Scene& scene, BackendKind resolved, Precision precision) {
+std::unique_ptr<SimulationModel> makeMlsSimulation(const CompiledScene& scene, BackendKind resolved, Precision precision) {
   if (resolved == BackendKind::Auto)
     throw InputError(scene.file, "solver.backend", "makeMlsSimulation needs a resolved backend (cpu or cuda)");
   if (scene.solver.substeps < 0) throw InputError(scene.file, "solver.substeps", "must be >= 0");

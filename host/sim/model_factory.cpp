@@ -8,7 +8,7 @@
 
 namespace inc {
 
-std::vector<std::unique_ptr<SimulationModel>> createSceneModels(const Scene& scene, BackendKind backend) {
+std::vector<std::unique_ptr<SimulationModel>> createSceneModels(const CompiledScene& scene, BackendKind backend) {
   std::vector<std::unique_ptr<SimulationModel>> models;
   if (scene.models.mls) models.push_back(makeMlsSimulation(scene, backend, scene.solver.precision));
   // A cutting scene's organ is the PBD metaball organ itself: build one or the other, never both.

@@ -85,7 +85,7 @@ struct RenderLayers {
   std::vector<std::int32_t> held_ids;    // particles a tool holds now (grasped, prescribed) ...
   std::vector<Vec3d> held_points;        // ... and where they are (m)
   TriangleMesh swept_surface;            // the scalpel's swept cut surface(s) (m)
-  TriangleMesh colliders;                // the scene's static colliders (host/scene/scene_colliders.h colliderMesh) (m)
+  TriangleMesh colliders;                // the scene's static colliders (host/compiled/scene_colliders.h colliderMesh) (m)
   std::vector<ForceArrow> forces;
 };
 

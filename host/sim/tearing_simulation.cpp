@@ -43,7 +43,7 @@ Vec3d toolDirection(const ToolSpec& t, double time) {
 
 }  // namespace
 
-TearingSceneSetup tearingSetupFromScene(const Scene& scene) {
+TearingSceneSetup tearingSetupFromScene(const CompiledScene& scene) {
   const std::string& f = scene.file;
   TearingSceneSetup s;
   const GeometrySpec& g = scene.geometry;
@@ -133,7 +133,7 @@ namespace {
 template <typename T>
 class TearingSimulation final : public SimulationModel {
  public:
-  TearingSimulation(const Scene& scene, TearingSceneSetup setup, BackendKind backend)
+  TearingSimulation(const CompiledScene& scene, TearingSceneSetup setup, BackendKind backend)
       : scene_(scene), driver_(convert(setup.sheet), convertParams(setup.tear), setup.model, stepParams(scene, setup), backend) {
     grabTools();
     checkpoint_ = driver_.sheet();
@@ -271,7 +271,7 @@ class TearingSimulation final : public SimulationModel {
     p.seed = d.seed;
     return p;
   }
-  static PbdStepParams<T> stepParams(const Scene& scene, const TearingSceneSetup& s) {
+  static PbdStepParams<T> stepParams(const CompiledScene& scene, const TearingSceneSetup& s) {
     PbdStepParams<T> p;
     p.frame_dt = T(scene.solver.frame_dt);
     p.substeps = scene.solver.substeps > 0 ? scene.solver.substeps : 4;
@@ -329,7 +329,7 @@ class TearingSimulation final : public SimulationModel {
     return removed;
   }
 
-  Scene scene_;
+  CompiledScene scene_;
   TearingDriver<T> driver_;
   std::vector<Grab> grabs_, checkpoint_grabs_;
   TearSheet<T> checkpoint_;
@@ -338,7 +338,7 @@ class TearingSimulation final : public SimulationModel {
 
 }  // namespace
 
-std::unique_ptr<SimulationModel> makeTearingSimulation(const Scene& scene, BackendKind backend, Precision precision) {
+std::unique_ptr<SimulationModel> makeTearingSimulation(const CompiledScene& scene, BackendKind backend, Precision precision) {
   if (!scene.models.tearing) throw InputError(scene.file, "models.tearing", "is false: the scene does not ask for tearing");
   TearingSceneSetup setup = tearingSetupFromScene(scene);
   const double compliance = setup.model.stretch_compliance;

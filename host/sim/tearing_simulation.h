@@ -4,7 +4,7 @@
 #include <memory>
 
 #include "model/backend.h"
-#include "host/scene/scene.h"
+#include "host/compiled/compiled_scene.h"
 #include "host/sim/simulation_model.h"
 #include "model/tearing_sheet.h"
 
@@ -29,11 +29,11 @@ struct TearingSceneSetup {
   bool xpbd = true;
   std::string solver = "jacobi";
 };
-TearingSceneSetup tearingSetupFromScene(const Scene& scene);
+TearingSceneSetup tearingSetupFromScene(const CompiledScene& scene);
 
 // The tearing sheet of `scene` on a resolved backend (Cpu or Cuda) in `precision`. Throws InputError.
 // FrameReport stages: solve, tear, rebuild (ms); counters: splits, yielding, deferred, removed, particles,
 // triangles.
-std::unique_ptr<SimulationModel> makeTearingSimulation(const Scene& scene, BackendKind backend, Precision precision);
+std::unique_ptr<SimulationModel> makeTearingSimulation(const CompiledScene& scene, BackendKind backend, Precision precision);
 
 }  // namespace inc

@@ -102,7 +102,7 @@ TEST(Runner, RunsTheRequestedFramesAndWritesOutputs) {
   opt.frames = 25;
   opt.out_dir = dir.string();
   opt.quiet = true;
-  auto factory = [](const Scene&, BackendKind) {
+  auto factory = [](const CompiledScene&, BackendKind) {
     std::vector<std::unique_ptr<SimulationModel>> m;
     m.push_back(std::make_unique<OscillatorModel>(8));
     return m;
@@ -124,7 +124,7 @@ TEST(Runner, SecondsSelectTheFrameCount) {
   const test::TempDir tmp("runner_seconds");
   opt.out_dir = tmp.str();
   opt.quiet = true;
-  auto factory = [](const Scene&, BackendKind) {
+  auto factory = [](const CompiledScene&, BackendKind) {
     std::vector<std::unique_ptr<SimulationModel>> m;
     m.push_back(std::make_unique<OscillatorModel>(4));
     return m;
@@ -138,7 +138,7 @@ TEST(Runner, GuardRetriesWithHalfTheStepAndRecovers) {
   const test::TempDir tmp("runner_retry");
   opt.out_dir = tmp.str();
   opt.quiet = true;
-  auto factory = [](const Scene&, BackendKind) {
+  auto factory = [](const CompiledScene&, BackendKind) {
     std::vector<std::unique_ptr<SimulationModel>> m;
     // Unstable at dt = 1e-3 (the model's default), stable at 5e-4 after one halving.
     m.push_back(std::make_unique<OscillatorModel>(6, 0.75e-3));
@@ -158,7 +158,7 @@ TEST(Runner, NaNStopsWithStageParticleAndKeepsLastGoodState) {
   opt.out_dir = dir.string();
   opt.quiet = true;
   opt.retry_once = false;
-  auto factory = [](const Scene&, BackendKind) {
+  auto factory = [](const CompiledScene&, BackendKind) {
     std::vector<std::unique_ptr<SimulationModel>> m;
     m.push_back(std::make_unique<OscillatorModel>(6, 1e9, 7));
     return m;
@@ -181,7 +181,7 @@ TEST(Runner, BadOptionsAreInputErrors) {
   opt.out_dir = tmp.str();
   opt.quiet = true;
   opt.seconds = -2.0;
-  auto factory = [](const Scene&, BackendKind) { return std::vector<std::unique_ptr<SimulationModel>>{}; };
+  auto factory = [](const CompiledScene&, BackendKind) { return std::vector<std::unique_ptr<SimulationModel>>{}; };
   EXPECT_THROW(runScene(oscillatorScene(), opt, factory), InputError);
   opt.seconds = -1.0;
   EXPECT_THROW(runScene(oscillatorScene(), opt, factory), InputError);  // no model switched on

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <map>
 
+#include "host/scene/scene_compile.h"
 #include "host/scene/embedded_scenes.h"
 #include "host/haptics/mfs_punch.h"
 #include "model/input_error.h"
@@ -186,7 +187,7 @@ TEST(Tradeoff, HangingBarMlsDisplacementMatchesUniaxialStress) {
   const AnalyticCase ac = detectAnalyticCase(s);
   ASSERT_EQ(ac.kind, AnalyticCase::Kind::HangingBar);
   s.material.damping_per_s = 2.0 * ac.omega1;
-  auto models = createSceneModels(s, BackendKind::Cpu);
+  auto models = createSceneModels(compileScene(s), BackendKind::Cpu);
   ASSERT_EQ(models.size(), 1u);
   std::vector<Vec3d> rest, now;
   models[0]->currentPositions(rest);
@@ -320,7 +321,7 @@ TEST(Tradeoff, DISABLED_HangingBarStudy) {
       s.geometry.jitter = jitter;
       const AnalyticCase ac = detectAnalyticCase(s);
       s.material.damping_per_s = 2.0 * ac.omega1;
-      auto models = createSceneModels(s, BackendKind::Cpu);
+      auto models = createSceneModels(compileScene(s), BackendKind::Cpu);
       std::vector<Vec3d> rest, now;
       models[0]->currentPositions(rest);
       for (int f = 0; f < 8; ++f) ASSERT_TRUE(models[0]->advance(s.solver.frame_dt).finite);

@@ -3,6 +3,7 @@
 
 #include <cmath>
 
+#include "host/scene/scene_compile.h"
 #include "model/input_error.h"
 #include "host/sim/metaball_simulation.h"
 #include "host/assembly/scene_surface.h"
@@ -44,10 +45,10 @@ double maxVertexDistance(const TriangleMesh& a, const TriangleMesh& b) {
 // At rest the skin reproduces the rest surface exactly (weights partition unity, rotations identity).
 TEST(MetaballSurface, AtRestTheSkinIsTheRestSurface) {
   const Scene s = ellipsoidScene(0);
-  auto m = makeMetaballSimulation(s, BackendKind::Cpu, Precision::Float64);
+  auto m = makeMetaballSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
   TriangleMesh skin;
   ASSERT_TRUE(m->currentSurface(skin));
-  const TriangleMesh rest = sceneSurfaceMesh(s);
+  const TriangleMesh rest = sceneSurfaceMesh(compileScene(s));
   ASSERT_EQ(skin.vertices.size(), rest.vertices.size());
   EXPECT_EQ(skin.triangles, rest.triangles);
   EXPECT_LT(maxVertexDistance(skin, rest), 1e-12);  // m
@@ -57,7 +58,7 @@ TEST(MetaballSurface, AtRestTheSkinIsTheRestSurface) {
 // sphere (a convex blend of sphere motions, up to the rotation term: 20 % slack), and it does move.
 TEST(MetaballSurface, SkinFollowsTheSpheresAndStaysClosed) {
   const Scene s = ellipsoidScene(0);
-  auto m = makeMetaballSimulation(s, BackendKind::Cpu, Precision::Float64);
+  auto m = makeMetaballSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
   FrameReport rep;
   for (int f = 0; f < 20; ++f) rep = m->advance(1.0 / 60.0);
   ASSERT_TRUE(rep.finite);
@@ -66,7 +67,7 @@ TEST(MetaballSurface, SkinFollowsTheSpheresAndStaysClosed) {
   const MeshReport r = analyzeMesh(skin);
   EXPECT_TRUE(r.closed());
   EXPECT_EQ(r.inconsistent_edges, 0);
-  const double moved = maxVertexDistance(skin, sceneSurfaceMesh(s));
+  const double moved = maxVertexDistance(skin, sceneSurfaceMesh(compileScene(s)));
   EXPECT_GT(moved, 1e-4);                          // it sags visibly (> 0.1 mm)
   EXPECT_LT(moved, 1.2 * rep.max_displacement + 1e-9);
 }
@@ -75,17 +76,17 @@ TEST(MetaballSurface, SkinFollowsTheSpheresAndStaysClosed) {
 // enclosed volume of the surface mesh within 3 %, every centre inside the ellipsoid.
 TEST(MetaballSurface, TargetSpheresUsesThePacker) {
   const Scene s = ellipsoidScene(120);
-  const MetaballModel mb = buildSceneMetaballs(s);
+  const MetaballModel mb = buildSceneMetaballs(compileScene(s));
   EXPECT_GT(int(mb.size()), 60);
   EXPECT_LE(int(mb.size()), 120);
   double mass = 0;
   for (double mi : mb.masses) mass += mi;
-  const double volume = analyzeMesh(sceneSurfaceMesh(s)).signed_volume;
+  const double volume = analyzeMesh(sceneSurfaceMesh(compileScene(s))).signed_volume;
   EXPECT_NEAR(mass, s.material.density_kg_m3 * volume, 0.03 * s.material.density_kg_m3 * volume);
   for (const Vec3d& c : mb.rest_centers) {
     const double q = c.x * c.x / (0.04 * 0.04) + c.y * c.y / (0.03 * 0.03) + c.z * c.z / (0.02 * 0.02);
     EXPECT_LT(q, 1.0);
   }
-  auto m = makeMetaballSimulation(s, BackendKind::Cpu, Precision::Float32);
+  auto m = makeMetaballSimulation(compileScene(s), BackendKind::Cpu, Precision::Float32);
   EXPECT_EQ(m->particleCount(), mb.size());
 }

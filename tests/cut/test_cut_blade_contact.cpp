@@ -7,6 +7,7 @@
 #include <cmath>
 #include <vector>
 
+#include "host/scene/scene_compile.h"
 #include "host/sim/dissection_simulation.h"
 #include "host/sim/simulation_model.h"
 #include "physics/mls_blade_contact.h"
@@ -141,7 +142,7 @@ double closestPointToBlade(SimulationModel& sim, double t) {
 TEST(CutBladeContact, NoNodalPointInsideTheBladeWhileItCuts) {
   const double r = 0.002;
   for (const double radius : {r, 0.0}) {
-    auto sim = makeDissectionSimulation(cutBlock(radius), BackendKind::Cpu, Precision::Float64);
+    auto sim = makeDissectionSimulation(compileScene(cutBlock(radius)), BackendKind::Cpu, Precision::Float64);
     double closest = 1e9, m0 = 0;
     int frames_with_points = 0;
     for (int f = 0; f < 14; ++f) {
@@ -171,7 +172,7 @@ TEST(CutBladeContact, HeldBladeStopsFallingTissue) {
     Scene s = cutBlock(radius);
     s.solver.gravity = Vec3d(0, 0, -9.81);
     s.tools[0].path = {{0.0, Vec3d(0.0, 0.0, -0.03), Vec3d(0, 1, 0)}, {0.5, Vec3d(0.0, 0.0, -0.03), Vec3d(0, 1, 0)}};
-    auto sim = makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64);
+    auto sim = makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
     const double rs = 0.0075;
     double deepest = 0;
     for (int f = 0; f < 24; ++f) {
@@ -203,7 +204,7 @@ TEST(CutBladeContact, FrictionDragsTheCutTissueAlongTheBlade) {
   for (int k = 0; k < 2; ++k) {
     Scene s = cutBlock(0.002);
     s.cutting.blade_friction = k == 0 ? 0.0 : 1.0;
-    auto sim = makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64);
+    auto sim = makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
     for (int f = 0; f < 12; ++f) ASSERT_TRUE(sim->advance(kDt).finite) << f;
     RenderLayers layers;
     sim->renderLayers(layers);

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <vector>
 
+#include "host/scene/scene_compile.h"
 #include "host/sim/dissection_simulation.h"
 #include "host/io/mesh.h"
 #include "tests/support/cut_block_scene.h"
@@ -31,7 +32,7 @@ struct Recording {
 
 Recording record(const Scene& s, int frames) {
   Recording r;
-  auto sim = makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64);
+  auto sim = makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
   for (int f = 0; f < frames; ++f) {
     r.frames.push_back(sim->advance(kDt));
     EXPECT_TRUE(r.frames.back().finite) << f;
@@ -128,7 +129,7 @@ TEST(CutConversionDelay, RetriedFrameDoesNotApplyItsOwnConversion) {
   const Recording plain = record(block(1, true), frames);
   const int launch = firstFrame(plain, "nodal_points") - 1;  // applied at the start of the next frame
   ASSERT_GE(launch, 0);
-  auto sim = makeDissectionSimulation(block(1, true), BackendKind::Cpu, Precision::Float64);
+  auto sim = makeDissectionSimulation(compileScene(block(1, true)), BackendKind::Cpu, Precision::Float64);
   for (int f = 0; f < frames; ++f) {
     if (f == launch) {
       sim->saveCheckpoint();
@@ -149,7 +150,7 @@ TEST(CutConversionDelay, RetriedFrameDoesNotApplyItsOwnConversion) {
 TEST(CutConversionDelay, MouseStrokeAppliesEachConversionByTheNextFrame) {
   Scene s = cuttest::mouseCutBlockScene(false, "<test:conversion_delay>");
   s.cutting.conversion_delay_frames = 1;
-  auto sim = makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64);
+  auto sim = makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
   ToolEvent e = cuttest::mouseScalpel();
   const int steps = 8;
   double points = 0;

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "host/scene/scene_compile.h"
 #include "host/sim/dissection_simulation.h"
 #include "model/input_error.h"
 #include "host/scene/scene_loader.h"
@@ -40,7 +41,7 @@ Scene blockScene(double leave_s) {
 // there to rounding while the points exist (max displacement < 1e-9 m, kinetic energy < 1e-15 J, float64), and
 // after the re-packing.
 TEST(CutCoupled, CoupledSystemAtRestStaysAtRest) {
-  auto sim = makeDissectionSimulation(blockScene(0.3), BackendKind::Cpu, Precision::Float64);
+  auto sim = makeDissectionSimulation(compileScene(blockScene(0.3)), BackendKind::Cpu, Precision::Float64);
   double points_max = 0;
   for (int f = 0; f < 22; ++f) {
     const FrameReport rep = sim->advance(kDt);
@@ -69,7 +70,7 @@ TEST(CutCoupled, MassIsConservedThroughSpheresPointsAndSpheres) {
   // The bottom layer (centres at z = -1 cm) held: a box that holds no sphere centre is refused since main's
   // 43c02b7 (the earlier z <= -1.2 mm box held none, and the block fell freely).
   s.fixed = {{Vec3d(-1, -1, -1), Vec3d(1, 1, -0.008)}};
-  auto sim = makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64);
+  auto sim = makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
   const double m0 = sim->advance(kDt).counters.at("mass_kg");
   EXPECT_NEAR(m0, 0.06 * 0.04 * 0.03 * s.material.density_kg_m3, 1e-12);
   bool saw_points = false;
@@ -114,7 +115,7 @@ TEST(CutCoupled, PulledFlapReachesStaticEquilibrium) {
             {0.27, Vec3d(-0.025, 0.0, 0.051), Vec3d(0, 0, -1)},
             {5.0, Vec3d(-0.025, 0.0, 0.051), Vec3d(0, 0, -1)}};
   s.tools.push_back(g);
-  auto sim = makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64);
+  auto sim = makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
   FrameReport rep;
   double mass = 0, v_pull = 0, disp_prev = 0, v_rms = 0;
   for (int f = 0; f < 54; ++f) {
@@ -140,7 +141,7 @@ TEST(CutCoupled, SuccessiveStrokesInOneRun) {
   s.tools[0].path = {{0.05, Vec3d(-0.05, 0.002, 0.0), Vec3d(0, 0, 1)}, {0.15, Vec3d(0.05, 0.002, 0.0), Vec3d(0, 0, 1)}};
   s.tools.push_back(scalpel("second", {{0.25, Vec3d(0.0013, -0.04, 0.0), Vec3d(0, 0, 1)},
                                        {0.35, Vec3d(0.0013, 0.04, 0.0), Vec3d(0, 0, 1)}}));
-  auto sim = makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64);
+  auto sim = makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
   FrameReport rep;
   double points_between = -1;
   for (int f = 0; f < 24; ++f) {
@@ -158,7 +159,7 @@ TEST(CutCoupled, SuccessiveStrokesInOneRun) {
   EXPECT_EQ(rep.counters.at("nodal_points"), 0.0);
   s.tools[1].path[0].t = 0.1;  // starts before the first leaves the tissue
   try {
-    makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64);
+    makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
     FAIL() << "overlapping strokes accepted";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("tools"), std::string::npos) << e.what();
@@ -197,23 +198,23 @@ TEST(CutCoupled, BadCuttingSettingsAreInputErrorsNamingTheKey) {
   EXPECT_EQ(parseScene(sceneToJson(good), "<test>", ".").cutting.blade_friction, 0.25);
   Scene s = blockScene(0.3);
   s.cutting.stroke_end_frames = 121;
-  EXPECT_THROW(makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64), InputError);
+  EXPECT_THROW(makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64), InputError);
   s = blockScene(0.3);
   s.cutting.conversion_delay_frames = 2;
-  EXPECT_THROW(makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64), InputError);
+  EXPECT_THROW(makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64), InputError);
   s = blockScene(0.3);
   s.cutting.open_surface_frames = -1;
-  EXPECT_THROW(makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64), InputError);
+  EXPECT_THROW(makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64), InputError);
   s = blockScene(0.3);
   s.cutting.blade_friction = std::nan("");
-  EXPECT_THROW(makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64), InputError);
+  EXPECT_THROW(makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64), InputError);
   s = blockScene(0.3);
   s.cutting.blade_radius_m = std::nan("");
-  EXPECT_THROW(makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64), InputError);
+  EXPECT_THROW(makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64), InputError);
   s = blockScene(0.3);
   s.cutting.exchanges_per_frame = 0;
   try {
-    makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64);
+    makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
     FAIL();
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("cutting.exchanges_per_frame"), std::string::npos) << e.what();
@@ -221,7 +222,7 @@ TEST(CutCoupled, BadCuttingSettingsAreInputErrorsNamingTheKey) {
   s = blockScene(0.3);
   s.cutting.mls_substeps_per_exchange = 1;  // 8 ms steps for points 5 mm apart: far above the stable step
   try {
-    makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64);
+    makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
     FAIL();
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("cutting.mls_substeps_per_exchange"), std::string::npos) << e.what();

@@ -5,6 +5,7 @@
 #include <map>
 #include <utility>
 
+#include "host/scene/scene_compile.h"
 #include "host/sim/dissection_simulation.h"
 #include "model/input_error.h"
 #include "host/scene/scene_loader.h"
@@ -23,7 +24,7 @@ Scene blockCutScene() {
 }
 
 TEST(CutDissection, StraightCutSeparatesTheBlockAtRestWithAClosedSurface) {
-  auto sim = makeDissectionSimulation(blockCutScene(), BackendKind::Cpu, Precision::Float64);
+  auto sim = makeDissectionSimulation(compileScene(blockCutScene()), BackendKind::Cpu, Precision::Float64);
   const std::size_t n0 = sim->particleCount();
   FrameReport rep;
   double pending_max = 0;
@@ -57,7 +58,7 @@ TEST(CutDissection, NoSkinWeightCrossesTheCut) {
   Scene s = blockCutScene();
   s.solver.gravity = Vec3d(0, 0, -9.81);
   s.fixed = {{Vec3d(-1, -1, -1), Vec3d(1, 0.002, 1)}};
-  auto sim = makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64);
+  auto sim = makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
   for (int f = 0; f < 9; ++f) ASSERT_TRUE(sim->advance(1.0 / 60.0).finite);
   ASSERT_EQ(sim->advance(1.0 / 60.0).counters["cuts_applied"], 1.0);
   TriangleMesh at_cut, later;
@@ -103,13 +104,13 @@ TEST(CutDissection, NoSkinWeightCrossesTheCut) {
 TEST(CutDissection, MissingScalpelOrCuttingFlagIsAnInputError) {
   Scene s = blockCutScene();
   s.tools.clear();
-  EXPECT_THROW(makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64), InputError);
+  EXPECT_THROW(makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64), InputError);
   s = blockCutScene();
   s.models.cutting = false;
-  EXPECT_THROW(makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64), InputError);
+  EXPECT_THROW(makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64), InputError);
   s = blockCutScene();
   s.tools[0].path.resize(1);
-  EXPECT_THROW(makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64), InputError);
+  EXPECT_THROW(makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64), InputError);
 }
 
 // The shipped liver scene: a curved scalpel path cuts the right tip off (the sphere graph splits in two), the
@@ -122,7 +123,7 @@ TEST(CutDissection, LiverCutSceneCutsACurvedPathAndTheGrasperOpensIt) {
   s.cutting.samples_per_diameter = 2;
   s.cutting.exchanges_per_frame = 2;
   s.pbd.iterations = 5;
-  auto sim = makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float32);
+  auto sim = makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float32);
   FrameReport rep = sim->advance(s.solver.frame_dt);
   const double m0 = rep.counters["mass_kg"];
   double points_max = 0, grasped = 0, disp_before_grasp = 0;

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <vector>
 
+#include "host/scene/scene_compile.h"
 #include "host/cut/cut_stroke_end.h"
 #include "host/sim/dissection_simulation.h"
 #include "host/assembly/organ_shapes.h"
@@ -37,7 +38,7 @@ struct Recording {
 
 Recording record(const Scene& s, int frames) {
   Recording r;
-  auto sim = makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64);
+  auto sim = makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
   for (int f = 0; f < frames; ++f) {
     r.frames.push_back(sim->advance(kDt));
     EXPECT_TRUE(r.frames.back().finite) << f;
@@ -131,7 +132,7 @@ TEST(CutStrokeEnd, RetriedFrameInsideTheDelayCountsOnce) {
   const int delay = 3, frames = 16;
   const Recording plain = record(fallingBlock(delay), frames);
   const int fe = firstApplied(plain) - delay;
-  auto sim = makeDissectionSimulation(fallingBlock(delay), BackendKind::Cpu, Precision::Float64);
+  auto sim = makeDissectionSimulation(compileScene(fallingBlock(delay)), BackendKind::Cpu, Precision::Float64);
   int applied_at = -1;
   for (int f = 0; f < frames; ++f) {
     if (f == fe + 1) {
@@ -157,7 +158,7 @@ TEST(CutStrokeEnd, StarvedWorkerIsReplacedByTheDueFrame) {
   const Recording plain = record(fallingBlock(delay), frames);
   const int applied = firstApplied(plain);
   ASSERT_GT(applied, 0);
-  auto sim = makeDissectionSimulation(fallingBlock(delay), BackendKind::Cpu, Precision::Float64);
+  auto sim = makeDissectionSimulation(compileScene(fallingBlock(delay)), BackendKind::Cpu, Precision::Float64);
   cuttest::HeldIdleWorkers held;
   TriangleMesh surface;
   for (int f = 0; f < frames; ++f) {
@@ -180,7 +181,7 @@ TEST(CutStrokeEnd, StarvedWorkerIsReplacedByTheDueFrame) {
 // delay), then cuts the new pieces: a mouse stroke across the block right after the scripted one.
 TEST(CutStrokeEnd, NewStrokeAppliesThePendingEndFirst) {
   const int delay = 5;
-  auto sim = makeDissectionSimulation(fallingBlock(delay, false), BackendKind::Cpu, Precision::Float64);
+  auto sim = makeDissectionSimulation(compileScene(fallingBlock(delay, false)), BackendKind::Cpu, Precision::Float64);
   int f = 0;
   for (; f < 30; ++f) {
     const FrameReport rep = sim->advance(kDt);
@@ -214,7 +215,7 @@ TEST(CutStrokeEnd, InteractiveStrokeTurningBackLeavesTheSurfaceUnsplit) {
   const std::vector<double> xs = {-0.05, -0.01, 0.03, -0.02, 0.02};
   Scene s = cuttest::mouseCutBlockScene(false, "<test:stroke_end>");
   s.cutting.stroke_end_frames = 2;
-  auto sim = makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64);
+  auto sim = makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
   ToolEvent e = cuttest::mouseScalpel();
   for (std::size_t k = 0; k < xs.size(); ++k) {
     e.phase = k == 0 ? ToolPhase::Press : k + 1 == xs.size() ? ToolPhase::Release : ToolPhase::Drag;

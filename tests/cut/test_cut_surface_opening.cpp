@@ -7,6 +7,7 @@
 #include <cmath>
 #include <vector>
 
+#include "host/scene/scene_compile.h"
 #include "host/sim/dissection_simulation.h"
 #include "host/io/mesh.h"
 #include "tests/support/cut_block_scene.h"
@@ -32,7 +33,7 @@ struct Frame {
 
 std::vector<Frame> record(const Scene& s, int frames, std::vector<Vec3d>* positions = nullptr) {
   std::vector<Frame> out;
-  auto sim = makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64);
+  auto sim = makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
   for (int f = 0; f < frames; ++f) {
     Frame fr;
     fr.report = sim->advance(kDt);
@@ -151,7 +152,7 @@ TEST(CutSurfaceOpening, EachSideOfTheSlitFollowsItsOwnTissue) {
 TEST(CutSurfaceOpening, StarvedWorkerIsReplacedByTheDueFrame) {
   const int open = 2, frames = 20;
   const std::vector<Frame> plain = record(block(open, true), frames);
-  auto sim = makeDissectionSimulation(block(open, true), BackendKind::Cpu, Precision::Float64);
+  auto sim = makeDissectionSimulation(compileScene(block(open, true)), BackendKind::Cpu, Precision::Float64);
   cuttest::HeldIdleWorkers held;
   double here = 0;
   for (int f = 0; f < frames; ++f) {

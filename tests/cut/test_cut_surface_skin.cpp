@@ -3,6 +3,7 @@
 
 #include <cmath>
 
+#include "host/scene/scene_compile.h"
 #include "host/cut/cut_surface_state.h"
 #include "host/sim/dissection_simulation.h"
 #include "host/assembly/organ_shapes.h"
@@ -79,7 +80,7 @@ Scene arcCutScene(double end_angle) {
 
 TEST(CutSurfaceSkin, CurvedAndPartialScriptedCutsSplitTheSimulatedSurface) {
   for (const bool through : {true, false}) {
-    auto sim = makeDissectionSimulation(arcCutScene(through ? kPi / 2 - 0.7 : kPi / 2), BackendKind::Cpu, Precision::Float64);
+    auto sim = makeDissectionSimulation(compileScene(arcCutScene(through ? kPi / 2 - 0.7 : kPi / 2)), BackendKind::Cpu, Precision::Float64);
     FrameReport rep;
     for (int f = 0; f < 14; ++f) {
       rep = sim->advance(1.0 / 60.0);

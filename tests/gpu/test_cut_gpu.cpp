@@ -7,6 +7,7 @@
 #include <cmath>
 #include <string>
 
+#include "host/scene/scene_compile.h"
 #include "host/backends/solver_factory.h"
 #include "cpu_fallback/neighbor_bruteforce.h"
 #include "host/cut/cut_nodal_points.h"
@@ -270,8 +271,8 @@ void expectSameDissectionOnBothBackends(const std::string& solver, double blade_
   s.tools = {cuttest::scalpel({{0.05, Vec3d(-0.05, 0.002, 0.0), Vec3d(0, 0, 1)},
                                {0.2, Vec3d(0.05, 0.002, 0.0), Vec3d(0, 0, 1)},
                                {0.3, Vec3d(0.05, 0.002, 0.0), Vec3d(0, 0, 1)}})};
-  auto cpu = makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64);
-  auto gpu = makeDissectionSimulation(s, BackendKind::Cuda, Precision::Float64);
+  auto cpu = makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
+  auto gpu = makeDissectionSimulation(compileScene(s), BackendKind::Cuda, Precision::Float64);
   ASSERT_EQ(gpu->backend(), BackendKind::Cuda);
   double points_max = 0;
   for (int f = 0; f < 24; ++f) {

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "host/scene/scene_compile.h"
 #include "host/sim/mls_simulation.h"
 #include "host/backends/solver_factory.h"
 #include "model/mls_solver.h"
@@ -201,8 +202,8 @@ TEST(MlsGpu, SimulationRunsTheBeamSceneOnTheDevice) {
   clamp.min = Vec3d(-0.001, -0.011, -0.011);
   clamp.max = Vec3d(0.0051, 0.011, 0.011);
   s.fixed.push_back(clamp);
-  auto gpu = makeMlsSimulation(s, BackendKind::Cuda, Precision::Float32);
-  auto cpu = makeMlsSimulation(s, BackendKind::Cpu, Precision::Float32);
+  auto gpu = makeMlsSimulation(compileScene(s), BackendKind::Cuda, Precision::Float32);
+  auto cpu = makeMlsSimulation(compileScene(s), BackendKind::Cpu, Precision::Float32);
   FrameReport rg, rc;
   for (int f = 0; f < 3; ++f) {
     rg = gpu->advance(s.solver.frame_dt);

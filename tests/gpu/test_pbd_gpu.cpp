@@ -6,6 +6,7 @@
 #include <cmath>
 #include <functional>
 
+#include "host/scene/scene_compile.h"
 #include "tests/support/pbd_fixtures.h"
 #include "cpu_fallback/pbd_solver_cpu.h"
 #include "kernels/device_info.h"
@@ -370,8 +371,8 @@ TEST(PbdGpu, LiverGraspSceneMatchesCpuAfter100Frames) {
     GTEST_SKIP() << "no CUDA device";
   }
   const Scene s = loadSceneFile(test::sourcePath("scenes/liver_grasp.json"));
-  auto cpu = makeMetaballSimulation(s, BackendKind::Cpu, Precision::Float32);
-  auto gpu = makeMetaballSimulation(s, BackendKind::Cuda, Precision::Float32);
+  auto cpu = makeMetaballSimulation(compileScene(s), BackendKind::Cpu, Precision::Float32);
+  auto gpu = makeMetaballSimulation(compileScene(s), BackendKind::Cuda, Precision::Float32);
   ASSERT_EQ(gpu->backend(), BackendKind::Cuda);
   FrameReport rc, rg;
   for (int f = 0; f < 100; ++f) {
@@ -400,8 +401,8 @@ TEST(PbdGpu, LiverDropSceneCollidersMatchCpu) {
   for (const char* solver : {"jacobi", "gauss_seidel"}) {
     Scene s = loadSceneFile(test::sourcePath("scenes/liver_drop.json"));
     s.pbd.solver = solver;
-    auto cpu = makeMetaballSimulation(s, BackendKind::Cpu, Precision::Float64);
-    auto gpu = makeMetaballSimulation(s, BackendKind::Cuda, Precision::Float64);
+    auto cpu = makeMetaballSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
+    auto gpu = makeMetaballSimulation(compileScene(s), BackendKind::Cuda, Precision::Float64);
     for (int f = 0; f < 60; ++f) {
       ASSERT_TRUE(cpu->advance(s.solver.frame_dt).finite);
       ASSERT_TRUE(gpu->advance(s.solver.frame_dt).finite);

@@ -8,6 +8,7 @@
 #include <random>
 #include <tuple>
 
+#include "host/scene/scene_compile.h"
 #include "cpu_fallback/tearing_cpu.h"
 #include "host/backends/solver_factory.h"
 #include "host/tear/tearing_driver.h"
@@ -433,7 +434,7 @@ TEST(TearingPatchGpu, SimulationModelOnCudaTearsAndRestoresCheckpoints) {
   g.length = 0.1;
   g.path = {ToolKeyframe{0.0, Vec3d(0.2, 0.0, 0), Vec3d(0, 1, 0)}, ToolKeyframe{0.25, Vec3d(0.28, 0.0, 0), Vec3d(0, 1, 0)}};
   s.tools.push_back(g);
-  auto m = makeTearingSimulation(s, BackendKind::Cuda, Precision::Float32);
+  auto m = makeTearingSimulation(compileScene(s), BackendKind::Cuda, Precision::Float32);
   EXPECT_EQ(m->backend(), BackendKind::Cuda);
   const std::size_t n0 = m->particleCount();
   double splits = 0;

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <thread>
 
+#include "host/scene/scene_compile.h"
 #include "host/haptics/haptic_cut_realtime.h"
 #include "host/haptics/tip_contact.h"
 #include "model/input_error.h"
@@ -45,7 +46,7 @@ double counter(const FrameReport& r, const char* name) {
 // stroke spans the whole section). Topology, not timing: which frame sees a decision depends on the machine.
 TEST(HapticRealtime, ThreadedCuttingSessionCutsTheBlockInTwo) {
   const Scene scene = blockScene();
-  auto sim = makeDissectionSimulation(scene, BackendKind::Cpu, Precision::Float32);
+  auto sim = makeDissectionSimulation(compileScene(scene), BackendKind::Cpu, Precision::Float32);
   const TipStiffness tip = mfsTipStiffness(scene.material, 0.008, 0.002, Vec3d{0, 0, 1});
   CuttingTool tool(tipElastic(tip), scene.cut_thresholds,
                    Vec3d{0, 0, 0.015}, Vec3d{0, 0, 1});
@@ -91,7 +92,7 @@ TEST(HapticRealtime, ThreadedCuttingSessionCutsTheBlockInTwo) {
 TEST(HapticRealtime, DecisionsNeedAModelThatCuts) {
   Scene scene = blockScene();
   scene.models.cutting = false;
-  auto sim = makeMetaballSimulation(scene, BackendKind::Cpu, Precision::Float32);
+  auto sim = makeMetaballSimulation(compileScene(scene), BackendKind::Cpu, Precision::Float32);
   CuttingTool tool([](const TipContact&) { return ForceResult{}; }, scene.cut_thresholds, Vec3d{0, 0, 0.015},
                    Vec3d{0, 0, 1});
   ScriptedDevice device(throughStroke(), ScriptedDevice::Mode::kByTime, 3.3);

@@ -53,7 +53,7 @@ class RestingSlab : public SimulationModel {
   std::vector<Vec3d> x_;
 };
 
-std::vector<std::unique_ptr<SimulationModel>> slabFactory(const Scene&, BackendKind) {
+std::vector<std::unique_ptr<SimulationModel>> slabFactory(const CompiledScene&, BackendKind) {
   std::vector<std::unique_ptr<SimulationModel>> v;
   v.push_back(std::make_unique<RestingSlab>());
   return v;

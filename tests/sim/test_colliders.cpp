@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "host/scene/scene_compile.h"
 #include "host/sim/dissection_simulation.h"
 #include "host/backends/solver_factory.h"
 #include "model/input_error.h"
@@ -15,7 +16,7 @@
 #include "model/mls_solver.h"
 #include "model/pbd_model.h"
 #include "cpu_fallback/pbd_solver_cpu.h"
-#include "host/scene/scene_colliders.h"
+#include "host/compiled/scene_colliders.h"
 #include "host/scene/scene_loader.h"
 #include "physics/mls_static_contact.h"
 #include "physics/pbd_block.h"
@@ -91,7 +92,7 @@ TEST(SceneColliders, BadCollidersNameTheirKeyAndReason) {
 TEST(SceneColliders, AnOrganStartingInsideAColliderIsRefused) {
   const Scene s = parseScene(sceneWith(R"([{"kind": "plane", "point_m": [0, 0, 0.001], "normal": [0, 0, 1]}])"), "c.json", ".");
   try {
-    makeMetaballSimulation(s, BackendKind::Cpu, Precision::Float64);
+    makeMetaballSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
     FAIL() << "accepted";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("colliders[0]"), std::string::npos) << e.what();
@@ -171,7 +172,7 @@ TEST(SceneColliders, TheColliderLayerDrawsPlanesAroundTheOrganAndBoxesFacingOut)
     else
       EXPECT_GT(dot(normal, (a + b + c) * (1.0 / 3.0) - box_centre), 0.0) << "box triangle " << t << " faces out";
   }
-  auto model = makeMetaballSimulation(s, BackendKind::Cpu, Precision::Float64);
+  auto model = makeMetaballSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
   RenderLayers layers;
   model->renderLayers(layers);
   EXPECT_EQ(layers.colliders.triangles.size(), 14u);
@@ -259,7 +260,7 @@ double slideOfTheOrgan(double mu) {
   const double a = M_PI / 9;
   s.solver.gravity = Vec3d(9.81 * std::sin(a), 0, -9.81 * std::cos(a));
   s.material.damping_per_s = 0.0;
-  auto m = makeMetaballSimulation(s, BackendKind::Cpu, Precision::Float64);
+  auto m = makeMetaballSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
   std::vector<Vec3d> x0, x;
   m->currentPositions(x0);
   for (int f = 0; f < 60; ++f) EXPECT_TRUE(m->advance(kDt).finite);
@@ -328,7 +329,7 @@ TEST(SceneColliders, AFallingMetaballOrgansSurfaceRestsOnTheFloor) {
                                               : "[]"),
                          "c.json", ".");
     s.solver.gravity = Vec3d(0, 0, -9.81);
-    auto m = makeMetaballSimulation(s, BackendKind::Cpu, Precision::Float64);
+    auto m = makeMetaballSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
     double low = 1.0, low_ball = 1.0;
     RenderLayers layers;
     for (int f = 0; f < 40; ++f) {
@@ -361,7 +362,7 @@ TEST(SceneColliders, ACutBlocksNodalPointsStayOutOfTheFloor) {
   ColliderSpec floor;
   floor.point = Vec3d(0, 0, floor_z);
   s.colliders = {floor};
-  auto m = makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64);
+  auto m = makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
   double low_points = 1.0, low_skin_before = 1.0, low_skin_after = 1.0;
   std::size_t frames_with_points = 0;
   bool ended = false;

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <vector>
 
+#include "host/scene/scene_compile.h"
 #include "host/sim/dissection_simulation.h"
 #include "model/input_error.h"
 #include "host/sim/interactive_tool.h"
@@ -85,7 +86,7 @@ std::vector<std::size_t> within(const SimulationModel& m, const Vec3d& p, double
 
 // PBD organ: the grasped spheres are attached (compliance 1e-6 m/N) to targets riding on the tip: 1.5 mm.
 TEST(InteractiveTool, MetaballGraspDragsTheRegionAndReleaseLetsItRelax) {
-  auto m = makeMetaballSimulation(blockScene(false), BackendKind::Cpu, Precision::Float64);
+  auto m = makeMetaballSimulation(compileScene(blockScene(false)), BackendKind::Cpu, Precision::Float64);
   const Vec3d tip(0.025, 0.0, 0.01);
   const auto region = within(*m, tip, 0.006);  // the spheres nearest the tip: certainly caught (reach 6 mm + r)
   ASSERT_FALSE(region.empty());
@@ -98,7 +99,7 @@ TEST(InteractiveTool, MetaballGraspDragsTheRegionAndReleaseLetsItRelax) {
 
 // Dissection model: the same grasp machinery on its organ.
 TEST(InteractiveTool, DissectionGraspDragsTheRegion) {
-  auto m = makeDissectionSimulation(blockScene(true), BackendKind::Cpu, Precision::Float64);
+  auto m = makeDissectionSimulation(compileScene(blockScene(true)), BackendKind::Cpu, Precision::Float64);
   const Vec3d tip(0.025, 0.0, 0.01);
   graspDragRelease(*m, tip, 0.006, 1.5e-3, within(*m, tip, 0.006));
 }
@@ -112,7 +113,7 @@ TEST(InteractiveTool, MlsGraspPinsAndDragsNodes) {
   s.material.damping_per_s = 40.0;
   s.solver.substeps = 0;
   s.solver.safety = 0.8;
-  auto m = makeMlsSimulation(s, BackendKind::Cpu, Precision::Float64);
+  auto m = makeMlsSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
   const Vec3d tip(0.0275, 0.0025, 0.0125);
   const auto region = within(*m, tip, 0.008);
   ASSERT_FALSE(region.empty());
@@ -155,7 +156,7 @@ TEST(InteractiveTool, RestPointUndoesATranslation) {
 TEST(InteractiveTool, MouseStrokeCutsTheDissectionModel) {
   Scene s = blockScene(true);
   s.fixed.clear();
-  auto m = makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64);
+  auto m = makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
   ASSERT_TRUE(m->toolSupport().cut);
   FrameReport rep = m->advance(kDt);
   EXPECT_EQ(rep.counters["sphere_components"], 1.0);
@@ -206,7 +207,7 @@ TEST(InteractiveTool, MouseStrokeCutsTheDissectionModel) {
 }
 
 TEST(InteractiveTool, BadToolEventsAreInputErrors) {
-  auto m = makeDissectionSimulation(blockScene(true), BackendKind::Cpu, Precision::Float32);
+  auto m = makeDissectionSimulation(compileScene(blockScene(true)), BackendKind::Cpu, Precision::Float32);
   ToolEvent e;
   e.kind = ToolKind::Cut;
   e.tip = Vec3d(0, 0, 0);

@@ -3,6 +3,7 @@
 
 #include <cmath>
 
+#include "host/scene/scene_compile.h"
 #include "host/sim/grasper.h"
 #include "model/input_error.h"
 #include "host/sim/metaball_simulation.h"
@@ -47,7 +48,7 @@ Scene graspScene() {
 
 TEST(MetaballSimulation, LatticeFillOfABoxHasItsMassAndOverlapLinks) {
   const Scene s = graspScene();
-  const MetaballModel mb = buildSceneMetaballs(s);
+  const MetaballModel mb = buildSceneMetaballs(compileScene(s));
   ASSERT_EQ(mb.size(), 6u * 4u * 2u);
   double mass = 0;
   for (double m : mb.masses) mass += m;
@@ -66,7 +67,7 @@ TEST(MetaballSimulation, LatticeFillOfABoxHasItsMassAndOverlapLinks) {
 
 TEST(MetaballSimulation, GrasperCatchesDragsAndReleases) {
   const Scene s = graspScene();
-  auto sim = makeMetaballSimulation(s, BackendKind::Cpu, Precision::Float64);
+  auto sim = makeMetaballSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
   std::vector<Vec3d> at_grasp, x;
   FrameReport r;
   for (int f = 0; f < 7; ++f) ASSERT_TRUE(sim->advance(1.0 / 60.0).finite);
@@ -108,7 +109,7 @@ TEST(MetaballSimulation, ProbePushesSpheresOutOfItsCapsule) {
   s.tools[0].kind = "probe";
   s.tools[0].length = 0.03;
   s.tools[0].path = {{0.0, Vec3d(0.045, 0.0, 0.02), Vec3d(0, 0, -1)}, {0.3, Vec3d(0.045, 0.0, 0.008), Vec3d(0, 0, -1)}};
-  auto sim = makeMetaballSimulation(s, BackendKind::Cpu, Precision::Float64);
+  auto sim = makeMetaballSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
   for (int f = 0; f < 24; ++f) ASSERT_TRUE(sim->advance(1.0 / 60.0).finite);
   std::vector<Vec3d> x;
   sim->currentPositions(x);
@@ -120,7 +121,7 @@ TEST(MetaballSimulation, ProbePushesSpheresOutOfItsCapsule) {
 
 TEST(MetaballSimulation, CheckpointRestoreReplaysExactly) {
   const Scene s = graspScene();
-  auto sim = makeMetaballSimulation(s, BackendKind::Cpu, Precision::Float64);
+  auto sim = makeMetaballSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
   for (int f = 0; f < 10; ++f) sim->advance(1.0 / 60.0);
   sim->saveCheckpoint();
   for (int f = 0; f < 5; ++f) sim->advance(1.0 / 60.0);
@@ -135,13 +136,13 @@ TEST(MetaballSimulation, CheckpointRestoreReplaysExactly) {
 TEST(MetaballSimulation, BadSettingsAreInputErrors) {
   Scene s = graspScene();
   s.pbd.solver = "sor";
-  EXPECT_THROW(makeMetaballSimulation(s, BackendKind::Cpu, Precision::Float32), InputError);
+  EXPECT_THROW(makeMetaballSimulation(compileScene(s), BackendKind::Cpu, Precision::Float32), InputError);
   s = graspScene();
   s.pbd.iterations = 0;
-  EXPECT_THROW(makeMetaballSimulation(s, BackendKind::Cpu, Precision::Float32), InputError);
+  EXPECT_THROW(makeMetaballSimulation(compileScene(s), BackendKind::Cpu, Precision::Float32), InputError);
   s = graspScene();
   s.geometry.spacing = -0.01;
-  EXPECT_THROW(makeMetaballSimulation(s, BackendKind::Cpu, Precision::Float32), InputError);
+  EXPECT_THROW(makeMetaballSimulation(compileScene(s), BackendKind::Cpu, Precision::Float32), InputError);
 }
 
 // The shipped scene loads, fills to a liver-sized sphere count (the paper's Table 1 case is 570) and its
@@ -149,7 +150,7 @@ TEST(MetaballSimulation, BadSettingsAreInputErrors) {
 TEST(MetaballSimulation, LiverGraspSceneRunsAndGrasps) {
   const Scene s = loadSceneFile(test::sourcePath("scenes/liver_grasp.json"));
   ASSERT_TRUE(s.models.pbd_metaballs);
-  auto sim = makeMetaballSimulation(s, BackendKind::Cpu, Precision::Float32);
+  auto sim = makeMetaballSimulation(compileScene(s), BackendKind::Cpu, Precision::Float32);
   EXPECT_GT(sim->particleCount(), 450u);
   EXPECT_LT(sim->particleCount(), 700u);
   FrameReport r;

@@ -3,6 +3,7 @@
 
 #include <cmath>
 
+#include "host/scene/scene_compile.h"
 #include "model/input_error.h"
 #include "host/sim/mls_simulation.h"
 #if INCISION_HAVE_CUDA
@@ -40,7 +41,7 @@ Scene beamScene() {
 TEST(MlsSimulation, BeamFramesReportEnergiesAndHoldTheClamp) {
   for (const Precision prec : {Precision::Float32, Precision::Float64}) {
     const Scene scene = beamScene();
-    auto sim = makeMlsSimulation(scene, BackendKind::Cpu, prec);
+    auto sim = makeMlsSimulation(compileScene(scene), BackendKind::Cpu, prec);
     EXPECT_EQ(sim->name(), "mls");
     EXPECT_EQ(sim->backend(), BackendKind::Cpu);
     ASSERT_EQ(sim->particleCount(), 16u * 4u * 4u);
@@ -76,7 +77,7 @@ TEST(MlsSimulation, BeamFramesReportEnergiesAndHoldTheClamp) {
 
 TEST(MlsSimulation, CheckpointRestoresStateAndScalingDoublesSubsteps) {
   const Scene scene = beamScene();
-  auto sim = makeMlsSimulation(scene, BackendKind::Cpu, Precision::Float64);
+  auto sim = makeMlsSimulation(compileScene(scene), BackendKind::Cpu, Precision::Float64);
   sim->advance(scene.solver.frame_dt);
   sim->saveCheckpoint();
   std::vector<Vec3d> saved, again;
@@ -99,7 +100,7 @@ TEST(MlsSimulation, BadSceneInputIsRefusedWithItsKey) {
   Scene scene = beamScene();
   auto keyOf = [](const Scene& s, BackendKind b) {
     try {
-      makeMlsSimulation(s, b, Precision::Float32);
+      makeMlsSimulation(compileScene(s), b, Precision::Float32);
     } catch (const InputError& e) {
       return e.key();
     }
@@ -148,7 +149,7 @@ TEST(MlsSimulation, GrasperCarriesItsParticlesAlongThePath) {
   k1.position = Vec3d(0.0775, 0, 0.005);
   tool.path = {k0, k1};
   scene.tools.push_back(tool);
-  auto sim = makeMlsSimulation(scene, BackendKind::Cpu, Precision::Float64);
+  auto sim = makeMlsSimulation(compileScene(scene), BackendKind::Cpu, Precision::Float64);
   std::vector<Vec3d> x0, x;
   sim->currentPositions(x0);
   FrameReport r;
@@ -178,7 +179,7 @@ TEST(MlsSimulation, GrasperCarriesItsParticlesAlongThePath) {
   // A grasper that touches nothing is refused with its key.
   scene.tools[0].path[0].position = Vec3d(1, 1, 1);
   try {
-    makeMlsSimulation(scene, BackendKind::Cpu, Precision::Float64);
+    makeMlsSimulation(compileScene(scene), BackendKind::Cpu, Precision::Float64);
     ADD_FAILURE() << "expected InputError";
   } catch (const InputError& e) {
     EXPECT_EQ(e.key(), "tools[0]");

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 
+#include "host/scene/scene_compile.h"
 #include "host/scene/embedded_scenes.h"
 #include "host/app/runner.h"
 #include "host/scene/scene_loader.h"
@@ -24,14 +25,14 @@ Scene beam(bool mls, bool pbd) {
 
 std::size_t hostBytes(const Scene& s) {
   std::size_t b = 0;
-  for (const auto& m : createSceneModels(s, BackendKind::Cpu)) b += m->memory().host_bytes;
+  for (const auto& m : createSceneModels(compileScene(s), BackendKind::Cpu)) b += m->memory().host_bytes;
   return b;
 }
 
 }  // namespace
 
 TEST(ModelMemory, PbdOnlySceneBuildsNoMlsModelAndItsMemoryIsThePbdModelsAlone) {
-  const auto pbd_only = createSceneModels(beam(false, true), BackendKind::Cpu);
+  const auto pbd_only = createSceneModels(compileScene(beam(false, true)), BackendKind::Cpu);
   ASSERT_EQ(pbd_only.size(), 1u);
   EXPECT_EQ(pbd_only[0]->name(), "pbd_metaballs");
   const std::size_t pbd = hostBytes(beam(false, true)), mls = hostBytes(beam(true, false)),

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <set>
 
+#include "host/scene/scene_compile.h"
 #include "host/sim/dissection_simulation.h"
 #include "host/sim/metaball_simulation.h"
 #include "host/sim/mls_simulation.h"
@@ -49,7 +50,7 @@ Vec3d sum(const std::vector<ForceArrow>& a, ForceArrowKind kind) {
 TEST(RenderLayers, MetaballSpheresAndFixedSetMatchTheScene) {
   Scene s = metaballBlock();
   s.fixed = {{Vec3d(-1, -1, -1), Vec3d(-0.01, 1, 1)}};  // the x < -1 cm slab: 2 of 6 columns
-  auto m = makeMetaballSimulation(s, BackendKind::Cpu, Precision::Float32);
+  auto m = makeMetaballSimulation(compileScene(s), BackendKind::Cpu, Precision::Float32);
   std::vector<Vec3d> rest;
   m->currentPositions(rest);
   for (int f = 0; f < 3; ++f) ASSERT_TRUE(m->advance(1.0 / 60.0).finite);
@@ -82,7 +83,7 @@ TEST(RenderLayers, MetaballGraspForceCarriesTheWeightAtRest) {
   Scene s = metaballBlock();
   s.pbd.solver = "gauss_seidel";
   s.material.damping_per_s = 8.0;
-  auto m = makeMetaballSimulation(s, BackendKind::Cpu, Precision::Float64);
+  auto m = makeMetaballSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
   ToolEvent e;
   e.kind = ToolKind::Grasp;
   e.phase = ToolPhase::Press;
@@ -134,7 +135,7 @@ TEST(RenderLayers, MlsClampAndGraspForcesBalanceTheWeightAtRest) {
   g.radius = 0.006;
   g.path = {{0.0, Vec3d(0.0775, 0, 0), Vec3d(0, 0, -1)}, {0.1, Vec3d(0.0775, 0, 0.003), Vec3d(0, 0, -1)}};
   s.tools = {g};
-  auto m = makeMlsSimulation(s, BackendKind::Cpu, Precision::Float64);
+  auto m = makeMlsSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
   std::vector<Vec3d> rest;
   m->currentPositions(rest);
   for (int f = 0; f < 45; ++f) ASSERT_TRUE(m->advance(1.0 / 60.0).finite);
@@ -186,7 +187,7 @@ TEST(RenderLayers, DissectionSweptSurfaceAndNodalPointsFollowTheCut) {
   s.cutting.exchanges_per_frame = 2;
   s.fixed = {{Vec3d(-1, -1, -1), Vec3d(1, 0.002, 1)}};
   s.tools = {cuttest::parkedScalpel()};  // the scene's scripted scalpel never runs here
-  auto m = makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float64);
+  auto m = makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
   RenderLayers l;
   m->renderLayers(l);
   EXPECT_TRUE(l.swept_surface.triangles.empty());
@@ -274,7 +275,7 @@ TEST(RenderLayers, TearingSheetFixedAndHeldParticles) {
   g.length = 0.1;
   g.path = {{0.0, Vec3d(0.2, 0.0, 0), Vec3d(0, 1, 0)}, {0.25, Vec3d(0.22, 0.0, 0), Vec3d(0, 1, 0)}};
   s.tools = {g};
-  auto m = makeTearingSimulation(s, BackendKind::Cpu, Precision::Float64);
+  auto m = makeTearingSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
   std::vector<Vec3d> rest;
   m->currentPositions(rest);
   m->advance(1.0 / 60.0);

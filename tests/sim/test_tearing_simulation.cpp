@@ -3,6 +3,7 @@
 
 #include <cstdio>
 
+#include "host/scene/scene_compile.h"
 #include "model/input_error.h"
 #include "host/sim/tearing_simulation.h"
 
@@ -37,7 +38,7 @@ Scene sheetScene() {
 
 TEST(TearingSimulation, GrasperPullTearsSheetAndReportsCounters) {
   const Scene scene = sheetScene();
-  auto m = makeTearingSimulation(scene, BackendKind::Cpu, Precision::Float64);
+  auto m = makeTearingSimulation(compileScene(scene), BackendKind::Cpu, Precision::Float64);
   EXPECT_EQ(m->name(), "tearing_sheet");
   const std::size_t n0 = m->particleCount();
   EXPECT_EQ(n0, 21u * 11u);
@@ -69,7 +70,7 @@ TEST(TearingSimulation, ScalpelRemovesTissueAndTubeBuilds) {
   sc.length = 0.0;
   sc.path = {ToolKeyframe{0.0, Vec3d(0.1, 0.0, 0), Vec3d(0, 1, 0)}, ToolKeyframe{0.1, Vec3d(0.1, 0.1, 0), Vec3d(0, 1, 0)}};
   scene.tools.push_back(sc);
-  auto m = makeTearingSimulation(scene, BackendKind::Cpu, Precision::Float32);
+  auto m = makeTearingSimulation(compileScene(scene), BackendKind::Cpu, Precision::Float32);
   double removed = 0;
   for (int f = 0; f < 8; ++f) removed += m->advance(1.0 / 60.0).counters.at("removed");
   EXPECT_GT(removed, 0.0);
@@ -80,7 +81,7 @@ TEST(TearingSimulation, ScalpelRemovesTissueAndTubeBuilds) {
   leg.geometry.kind = GeometrySpec::Kind::Beam;
   leg.geometry.size = Vec3d(0.2, 0.06, 0.06);
   leg.tools.clear();
-  auto t = makeTearingSimulation(leg, BackendKind::Cpu, Precision::Float32);
+  auto t = makeTearingSimulation(compileScene(leg), BackendKind::Cpu, Precision::Float32);
   EXPECT_GT(t->particleCount(), 100u);
   EXPECT_TRUE(t->advance(1.0 / 60.0).finite);
 }
@@ -88,17 +89,17 @@ TEST(TearingSimulation, ScalpelRemovesTissueAndTubeBuilds) {
 TEST(TearingSimulation, BadScenesRefused) {
   Scene s = sheetScene();
   s.models.tearing = false;
-  EXPECT_THROW(makeTearingSimulation(s, BackendKind::Cpu, Precision::Float32), InputError);
+  EXPECT_THROW(makeTearingSimulation(compileScene(s), BackendKind::Cpu, Precision::Float32), InputError);
   s = sheetScene();
   s.geometry.kind = GeometrySpec::Kind::Sphere;
-  EXPECT_THROW(makeTearingSimulation(s, BackendKind::Cpu, Precision::Float32), InputError);
+  EXPECT_THROW(makeTearingSimulation(compileScene(s), BackendKind::Cpu, Precision::Float32), InputError);
   s = sheetScene();
   s.tools[0].kind = "probe";
-  EXPECT_THROW(makeTearingSimulation(s, BackendKind::Cpu, Precision::Float32), InputError);
+  EXPECT_THROW(makeTearingSimulation(compileScene(s), BackendKind::Cpu, Precision::Float32), InputError);
   s = sheetScene();  // the tearing solve is patched on the device, which Chebyshev acceleration does not support
   s.pbd.chebyshev_rho = 0.5;
   try {
-    makeTearingSimulation(s, BackendKind::Cpu, Precision::Float32);
+    makeTearingSimulation(compileScene(s), BackendKind::Cpu, Precision::Float32);
     ADD_FAILURE() << "chebyshev_rho accepted by the tearing model";
   } catch (const InputError& e) {
     EXPECT_EQ(e.key(), "pbd.chebyshev_rho");
@@ -107,7 +108,7 @@ TEST(TearingSimulation, BadScenesRefused) {
 
 TEST(TearingSimulation, TearingSectionSetsCriterionMaterialAndRegions) {
   Scene s = sheetScene();
-  TearingSceneSetup d = tearingSetupFromScene(s);  // defaults: k = E, tau_f = 0.1 k, tresca, seed 1
+  TearingSceneSetup d = tearingSetupFromScene(compileScene(s));  // defaults: k = E, tau_f = 0.1 k, tresca, seed 1
   EXPECT_EQ(d.tear.criterion, TearCriterion::TrescaBonds);
   EXPECT_EQ(d.tear.seed, 1u);
   EXPECT_DOUBLE_EQ(d.sheet.k[0], 1.5e3);
@@ -123,7 +124,7 @@ TEST(TearingSimulation, TearingSectionSetsCriterionMaterialAndRegions) {
   r.max = Vec3d(1, 1, 1);
   r.tau_f_pa = 50;
   s.tearing.regions.push_back(r);
-  d = tearingSetupFromScene(s);
+  d = tearingSetupFromScene(compileScene(s));
   EXPECT_EQ(d.tear.criterion, TearCriterion::Threshold);
   EXPECT_EQ(d.tear.seed, 99u);
   EXPECT_DOUBLE_EQ(d.tear.break_strain, 0.35);
@@ -143,7 +144,7 @@ TEST(TearingSimulation, TearingSectionSetsCriterionMaterialAndRegions) {
   EXPECT_GT(out, 0);
   s.tearing.criterion = "von_mises";  // a Scene built in code is checked too
   try {
-    tearingSetupFromScene(s);
+    tearingSetupFromScene(compileScene(s));
     ADD_FAILURE() << "no error";
   } catch (const InputError& e) {
     EXPECT_EQ(e.key(), "tearing.criterion");

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "host/scene/scene_compile.h"
 #include "cpu_fallback/pbd_solver_cpu.h"
 #include "model/input_error.h"
 #include "host/sim/metaball_simulation.h"
@@ -116,7 +117,7 @@ Dragged dragBlock(double mu) {
                         {"t_s": 0.25, "position_m": [0.1, 0, 0.0155], "direction": [1, 0, 0]},
                         {"t_s": 1.25, "position_m": [0.15, 0, 0.0155], "direction": [1, 0, 0]}]}]})";
   const Scene s = parseScene(json, "drag.json", ".");
-  auto m = makeMetaballSimulation(s, BackendKind::Cpu, Precision::Float64);
+  auto m = makeMetaballSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
   std::vector<Vec3d> x0, x1, x2;
   m->currentPositions(x0);
   for (int f = 0; f < 74; ++f) EXPECT_TRUE(m->advance(kDt).finite);

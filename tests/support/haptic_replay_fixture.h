@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "host/scene/scene_compile.h"
 #include "host/sim/dissection_simulation.h"
 #include "host/haptics/haptic_cut_session.h"
 #include "host/haptics/mfs_local.h"
@@ -85,7 +86,7 @@ struct SessionRun {
 inline SessionRun runSession(HapticDevice& device, int frames, BackendKind backend = BackendKind::Cpu,
                              Precision precision = Precision::Float64) {
   const Scene scene = blockScene();
-  auto sim = makeDissectionSimulation(scene, backend, precision);
+  auto sim = makeDissectionSimulation(compileScene(scene), backend, precision);
   const TipModel tip;
   CuttingTool tool([&tip](const TipContact& c) { return tip(c.displacement_m); }, scene.cut_thresholds,
                    Vec3d{0, 0, 0.015}, Vec3d{0, 0, 1});

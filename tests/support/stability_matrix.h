@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "host/scene/scene_compile.h"
 #include "host/backends/solver_factory.h"
 #include "host/scene/embedded_scenes.h"
 #include "model/input_error.h"
@@ -96,7 +97,7 @@ inline Outcome runModel(SimulationModel& m, double frame_dt, int frames, double 
 inline Outcome runScene(const Scene& s, BackendKind be, int frames, double wall_s = 0.0) {
   std::vector<std::unique_ptr<SimulationModel>> models;
   try {
-    models = createSceneModels(s, be);
+    models = createSceneModels(compileScene(s), be);
   } catch (const InputError& e) {
     Outcome o;
     o.refused = true;
@@ -158,7 +159,7 @@ inline void materialsCase(BackendKind be, bool mls) {
 inline void mlsTimeStepCase(BackendKind be) {
   Scene s = bar(true, 1.0e5, 0.45);
   s.solver.frame_dt = 2.0e-4;
-  const MlsBuildInput in = mlsBuildInputFromScene(s);
+  const MlsBuildInput in = mlsBuildInputFromScene(compileScene(s));
   const double limit = makeMlsSolver(in, BackendKind::Cpu, Precision::Float64)->stableTimeStep();
   ASSERT_GT(limit, 0.0);
   for (double ratio : {0.01, 0.1, 0.5, 0.9, 1.5, 2.0}) {
@@ -271,7 +272,7 @@ inline void compressionCase(BackendKind be, bool mls) {
 inline void mlsIsolatedCase(BackendKind be) {
   Scene s = bar(true, 1.0e4, 0.45);
   s.material.damping_per_s = 0.0;
-  MlsBuildInput in = mlsBuildInputFromScene(s);
+  MlsBuildInput in = mlsBuildInputFromScene(compileScene(s));
   const Vec3d lone{0.02, 0.1, 0.0};
   in.rest_positions.push_back(lone);
   if (!in.masses.empty()) in.masses.push_back(in.masses.back());
@@ -335,7 +336,7 @@ inline void soakCase(BackendKind be, bool mls, double wall_s, int max_frames) {
   constexpr int kSettleFrames = 40, kTailFrames = 10;
   Scene s = bar(mls, 1.0e5, 0.45);
   s.material.damping_per_s = 20.0;
-  std::vector<std::unique_ptr<SimulationModel>> models = createSceneModels(s, be);
+  std::vector<std::unique_ptr<SimulationModel>> models = createSceneModels(compileScene(s), be);
   ASSERT_EQ(models.size(), 1u);
   const Outcome o = runModel(*models[0], s.solver.frame_dt, max_frames, wall_s, kSettleFrames);
   ASSERT_FALSE(o.reported_failure) << o.failure;

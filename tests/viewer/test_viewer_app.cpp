@@ -9,6 +9,7 @@
 
 #include <stb_image.h>
 
+#include "host/scene/scene_compile.h"
 #include "host/sim/dissection_simulation.h"
 #include "host/sim/metaball_simulation.h"
 #include "model/input_error.h"
@@ -109,7 +110,7 @@ TEST_F(ViewerApp, RealCutSceneShowsCutWallColour) {
     Scene s = cuttest::dissectionBlock("<test:viewer_cut_block>", true);
     s.fixed = {{Vec3d(-1, -1, -1), Vec3d(1, 0.002, 1)}};
     s.tools = {cuttest::parkedScalpel()};  // the scene's scripted scalpel never runs here
-    std::unique_ptr<SimulationModel> m = makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float32);
+    std::unique_ptr<SimulationModel> m = makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float32);
     if (cut) {
       ToolEvent e;
       e.kind = ToolKind::Cut;
@@ -144,7 +145,7 @@ TEST_F(ViewerApp, RealCutSceneShowsCutWallColour) {
 std::unique_ptr<SimulationModel> dissectionBlock() {
   Scene s = cuttest::dissectionBlock("<test:viewer_mouse_block>");
   s.tools = {cuttest::parkedScalpel()};
-  return makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float32);
+  return makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float32);
 }
 
 // The viewer's own mouse path in cut mode: the button goes down left of the block (off the tissue: the stroke
@@ -244,7 +245,7 @@ TEST_F(ViewerApp, MetaballSpheresWithFixedOnesMarked) {
   s.solver.gravity = Vec3d(0, 0, 0);
   s.fixed = {{Vec3d(-1, -1, -1), Vec3d(-0.01, 1, 1)}};
   ViewerOptions o;
-  o.model = makeMetaballSimulation(s, BackendKind::Cpu, Precision::Float32);
+  o.model = makeMetaballSimulation(compileScene(s), BackendKind::Cpu, Precision::Float32);
   o.width = 480;
   o.height = 300;
   o.frames = 2;
@@ -291,7 +292,7 @@ TEST_F(ViewerApp, GraspDragShowsTheToolForceArrow) {
   s.pbd.iterations = 5;
   s.fixed = {{Vec3d(-1, -1, -1), Vec3d(1, -0.01, 1)}};
   ViewerOptions o;
-  o.model = makeMetaballSimulation(s, BackendKind::Cpu, Precision::Float32);
+  o.model = makeMetaballSimulation(compileScene(s), BackendKind::Cpu, Precision::Float32);
   o.width = 480;
   o.height = 300;
   o.frames = 14;
@@ -352,7 +353,7 @@ TEST_F(ViewerApp, CutBlockShowsAllLayersTogether) {
   t.length = 0.1;
   t.path = {{100.0, Vec3d(-0.06, 0.005, 0), Vec3d(0, 0, 1)}, {101.0, Vec3d(0.0, 0.005, 0), Vec3d(0, 0, 1)}};
   s.tools = {t};
-  std::unique_ptr<SimulationModel> m = makeDissectionSimulation(s, BackendKind::Cpu, Precision::Float32);
+  std::unique_ptr<SimulationModel> m = makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float32);
   ToolEvent e;
   e.kind = ToolKind::Cut;
   e.axis = Vec3d(0, 0, -1);

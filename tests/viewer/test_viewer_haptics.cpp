@@ -4,6 +4,7 @@
 #include <memory>
 #include <string>
 
+#include "host/scene/scene_compile.h"
 #include "host/haptics/haptic_scene_model.h"
 #include "host/haptics/pointer_device.h"
 #include "tests/support/viewer_test_model.h"
@@ -36,7 +37,7 @@ TEST(ViewerHaptics, MouseDrivesThePointerDeviceIntoTheTissuePlane) {
   SceneHapticsOptions ho;
   ho.device = pointer;
   ho.record_s = 10.0;
-  auto model = std::make_unique<HapticSceneModel>(std::make_unique<testing::SaggingBall>(), scene, ho);
+  auto model = std::make_unique<HapticSceneModel>(std::make_unique<testing::SaggingBall>(), compileScene(scene), ho);
   HapticSceneModel* haptic = model.get();
   const TissuePlane plane = haptic->haptics().plane();
   const double press = 0.004;

@@ -1,4 +1,5 @@
 // `incision view`: builds the scene's first model through the model factory and hands it to the viewer.
+#include "host/scene/scene_compile.h"
 #include "host/app/cli/view_command.h"
 
 #include <cmath>
@@ -36,7 +37,7 @@ int runViewCommand(const Scene& scene_in, const ViewCommandOptions& options) {
         SceneHapticsOptions ho;
         ho.device = pointer;
         ho.record_s = 10.0;  // the viewer plots the loop through the model counters, not the records
-        auto m = std::make_unique<HapticSceneModel>(base(), *sc, ho);
+        auto m = std::make_unique<HapticSceneModel>(base(), compileScene(*sc), ho);
         *last = m.get();
         return m;
       } catch (...) {

@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "host/io/mesh.h"
-#include "host/scene/scene.h"
+#include "host/compiled/compiled_scene.h"
 #include "physics/pbd_collision.h"
 
 namespace inc {
@@ -26,6 +26,6 @@ TriangleMesh colliderMeshAround(const std::vector<ColliderSpec>& specs, const st
 // Throws InputError(scene.file, "colliders[k]", reason) when any of `points` (the organ's sphere centres or nodal
 // points at rest, m) lies inside collider k: behind a plane, or strictly inside a box. The solvers would push
 // those parts out in the first substep, a jump no scene means. `what` names the points in the message.
-void checkCollidersClear(const Scene& scene, const std::vector<Vec3d>& points, const std::string& what);
+void checkCollidersClear(const CompiledScene& scene, const std::vector<Vec3d>& points, const std::string& what);
 
 }  // namespace inc

@@ -1,5 +1,5 @@
 // The scene's static colliders in the solvers' form, and the start-outside check.
-#include "host/scene/scene_colliders.h"
+#include "host/compiled/scene_colliders.h"
 
 #include <algorithm>
 #include <cmath>
@@ -59,7 +59,7 @@ TriangleMesh colliderMeshAround(const std::vector<ColliderSpec>& specs, const st
   return colliderMesh(specs, (lo + hi) * 0.5, std::max(norm(hi - lo), 1e-3));
 }
 
-void checkCollidersClear(const Scene& scene, const std::vector<Vec3d>& points, const std::string& what) {
+void checkCollidersClear(const CompiledScene& scene, const std::vector<Vec3d>& points, const std::string& what) {
   for (std::size_t k = 0; k < scene.colliders.size(); ++k) {
     const ColliderSpec& c = scene.colliders[k];
     std::size_t inside = 0;

@@ -1,5 +1,6 @@
-// The one validation of a Material (material.youngs_modulus_pa, poisson_ratio, density_kg_m3, damping_per_s).
-#include "host/scene/material_checks.h"
+// The one validation of a Material (material.youngs_modulus_pa, poisson_ratio, density_kg_m3, damping_per_s) and of
+// the haptic cutting thresholds (material.cutting).
+#include "host/compiled/material_checks.h"
 
 #include <cmath>
 
@@ -32,6 +33,21 @@ void validateMaterial(const Material& m, const std::string& file, const std::str
   if (!(rho > 0) || !std::isfinite(rho)) fail("density_kg_m3", "must be > 0" + got(rho));
   const double c = m.damping_per_s;
   if (!(c >= 0) || !std::isfinite(c)) fail("damping_per_s", "must be >= 0" + got(c));
+}
+
+void validateCutThresholds(const CutThresholds<double>& th, const std::string& file, const std::string& key) {
+  auto check = [&](double v, bool ok, const char* name, const char* rule) {
+    if (!std::isfinite(v) || !ok) throw InputError(file, key + "." + name, std::string(rule) + got(v));
+  };
+  check(th.press_n, th.press_n >= 0.0, "press_threshold_n", "F_p must be finite and >= 0 N");
+  check(th.static_n, th.static_n > 0.0, "static_friction_n", "F_s must be finite and > 0 N");
+  check(th.dynamic_n, th.dynamic_n > 0.0, "dynamic_friction_n", "F_d must be finite and > 0 N");
+  check(th.friction_per_depth_n_per_m, th.friction_per_depth_n_per_m >= 0.0, "friction_n_per_m",
+        "the friction slope must be finite and >= 0 N/m");
+  if (!(th.dynamic_n < th.static_n))
+    throw InputError(file, key + ".dynamic_friction_n",
+                     "dynamic friction F_d must be below static friction F_s = " + formatNumber(th.static_n) +
+                         " N (the hysteresis of eq. 16)" + got(th.dynamic_n));
 }
 
 }  // namespace inc
