@@ -3,6 +3,7 @@
 
 #include <cmath>
 
+#include "host/scene/scene_fields.h"
 #include "host/scene/scene_keys.h"
 #include "model/input_error.h"
 
@@ -11,12 +12,9 @@ namespace inc {
 CutThresholds<double> readCutThresholds(const scene_json::ObjectReader& r) {
   r.allowOnly(sceneKeysUnder("material.cutting"));
   CutThresholds<double> th;
-  // number() already refuses NaN / infinity and non-numbers with the key path; ranges are checked below
+  // The table's reads refuse NaN / infinity and non-numbers with the key path; ranges are checked below
   // in one place (validateCutThresholds) so the haptic code and the scene agree on them.
-  th.press_n = r.number("press_threshold_n", th.press_n);
-  th.static_n = r.number("static_friction_n", th.static_n);
-  th.dynamic_n = r.number("dynamic_friction_n", th.dynamic_n);
-  th.friction_per_depth_n_per_m = r.number("friction_n_per_m", th.friction_per_depth_n_per_m);
+  readSceneKeys(r, "material.cutting", th);
   validateCutThresholds(th, r.file(), r.path());
   return th;
 }

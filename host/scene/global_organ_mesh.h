@@ -26,10 +26,11 @@ TriangleMesh loadGlobalOrganMesh(const std::string& path, double scale);
 // tolerance) is held (displacement zero), every other one is traction-free.
 std::vector<BemBc> organSupports(const TriangleMesh& mesh, const std::vector<FixedRegion>& fixed);
 
-// haptics.global_model and, with "bem", global_mesh (resolved against base_dir, loaded and checked),
-// global_mesh_scale and global_cache (default: the scene file's name with .bemcache in its folder; a scene without
-// a file caches next to the mesh). Throws InputError(file, "haptics.<key>", reason), also when no element of the
-// organ lies in a `fixed` region (the BEM system would be singular).
+// After the key table has read h.global_model and h.global_mesh_scale: refuses the global_* keys unless
+// global_model is "bem"; with "bem", global_mesh (resolved against base_dir, loaded and checked) and global_cache
+// (default: the scene file's name with .bemcache in its folder; a scene without a file caches next to the mesh).
+// Throws InputError(file, "haptics.<key>", reason), also when no element of the organ lies in a `fixed` region
+// (the BEM system would be singular).
 void readGlobalModelKeys(const scene_json::ObjectReader& haptics, const std::string& base_dir,
                          const std::vector<FixedRegion>& fixed, HapticsSpec& h);
 // The same keys for sceneToJson (global_mesh, global_cache written absolute).
