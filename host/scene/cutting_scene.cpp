@@ -19,13 +19,6 @@ CutThresholds<double> readCutThresholds(const scene_json::ObjectReader& r) {
   return th;
 }
 
-nlohmann::ordered_json cutThresholdsJson(const CutThresholds<double>& th) {
-  return nlohmann::ordered_json{{"press_threshold_n", th.press_n},
-                                {"static_friction_n", th.static_n},
-                                {"dynamic_friction_n", th.dynamic_n},
-                                {"friction_n_per_m", th.friction_per_depth_n_per_m}};
-}
-
 void validateCutThresholds(const CutThresholds<double>& th, const std::string& file, const std::string& key) {
   auto got = [](double v) { return " (got " + scene_json::formatNumber(v) + ")"; };
   auto check = [&](double v, bool ok, const char* name, const char* rule) {

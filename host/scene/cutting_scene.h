@@ -1,4 +1,4 @@
-// Scene keys of the haptic cutting force model (material.cutting): reading, validation and writing.
+// Scene keys of the haptic cutting force model (material.cutting): reading and validation.
 #pragma once
 
 #include <string>
@@ -15,9 +15,6 @@ namespace inc {
 // CutThresholds. Throws InputError(file, "material.cutting.<key>", reason) for a non-number, NaN, a
 // negative value or F_d >= F_s.
 CutThresholds<double> readCutThresholds(const scene_json::ObjectReader& cutting);
-
-// The same keys for sceneToJson (reads back to the same values).
-nlohmann::ordered_json cutThresholdsJson(const CutThresholds<double>& th);
 
 // Throws InputError(file, key + ".<scene key>", reason) unless F_p >= 0, F_s > 0, F_d > 0, friction slope >= 0,
 // all finite, and F_d < F_s (scene keys: press_threshold_n, static_friction_n, dynamic_friction_n,

@@ -84,12 +84,4 @@ void readGlobalModelKeys(const scene_json::ObjectReader& r, const std::string& b
   }
 }
 
-void writeGlobalModelKeys(const HapticsSpec& h, nlohmann::ordered_json& j) {
-  j["global_model"] = h.global_model;
-  if (h.global_model != "bem") return;
-  j["global_mesh"] = h.global_mesh;
-  j["global_mesh_scale"] = h.global_mesh_scale;
-  j["global_cache"] = h.global_cache;
-}
-
 }  // namespace inc

@@ -33,7 +33,5 @@ std::vector<BemBc> organSupports(const TriangleMesh& mesh, const std::vector<Fix
 // (the BEM system would be singular).
 void readGlobalModelKeys(const scene_json::ObjectReader& haptics, const std::string& base_dir,
                          const std::vector<FixedRegion>& fixed, HapticsSpec& h);
-// The same keys for sceneToJson (global_mesh, global_cache written absolute).
-void writeGlobalModelKeys(const HapticsSpec& h, nlohmann::ordered_json& haptics);
 
 }  // namespace inc

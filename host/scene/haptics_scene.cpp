@@ -149,47 +149,4 @@ HapticsSpec readHapticsSpec(const ObjectReader& top, const std::string& base_dir
   return h;
 }
 
-nlohmann::ordered_json hapticsSpecJson(const HapticsSpec& h) {
-  using J = nlohmann::ordered_json;
-  auto vec = [](const Vec3d& v) { return J::array({v.x, v.y, v.z}); };
-  auto device = [&](const HapticDeviceSpec& d, J& j) {
-    if (h.devices_listed || !d.name.empty()) j["name"] = d.name;
-    j["device"] = d.device;
-    if (!d.trajectory.empty()) j["trajectory"] = d.trajectory;
-    j["playback"] = d.playback;
-    j["udp_port"] = d.udp_port;
-    j["udp_device"] = d.udp_device;
-    j["openhaptics_device"] = d.openhaptics_device;
-    j["workspace_scale"] = d.workspace_scale;
-    j["workspace_offset_m"] = vec(d.workspace_offset_m);
-    j["max_force_n"] = d.max_force_n;
-    j["rate_hz"] = d.rate_hz;
-    j["max_force_rate_n_per_s"] = d.max_force_rate_n_per_s;
-    j["realtime"] = d.realtime;
-    j["cpu"] = d.cpu;
-    j["tool"] = d.tool;
-    j["blade_length_m"] = d.blade_length_m;
-    j["blade_axis"] = vec(d.blade_axis);
-  };
-  J j;
-  if (h.devices_listed) {
-    J list = J::array();
-    for (const HapticDeviceSpec& d : h.devices) {
-      J e;
-      device(d, e);
-      list.push_back(e);
-    }
-    j["devices"] = list;
-  } else {
-    device(h.devices.at(0), j);
-  }
-  if (h.has_surface_point) j["surface_point_m"] = vec(h.surface_point_m);
-  j["surface_normal"] = vec(h.surface_normal);
-  j["local_radius_m"] = h.local_radius_m;
-  j["local_spacing_m"] = h.local_spacing_m;
-  j["record_trajectory"] = h.record_trajectory;
-  writeGlobalModelKeys(h, j);
-  return j;
-}
-
 }  // namespace inc

@@ -1,4 +1,4 @@
-// Scene keys of the haptic loops (the `haptics` section): reading, validation and writing.
+// Scene keys of the haptic loops (the `haptics` section): reading and validation (the key table writes them).
 #pragma once
 
 #include <string>
@@ -22,9 +22,6 @@ HapticsSpec readHapticsSpec(const scene_json::ObjectReader& top, const std::stri
 // The key path of device `index`'s `key`: "haptics.<key>" in the single-device form, else
 // "haptics.devices[index].<key>".
 std::string hapticDeviceKey(const HapticsSpec& h, std::size_t index, const std::string& key);
-
-// The same keys for sceneToJson (reads back to the same values).
-nlohmann::ordered_json hapticsSpecJson(const HapticsSpec& h);
 
 // Whether this build has the OpenHaptics driver (CMake found the SDK: INCISION_WITH_OPENHAPTICS).
 bool openHapticsBuilt();

@@ -31,17 +31,6 @@ using scene_json::ObjectReader;
 // Guard against a slip in spacing_m (5e-5 for 5e-3) that would ask for more particles than any machine holds.
 constexpr double kMaxEstimatedParticles = 5.0e7;
 
-const char* kindName(GeometrySpec::Kind k) {
-  switch (k) {
-    case GeometrySpec::Kind::Box: return "box";
-    case GeometrySpec::Kind::Beam: return "beam";
-    case GeometrySpec::Kind::Sphere: return "sphere";
-    case GeometrySpec::Kind::Ellipsoid: return "ellipsoid";
-    case GeometrySpec::Kind::Mesh: return "mesh";
-  }
-  return "?";
-}
-
 // Loads and checks the mesh of a "mesh" geometry; returns its extent and volume in metres for the sampling checks.
 void checkMeshGeometry(const ObjectReader& g, const GeometrySpec& spec, double& min_extent, double& volume) {
   TriangleMesh mesh;
@@ -380,120 +369,7 @@ Scene loadSceneFile(const std::string& path) {
 }
 
 std::string sceneToJson(const Scene& s) {
-  using J = nlohmann::ordered_json;
-  auto vec = [](const Vec3d& v) { return J::array({v.x, v.y, v.z}); };
-  J j;
-  j["name"] = s.name;
-  j["description"] = s.description;
-  j["duration_s"] = s.duration;
-
-  J g;
-  g["kind"] = kindName(s.geometry.kind);
-  switch (s.geometry.kind) {
-    case GeometrySpec::Kind::Box:
-    case GeometrySpec::Kind::Beam:
-      g["center_m"] = vec(s.geometry.center);
-      g["size_m"] = vec(s.geometry.size);
-      break;
-    case GeometrySpec::Kind::Sphere:
-      g["center_m"] = vec(s.geometry.center);
-      g["radius_m"] = s.geometry.radius;
-      break;
-    case GeometrySpec::Kind::Ellipsoid:
-      g["center_m"] = vec(s.geometry.center);
-      g["radii_m"] = vec(s.geometry.radii);
-      break;
-    case GeometrySpec::Kind::Mesh:
-      g["mesh"] = s.geometry.mesh_path;
-      g["mesh_scale"] = s.geometry.mesh_scale;
-      break;
-  }
-  g["spacing_m"] = s.geometry.spacing;
-  g["jitter"] = s.geometry.jitter;
-  g["seed"] = s.geometry.seed;
-  j["geometry"] = g;
-
-  j["material"] = J{{"youngs_modulus_pa", s.material.youngs_modulus_pa},
-                    {"poisson_ratio", s.material.poisson_ratio},
-                    {"density_kg_m3", s.material.density_kg_m3},
-                    {"damping_per_s", s.material.damping_per_s},
-                    {"cutting", cutThresholdsJson(s.cut_thresholds)}};
-  j["models"] = J{{"mls", s.models.mls},
-                  {"pbd_metaballs", s.models.pbd_metaballs},
-                  {"cutting", s.models.cutting},
-                  {"tearing", s.models.tearing},
-                  {"haptics", s.models.haptics}};
-  j["mls"] = J{{"support_factor", s.mls.support_factor},
-               {"volume_preservation", s.mls.volume_preservation},
-               {"volume_stiffness", s.mls.volume_stiffness},
-               {"condition_limit", s.mls.condition_limit}};
-  j["pbd"] = J{{"iterations", s.pbd.iterations},
-               {"xpbd", s.pbd.xpbd},
-               {"solver", s.pbd.solver},
-               {"chebyshev_rho", s.pbd.chebyshev_rho},
-               {"stretch_compliance", s.pbd.stretch_compliance},
-               {"laplacian_compliance", s.pbd.laplacian_compliance},
-               {"volume_preservation", s.pbd.volume_preservation},
-               {"target_spheres", s.pbd.target_spheres}};
-  j["solver"] = J{{"frame_dt_s", s.solver.frame_dt},
-                  {"substeps", s.solver.substeps},
-                  {"safety", s.solver.safety},
-                  {"precision", precisionName(s.solver.precision)},
-                  {"backend", backendName(s.solver.backend)},
-                  {"gravity_m_s2", vec(s.solver.gravity)},
-                  {"energy_bound", s.solver.energy_bound}};
-  J fixed = J::array();
-  for (const FixedRegion& f : s.fixed) fixed.push_back(J{{"min_m", vec(f.min)}, {"max_m", vec(f.max)}});
-  j["fixed"] = fixed;
-  J tools = J::array();
-  for (const ToolSpec& t : s.tools) {
-    J path = J::array();
-    for (const ToolKeyframe& k : t.path)
-      path.push_back(J{{"t_s", k.t}, {"position_m", vec(k.position)}, {"direction", vec(k.direction)}});
-    J tool{{"name", t.name}, {"kind", t.kind}, {"radius_m", t.radius}, {"length_m", t.length}, {"path", path}};
-    if (t.friction != 0.0) tool["friction"] = t.friction;  // a scalpel has none (cutting.blade_friction)
-    tools.push_back(tool);
-  }
-  j["tools"] = tools;
-  if (!s.colliders.empty()) {
-    J colliders = J::array();
-    for (const ColliderSpec& c : s.colliders)
-      colliders.push_back(c.kind == "plane" ? J{{"kind", "plane"}, {"point_m", vec(c.point)}, {"normal", vec(c.normal)},
-                                                {"friction", c.friction}}
-                                            : J{{"kind", "box"}, {"min_m", vec(c.min)}, {"max_m", vec(c.max)},
-                                                {"friction", c.friction}});
-    j["colliders"] = colliders;
-  }
-  j["output"] = J{{"every_frames", s.output.every_frames},
-                  {"particles_ply", s.output.particles_ply},
-                  {"mesh_obj", s.output.mesh_obj},
-                  {"vtk", s.output.vtk},
-                  {"metrics_csv", s.output.metrics_csv}};
-  J regions = J::array();
-  for (const TearingRegionSpec& g : s.tearing.regions)
-    regions.push_back(J{{"min_m", vec(g.min)}, {"max_m", vec(g.max)}, {"k_pa", g.k_pa}, {"tau_f_pa", g.tau_f_pa}});
-  j["tearing"] = J{{"criterion", s.tearing.criterion},
-                   {"k_pa", s.tearing.k_pa},
-                   {"tau_f_pa", s.tearing.tau_f_pa},
-                   {"break_strain", s.tearing.break_strain},
-                   {"random_range", s.tearing.random_range},
-                   {"seed", s.tearing.seed},
-                   {"regions", regions}};
-  j["cutting"] = J{{"samples_per_diameter", s.cutting.samples_per_diameter},
-                   {"exchanges_per_frame", s.cutting.exchanges_per_frame},
-                   {"pbd_substeps_per_exchange", s.cutting.pbd_substeps_per_exchange},
-                   {"pbd_iterations", s.cutting.pbd_iterations},
-                   {"mls_substeps_per_exchange", s.cutting.mls_substeps_per_exchange},
-                   {"repack_boundary_offset", s.cutting.repack_boundary_offset},
-                   {"repack_spacing_factor", s.cutting.repack_spacing_factor},
-                   {"repack_sphere_budget", s.cutting.repack_sphere_budget},
-                   {"stroke_end_frames", s.cutting.stroke_end_frames},
-                   {"conversion_delay_frames", s.cutting.conversion_delay_frames},
-                   {"open_surface_frames", s.cutting.open_surface_frames},
-                   {"blade_radius_m", s.cutting.blade_radius_m},
-                   {"blade_friction", s.cutting.blade_friction}};
-  j["haptics"] = hapticsSpecJson(s.haptics);
-  return compactScalarArrays(j.dump(2)) + "\n";
+  return compactScalarArrays(writeSceneKeys(s).dump(2)) + "\n";  // host/scene/scene_fields.h: the table's walk
 }
 
 }  // namespace inc
