@@ -1,5 +1,5 @@
-// Scene keys of the haptic cutting force model (material.cutting): reading and writing (the ranges are checked
-// by validateCutThresholds, host/compiled/material_checks.h).
+// Scene keys of the haptic cutting force model (material.cutting): reading (the ranges are checked by
+// validateCutThresholds, host/compiled/material_checks.h; writing is the key table's).
 #pragma once
 
 #include <string>
@@ -16,8 +16,5 @@ namespace inc {
 // CutThresholds. Throws InputError(file, "material.cutting.<key>", reason) for a non-number, NaN, a
 // negative value or F_d >= F_s.
 CutThresholds<double> readCutThresholds(const scene_json::ObjectReader& cutting);
-
-// The same keys for sceneToJson (reads back to the same values).
-nlohmann::ordered_json cutThresholdsJson(const CutThresholds<double>& th);
 
 }  // namespace inc

@@ -11,15 +11,11 @@ namespace inc {
 
 void readGlobalModelKeys(const scene_json::ObjectReader& r, const std::string& base_dir,
                          const std::vector<FixedRegion>& fixed, HapticsSpec& h) {
-  h.global_model = r.choice("global_model", h.global_model, {"none", "bem"});
   if (h.global_model != "bem") {
     for (const char* k : {"global_mesh", "global_mesh_scale", "global_cache"})
       if (r.has(k)) r.fail(k, "is used only with global_model \"bem\"");
     return;
   }
-  h.global_mesh_scale = r.number("global_mesh_scale", h.global_mesh_scale);
-  if (!(h.global_mesh_scale > 0.0))
-    r.fail("global_mesh_scale", "must be > 0 (got " + scene_json::formatNumber(h.global_mesh_scale) + ")");
   if (!r.has("global_mesh")) r.fail("global_mesh", "is required with global_model \"bem\" (the organ's closed surface mesh)");
   const std::string rel = r.string("global_mesh", "");
   if (rel.empty()) r.fail("global_mesh", "must name a mesh file");
@@ -43,14 +39,6 @@ void readGlobalModelKeys(const scene_json::ObjectReader& r, const std::string& b
   } else {
     h.global_cache = h.global_mesh + ".bemcache";
   }
-}
-
-void writeGlobalModelKeys(const HapticsSpec& h, nlohmann::ordered_json& j) {
-  j["global_model"] = h.global_model;
-  if (h.global_model != "bem") return;
-  j["global_mesh"] = h.global_mesh;
-  j["global_mesh_scale"] = h.global_mesh_scale;
-  j["global_cache"] = h.global_cache;
 }
 
 }  // namespace inc

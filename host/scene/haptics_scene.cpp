@@ -3,11 +3,10 @@
 
 #include <algorithm>
 #include <cctype>
-#include <cmath>
-#include <limits>
 
 #include "host/scene/global_organ_mesh.h"
 #include "host/io/trajectory.h"
+#include "host/scene/scene_fields.h"
 #include "host/scene/scene_keys.h"
 #include "model/input_error.h"
 
@@ -34,29 +33,6 @@ bool contains(const std::vector<std::string>& v, const std::string& s) { return 
 
 std::string got(double v) { return " (got " + formatNumber(v) + ")"; }
 
-double positiveKey(const ObjectReader& r, const std::string& key, double fallback) {
-  const double v = r.number(key, fallback);
-  if (!(v > 0)) r.fail(key, "must be > 0" + got(v));
-  return v;
-}
-
-int intIn(const ObjectReader& r, const std::string& key, int fallback, long long lo, long long hi) {
-  const long long v = r.integer(key, fallback);
-  if (v < lo || v > hi)
-    r.fail(key, "must lie in [" + std::to_string(lo) + ", " + std::to_string(hi) + "] (got " + std::to_string(v) + ")");
-  return static_cast<int>(v);
-}
-
-Vec3d unitKey(const ObjectReader& r, const std::string& key, const Vec3d& fallback) {
-  Vec3d d = r.vec3(key, fallback);
-  const double n2 = norm2(d);
-  if (!(n2 > 0) || !std::isfinite(n2)) r.fail(key, "must be a non-zero, finite vector");
-  // A vector that is unit to rounding stays as it is, so writing and re-reading a scene changes nothing.
-  if (std::fabs(n2 - 1.0) > 8 * std::numeric_limits<double>::epsilon()) d = d * (1.0 / std::sqrt(n2));
-  return d;
-}
-
-
 bool validName(const std::string& n) {
   if (n.empty() || n.size() > 32) return false;
   for (char c : n)
@@ -64,13 +40,14 @@ bool validName(const std::string& n) {
   return true;
 }
 
-// The keys of one device from `r` (the `haptics` object itself or one of its devices[i]).
+// The keys of one device from `r` (the `haptics` object itself or one of its devices[i]): the table reads them,
+// then the name, the driver and the trajectory file are checked here.
 HapticDeviceSpec readDevice(const ObjectReader& r, const std::string& base_dir, const std::string& default_name) {
   HapticDeviceSpec d;
-  d.name = r.string("name", default_name);
+  d.name = default_name;
+  readSceneKeys(r, "haptics.devices[]", d);
   if (r.has("name") && !validName(d.name))
     r.fail("name", "must be 1 to 32 letters, digits, '_' or '-' (it names the device's output files)");
-  d.device = r.choice("device", d.device, {"scripted", "udp", "openhaptics"});
   if (d.device == "openhaptics" && !openHapticsBuilt())
     r.fail("device", "the OpenHaptics driver is not built (CMake did not find the SDK: HD/hd.h and libHD; see "
                      "docs/haptics.md); use \"udp\" with an external driver");
@@ -84,21 +61,6 @@ HapticDeviceSpec readDevice(const ObjectReader& r, const std::string& base_dir, 
       r.fail("trajectory", e.what());
     }
   }
-  d.playback = r.choice("playback", d.playback, {"time", "tick"});
-  d.udp_port = intIn(r, "udp_port", d.udp_port, 1, 65535);
-  d.udp_device = intIn(r, "udp_device", d.udp_device, 0, 65535);
-  d.openhaptics_device = r.string("openhaptics_device", d.openhaptics_device);
-  d.workspace_scale = positiveKey(r, "workspace_scale", d.workspace_scale);
-  d.workspace_offset_m = r.vec3("workspace_offset_m", d.workspace_offset_m);
-  d.max_force_n = positiveKey(r, "max_force_n", d.max_force_n);
-  d.rate_hz = r.number("rate_hz", d.rate_hz);
-  if (!(d.rate_hz >= 100.0 && d.rate_hz <= 10000.0)) r.fail("rate_hz", "must lie in [100, 10000] Hz" + got(d.rate_hz));
-  d.max_force_rate_n_per_s = positiveKey(r, "max_force_rate_n_per_s", d.max_force_rate_n_per_s);
-  d.realtime = r.boolean("realtime", d.realtime);
-  d.cpu = intIn(r, "cpu", d.cpu, -1, 4095);
-  d.tool = r.choice("tool", d.tool, {"auto", "scalpel", "probe"});
-  d.blade_length_m = positiveKey(r, "blade_length_m", d.blade_length_m);
-  d.blade_axis = unitKey(r, "blade_axis", d.blade_axis);
   return d;
 }
 
@@ -170,63 +132,16 @@ HapticsSpec readHapticsSpec(const ObjectReader& top, const std::string& base_dir
     h.devices = {readDevice(r, base_dir, "")};
   }
   checkDevices(h, r, models);
+  readSceneKeys(r, "haptics", h);  // the keys every device shares
   h.has_surface_point = r.has("surface_point_m");
-  h.surface_point_m = r.vec3("surface_point_m", h.surface_point_m);
-  h.surface_normal = unitKey(r, "surface_normal", h.surface_normal);
-  h.local_radius_m = positiveKey(r, "local_radius_m", h.local_radius_m);
-  h.local_spacing_m = positiveKey(r, "local_spacing_m", h.local_spacing_m);
   if (!(h.local_spacing_m <= 0.5 * h.local_radius_m))
     r.fail("local_spacing_m", "must be at most half of local_radius_m (" + formatNumber(h.local_radius_m) +
                                   " m): the local model needs at least two shells" + got(h.local_spacing_m));
   if (h.local_radius_m / h.local_spacing_m > 64.0)
     r.fail("local_spacing_m", "is too fine for local_radius_m (more than 64 shells: the local model would have "
                               "tens of thousands of nodes)" + got(h.local_spacing_m));
-  h.record_trajectory = r.boolean("record_trajectory", h.record_trajectory);
   readGlobalModelKeys(r, base_dir, fixed, h);  // host/scene/global_organ_mesh.h
   return h;
-}
-
-nlohmann::ordered_json hapticsSpecJson(const HapticsSpec& h) {
-  using J = nlohmann::ordered_json;
-  auto vec = [](const Vec3d& v) { return J::array({v.x, v.y, v.z}); };
-  auto device = [&](const HapticDeviceSpec& d, J& j) {
-    if (h.devices_listed || !d.name.empty()) j["name"] = d.name;
-    j["device"] = d.device;
-    if (!d.trajectory.empty()) j["trajectory"] = d.trajectory;
-    j["playback"] = d.playback;
-    j["udp_port"] = d.udp_port;
-    j["udp_device"] = d.udp_device;
-    j["openhaptics_device"] = d.openhaptics_device;
-    j["workspace_scale"] = d.workspace_scale;
-    j["workspace_offset_m"] = vec(d.workspace_offset_m);
-    j["max_force_n"] = d.max_force_n;
-    j["rate_hz"] = d.rate_hz;
-    j["max_force_rate_n_per_s"] = d.max_force_rate_n_per_s;
-    j["realtime"] = d.realtime;
-    j["cpu"] = d.cpu;
-    j["tool"] = d.tool;
-    j["blade_length_m"] = d.blade_length_m;
-    j["blade_axis"] = vec(d.blade_axis);
-  };
-  J j;
-  if (h.devices_listed) {
-    J list = J::array();
-    for (const HapticDeviceSpec& d : h.devices) {
-      J e;
-      device(d, e);
-      list.push_back(e);
-    }
-    j["devices"] = list;
-  } else {
-    device(h.devices.at(0), j);
-  }
-  if (h.has_surface_point) j["surface_point_m"] = vec(h.surface_point_m);
-  j["surface_normal"] = vec(h.surface_normal);
-  j["local_radius_m"] = h.local_radius_m;
-  j["local_spacing_m"] = h.local_spacing_m;
-  j["record_trajectory"] = h.record_trajectory;
-  writeGlobalModelKeys(h, j);
-  return j;
 }
 
 }  // namespace inc

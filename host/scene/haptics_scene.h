@@ -1,4 +1,4 @@
-// Scene keys of the haptic loops (the `haptics` section): reading, validation and writing.
+// Scene keys of the haptic loops (the `haptics` section): reading and validation (the key table writes them).
 #pragma once
 
 #include <string>
@@ -18,9 +18,6 @@ namespace inc {
 // scalpel), or a global model whose organ mesh cannot be used (open, too large, held nowhere by `fixed`).
 HapticsSpec readHapticsSpec(const scene_json::ObjectReader& top, const std::string& base_dir, const ModelsSpec& models,
                             const std::vector<FixedRegion>& fixed);
-
-// The same keys for sceneToJson (reads back to the same values).
-nlohmann::ordered_json hapticsSpecJson(const HapticsSpec& h);
 
 // Whether this build has the OpenHaptics driver (CMake found the SDK: INCISION_WITH_OPENHAPTICS).
 bool openHapticsBuilt();
