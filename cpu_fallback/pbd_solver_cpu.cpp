@@ -131,9 +131,9 @@ INC_FLATTEN void projectDistanceRange(const pbd::BlockView<T>& v, const std::int
       if (kJacobi) {  // pbd::emitCorrection
         slot_corr[s0] = r.dp0 * scale;
         slot_corr[s0 + 1] = r.dp1 * scale;
-      } else {
-        x[i] += r.dp0;
-        x[j] += r.dp1;
+      } else {  // fixed particles are never written (pbd::emitCorrection)
+        if (w[i] > T(0)) x[i] += r.dp0;
+        if (w[j] > T(0)) x[j] += r.dp1;
       }
       lambda[c].x += r.dlambda * scale;
     };
@@ -252,8 +252,8 @@ void shapeMatchMembersVec(const pbd::BlockView<float>& b, int c, const pbd::Solv
     const F4 d = pbd::shapeMatchApplyCorrection3(kept_dp[s - s0], sc, w[p], shift);
     if (kJacobi)
       storeVec3(slot_corr[s], d);
-    else
-      storeVec3(x[p], loadVec3(x[p]) + d);  // ctx.x[p] += d
+    else if (w[p] > 0.0f)
+      storeVec3(x[p], loadVec3(x[p]) + d);  // ctx.x[p] += d (fixed members never written)
     storeVec3(lambda[s], loadVec3(lambda[s]) + kept_dl[s - s0] * sc);
   }
 }
@@ -312,10 +312,11 @@ void projectLaplacianCpu<float>(const pbd::BlockView<float>& b, int c, const pbd
     storeVec3(b.slot_corr[s0], d_center * scale);
     for (std::int32_t s = s0 + 1; s < s1; ++s) storeVec3(b.slot_corr[s], dl * (-ctx.w[b.ids[s]] * inv_n) * scale);
   } else {
-    storeVec3(ctx.x[ids[0]], loadVec3(ctx.x[ids[0]]) + d_center);
+    // pbd::emitCorrection: fixed particles are never written
+    if (ctx.w[ids[0]] > 0.0f) storeVec3(ctx.x[ids[0]], loadVec3(ctx.x[ids[0]]) + d_center);
     for (std::int32_t s = s0 + 1; s < s1; ++s) {
       Vec3<float>& xs = ctx.x[b.ids[s]];
-      storeVec3(xs, loadVec3(xs) + dl * (-ctx.w[b.ids[s]] * inv_n));
+      if (ctx.w[b.ids[s]] > 0.0f) storeVec3(xs, loadVec3(xs) + dl * (-ctx.w[b.ids[s]] * inv_n));
     }
   }
   storeVec3(b.lambda[c], loadVec3(b.lambda[c]) + dl * scale);

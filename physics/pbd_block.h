@@ -60,12 +60,14 @@ INC_HD XpbdTerm<T> blockTerm(const BlockView<T>& b, const SolveContext<T>& ctx, 
   return xpbdTerm(ctx.xpbd, b.compliance[i], b.stiffness, ctx.dt);
 }
 
+// Gauss-Seidel writes only movable particles: a fixed one (w = 0, zero correction) may be shared by the
+// constraints of one colour (model/graph_coloring.h), which run concurrently, so it is never written.
 template <typename T>
 INC_HD void emitCorrection(const BlockView<T>& b, const SolveContext<T>& ctx, std::int32_t slot, const Vec3<T>& d,
                            T scale) {
   if (ctx.jacobi)
     b.slot_corr[slot] = d * scale;
-  else
+  else if (ctx.w[b.ids[slot]] > T(0))
     ctx.x[b.ids[slot]] += d;
 }
 
@@ -130,7 +132,7 @@ INC_HD void shapeMatchApplyTerm(const BlockView<T>& b, const SolveContext<T>& ct
   const Vec3<T> d = ctx.w[p] > T(0) ? r.dp * sc + shift : Vec3<T>();
   if (ctx.jacobi)
     b.slot_corr[s] = d;
-  else
+  else if (ctx.w[p] > T(0))  // a fixed member may belong to another cluster of this colour (emitCorrection)
     ctx.x[p] += d;
   b.lambda[s] += r.dlambda * sc;
 }
