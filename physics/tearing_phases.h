@@ -70,7 +70,7 @@ INC_HD Detection<T> detectYield(const SheetView<T>& s, std::int32_t i, int crite
     sigma *= T(1) / T(e.count);
     T s1, s2, s3;
     symmetricEigenvalues(sigma, s1, s2, s3);
-    y = e.count >= 2 && (s1 - s3) / T(2) >= s.tau_f[i];
+    y = e.count >= 2 && trescaShearOfPrincipals(s1, s3) >= s.tau_f[i];
     smax = s1;
     smin = s3;
     if (y) {

@@ -201,12 +201,19 @@ INC_HD void accumulateBondStress(Mat3<T>& sigma, const Vec3<T>& xi, const Vec3<T
   sigma += outer(n, n) * (k * (len - rest) / rest);
 }
 
-// Eq. 5 with the real principal stresses: tau = (sigma_1 - sigma_3) / 2 >= tau_f.
+// Eq. 5's shear from the largest and smallest principal stresses: tau = (sigma_1 - sigma_3) / 2. detectYield
+// calls it with the eigenvalues it already has (it needs them for the split direction too).
+template <typename T>
+INC_HD T trescaShearOfPrincipals(T sigma_1, T sigma_3) {
+  return (sigma_1 - sigma_3) / T(2);
+}
+
+// Eq. 5 with the real principal stresses of sigma: tau = (sigma_1 - sigma_3) / 2 >= tau_f.
 template <typename T>
 INC_HD T trescaShearPrincipal(const Mat3<T>& sigma) {
   T s1, s2, s3;
   symmetricEigenvalues(sigma, s1, s2, s3);
-  return (s1 - s3) / T(2);
+  return trescaShearOfPrincipals(s1, s3);
 }
 
 }  // namespace inc::tear
