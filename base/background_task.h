@@ -88,7 +88,8 @@ class BackgroundTask {
   // it threw), false when it is still running.
   bool waitFor(double ms) {
     std::unique_lock<std::mutex> lock(mutex_);
-    if (!finished_.wait_for(lock, std::chrono::duration<double, std::milli>(ms), [this] { return done_; })) return false;
+    if (!finished_.wait_for(lock, std::chrono::duration<double, std::milli>(ms), [this] { return done_; }))
+      return false;
     if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
     return true;
   }

@@ -9,8 +9,13 @@
 namespace inc {
 
 Progress::Progress(std::string label, long total, bool quiet, std::FILE* out)
-    : label_(std::move(label)), total_(total), quiet_(quiet), tty_(isTerminal(out)), out_(out),
-      start_(std::chrono::steady_clock::now()), last_draw_(start_) {}
+    : label_(std::move(label)),
+      total_(total),
+      quiet_(quiet),
+      tty_(isTerminal(out)),
+      out_(out),
+      start_(std::chrono::steady_clock::now()),
+      last_draw_(start_) {}
 
 bool Progress::isTerminal(std::FILE* f) { return isatty(fileno(f)) != 0; }
 

@@ -68,9 +68,9 @@ void Team::barrier() const {
   const Clock::duration phase_work = arrive - since_;
   const int others = std::max(1, c.threads.load(std::memory_order_relaxed) - 1);
   const Clock::time_point limit =
-      arrive + std::min<Clock::duration>(std::max<Clock::duration>(kStallFloor, 2 * phase_work),
-                                         std::max<Clock::duration>(others * worked_ + kStallFloor - waited_,
-                                                                   Clock::duration(0)));
+      arrive + std::min<Clock::duration>(
+                   std::max<Clock::duration>(kStallFloor, 2 * phase_work),
+                   std::max<Clock::duration>(others * worked_ + kStallFloor - waited_, Clock::duration(0)));
   bool released = false, timed = false;
   for (int k = 1;; ++k) {
     if (c.generation.load(std::memory_order_acquire) != gen) {

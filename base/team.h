@@ -1,4 +1,5 @@
-// A team of threads kept for one multi-phase step (one OpenMP parallel region, barriers between phases) that carries on with the lead thread alone when a barrier stalls.
+// A team of threads kept for one multi-phase step (one OpenMP parallel region, barriers between phases) that carries on
+// with the lead thread alone when a barrier stalls.
 #pragma once
 
 #include <atomic>
@@ -13,8 +14,8 @@ namespace detail {
 
 // Shared by the threads of one team run.
 struct TeamControl {
-  std::atomic<int> threads{1};    // threads of the team
-  std::atomic<int> active{1};     // threads that take part in phases: `threads`, or 1 after a stall
+  std::atomic<int> threads{1};  // threads of the team
+  std::atomic<int> active{1};   // threads that take part in phases: `threads`, or 1 after a stall
   std::atomic<bool> stall_seen{false};
   alignas(64) std::atomic<int> arrived{0};
   alignas(64) std::atomic<unsigned> generation{0};
@@ -34,8 +35,8 @@ int regionThreadCount();
 // A barrier spins briefly, then sleeps. The team has stalled when a waiter has waited longer than it worked:
 // in one wait (past twice its work since its previous barrier, and at least 10 ms: a team member was
 // descheduled) or over the step so far (more than (team size - 1) x its work plus 10 ms: many short waits,
-// the team no faster than one thread). That happens on a loaded machine (other processes, a second test process with its own
-// team). From the barrier where a stall is noticed on, the team has size 1: the lead thread does every
+// the team no faster than one thread). That happens on a loaded machine (other processes, a second test process with
+// its own team). From the barrier where a stall is noticed on, the team has size 1: the lead thread does every
 // remaining phase alone, the others get empty ranges and their barriers return at once. Phase results do not
 // depend on who computes which item, so the step's result is unchanged.
 class Team {

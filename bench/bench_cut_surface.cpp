@@ -4,16 +4,16 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <ctime>
 #include <cstdio>
+#include <ctime>
 #include <fstream>
 #include <string>
 #include <vector>
 
+#include "host/assembly/organ_shapes.h"
 #include "host/cut/cut_mesh.h"
 #include "host/cut/cut_surface_split.h"
 #include "model/input_error.h"
-#include "host/assembly/organ_shapes.h"
 
 namespace {
 
@@ -105,8 +105,8 @@ int main(int argc, char** argv) {
         cpu_checked.push_back(cpuMs() - c0);
       }
       std::printf("%-16s %9zu %9d %6d %6d %8d %10.2f %8.2f %8.2f %9.1f° %9.1f°\n", k.name, r.mesh.triangles.size(),
-                  r.crossings, r.front_points + r.pierce_points, r.wall_triangles, r.components, median(ms), median(cpu),
-                  median(cpu_checked), r.min_wall_angle_deg, r.min_split_angle_deg);
+                  r.crossings, r.front_points + r.pierce_points, r.wall_triangles, r.components, median(ms),
+                  median(cpu), median(cpu_checked), r.min_wall_angle_deg, r.min_split_angle_deg);
     }
     // The previous planar-only split (ear-clipped caps) on the same plane, for comparison.
     std::vector<double> ms;
@@ -115,8 +115,8 @@ int main(int argc, char** argv) {
       const CutMeshResult m = splitMeshByPlane(mesh, Vec3d(c.x + 0.013 * W, 0, 0), Vec3d(-1, 0, 0));
       ms.push_back(msSince(t0));
     }
-    std::printf("%-16s %58.2f  (splitMeshByPlane, ear-clipped caps: the planar-only split it replaces)\n", "planar (old)",
-                median(ms));
+    std::printf("%-16s %58.2f  (splitMeshByPlane, ear-clipped caps: the planar-only split it replaces)\n",
+                "planar (old)", median(ms));
   } catch (const InputError& e) {
     std::fprintf(stderr, "%s\n", e.what());
     return 2;

@@ -12,11 +12,11 @@
 #include <thread>
 #include <vector>
 
-#include "host/scene/scene_compile.h"
 #include "cpu_fallback/mls_pair_sums_cpu.h"
 #include "host/backends/backend_choice.h"
-#include "model/backend.h"
+#include "host/scene/scene_compile.h"
 #include "host/sim/dissection_simulation.h"
+#include "model/backend.h"
 #include "model/input_error.h"
 #if INCISION_HAVE_CUDA
 #include "kernels/device_info.h"
@@ -54,8 +54,9 @@ double g_chebyshev_rho = 0;
 int g_end_frames = 0;
 double g_pace_hz = 0;
 double g_blade_radius = 0;  // --blade-radius: cutting.blade_radius_m (the blade as a contact)
-int g_conversion_delay = 0;  // --conversion-delay: cutting.conversion_delay_frames (conversions prepared beside a frame)
-int g_open_frames = 0;       // --open-frames: cutting.open_surface_frames (the surface opened during the stroke)
+int g_conversion_delay =
+    0;                  // --conversion-delay: cutting.conversion_delay_frames (conversions prepared beside a frame)
+int g_open_frames = 0;  // --open-frames: cutting.open_surface_frames (the surface opened during the stroke)
 
 struct Row {
   std::string kind, backend, solver;
@@ -204,11 +205,13 @@ Row runCase(const std::string& kind, BackendKind backend, int target, double len
 }
 
 void printRow(const Row& r) {
-  std::printf("%-6s %-5s %-12s %7d %7d %6.3f %7d %6d %5d | %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f | %8.2f %8.2f %8.2f %7d"
-              " | %8.2f %8.2f %8.2f %8.2f\n",
-              r.kind.c_str(), r.backend.c_str(), r.solver.c_str(), r.target, r.spheres, r.cut_length_m, r.nodal_points, r.interface,
-              r.mls_substeps, r.ms_deform, r.ms_cutting, r.ms_mls, r.ms_exchange, r.ms_pbd, r.ms_convert, r.ms_repack,
-              r.ms_apply_frame, r.ms_after, r.spheres_after, r.ms_end_frame, r.ms_ending, r.ms_apply_wait, r.ms_end_worker);
+  std::printf(
+      "%-6s %-5s %-12s %7d %7d %6.3f %7d %6d %5d | %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f | %8.2f %8.2f %8.2f %7d"
+      " | %8.2f %8.2f %8.2f %8.2f\n",
+      r.kind.c_str(), r.backend.c_str(), r.solver.c_str(), r.target, r.spheres, r.cut_length_m, r.nodal_points,
+      r.interface, r.mls_substeps, r.ms_deform, r.ms_cutting, r.ms_mls, r.ms_exchange, r.ms_pbd, r.ms_convert,
+      r.ms_repack, r.ms_apply_frame, r.ms_after, r.spheres_after, r.ms_end_frame, r.ms_ending, r.ms_apply_wait,
+      r.ms_end_worker);
   std::fflush(stdout);
 }
 
@@ -237,17 +240,20 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 120));
   app.add_option("--blade-radius", g_blade_radius, "cutting.blade_radius_m: the blade's contact capsule (m), 0: none")
       ->check(CLI::Range(0.0, 0.05));
-  app.add_option("--conversion-delay", g_conversion_delay,
-                 "cutting.conversion_delay_frames: 1 prepares each conversion beside the frame and applies it at the next")
+  app.add_option(
+         "--conversion-delay", g_conversion_delay,
+         "cutting.conversion_delay_frames: 1 prepares each conversion beside the frame and applies it at the next")
       ->check(CLI::Range(0, 1));
   app.add_option("--open-frames", g_open_frames,
-                 "cutting.open_surface_frames: open the surface along the sweep so far on a worker, shown this many frames later")
+                 "cutting.open_surface_frames: open the surface along the sweep so far on a worker, shown this many "
+                 "frames later")
       ->check(CLI::Range(0, 120));
   app.add_option("--pace-hz", g_pace_hz, "start frames at this rate (an interactive loop); 0: back to back")
       ->check(CLI::Range(0.0, 10000.0));
   app.add_flag("--stages", stages, "print the median of every stage of the cutting frames");
   app.add_flag("--quick", quick, "a short run: size 500, lengths 0.06,0.24");
-  app.add_flag("--portable-pair-sums", portable, "CPU MLS: the portable pair loops even where the CPU has AVX2 (same bits)");
+  app.add_flag("--portable-pair-sums", portable,
+               "CPU MLS: the portable pair loops even where the CPU has AVX2 (same bits)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -281,10 +287,10 @@ int main(int argc, char** argv) {
     have_gpu = inc::cuda::queryDevices().device_count > 0;
 #endif
     std::vector<Row> rows;
-    std::printf("%-6s %-5s %-12s %7s %7s %6s %7s %6s %5s | %8s %8s %8s %8s %8s %8s | %8s %8s %8s %7s | %8s %8s %8s %8s\n",
-                "case", "back",
-                "pbd", "target", "spheres", "len_m", "nodes", "iface", "mlsub", "deform", "cutting", "mls", "exchng", "pbd",
-                "convert", "repack", "apply", "after", "spheres", "end", "ending", "wait", "worker");
+    std::printf(
+        "%-6s %-5s %-12s %7s %7s %6s %7s %6s %5s | %8s %8s %8s %8s %8s %8s | %8s %8s %8s %7s | %8s %8s %8s %8s\n",
+        "case", "back", "pbd", "target", "spheres", "len_m", "nodes", "iface", "mlsub", "deform", "cutting", "mls",
+        "exchng", "pbd", "convert", "repack", "apply", "after", "spheres", "end", "ending", "wait", "worker");
     for (BackendKind b : backends) {
       if (b == BackendKind::Cuda && !have_gpu) continue;
       for (double n : sizes) {
@@ -301,7 +307,8 @@ int main(int argc, char** argv) {
       std::ofstream f(csv);
       if (!f) throw InputError(csv, "--csv", "cannot write");
       f << "case,backend,target,spheres,cut_length_m,nodal_points,interface_spheres,mls_substeps,ms_deform,ms_cutting,"
-           "ms_mls,ms_exchange,ms_pbd,ms_convert,ms_repack,ms_apply_frame,ms_after,spheres_after,pbd_solver,pbd_iterations,"
+           "ms_mls,ms_exchange,ms_pbd,ms_convert,ms_repack,ms_apply_frame,ms_after,spheres_after,pbd_solver,pbd_"
+           "iterations,"
            "stroke_end_frames,pace_hz,ms_end_frame,ms_ending,ms_apply_wait,ms_end_worker,ms_end_split,ms_end_repack,"
            "ms_end_build,ms_end_bind,blade_radius_m,conversion_delay_frames,open_surface_frames\n";
       for (const Row& r : rows)
@@ -309,21 +316,24 @@ int main(int argc, char** argv) {
           << r.nodal_points << ',' << r.interface << ',' << r.mls_substeps << ',' << r.ms_deform << ',' << r.ms_cutting
           << ',' << r.ms_mls << ',' << r.ms_exchange << ',' << r.ms_pbd << ',' << r.ms_convert << ',' << r.ms_repack
           << ',' << r.ms_apply_frame << ',' << r.ms_after << ',' << r.spheres_after << ',' << r.solver << ','
-          << r.pbd_iterations << ',' << g_end_frames << ',' << g_pace_hz << ',' << r.ms_end_frame << ','
-          << r.ms_ending << ',' << r.ms_apply_wait << ',' << r.ms_end_worker << ',' << r.ms_end_split << ','
-          << r.ms_end_repack << ',' << r.ms_end_build << ',' << r.ms_end_bind << ',' << g_blade_radius << ','
-          << g_conversion_delay << ',' << g_open_frames << '\n';
+          << r.pbd_iterations << ',' << g_end_frames << ',' << g_pace_hz << ',' << r.ms_end_frame << ',' << r.ms_ending
+          << ',' << r.ms_apply_wait << ',' << r.ms_end_worker << ',' << r.ms_end_split << ',' << r.ms_end_repack << ','
+          << r.ms_end_build << ',' << r.ms_end_bind << ',' << g_blade_radius << ',' << g_conversion_delay << ','
+          << g_open_frames << '\n';
     }
     if (rows.empty()) {
       std::printf("bench_cutting: no rows (sizes above the limits or no device)\n");
       return 0;
     }
     const Row& first = rows.front();
-    std::printf("bench_cutting: %s (%s PBD) %d spheres, conversion delay %d: %.3f ms per frame while cutting (%d nodal points), re-packing %.3f ms; "
-                "stroke end (%d frames late): blade-leaving frame %.2f ms, applying frame %.2f ms (waited %.2f), workers %.2f ms\n",
-                first.backend.c_str(), first.solver.c_str(), first.spheres, g_conversion_delay, first.ms_cutting, first.nodal_points,
-                first.ms_repack,
-                g_end_frames, first.ms_end_frame, first.ms_apply_frame, first.ms_apply_wait, first.ms_end_worker);
+    std::printf(
+        "bench_cutting: %s (%s PBD) %d spheres, conversion delay %d: %.3f ms per frame while cutting (%d nodal "
+        "points), re-packing %.3f ms; "
+        "stroke end (%d frames late): blade-leaving frame %.2f ms, applying frame %.2f ms (waited %.2f), workers %.2f "
+        "ms\n",
+        first.backend.c_str(), first.solver.c_str(), first.spheres, g_conversion_delay, first.ms_cutting,
+        first.nodal_points, first.ms_repack, g_end_frames, first.ms_end_frame, first.ms_apply_frame,
+        first.ms_apply_wait, first.ms_end_worker);
   } catch (const InputError& e) {
     std::fprintf(stderr, "%s\n", e.what());
     return 2;

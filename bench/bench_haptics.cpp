@@ -113,9 +113,12 @@ int main(int argc, char** argv) {
   // --- BEM: precompute and SMW update against element count ---
   std::printf("BEM global model (Kelvin, constant triangles), E = 3 kPa, nu = 0.45\n");
   std::printf("%8s %6s %12s %12s %12s %12s\n", "elements", "dofs", "assemble_s", "inverse_s", "solve_ms", "fresh_ms");
-  struct Mesh { std::string name; TriangleMesh mesh; };
-  std::vector<Mesh> meshes = {{"ico80", icosphereMesh(0.04, 1)}, {"ico320", icosphereMesh(0.04, 2)},
-                              {"kidney690", uvSphereMesh(0.04, 16, 23)}};
+  struct Mesh {
+    std::string name;
+    TriangleMesh mesh;
+  };
+  std::vector<Mesh> meshes = {
+      {"ico80", icosphereMesh(0.04, 1)}, {"ico320", icosphereMesh(0.04, 2)}, {"kidney690", uvSphereMesh(0.04, 16, 23)}};
   if (!quick) meshes.push_back({"ico1280", icosphereMesh(0.04, 3)});
   double kidney_global_ms = 0.0, kidney_local_us = 0.0, kidney_touch_ms = 0.0;
   if (loop_only) meshes.clear();
@@ -160,25 +163,27 @@ int main(int argc, char** argv) {
     if (m.name == "kidney690") {
       // The paper's kidney case: 688 polygons, 2068 DOFs, 40 Hz visual, 1 kHz haptic.
       bem.setContact({});
-      HybridHapticModel hybrid(bem, [] {
-        HemisphereCloudSpec s;
-        s.inner_spacing_m = 2e-3;
-        s.inner_shells = 2;
-        s.radius_m = 8e-3;
-        return s;
-      }(), {3e3, 0.45});
+      HybridHapticModel hybrid(bem,
+                               [] {
+                                 HemisphereCloudSpec s;
+                                 s.inner_spacing_m = 2e-3;
+                                 s.inner_shells = 2;
+                                 s.radius_m = 8e-3;
+                                 return s;
+                               }(),
+                               {3e3, 0.45});
       kidney_touch_ms = 1e3 * medianSeconds(reps, [&] { hybrid.touch(top); });
       const double touch_cpu_ms = 1e3 * medianCpuSeconds(reps, [&] { hybrid.touch(top); });
       const Vec3d d = bem.normals()[top] * -1e-3;
       kidney_global_ms = 1e3 * medianSeconds(reps, [&] { hybrid.globalStep(d, 0.0); });
       kidney_local_us = 1e6 * medianSeconds(reps * 1000, [&] { (void)hybrid.localTick(d); });
-      std::printf("   kidney hybrid: contact change (touch: half-space data + 3 BEM solves) %.2f ms wall (%.2f ms CPU), "
-                  "global step %.3f ms "
-                  "(budget 25 ms at 40 Hz, margin %.0fx even with a new contact every frame: %.1fx), local tick %.3f us "
-                  "(budget 1000 us, margin %.0fx)\n",
-                  kidney_touch_ms, touch_cpu_ms, kidney_global_ms, 25.0 / kidney_global_ms,
-                  25.0 / (kidney_global_ms + kidney_touch_ms),
-                  kidney_local_us, 1000.0 / kidney_local_us);
+      std::printf(
+          "   kidney hybrid: contact change (touch: half-space data + 3 BEM solves) %.2f ms wall (%.2f ms CPU), "
+          "global step %.3f ms "
+          "(budget 25 ms at 40 Hz, margin %.0fx even with a new contact every frame: %.1fx), local tick %.3f us "
+          "(budget 1000 us, margin %.0fx)\n",
+          kidney_touch_ms, touch_cpu_ms, kidney_global_ms, 25.0 / kidney_global_ms,
+          25.0 / (kidney_global_ms + kidney_touch_ms), kidney_local_us, 1000.0 / kidney_local_us);
       csv.row("kidney", "touch", E, kidney_touch_ms * 1e-3, "s");
       csv.row("kidney", "touch_cpu", E, touch_cpu_ms * 1e-3, "s");
       csv.row("kidney", "global_step", E, kidney_global_ms * 1e-3, "s");
@@ -265,7 +270,8 @@ int main(int argc, char** argv) {
       cfg.realtime = realtime;
       if (spin_margin_us >= 0.0) cfg.spin_margin_s = cfg.realtime_spin_margin_s = 1e-6 * spin_margin_us;
       cfg.record_capacity = std::size_t(loop_seconds * 1000.0 * 1.2) + 1000;
-      HapticLoop loop(dev, [&](const ForceRequest& q) { return hybrid.localTick(q.sample.position_m - rest); }, cfg);
+      HapticLoop loop(
+          dev, [&](const ForceRequest& q) { return hybrid.localTick(q.sample.position_m - rest); }, cfg);
       GlobalLoop global(hybrid, loop, 40.0, rest);
       global.setRetouchEachStep(mode == 2);
       loop.start();
@@ -276,12 +282,13 @@ int main(int argc, char** argv) {
       loop.stop();
       const PeriodStats s = loop.stats();
       std::printf("%-26s %8llu %9.4f %9.4f %9.4f %8llu %8llu %8.2f us %8.2f us\n", names[mode],
-                  (unsigned long long)s.ticks, 1e3 * s.p50_s, 1e3 * s.p99_s, 1e3 * s.max_s, (unsigned long long)s.missed,
-                  (unsigned long long)s.skipped, 1e6 * s.compute_p99_s, 1e6 * s.compute_max_s);
+                  (unsigned long long)s.ticks, 1e3 * s.p50_s, 1e3 * s.p99_s, 1e3 * s.max_s,
+                  (unsigned long long)s.missed, (unsigned long long)s.skipped, 1e6 * s.compute_p99_s,
+                  1e6 * s.compute_max_s);
       if (mode > 0) {
         const auto gp = global.periods(), gw = global.workSeconds();
-        std::printf("   global loop: %zu steps, period p50 %.2f ms p99 %.2f ms, work p50 %.3f ms max %.3f ms\n", gp.size(),
-                    1e3 * pct(gp, 0.5), 1e3 * pct(gp, 0.99), 1e3 * pct(gw, 0.5),
+        std::printf("   global loop: %zu steps, period p50 %.2f ms p99 %.2f ms, work p50 %.3f ms max %.3f ms\n",
+                    gp.size(), 1e3 * pct(gp, 0.5), 1e3 * pct(gp, 0.99), 1e3 * pct(gw, 0.5),
                     gw.empty() ? 0.0 : 1e3 * *std::max_element(gw.begin(), gw.end()));
         csv.row("loop", std::string(mode == 1 ? "global" : "retouch") + "_period_p50", 40, pct(gp, 0.5), "s");
         csv.row("loop", std::string(mode == 1 ? "global" : "retouch") + "_work_p50", 40, pct(gw, 0.5), "s");
@@ -301,10 +308,11 @@ int main(int argc, char** argv) {
   }
   std::printf("haptic thread scheduling: %s\n", scheduling.c_str());
   if (csv.f) std::fclose(csv.f);
-  std::printf("SUMMARY bench_haptics: loop p99 %.3f ms beside the 40 Hz global loop; kidney contact change %.2f ms + "
-              "global step %.3f ms (40 Hz margin %.1fx with a new contact every frame), local tick %.3f us (1 kHz "
-              "margin %.0fx)\n",
-              1e3 * p99_loaded, kidney_touch_ms, kidney_global_ms, 25.0 / (kidney_touch_ms + kidney_global_ms),
-              kidney_local_us, 1000.0 / kidney_local_us);
+  std::printf(
+      "SUMMARY bench_haptics: loop p99 %.3f ms beside the 40 Hz global loop; kidney contact change %.2f ms + "
+      "global step %.3f ms (40 Hz margin %.1fx with a new contact every frame), local tick %.3f us (1 kHz "
+      "margin %.0fx)\n",
+      1e3 * p99_loaded, kidney_touch_ms, kidney_global_ms, 25.0 / (kidney_touch_ms + kidney_global_ms), kidney_local_us,
+      1000.0 / kidney_local_us);
   return 0;
 }

@@ -13,17 +13,17 @@
 #include <vector>
 
 #include "bench/bench_memory.h"
-#include "host/backends/backend_choice.h"
-#include "host/backends/solver_factory.h"
 #include "bench/mls_traffic.h"
 #include "cpu_fallback/mls_solver_cpu.h"
+#include "host/assembly/mls_model_build.h"
+#include "host/assembly/particle_sampling.h"
+#include "host/backends/backend_choice.h"
+#include "host/backends/solver_factory.h"
+#include "kernels/device_info.h"
 #include "model/backend.h"
 #include "model/input_error.h"
-#include "host/assembly/mls_model_build.h"
 #include "model/mls_model.h"
 #include "model/mls_solver.h"
-#include "host/assembly/particle_sampling.h"
-#include "kernels/device_info.h"
 #if INCISION_HAVE_CUDA
 #include "kernels/mls_solver_cuda.h"
 #endif
@@ -158,7 +158,8 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   try {
-    if (lo < 8 || hi < lo || substeps < 1 || repeats < 1) throw InputError("", "--min/--max/--substeps/--repeats", "out of range");
+    if (lo < 8 || hi < lo || substeps < 1 || repeats < 1)
+      throw InputError("", "--min/--max/--substeps/--repeats", "out of range");
     if (cpu_threads > 0) omp_set_num_threads(cpu_threads);
     if (quick) {
       hi = std::min<std::int64_t>(hi, 100000);
@@ -185,8 +186,10 @@ int main(int argc, char** argv) {
     if (precision_text != "float64") precs.push_back(Precision::Float32);
     if (precision_text != "float32") precs.push_back(Precision::Float64);
 
-    std::printf("# bench_mls: %s; CPU threads %d; %d substeps x %d repeats (median); cube of lattice particles, "
-                "support 2 spacings\n", note.empty() ? "-" : note.c_str(), omp_get_max_threads(), substeps, repeats);
+    std::printf(
+        "# bench_mls: %s; CPU threads %d; %d substeps x %d repeats (median); cube of lattice particles, "
+        "support 2 spacings\n",
+        note.empty() ? "-" : note.c_str(), omp_get_max_threads(), substeps, repeats);
     std::printf("%-5s %-8s %10s %6s %11s %10s %10s %10s %10s %12s %9s %8s\n", "back", "prec", "particles", "nbrs",
                 "ms/step", "wall ms", "integrate", "stress", "forces", "particles/s", "MB/step", "GB/s");
     std::vector<Row> rows;
@@ -222,8 +225,10 @@ int main(int argc, char** argv) {
           }
 #endif
         };
-        if (p == Precision::Float64) runBoth(buildMlsModel<double>(in));
-        else runBoth(buildMlsModel<float>(in));
+        if (p == Precision::Float64)
+          runBoth(buildMlsModel<double>(in));
+        else
+          runBoth(buildMlsModel<float>(in));
       }
     }
 
@@ -232,9 +237,10 @@ int main(int argc, char** argv) {
     double ms32 = 0, ms64 = 0;
     const int acc_steps = quick ? 100 : 500;
     const double err = precisionError(acc_backend, 10000, acc_steps, ms32, ms64);
-    std::printf("# accuracy (%s, 1e4 particles, %d substeps): float32 vs float64 max |du| / max |u| = %.3e; "
-                "%.4f ms/step float32, %.4f ms/step float64 (%.2fx)\n",
-                backendName(acc_backend), acc_steps, err, ms32, ms64, ms64 / ms32);
+    std::printf(
+        "# accuracy (%s, 1e4 particles, %d substeps): float32 vs float64 max |du| / max |u| = %.3e; "
+        "%.4f ms/step float32, %.4f ms/step float64 (%.2fx)\n",
+        backendName(acc_backend), acc_steps, err, ms32, ms64, ms64 / ms32);
 
     if (!csv.empty()) {
       std::ofstream f(csv);
@@ -242,7 +248,8 @@ int main(int argc, char** argv) {
       // kind "timing": one row per backend, precision and size; kind "accuracy": the float32 and float64 runs of
       // the same 1e4-particle motion (wall ms per step, float32's max |du| / max |u| against float64).
       f << "kind,backend,precision,particles,mean_neighbors,ms_per_step,wall_ms_per_step,ms_integrate,ms_stress,"
-           "ms_forces,particles_per_s,mbytes_per_step,gbytes_per_s,rel_error_vs_float64,ms_per_step_min,ms_per_step_max,"
+           "ms_forces,particles_per_s,mbytes_per_step,gbytes_per_s,rel_error_vs_float64,ms_per_step_min,ms_per_step_"
+           "max,"
            "host_peak_mib,device_peak_mib\n";
       for (const Row& r : rows)
         f << "timing," << r.backend << ',' << r.precision << ',' << r.particles << ',' << r.mean_neighbors << ','
@@ -256,16 +263,20 @@ int main(int argc, char** argv) {
     // Summary line (last line of stdout): the largest float32 row of the fastest backend.
     const Row* best = nullptr;
     for (const Row& r : rows)
-      if (r.precision == "float32" && (!best || r.particles > best->particles || (r.particles == best->particles && r.ms_step < best->ms_step)))
+      if (r.precision == "float32" &&
+          (!best || r.particles > best->particles || (r.particles == best->particles && r.ms_step < best->ms_step)))
         best = &r;
     // Achieved bandwidth against the device's measured peak (a device-to-device copy, read + write).
     const double peak = best && best->backend == "cuda" ? cuda::measureCopyBandwidthGbs() : 0.0;
     char frac[64] = "";
-    if (peak > 0) std::snprintf(frac, sizeof frac, ", %.0f %% of the measured %.0f GB/s", 100.0 * best->gbytes_per_s / peak, peak);
+    if (peak > 0)
+      std::snprintf(frac, sizeof frac, ", %.0f %% of the measured %.0f GB/s", 100.0 * best->gbytes_per_s / peak, peak);
     if (best)
-      std::printf("bench_mls: %s float32 %lld particles %.4f ms/step (%.3e particles/s, %.1f GB/s%s); f32-vs-f64 rel err %.2e\n",
-                  best->backend.c_str(), (long long)best->particles, best->ms_step, best->particles_per_s,
-                  best->gbytes_per_s, frac, err);
+      std::printf(
+          "bench_mls: %s float32 %lld particles %.4f ms/step (%.3e particles/s, %.1f GB/s%s); f32-vs-f64 rel err "
+          "%.2e\n",
+          best->backend.c_str(), (long long)best->particles, best->ms_step, best->particles_per_s, best->gbytes_per_s,
+          frac, err);
     else
       std::printf("bench_mls: no float32 row; f32-vs-f64 rel err %.2e\n", err);
   } catch (const InputError& e) {

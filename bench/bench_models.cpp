@@ -8,13 +8,13 @@
 #include <string>
 #include <vector>
 
-#include "host/scene/scene_compile.h"
-#include "model/backend.h"
+#include "host/app/runner.h"
 #include "host/backends/backend_choice.h"
 #include "host/scene/embedded_scenes.h"
-#include "model/input_error.h"
-#include "host/app/runner.h"
+#include "host/scene/scene_compile.h"
 #include "host/scene/scene_loader.h"
+#include "model/backend.h"
+#include "model/input_error.h"
 
 using namespace inc;
 
@@ -88,7 +88,9 @@ int main(int argc, char** argv) {
     }
     Scene base = parseScene(findEmbeddedScene("beam")->json, "<embedded:beam>", ".");
     base.geometry.spacing = spacing;
-    struct Combo { bool mls, pbd, tearing; };
+    struct Combo {
+      bool mls, pbd, tearing;
+    };
     const Combo combos[] = {{true, false, false}, {false, true, false}, {true, true, false}, {true, true, true}};
     std::vector<Row> rows;
     std::printf("%-8s %-36s %10s %10s %10s %10s %11s %11s\n", "backend", "models", "particles", "ms/frame", "min",
@@ -114,12 +116,12 @@ int main(int argc, char** argv) {
     }
     // Summary: the cost each model adds on the last backend (both-minus-one differences).
     const std::size_t k = rows.size() - 4;
-    std::printf("bench_models: %s: mls %.3f ms, pbd %.3f ms, mls+pbd %.3f ms, +tearing %.3f ms per frame; memory "
-                "mls %.2f, pbd %.2f, +tearing %.2f MiB\n",
-                rows[k].backend.c_str(), rows[k].ms_median, rows[k + 1].ms_median, rows[k + 2].ms_median,
-                rows[k + 3].ms_median, rows[k].host_mib + rows[k].device_mib,
-                rows[k + 1].host_mib + rows[k + 1].device_mib,
-                rows[k + 3].host_mib + rows[k + 3].device_mib - rows[k + 2].host_mib - rows[k + 2].device_mib);
+    std::printf(
+        "bench_models: %s: mls %.3f ms, pbd %.3f ms, mls+pbd %.3f ms, +tearing %.3f ms per frame; memory "
+        "mls %.2f, pbd %.2f, +tearing %.2f MiB\n",
+        rows[k].backend.c_str(), rows[k].ms_median, rows[k + 1].ms_median, rows[k + 2].ms_median, rows[k + 3].ms_median,
+        rows[k].host_mib + rows[k].device_mib, rows[k + 1].host_mib + rows[k + 1].device_mib,
+        rows[k + 3].host_mib + rows[k + 3].device_mib - rows[k + 2].host_mib - rows[k + 2].device_mib);
   } catch (const InputError& e) {
     std::fprintf(stderr, "bench_models: %s\n", e.what());
     return 2;

@@ -1,6 +1,6 @@
 // Benchmark: grid neighbour search rebuild + self-query time against particle count (jittered lattice, ~30 neighbours).
-#include <CLI/CLI.hpp>
 #include <omp.h>
+#include <CLI/CLI.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -11,13 +11,13 @@
 #include <string>
 #include <vector>
 
-#include "bench/bench_memory.h"
-#include "host/backends/backend_choice.h"
-#include "cpu_fallback/neighbor_search_cpu.h"
 #include "base/parallel.h"
+#include "bench/bench_memory.h"
+#include "cpu_fallback/neighbor_search_cpu.h"
+#include "host/backends/backend_choice.h"
+#include "kernels/device_info.h"
 #include "model/backend.h"
 #include "model/input_error.h"
-#include "kernels/device_info.h"
 #if INCISION_HAVE_CUDA
 #include <cuda_runtime.h>
 
@@ -80,13 +80,13 @@ TrafficModel trafficModel(std::size_t point_bytes, double neighbours, double buc
   auto sortPairs = [](int bits) {  // CUB onesweep: a key histogram pass, then 8-bit digit passes over key+value
     return 4.0 + 16.0 * double((bits + 7) / 8);
   };
-  double build = P;                      // bounding-box reduction reads every point
-  build += 4.0 * buckets_per_point;      // histogram memset
-  build += P + 4.0 + 4.0 + 8.0;          // bucket keys: read point, write key and iota, histogram atomic (r+w)
-  build += sortPairs(bucket_bits);       // sort (key, index) pairs by bucket
-  build += 4.0 + 2.0 * P + 4.0;          // gather: read perm and point, write sorted point and inverse
-  if (Q != P) build += Q;                // ... and the packed copy
-  build += 8.0 * buckets_per_point;      // exclusive scan of the histogram: read + write
+  double build = P;                  // bounding-box reduction reads every point
+  build += 4.0 * buckets_per_point;  // histogram memset
+  build += P + 4.0 + 4.0 + 8.0;      // bucket keys: read point, write key and iota, histogram atomic (r+w)
+  build += sortPairs(bucket_bits);   // sort (key, index) pairs by bucket
+  build += 4.0 + 2.0 * P + 4.0;      // gather: read perm and point, write sorted point and inverse
+  if (Q != P) build += Q;            // ... and the packed copy
+  build += 8.0 * buckets_per_point;  // exclusive scan of the histogram: read + write
   if (morton) build += (P + 8.0) + sortPairs(morton_bits);  // Morton keys + their sort before the rest
   if (!gpu) {
     // traversal: read own point (and perm for original-order lists), append the list to a block buffer; then
@@ -96,8 +96,8 @@ TrafficModel trafficModel(std::size_t point_bytes, double neighbours, double buc
   // storage order: one traversal reads its own point and writes its offset and its row in place
   if (storage) return {build, Q + 8.0 + 4.0 * neighbours};
   double query = Q + 4.0 + 4.0 + 4.0 * neighbours;  // count+stage: own point, perm; write count, staged row
-  query += 4.0 + 8.0;                    // scan: read count, write int64 offset
-  query += 4.0 + 8.0 + 8.0 * neighbours;  // copy: perm, offset; read the staged row, write the indices
+  query += 4.0 + 8.0;                               // scan: read count, write int64 offset
+  query += 4.0 + 8.0 + 8.0 * neighbours;            // copy: perm, offset; read the staged row, write the indices
   return {build, query};
 }
 
@@ -110,9 +110,8 @@ int keyBits(std::uint64_t count) {
 struct Row {
   std::string backend, precision;
   std::size_t n = 0;
-  double neighbours = 0, build_ms = 0, query_ms = 0, total_ms = 0, bytes = 0, gbs = 0, peak_fraction = 0,
-         target_ms = 0;
-  double total_min_ms = 0, total_max_ms = 0;  // spread of the timed repeats
+  double neighbours = 0, build_ms = 0, query_ms = 0, total_ms = 0, bytes = 0, gbs = 0, peak_fraction = 0, target_ms = 0;
+  double total_min_ms = 0, total_max_ms = 0;      // spread of the timed repeats
   double host_peak_mib = 0, device_peak_mib = 0;  // bench/bench_memory.h: the row's peaks
   bool hashed = false;
   double cell_factor = 0;
@@ -252,9 +251,9 @@ Row runCuda(std::size_t n, int repeats, bool morton, double cell_factor, double 
   const auto& p = s.params();
   const int max_dim = std::max(p.dims[0], std::max(p.dims[1], p.dims[2]));
   const int morton_bits = std::max(1, std::min(30, 3 * (keyBits(std::uint64_t(max_dim)) - p.morton_shift)));
-  const TrafficModel m = trafficModel(sizeof(Vec3<T>), row.neighbours, used / double(n),
-                                      keyBits(std::uint64_t(neighborBucketCount(n))), morton_bits, morton, true,
-                                      g_storage);
+  const TrafficModel m =
+      trafficModel(sizeof(Vec3<T>), row.neighbours, used / double(n), keyBits(std::uint64_t(neighborBucketCount(n))),
+                   morton_bits, morton, true, g_storage);
   row.bytes = m.build + m.query;
   row.gbs = row.bytes * double(n) / (row.total_ms * 1e-3) / 1e9;
   row.peak_fraction = peak_gbs > 0 ? row.gbs / peak_gbs : 0.0;
@@ -302,8 +301,9 @@ int main(int argc, char** argv) {
   app.add_option("--cpu-max", cpu_max, "also run the CPU fallback from --min up to this count (0: no)");
   app.add_option("--precision", precision, "float | double")->check(CLI::IsMember({"float", "double"}));
   app.add_option("--repeats", repeats, "timed repeats per size after warm-up (default 10 GPU, 5 CPU)");
-  app.add_option("--cpu-threads", cpu_threads, "OpenMP threads for the CPU runs (0: OMP_NUM_THREADS or all cores;"
-                                              " 2 matches the issue's 2-core target)");
+  app.add_option("--cpu-threads", cpu_threads,
+                 "OpenMP threads for the CPU runs (0: OMP_NUM_THREADS or all cores;"
+                 " 2 matches the issue's 2-core target)");
   app.add_option("--cell-factor", cell_factor, "grid cell edge / radius (default: CPU 0.5, CUDA 1.0, as findNeighbors)")
       ->check(CLI::Range(0.0, 10.0));
   app.add_flag("--morton", morton, "store the grid in Z order");
@@ -337,11 +337,12 @@ int main(int argc, char** argv) {
                     dev.peak_bandwidth_gbs > 0 ? "memory clock x bus width" : "the H100 SXM5 datasheet");
       peak_note = note;
     }
-    std::printf("# %s; device: %s; peak %.0f GB/s (%s); cpu threads %d; radius %.2f at unit density; %s order; %s input;"
-                " %s lists%s\n",
-                choice.note.c_str(), dev.device_count ? dev.name.c_str() : "none", peak, peak_note.c_str(),
-                cpu::threadCount(), kRadius, morton ? "Morton" : "bucket", g_shuffle ? "shuffled" : "lattice-order",
-                g_storage ? "storage-order" : "original-order", g_fresh_lists ? "; CPU: fresh lists every call" : "");
+    std::printf(
+        "# %s; device: %s; peak %.0f GB/s (%s); cpu threads %d; radius %.2f at unit density; %s order; %s input;"
+        " %s lists%s\n",
+        choice.note.c_str(), dev.device_count ? dev.name.c_str() : "none", peak, peak_note.c_str(), cpu::threadCount(),
+        kRadius, morton ? "Morton" : "bucket", g_shuffle ? "shuffled" : "lattice-order",
+        g_storage ? "storage-order" : "original-order", g_fresh_lists ? "; CPU: fresh lists every call" : "");
     std::printf("%-5s %-6s %10s %7s %11s %11s %11s %9s %8s %8s %8s %10s\n", "back", "prec", "n", "nbr/p", "build_ms",
                 "query_ms", "total_ms", "ns/p", "B/p", "GB/s", "peak", "target_ms");
     std::vector<Row> rows;
@@ -352,10 +353,11 @@ int main(int argc, char** argv) {
 #if INCISION_HAVE_CUDA
       if (on_gpu)
         r = precision == "double" ? runCuda<double>(n, reps, morton, cellFactor(true), peak, profile)
-                                    : runCuda<float>(n, reps, morton, cellFactor(true), peak, profile);
+                                  : runCuda<float>(n, reps, morton, cellFactor(true), peak, profile);
 #endif
-      if (!on_gpu) r = precision == "double" ? runCpu<double>(n, reps, morton, cellFactor(false))
-                                        : runCpu<float>(n, reps, morton, cellFactor(false));
+      if (!on_gpu)
+        r = precision == "double" ? runCpu<double>(n, reps, morton, cellFactor(false))
+                                  : runCpu<float>(n, reps, morton, cellFactor(false));
       r.cell_factor = cellFactor(on_gpu);
       r.precision = precision;
       printRow(r);
@@ -369,16 +371,17 @@ int main(int argc, char** argv) {
     if (!csv.empty()) {
       std::ofstream f(csv);
       if (!f) throw InputError(csv, "--csv", "cannot write the file");
-      f << "backend,precision,order,input,lists,cell_factor,n,neighbors_per_particle,build_ms,query_ms,total_ms,ns_per_particle,"
+      f << "backend,precision,order,input,lists,cell_factor,n,neighbors_per_particle,build_ms,query_ms,total_ms,ns_per_"
+           "particle,"
            "bytes_per_particle,achieved_gbs,peak_gbs,peak_fraction,target_ms,total_min_ms,total_max_ms,host_peak_mib,"
            "device_peak_mib\n";
       for (const Row& r : rows)
         f << r.backend << ',' << r.precision << ',' << (morton ? "morton" : "bucket") << ','
-          << (g_shuffle ? "shuffled" : "lattice") << ',' << (g_storage ? "storage" : "original") << ',' << r.cell_factor << ',' << r.n << ','
-          << r.neighbours << ',' << r.build_ms << ',' << r.query_ms << ',' << r.total_ms << ','
-          << r.total_ms * 1e6 / double(r.n) << ',' << r.bytes << ',' << r.gbs << ',' << (r.backend == "cuda" ? peak : 0.0)
-          << ',' << r.peak_fraction << ',' << r.target_ms << ',' << r.total_min_ms << ',' << r.total_max_ms << ','
-          << r.host_peak_mib << ',' << r.device_peak_mib << '\n';
+          << (g_shuffle ? "shuffled" : "lattice") << ',' << (g_storage ? "storage" : "original") << ',' << r.cell_factor
+          << ',' << r.n << ',' << r.neighbours << ',' << r.build_ms << ',' << r.query_ms << ',' << r.total_ms << ','
+          << r.total_ms * 1e6 / double(r.n) << ',' << r.bytes << ',' << r.gbs << ','
+          << (r.backend == "cuda" ? peak : 0.0) << ',' << r.peak_fraction << ',' << r.target_ms << ',' << r.total_min_ms
+          << ',' << r.total_max_ms << ',' << r.host_peak_mib << ',' << r.device_peak_mib << '\n';
     }
     // one-line summary (last line): the largest run of each backend and the 1e6 row when present
     std::string summary = "bench_neighbors " + precision + (g_storage ? " storage-order" : "") + ":";
@@ -392,7 +395,8 @@ int main(int argc, char** argv) {
         }
       char buf[200];
       if (mega) {
-        std::snprintf(buf, sizeof buf, " %s 1e6 %.3f ms (target %.1f);", b.c_str(), mega->total_ms, b == "cuda" ? 0.5 : 300.0);
+        std::snprintf(buf, sizeof buf, " %s 1e6 %.3f ms (target %.1f);", b.c_str(), mega->total_ms,
+                      b == "cuda" ? 0.5 : 300.0);
         summary += buf;
       }
       if (big && big != mega) {

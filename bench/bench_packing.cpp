@@ -1,4 +1,5 @@
-// Benchmark: sphere packing time of the liver-like organ, and skinning time per frame (CPU / CUDA) against vertex count.
+// Benchmark: sphere packing time of the liver-like organ, and skinning time per frame (CPU / CUDA) against vertex
+// count.
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -11,11 +12,11 @@
 
 #include "base/parallel.h"
 #include "cpu_fallback/skinning_cpu.h"
-#include "model/input_error.h"
 #include "host/assembly/metaball_packing.h"
 #include "host/assembly/organ_shapes.h"
 #include "host/assembly/skin_binding.h"
 #include "kernels/device_info.h"
+#include "model/input_error.h"
 #if INCISION_HAVE_CUDA
 #include <cuda_runtime.h>
 
@@ -162,10 +163,11 @@ int run(const std::string& backend, const std::string& precision, int min_v, int
     pack_s.push_back(pack.report.seconds);
   }
   const PackReport& pr = pack.report;
-  std::printf("packing: liver-like %zu vertices -> %d spheres, %d links, coverage %.4f, surface dev mean %.2e max %.2e m, "
-              "protrusion %.2e m, %.3f s (median of %zu, %d threads)\n",
-              ref.vertices.size(), pr.spheres, pr.links, pr.coverage, pr.surface_mean, pr.surface_max, pr.max_protrusion,
-              median(pack_s), pack_s.size(), cpu::threadCount());
+  std::printf(
+      "packing: liver-like %zu vertices -> %d spheres, %d links, coverage %.4f, surface dev mean %.2e max %.2e m, "
+      "protrusion %.2e m, %.3f s (median of %zu, %d threads)\n",
+      ref.vertices.size(), pr.spheres, pr.links, pr.coverage, pr.surface_mean, pr.surface_max, pr.max_protrusion,
+      median(pack_s), pack_s.size(), cpu::threadCount());
 
   // 1b. Packing time against the sphere count (samples grow with it: 80 per sphere, at least the option's).
   struct PackRow {
@@ -181,8 +183,8 @@ int run(const std::string& backend, const std::string& precision, int min_v, int
       o.target_spheres = target;
       o.samples = std::max(popt.samples, 80 * target);
       const PackedOrgan pk = packOrgan(ref, o);
-      pack_rows.push_back({target, pk.report.spheres, o.samples, pk.report.seconds, pk.report.coverage,
-                           pk.report.surface_max});
+      pack_rows.push_back(
+          {target, pk.report.spheres, o.samples, pk.report.seconds, pk.report.coverage, pk.report.surface_max});
       std::printf("%-10s %8d %8d %9d %10.3f %10.4f %14.3e\n", "pack", target, pk.report.spheres, o.samples,
                   pk.report.seconds, pk.report.coverage, pk.report.surface_max);
       std::fflush(stdout);
@@ -193,7 +195,8 @@ int run(const std::string& backend, const std::string& precision, int min_v, int
   std::vector<int> sizes;
   for (int v : {1000, 8000, 30000, 100000, 300000, 1000000, 3000000})
     if (v >= min_v && v <= max_v) sizes.push_back(v);
-  if (quick && sizes.size() > 3) sizes = {sizes.front(), 8000 >= min_v && 8000 <= max_v ? 8000 : sizes[1], sizes.back()};
+  if (quick && sizes.size() > 3)
+    sizes = {sizes.front(), 8000 >= min_v && 8000 <= max_v ? 8000 : sizes[1], sizes.back()};
   const int reps = repeats > 0 ? repeats : (quick ? 5 : 50);
   std::vector<Row> rows;
   std::printf("%-10s %-6s %-7s %10s %8s %3s %12s %16s %22s\n", "what", "backend", "prec", "vertices", "spheres", "k",
@@ -229,8 +232,8 @@ int run(const std::string& backend, const std::string& precision, int min_v, int
       f << "pack,cpu," << precision << "," << ref.vertices.size() << "," << r.spheres << ",0,0,0,0," << r.seconds << ","
         << r.coverage << "\n";
     for (const auto& r : rows)
-      f << r.what << "," << r.backend << "," << r.precision << "," << r.vertices << "," << r.spheres << "," << r.k << ","
-        << r.ms_skin << "," << r.ms_skin_normals << "," << r.ms_frame << ",,\n";
+      f << r.what << "," << r.backend << "," << r.precision << "," << r.vertices << "," << r.spheres << "," << r.k
+        << "," << r.ms_skin << "," << r.ms_skin_normals << "," << r.ms_frame << ",,\n";
   }
   // One-line summary (last line): packing, and skinning of the reference-sized surface per backend.
   std::string summary = "bench_packing " + precision + ": pack " + std::to_string(pr.spheres) + " spheres " +
@@ -268,7 +271,8 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   try {
     if (quick) popt.samples = std::min(popt.samples, 15000);
-    if (precision == "double") return run<double>(backend, precision, min_v, max_v, cpu_max, k, popt, quick, repeats, csv);
+    if (precision == "double")
+      return run<double>(backend, precision, min_v, max_v, cpu_max, k, popt, quick, repeats, csv);
     return run<float>(backend, precision, min_v, max_v, cpu_max, k, popt, quick, repeats, csv);
   } catch (const InputError& e) {
     std::fprintf(stderr, "%s\n", e.what());

@@ -1,4 +1,5 @@
-// PBD/XPBD metaball solver: frame time and constraints/s against sphere count (CPU and CUDA, Jacobi and Gauss-Seidel), and residual/deflection against iterations.
+// PBD/XPBD metaball solver: frame time and constraints/s against sphere count (CPU and CUDA, Jacobi and Gauss-Seidel),
+// and residual/deflection against iterations.
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -11,10 +12,10 @@
 #include <vector>
 
 #include "bench/bench_memory.h"
+#include "host/assembly/pbd_builders.h"
 #include "host/backends/solver_factory.h"
 #include "model/backend.h"
 #include "model/input_error.h"
-#include "host/assembly/pbd_builders.h"
 #include "model/pbd_model.h"
 #if INCISION_HAVE_CUDA
 #include "kernels/device_info.h"
@@ -101,13 +102,13 @@ double frameBytes(const PbdModel<T>& m, int iterations, int substeps, bool jacob
                   double(b.compliance.size()) * t + 2 * mult + n * (v3 + t);
     if (b.kind == PbdConstraintKind::ShapeMatching) proj += n * t;  // masses (centre of mass)
     if (jacobi)
-      proj += double(b.jacobi_scale.size()) * t + sl * v3 +                  // scales, slot corrections written
-              i4 * (n + 1) + i4 * sl + sl * v3 + 2 * n * v3;                  // gather
+      proj += double(b.jacobi_scale.size()) * t + sl * v3 +   // scales, slot corrections written
+              i4 * (n + 1) + i4 * sl + sl * v3 + 2 * n * v3;  // gather
     else
       proj += n * v3;  // positions written in place
     iter += proj;
   }
-  iter += 2 * n * v3 + 2 * n * t;                       // contacts
+  iter += 2 * n * v3 + 2 * n * t;                      // contacts
   const double sub = 4 * n * v3 + n * t + 3 * n * v3;  // predict (x, v read+write, x_prev written, w), velocities
   return double(substeps) * (double(iterations) * iter + sub);
 }
@@ -261,12 +262,12 @@ double tipDeflection(BackendKind kind, Solve solver, std::int64_t n, int iterati
 void printRow(const Row& r) {
   if (r.table == "scaling")
     std::printf("%-6s %-8s %-12s %-8s %8lld %9lld %4d %4d %5d %10.3f %12.3e %10.2e  %s\n", r.backend.c_str(),
-                r.precision.c_str(), r.solver.c_str(), r.path.c_str(), (long long)r.spheres, (long long)r.constraints, r.iterations, r.substeps, r.colors,
-                r.ms_frame, r.constraints_per_s, r.residual_max, r.stages.c_str());
+                r.precision.c_str(), r.solver.c_str(), r.path.c_str(), (long long)r.spheres, (long long)r.constraints,
+                r.iterations, r.substeps, r.colors, r.ms_frame, r.constraints_per_s, r.residual_max, r.stages.c_str());
   else
-    std::printf("%-6s %-8s %-12s %8lld %4d %4d %10.3f %10.3e %10.3e %10.3e %9.2f%%\n", r.backend.c_str(), r.precision.c_str(),
-                r.solver.c_str(), (long long)r.spheres, r.iterations, r.substeps, r.ms_frame, r.residual_max,
-                r.residual_rms, r.deflection_m, 100.0 * r.deflection_err);
+    std::printf("%-6s %-8s %-12s %8lld %4d %4d %10.3f %10.3e %10.3e %10.3e %9.2f%%\n", r.backend.c_str(),
+                r.precision.c_str(), r.solver.c_str(), (long long)r.spheres, r.iterations, r.substeps, r.ms_frame,
+                r.residual_max, r.residual_rms, r.deflection_m, 100.0 * r.deflection_err);
 }
 
 }  // namespace
@@ -290,14 +291,18 @@ int main(int argc, char** argv) {
   app.add_option("--iterations", iterations, "iterations per substep in the scaling table");
   app.add_option("--substeps", substeps, "substeps per 1/60 s frame");
   app.add_option("--repeats", repeats, "timed frames per point (median)");
-  app.add_option("--fused-max", fused_max, "CUDA: largest sphere count run by the fused single-block kernel (0: never; Jacobi: at most 256)");
-  app.add_flag("--no-graph", g_no_graph, "CUDA: launch every frame directly (no CUDA graph), as a cut's rebuilt model is");
-  app.add_option("--grid-max", grid_max, "CUDA, Jacobi: largest sphere count run as one cooperative grid launch (0: never)");
+  app.add_option("--fused-max", fused_max,
+                 "CUDA: largest sphere count run by the fused single-block kernel (0: never; Jacobi: at most 256)");
+  app.add_flag("--no-graph", g_no_graph,
+               "CUDA: launch every frame directly (no CUDA graph), as a cut's rebuilt model is");
+  app.add_option("--grid-max", grid_max,
+                 "CUDA, Jacobi: largest sphere count run as one cooperative grid launch (0: never)");
   app.add_option("--cluster-max", cluster_max,
                  "CUDA, Jacobi: largest sphere count run by the thread-block cluster frame kernel (0: never)");
   app.add_flag("--jacobi-only", jacobi_only, "scaling table: Jacobi rows only (no Gauss-Seidel)");
-  app.add_option("--chebyshev-rho", chebyshev_rho,
-                 "Jacobi rows of the scaling table: Chebyshev acceleration with this spectral-radius estimate (0: off)");
+  app.add_option(
+      "--chebyshev-rho", chebyshev_rho,
+      "Jacobi rows of the scaling table: Chebyshev acceleration with this spectral-radius estimate (0: off)");
   app.add_option("--accuracy-rhos", accuracy_rhos,
                  "the accuracy table's Chebyshev-accelerated Jacobi rows, one per estimate (empty: none)");
   app.add_option("--rotation-iterations", g_rotation_iterations,
@@ -308,11 +313,13 @@ int main(int argc, char** argv) {
   double budget_s = 130.0;
   app.add_option("--row-seconds", g_row_seconds, "wall-time budget of one timed point (at least 3 frames are timed)");
   app.add_option("--budget", budget_s, "whole run: points that would start after this many seconds are skipped");
-  app.add_flag("--profile", g_profile, "add a per-stage CUDA-event split (one extra unfused, ungraphed frame) to each row");
+  app.add_flag("--profile", g_profile,
+               "add a per-stage CUDA-event split (one extra unfused, ungraphed frame) to each row");
   CLI11_PARSE(app, argc, argv);
   try {
     const BackendKind requested = parseBackend(backend);
-    if (precision != "float32" && precision != "float64") throw InputError("bench_pbd", "--precision", "float32 or float64");
+    if (precision != "float32" && precision != "float64")
+      throw InputError("bench_pbd", "--precision", "float32 or float64");
     if (quick) {
       max_n = std::min<std::int64_t>(max_n, 10000);
       cpu_max = std::min<std::int64_t>(cpu_max, 3000);
@@ -323,8 +330,8 @@ int main(int argc, char** argv) {
     if (!(g_row_seconds > 0) || !(budget_s > 0))
       throw InputError("bench_pbd", "--row-seconds/--budget", "must be positive");
     if (quick) g_row_seconds = std::min(g_row_seconds, 0.5);
-    g_deadline = std::chrono::steady_clock::now() +
-                 std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(budget_s));
+    g_deadline = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                                        std::chrono::duration<double>(budget_s));
     std::vector<BackendKind> kinds;
     if (requested != BackendKind::Cuda) kinds.push_back(BackendKind::Cpu);
 #if INCISION_HAVE_CUDA
@@ -332,7 +339,8 @@ int main(int argc, char** argv) {
 #else
     const bool have_gpu = false;
 #endif
-    if (requested == BackendKind::Cuda && !have_gpu) throw InputError("bench_pbd", "--backend", "no usable CUDA device");
+    if (requested == BackendKind::Cuda && !have_gpu)
+      throw InputError("bench_pbd", "--backend", "no usable CUDA device");
     if (have_gpu && requested != BackendKind::Cpu) kinds.push_back(BackendKind::Cuda);
     const bool f64 = precision == "float64";
 
@@ -342,11 +350,11 @@ int main(int argc, char** argv) {
     std::sort(sizes.begin(), sizes.end());
 
     std::vector<Row> rows;
-    std::printf("# scaling: %d iterations x %d substeps per 1/60 s frame, probe pressing, volume preservation near it\n",
-                iterations, substeps);
-    std::printf("%-6s %-8s %-12s %-8s %8s %9s %4s %4s %5s %10s %12s %10s  stages\n", "backend", "prec", "solver", "path",
-                "spheres",
-                "constr", "it", "sub", "cols", "ms/frame", "constr/s", "resid_m");
+    std::printf(
+        "# scaling: %d iterations x %d substeps per 1/60 s frame, probe pressing, volume preservation near it\n",
+        iterations, substeps);
+    std::printf("%-6s %-8s %-12s %-8s %8s %9s %4s %4s %5s %10s %12s %10s  stages\n", "backend", "prec", "solver",
+                "path", "spheres", "constr", "it", "sub", "cols", "ms/frame", "constr/s", "resid_m");
     for (BackendKind k : kinds)
       for (std::int64_t n : sizes) {
         if (k == BackendKind::Cpu && n > cpu_max) continue;
@@ -356,11 +364,13 @@ int main(int argc, char** argv) {
             ++g_skipped;
             continue;
           }
-          const Row r = f64 ? timeFrames<double>(k, s, n, iterations, substeps, repeats, fused_max, cluster_max, grid_max)
-                            : timeFrames<float>(k, s, n, iterations, substeps, repeats, fused_max, cluster_max, grid_max);
+          const Row r =
+              f64 ? timeFrames<double>(k, s, n, iterations, substeps, repeats, fused_max, cluster_max, grid_max)
+                  : timeFrames<float>(k, s, n, iterations, substeps, repeats, fused_max, cluster_max, grid_max);
           printRow(r);
           rows.push_back(r);
-          if (k == BackendKind::Cuda && r.path != "launches" && !pastDeadline()) {  // the same on per-phase launches, for comparison
+          if (k == BackendKind::Cuda && r.path != "launches" &&
+              !pastDeadline()) {  // the same on per-phase launches, for comparison
             const Row u = f64 ? timeFrames<double>(k, s, n, iterations, substeps, repeats, 0, 0, 0)
                               : timeFrames<float>(k, s, n, iterations, substeps, repeats, 0, 0, 0);
             printRow(u);
@@ -371,8 +381,9 @@ int main(int argc, char** argv) {
 
     // Speed/accuracy trade: deflection error against iterations (reference: 200 Gauss-Seidel iterations).
     const int frames = quick ? 30 : 90;
-    std::printf("# accuracy: %lld spheres, %d frames of sagging; deflection error vs a 200-iteration Gauss-Seidel run\n",
-                (long long)accuracy_n, frames);
+    std::printf(
+        "# accuracy: %lld spheres, %d frames of sagging; deflection error vs a 200-iteration Gauss-Seidel run\n",
+        (long long)accuracy_n, frames);
     std::printf("%-6s %-8s %-12s %8s %4s %4s %10s %10s %10s %10s %10s\n", "backend", "prec", "solver", "spheres", "it",
                 "sub", "ms/frame", "resid_max", "resid_rms", "tip_m", "err");
     for (BackendKind k : kinds) {
@@ -393,8 +404,10 @@ int main(int argc, char** argv) {
             ++g_skipped;
             continue;
           }
-          Row r = f64 ? timeFrames<double>(k, s, accuracy_n, it, substeps, std::max(3, repeats / 2), fused_max, cluster_max, grid_max)
-                      : timeFrames<float>(k, s, accuracy_n, it, substeps, std::max(3, repeats / 2), fused_max, cluster_max, grid_max);
+          Row r = f64 ? timeFrames<double>(k, s, accuracy_n, it, substeps, std::max(3, repeats / 2), fused_max,
+                                           cluster_max, grid_max)
+                      : timeFrames<float>(k, s, accuracy_n, it, substeps, std::max(3, repeats / 2), fused_max,
+                                          cluster_max, grid_max);
           r.table = "accuracy";
           r.deflection_m = f64 ? tipDeflection<double>(k, s, accuracy_n, it, substeps, frames, st)
                                : tipDeflection<float>(k, s, accuracy_n, it, substeps, frames, st);
@@ -410,15 +423,16 @@ int main(int argc, char** argv) {
     if (!csv.empty()) {
       std::ofstream out(csv);
       if (!out) throw InputError(csv, "--csv", "cannot write");
-      out << "table,backend,precision,solver,path,spheres,constraints,iterations,substeps,colors,ms_frame,constraints_per_s,"
+      out << "table,backend,precision,solver,path,spheres,constraints,iterations,substeps,colors,ms_frame,constraints_"
+             "per_s,"
              "residual_max_m,residual_rms_m,deflection_m,deflection_rel_err,ms_frame_min,ms_frame_max,mbytes_frame,"
              "gbytes_per_s,host_peak_mib,device_peak_mib\n";
       for (const Row& r : rows)
-        out << r.table << ',' << r.backend << ',' << r.precision << ',' << r.solver << ',' << r.path << ',' << r.spheres << ','
-            << r.constraints << ',' << r.iterations << ',' << r.substeps << ',' << r.colors << ',' << r.ms_frame << ','
-            << r.constraints_per_s << ',' << r.residual_max << ',' << r.residual_rms << ',' << r.deflection_m << ','
-            << r.deflection_err << ',' << r.ms_min << ',' << r.ms_max << ',' << r.mbytes_frame << ',' << r.gbytes_per_s
-            << ',' << r.host_peak_mib << ',' << r.device_peak_mib << '\n';
+        out << r.table << ',' << r.backend << ',' << r.precision << ',' << r.solver << ',' << r.path << ',' << r.spheres
+            << ',' << r.constraints << ',' << r.iterations << ',' << r.substeps << ',' << r.colors << ',' << r.ms_frame
+            << ',' << r.constraints_per_s << ',' << r.residual_max << ',' << r.residual_rms << ',' << r.deflection_m
+            << ',' << r.deflection_err << ',' << r.ms_min << ',' << r.ms_max << ',' << r.mbytes_frame << ','
+            << r.gbytes_per_s << ',' << r.host_peak_mib << ',' << r.device_peak_mib << '\n';
     }
     // Summary: the liver-sized case (accuracy_n spheres) at the scaling table's settings, fastest per backend.
     std::string summary = "bench_pbd: " + std::to_string(accuracy_n) + " spheres, " + std::to_string(iterations) + "x" +

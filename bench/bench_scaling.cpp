@@ -9,19 +9,19 @@
 #include <string>
 #include <vector>
 
-#include "host/scene/scene_compile.h"
-#include "bench/bench_memory.h"
-#include "host/backends/backend_choice.h"
-#include "bench/mls_traffic.h"
 #include "base/parallel.h"
-#include "model/backend.h"
-#include "host/scene/embedded_scenes.h"
-#include "model/input_error.h"
+#include "bench/bench_memory.h"
+#include "bench/mls_traffic.h"
 #include "host/app/runner.h"
-#include "host/scene/scene_loader.h"
-#include "host/assembly/skin_binding.h"
 #include "host/assembly/pbd_builders.h"
+#include "host/assembly/skin_binding.h"
+#include "host/backends/backend_choice.h"
+#include "host/scene/embedded_scenes.h"
+#include "host/scene/scene_compile.h"
+#include "host/scene/scene_loader.h"
 #include "kernels/device_info.h"
+#include "model/backend.h"
+#include "model/input_error.h"
 #if INCISION_HAVE_CUDA
 #include <cuda_runtime.h>
 
@@ -81,9 +81,11 @@ Row skinning(std::int64_t n, BackendKind be, int repeats) {
   const SkinBinding b = bindSkin(surf, mb, 4);
   const SkinArrays<T> a = skinArrays<T>(b);
   std::vector<Vec3<T>> centres(mb.size());
-  for (std::size_t i = 0; i < mb.size(); ++i) centres[i] = Vec3<T>(T(mb.rest_centers[i].x), T(mb.rest_centers[i].y), T(mb.rest_centers[i].z + 0.001));
+  for (std::size_t i = 0; i < mb.size(); ++i)
+    centres[i] = Vec3<T>(T(mb.rest_centers[i].x), T(mb.rest_centers[i].y), T(mb.rest_centers[i].z + 0.001));
   std::vector<Mat3<T>> rot(mb.size(), Mat3<T>::identity());
-  // Compulsory traffic per blend: rest vertex + output (2 x 3T), k x (index + weight), k x (centre + rotation) gathered.
+  // Compulsory traffic per blend: rest vertex + output (2 x 3T), k x (index + weight), k x (centre + rotation)
+  // gathered.
   r.mbytes = double(n) * (6.0 * sizeof(T) + 4.0 * (4.0 + sizeof(T)) + 4.0 * 12.0 * sizeof(T)) / 1e6;
   std::vector<double> ms;
   if (be == BackendKind::Cpu) {
@@ -208,7 +210,8 @@ int main(int argc, char** argv) {
       cpu_max = std::min<std::int64_t>(cpu_max, 4000);
       repeats = std::min(repeats, 3);
     }
-    if (lo < 100 || hi < lo || repeats < 1) throw InputError("", "--min/--max/--repeats", "need 100 <= min <= max, repeats >= 1");
+    if (lo < 100 || hi < lo || repeats < 1)
+      throw InputError("", "--min/--max/--repeats", "need 100 <= min <= max, repeats >= 1");
     std::vector<BackendKind> backends;
     const BackendKind req = parseBackend(backend);
     if (req == BackendKind::Cpu) {
@@ -216,7 +219,8 @@ int main(int argc, char** argv) {
     } else {
       const BackendChoice c = resolveBackend(req);
       backends.push_back(c.kind);
-      if (req == BackendKind::Auto && c.kind == BackendKind::Cuda && cpu_max >= lo) backends.push_back(BackendKind::Cpu);
+      if (req == BackendKind::Auto && c.kind == BackendKind::Cuda && cpu_max >= lo)
+        backends.push_back(BackendKind::Cpu);
     }
     std::vector<Precision> precs;
     if (precision == "float32" || precision == "both") precs.push_back(Precision::Float32);
@@ -230,8 +234,8 @@ int main(int argc, char** argv) {
            "device_peak_mib,substeps\n";
       if (!f) throw InputError(csv, "--csv", "cannot write the file");
     }
-    std::printf("%-9s %-5s %-8s %10s %10s %10s %10s %12s %9s %9s %10s %9s %9s %6s\n", "suite", "backend", "precision", "n",
-                "ms median", "min", "max", "items/s", "MB", "GB/s", "host MiB", "dev MiB", "dev peak", "subst");
+    std::printf("%-9s %-5s %-8s %10s %10s %10s %10s %12s %9s %9s %10s %9s %9s %6s\n", "suite", "backend", "precision",
+                "n", "ms median", "min", "max", "items/s", "MB", "GB/s", "host MiB", "dev MiB", "dev peak", "subst");
     for (const std::string suite : {"skinning", "frame"}) {
       if (suites.find(suite) == std::string::npos) continue;
       for (BackendKind be : backends)
@@ -257,7 +261,8 @@ int main(int argc, char** argv) {
                 << std::endl;
             }
             // The next point is ~4x the work: skip it when it would not fit the budget.
-            if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() * 4.0 > budget_s / 2.0) break;
+            if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() * 4.0 > budget_s / 2.0)
+              break;
             if (n < top && n * 4 > top) n = top / 4;  // end exactly at the top count
           }
         }
@@ -278,9 +283,10 @@ int main(int argc, char** argv) {
     std::snprintf(frac, sizeof frac, "; best GPU row %.0f GB/s = %.0f %% of the measured %.0f GB/s copy peak", best_gbs,
                   100.0 * best_gbs / peak, peak);
   std::printf("bench_scaling: %zu points, largest n %lld, best throughput %.3e items/s%s\n", rows.size(),
-              rows.empty() ? 0LL : (long long)std::max_element(rows.begin(), rows.end(), [](const Row& a, const Row& b) {
-                                     return a.n < b.n;
-                                   })->n,
+              rows.empty() ? 0LL
+                           : (long long)std::max_element(rows.begin(), rows.end(),
+                                                         [](const Row& a, const Row& b) { return a.n < b.n; })
+                                 ->n,
               best, frac);
   return 0;
 }

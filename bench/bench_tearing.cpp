@@ -1,4 +1,5 @@
-// Frame time before, during and after tearing ~200 / ~4000 particles out of a leg-like skin (traditional vs Tresca, CPU and CUDA tearing step).
+// Frame time before, during and after tearing ~200 / ~4000 particles out of a leg-like skin (traditional vs Tresca, CPU
+// and CUDA tearing step).
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -11,9 +12,9 @@
 #include <string>
 #include <vector>
 
+#include "host/tear/tearing_driver.h"
 #include "model/backend.h"
 #include "model/input_error.h"
-#include "host/tear/tearing_driver.h"
 #include "model/tearing_sheet.h"
 #if INCISION_HAVE_CUDA
 #include "kernels/device_info.h"
@@ -217,10 +218,12 @@ int main(int argc, char** argv) {
                "per-stage breakdown (device work synchronised around each stage, PBD stages by CUDA events; slower)");
   app.add_flag("--stages", opt.stages,
                "print the coarse stages' host wall time per phase (no synchronisation added: what --profile perturbs)");
-  app.add_flag("--host-path", opt.host_path, "CUDA: host sheet + host model rebuild every tearing frame (the old path)");
+  app.add_flag("--host-path", opt.host_path,
+               "CUDA: host sheet + host model rebuild every tearing frame (the old path)");
   app.add_flag("--sorted-rebuild", opt.sorted_rebuild,
                "CUDA device path: re-derive the topology by the older radix sorts instead of per particle");
-  app.add_flag("--no-graph", opt.no_graph, "CUDA: launch every PBD frame directly (no CUDA graph), to measure the graph's part");
+  app.add_flag("--no-graph", opt.no_graph,
+               "CUDA: launch every PBD frame directly (no CUDA graph), to measure the graph's part");
   app.add_option("--summary-every", opt.summary_every, "CUDA: PBD residual/finiteness summary every N frames");
   try {
     app.parse(argc, argv);
@@ -250,9 +253,9 @@ int main(int argc, char** argv) {
     if (backend_text != "cpu" && backend_text != "cuda" && backend_text != "both")
       throw InputError("command line", "--backend", "expected cpu, cuda or both");
     std::vector<Row> rows;
-    std::printf("%-5s %-12s %9s %6s %7s %7s %9s %9s %9s %9s %8s %8s %7s %6s\n", "tear", "method", "particles",
-                "target", "gripped", "splits", "ms_before", "ms_during", "ms_max", "ms_after", "tear_ms", "rebld_ms",
-                "drop", "path");
+    std::printf("%-5s %-12s %9s %6s %7s %7s %9s %9s %9s %9s %8s %8s %7s %6s\n", "tear", "method", "particles", "target",
+                "gripped", "splits", "ms_before", "ms_during", "ms_max", "ms_after", "tear_ms", "rebld_ms", "drop",
+                "path");
     for (BackendKind b : backends) {
       if (b == BackendKind::Cpu && particles > cpu_max) continue;
       for (std::int64_t t : tears)
@@ -274,9 +277,9 @@ int main(int argc, char** argv) {
            "ms_tear_during,ms_rebuild_during,drop,path\n";
       for (const Row& r : rows)
         f << r.backend << ',' << r.method << ',' << r.particles << ',' << r.target << ',' << r.gripped << ','
-          << r.splits << ',' << r.particles_after << ',' << r.ms_before << ',' << r.ms_during << ','
-          << r.ms_during_max << ',' << r.ms_after << ',' << r.ms_tear_during << ',' << r.ms_rebuild_during << ','
-          << r.drop << ',' << r.path << '\n';
+          << r.splits << ',' << r.particles_after << ',' << r.ms_before << ',' << r.ms_during << ',' << r.ms_during_max
+          << ',' << r.ms_after << ',' << r.ms_tear_during << ',' << r.ms_rebuild_during << ',' << r.drop << ','
+          << r.path << '\n';
     }
     // Summary: the worst Tresca drop and its frame time during the largest tear, per backend.
     std::ostringstream sum;

@@ -1,4 +1,5 @@
-// Compulsory memory traffic of the MLS solver (bytes): one substep and the per-frame reduction (bench_mls, bench_scaling).
+// Compulsory memory traffic of the MLS solver (bytes): one substep and the per-frame reduction (bench_mls,
+// bench_scaling).
 #pragma once
 
 #include <cstddef>
@@ -11,9 +12,10 @@ namespace inc::bench {
 // bytes per scalar (4 float32, 8 float64).
 inline double mlsStepBytes(std::int64_t n, double nnz, std::size_t t) {
   const double T = double(t), N = double(n);
-  const double drift = N * (1 + 10 * T + 6 * T);                                   // kind, v, f, m, u read; v, u written
+  const double drift = N * (1 + 10 * T + 6 * T);  // kind, v, f, m, u read; v, u written
   const double stress = N * (3 * T + 3 * T + 9 * T + T + 8 + 9 * T + T) + nnz * 4;  // X, u, A^-1, v, offsets; M, psi
-  const double force = N * (3 * T + 9 * T + 8 + 1 + T + 3 * T + 3 * T + 3 * T) + nnz * 4;  // X, M, offsets, kind, m, v, f
+  const double force =
+      N * (3 * T + 9 * T + 8 + 1 + T + 3 * T + 3 * T + 3 * T) + nnz * 4;  // X, M, offsets, kind, m, v, f
   return drift + stress + force;
 }
 

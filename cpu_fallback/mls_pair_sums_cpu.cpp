@@ -91,7 +91,8 @@ INC_TARGET_AVX2 void forceRangeAvx2(const MlsView<float>& s, std::int64_t begin,
     const auto add = [&](std::int64_t p, int q) INC_TARGET_AVX2 {
       const float* mi = m + 9 * std::int64_t(s.indices[p]);
       const __m128 w = _mm_loadu_ps(wx + 3 * p);
-      acc[q] = _mm256_add_ps(acc[q], _mm256_mul_ps(_mm256_loadu_ps(mi), _mm256_permutevar8x32_ps(_mm256_castps128_ps256(w), cols)));
+      acc[q] = _mm256_add_ps(
+          acc[q], _mm256_mul_ps(_mm256_loadu_ps(mi), _mm256_permutevar8x32_ps(_mm256_castps128_ps256(w), cols)));
       acc8[q] = _mm_add_ss(acc8[q], _mm_mul_ss(_mm_load_ss(mi + 8), _mm_movehl_ps(w, w)));
     };
     const std::int64_t e = s.offsets[k + 1];

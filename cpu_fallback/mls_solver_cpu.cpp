@@ -1,4 +1,5 @@
-// CPU MLS solver: drift, coupling, pass 1 (stress) and pass 2 (force gather + kick) on one thread team per frame, serial reductions.
+// CPU MLS solver: drift, coupling, pass 1 (stress) and pass 2 (force gather + kick) on one thread team per frame,
+// serial reductions.
 #include "cpu_fallback/mls_solver_cpu.h"
 
 #include <algorithm>
@@ -7,8 +8,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "cpu_fallback/mls_pair_sums_cpu.h"
 #include "base/parallel.h"
+#include "cpu_fallback/mls_pair_sums_cpu.h"
 #include "physics/mls_passes.h"
 
 namespace inc::cpu {
@@ -82,7 +83,8 @@ void MlsCpuSolver<T>::buildPairTables() {
 
 template <typename T>
 int MlsCpuSolver<T>::teamThreads() const {
-  return int(std::max<std::int64_t>(1, std::min<std::int64_t>(threadCount(), std::int64_t(size()) / kParticlesPerThread)));
+  return int(
+      std::max<std::int64_t>(1, std::min<std::int64_t>(threadCount(), std::int64_t(size()) / kParticlesPerThread)));
 }
 
 template <typename T>
@@ -300,9 +302,10 @@ MlsReduction MlsCpuSolver<T>::reduce() {
       if (r.finite) {
         r.finite = false;
         r.first_bad = k;
-        r.bad_stage = !(isFinite(st.displacement[std::size_t(k)]) && isFinite(st.velocity[std::size_t(k)])) ? "integrate"
-                      : !isFinite(st.force[std::size_t(k)])                                               ? "forces"
-                                                                                                          : "stress";
+        r.bad_stage = !(isFinite(st.displacement[std::size_t(k)]) && isFinite(st.velocity[std::size_t(k)]))
+                          ? "integrate"
+                      : !isFinite(st.force[std::size_t(k)]) ? "forces"
+                                                            : "stress";
       }
       continue;
     }
@@ -397,10 +400,13 @@ template <typename T>
 MemoryReport MlsCpuSolver<T>::memory() const {
   MemoryReport m;
   m.host_bytes = model_.bytes() + state_.bytes() +
-                 (saved_u_.size() + saved_v_.size() + pair_gradient_.size() + pair_force_.size() + weighted_sum_.size() +
-                  elastic_force_.size()) * sizeof(Vec3<T>) + stiffening_out_.size() * sizeof(T) +
+                 (saved_u_.size() + saved_v_.size() + pair_gradient_.size() + pair_force_.size() +
+                  weighted_sum_.size() + elastic_force_.size()) *
+                     sizeof(Vec3<T>) +
+                 stiffening_out_.size() * sizeof(T) +
                  (cg_members_.size() + particle_group_.size() + 2 * cg_member_offsets_.size()) * sizeof(std::int32_t) +
-                 (cg_rest_centre_.size() * 3 + cg_anchor_.size()) * sizeof(Vec3<T>) + cg_rest_length_.size() * 2 * sizeof(T);
+                 (cg_rest_centre_.size() * 3 + cg_anchor_.size()) * sizeof(Vec3<T>) +
+                 cg_rest_length_.size() * 2 * sizeof(T);
   return m;
 }
 

@@ -3,8 +3,8 @@
 
 #include <memory>
 
-#include "model/mls_model.h"
 #include "base/team.h"
+#include "model/mls_model.h"
 #include "model/mls_solver.h"
 #include "physics/cut_coupling.h"
 
@@ -48,11 +48,11 @@ class MlsCpuSolver final : public MlsSolver {
  private:
   // Runs n substeps of dt; stage times (ms) are added to `stats` when given.
   void substeps(T dt, int n, MlsFrameStats* stats);
-  MlsView<T> view();              // the passes' view, with the coupling arrays when groups are set
+  MlsView<T> view();  // the passes' view, with the coupling arrays when groups are set
   CouplingView<T> couplingView();
-  void couplingPass();            // eqs. 11-13 for every group at the current displacement
-  void buildPairTables();         // pair_gradient_, pair_force_, weighted_sum_ from the model (once)
-  int teamThreads() const;        // threads worth a team for this many particles
+  void couplingPass();      // eqs. 11-13 for every group at the current displacement
+  void buildPairTables();   // pair_gradient_, pair_force_, weighted_sum_ from the model (once)
+  int teamThreads() const;  // threads worth a team for this many particles
   MlsModel<T> model_;
   MlsState<T> state_;
   // Rest pair tables (MlsView::pair_gradient, pair_force per CSR slot, weighted_sum per particle).
@@ -65,7 +65,7 @@ class MlsCpuSolver final : public MlsSolver {
   std::vector<std::int32_t> cg_member_offsets_{0}, cg_members_, cg_spring_offsets_{0}, particle_group_;
   std::vector<Vec3<T>> cg_rest_centre_, cg_anchor_, cg_displacement_, cg_force_;
   std::vector<T> cg_rest_length_, cg_stiffness_;
-  std::vector<Vec3<T>> cg_centroid_;                    // rotation-aware eq. 13: rest frames (physics/cut_coupling.h)
+  std::vector<Vec3<T>> cg_centroid_;  // rotation-aware eq. 13: rest frames (physics/cut_coupling.h)
   std::vector<Mat3<T>> cg_gram_, cg_inertia_inverse_, cg_torque_;
   std::vector<pbd::Quat<T>> cg_rotation_, saved_rotation_;
   std::vector<Vec3<T>> saved_u_, saved_v_;
@@ -73,7 +73,7 @@ class MlsCpuSolver final : public MlsSolver {
   // displacement and anchors. coupling_stale_: only the anchors changed since (the elastic part is still valid).
   bool forces_valid_ = false;
   bool coupling_stale_ = false;
-  MlsBladeContact<T> blade_t_;  // the blade of the substeps running now (MlsView::blade when bladeOn())
+  MlsBladeContact<T> blade_t_;      // the blade of the substeps running now (MlsView::blade when bladeOn())
   MlsStaticContacts<T> statics_t_;  // the static colliders relative to the origin (MlsView::statics when staticsOn())
 };
 

@@ -1,4 +1,5 @@
-// CPU uniform-grid neighbour search: counting sort by bucket, a vector scan of whole cell rows (AVX2 or SSE2), per-block lists.
+// CPU uniform-grid neighbour search: counting sort by bucket, a vector scan of whole cell rows (AVX2 or SSE2),
+// per-block lists.
 #include "cpu_fallback/neighbor_search_cpu.h"
 
 #include <algorithm>
@@ -58,7 +59,8 @@ std::vector<std::int32_t> radixSortIndices(const std::vector<std::uint32_t>& key
     std::fill(count.begin(), count.end(), 0);
     for (std::size_t i = 0; i < n; ++i) ++count[((keys[std::size_t(idx[i])] >> shift) & 1023u) + 1];
     for (int d = 0; d < 1024; ++d) count[std::size_t(d) + 1] += count[std::size_t(d)];
-    for (std::size_t i = 0; i < n; ++i) tmp[std::size_t(count[(keys[std::size_t(idx[i])] >> shift) & 1023u]++)] = idx[i];
+    for (std::size_t i = 0; i < n; ++i)
+      tmp[std::size_t(count[(keys[std::size_t(idx[i])] >> shift) & 1023u]++)] = idx[i];
     idx.swap(tmp);
   }
   return idx;
@@ -129,12 +131,12 @@ INC_FORCE_INLINE void sortList(std::int32_t* a, std::size_t k) {
 // per plane from b0.
 template <typename T>
 struct QueryRows {
-  const T *xs, *ys, *zs;     // coordinates in bucket-slot order
-  const std::int32_t* ids;   // the id each slot is listed as (original index or storage slot)
+  const T *xs, *ys, *zs;      // coordinates in bucket-slot order
+  const std::int32_t* ids;    // the id each slot is listed as (original index or storage slot)
   const std::int32_t* start;  // bucket start table
   std::uint32_t b0, dx, dxy, width, rows_y, rows_z;
   T qx, qy, qz, r2;
-  std::int32_t skip;         // the query's own id (self-queries), else -1
+  std::int32_t skip;  // the query's own id (self-queries), else -1
 };
 
 // The scans. query() writes the ids of every slot of the rows with d^2 <= r2 and an id other than skip, in
@@ -153,7 +155,8 @@ struct PortableScan {
     const QueryRows<T> w = rows;  // a local copy: the stores through dst cannot change it, so it stays in registers
     std::int32_t* const first = dst;
     for (std::uint32_t z = 0, b = w.b0; z < w.rows_z; ++z, b += w.dxy)
-      for (std::uint32_t y = 0, by = b; y < w.rows_y; ++y, by += w.dx) dst = run(w, w.start[by], w.start[by + w.width], dst);
+      for (std::uint32_t y = 0, by = b; y < w.rows_y; ++y, by += w.dx)
+        dst = run(w, w.start[by], w.start[by + w.width], dst);
     if (sort) sortList(first, std::size_t(dst - first));
     return dst;
   }
@@ -253,7 +256,8 @@ struct Avx2Scan {
     const QueryRows<T> w = rows;  // a local copy: the stores through dst cannot change it, so it stays in registers
     std::int32_t* const first = dst;
     for (std::uint32_t z = 0, b = w.b0; z < w.rows_z; ++z, b += w.dxy)
-      for (std::uint32_t y = 0, by = b; y < w.rows_y; ++y, by += w.dx) dst = run(w, w.start[by], w.start[by + w.width], dst);
+      for (std::uint32_t y = 0, by = b; y < w.rows_y; ++y, by += w.dx)
+        dst = run(w, w.start[by], w.start[by + w.width], dst);
     const std::size_t k = std::size_t(dst - first);
     if (sort && k <= kSortWidth)
       sort32(first, k);
@@ -267,8 +271,8 @@ struct Avx2Scan {
     return _mm256_and_si256(_mm256_srlv_epi32(_mm256_set1_epi32(std::int32_t(kCompress.lanes[bits])), shifts),
                             _mm256_set1_epi32(7));
   }
-  INC_TARGET_AVX2 static INC_FORCE_INLINE std::int32_t* run(const QueryRows<float>& w, std::int32_t e,
-                                                            std::int32_t e1, std::int32_t* dst) {
+  INC_TARGET_AVX2 static INC_FORCE_INLINE std::int32_t* run(const QueryRows<float>& w, std::int32_t e, std::int32_t e1,
+                                                            std::int32_t* dst) {
     const __m256 vx = _mm256_set1_ps(w.qx), vy = _mm256_set1_ps(w.qy), vz = _mm256_set1_ps(w.qz);
     const __m256 vr2 = _mm256_set1_ps(w.r2);
     const __m256i vskip = _mm256_set1_epi32(w.skip), vend = _mm256_set1_epi32(e1);
@@ -281,16 +285,16 @@ struct Avx2Scan {
           _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
       const __m256i o = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(w.ids + e));
       const __m256i keep = _mm256_andnot_si256(_mm256_cmpeq_epi32(o, vskip), _mm256_cmpgt_epi32(vend, lane));
-      const unsigned bits = unsigned(
-          _mm256_movemask_ps(_mm256_and_ps(_mm256_cmp_ps(d2, vr2, _CMP_LE_OQ), _mm256_castsi256_ps(keep))));
+      const unsigned bits =
+          unsigned(_mm256_movemask_ps(_mm256_and_ps(_mm256_cmp_ps(d2, vr2, _CMP_LE_OQ), _mm256_castsi256_ps(keep))));
       lane = _mm256_add_epi32(lane, _mm256_set1_epi32(8));
       _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst), _mm256_permutevar8x32_epi32(o, packOrder(bits)));
       dst += __builtin_popcount(bits);
     }
     return dst;
   }
-  INC_TARGET_AVX2 static INC_FORCE_INLINE std::int32_t* run(const QueryRows<double>& w, std::int32_t e,
-                                                            std::int32_t e1, std::int32_t* dst) {
+  INC_TARGET_AVX2 static INC_FORCE_INLINE std::int32_t* run(const QueryRows<double>& w, std::int32_t e, std::int32_t e1,
+                                                            std::int32_t* dst) {
     const __m256d vx = _mm256_set1_pd(w.qx), vy = _mm256_set1_pd(w.qy), vz = _mm256_set1_pd(w.qz);
     const __m256d vr2 = _mm256_set1_pd(w.r2);
     const __m128i vskip = _mm_set1_epi32(w.skip), vend = _mm_set1_epi32(e1);
@@ -377,15 +381,15 @@ struct Avx2Scan {
 // What the per-block query loop reads.
 template <typename T>
 struct QueryJob {
-  NeighborGridView<T> g;                  // the generic traversal's view (storage order)
-  const T *xs, *ys, *zs;                  // the dense fast path's coordinates in bucket-slot order
-  const std::int32_t* ids;                // ... and the id each slot is listed as (original index or storage slot)
-  const std::int32_t* perm;               // storage slot -> original index; null for storage-order lists
-  const Vec3<T>* queries;                 // null for self-queries (the queries are the stored points)
+  NeighborGridView<T> g;     // the generic traversal's view (storage order)
+  const T *xs, *ys, *zs;     // the dense fast path's coordinates in bucket-slot order
+  const std::int32_t* ids;   // ... and the id each slot is listed as (original index or storage slot)
+  const std::int32_t* perm;  // storage slot -> original index; null for storage-order lists
+  const Vec3<T>* queries;    // null for self-queries (the queries are the stored points)
   const T* radii;
   bool per_query;
-  bool sort_rows;                         // false where the fast path visits the ids in ascending order
-  std::int64_t* counts;                   // counts[q]: row q's length
+  bool sort_rows;        // false where the fast path visits the ids in ascending order
+  std::int64_t* counts;  // counts[q]: row q's length
 };
 
 // Appends perm[j] (original index), or j itself when perm is null (storage-order lists).
@@ -557,7 +561,9 @@ void GridNeighborSearch<T>::build(const std::vector<Vec3<T>>& points, T cell_siz
     perm_ = radixSortIndices(keys);
   }
   sorted_.resize(n);
-  if (morton_order) parallelFor(std::int64_t(n), [&](std::int64_t s) { sorted_[std::size_t(s)] = points[std::size_t(perm_[std::size_t(s)])]; });
+  if (morton_order)
+    parallelFor(std::int64_t(n),
+                [&](std::int64_t s) { sorted_[std::size_t(s)] = points[std::size_t(perm_[std::size_t(s)])]; });
   const std::vector<Vec3<T>>& keyed = morton_order ? sorted_ : points;
   parallelFor(std::int64_t(n), [&](std::int64_t i) {
     std::int32_t c[3];
@@ -671,10 +677,10 @@ namespace {
 template <typename T>
 void checkQueries(const Vec3<T>* queries, std::size_t nq, const std::vector<T>& radii, bool self) {
   if (radii.size() != 1 && radii.size() != nq)
-    throw InputError("", "radii", "expected 1 radius or one per query (" + std::to_string(nq) + "), got " +
-                                      std::to_string(radii.size()));
-  if (nq > kMaxPoints)
-    throw InputError("", "queries", "too many queries (" + std::to_string(nq) + " > 2^30)");
+    throw InputError(
+        "", "radii",
+        "expected 1 radius or one per query (" + std::to_string(nq) + "), got " + std::to_string(radii.size()));
+  if (nq > kMaxPoints) throw InputError("", "queries", "too many queries (" + std::to_string(nq) + " > 2^30)");
   for (std::size_t i = 0; i < radii.size(); ++i)
     if (!neighborRadiusValid(radii[i]))
       throw InputError("", radii.size() == 1 ? std::string("radius") : "radii[" + std::to_string(i) + "]",
@@ -682,7 +688,8 @@ void checkQueries(const Vec3<T>* queries, std::size_t nq, const std::vector<T>& 
   if (!self)
     for (std::size_t i = 0; i < nq; ++i)
       if (!neighborPointFinite(queries[i]))
-        throw InputError("", "queries[" + std::to_string(i) + "]", "position " + describe(queries[i]) + " is not finite");
+        throw InputError("", "queries[" + std::to_string(i) + "]",
+                         "position " + describe(queries[i]) + " is not finite");
 }
 
 // The queries split into `count` blocks (one per thread): block b is [begin(b), begin(b + 1)).
@@ -809,8 +816,9 @@ void GridNeighborSearch<T>::run(const Vec3<T>* queries, std::size_t nq, const st
   }
   if (failed) {  // never truncate: either every list is complete or the caller gets an error
     for (detail::IndexBuffer& buf : buffers) buf = detail::IndexBuffer{};
-    throw InputError("", "radius", "the neighbour lists of " + std::to_string(nq) +
-                                       " queries do not fit in memory; use a smaller radius");
+    throw InputError(
+        "", "radius",
+        "the neighbour lists of " + std::to_string(nq) + " queries do not fit in memory; use a smaller radius");
   }
   if (scattered)
     placeScatteredRows(qb, perm_, buffers, out);

@@ -102,8 +102,8 @@ class GridNeighborSearch {
   // a few padding entries past n, which the vector scan may read (masked off).
   std::vector<T> slot_x_, slot_y_, slot_z_;
   std::vector<std::int32_t> slot_orig_;
-  std::vector<std::int32_t> slot_store_;    // storage slot of each bucket slot (identity unless Morton)
-  std::vector<std::uint32_t> keys_;         // build scratch: each point's bucket (kept: no fresh pages per build)
+  std::vector<std::int32_t> slot_store_;  // storage slot of each bucket slot (identity unless Morton)
+  std::vector<std::uint32_t> keys_;       // build scratch: each point's bucket (kept: no fresh pages per build)
   mutable detail::QueryScratch scratch_;
 };
 

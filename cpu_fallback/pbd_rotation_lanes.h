@@ -1,4 +1,5 @@
-// The CPU's rotation extraction of up to four shape-matching clusters at once, one cluster per SSE2 lane (pbd::extractRotations' results, bit for bit).
+// The CPU's rotation extraction of up to four shape-matching clusters at once, one cluster per SSE2 lane
+// (pbd::extractRotations' results, bit for bit).
 #pragma once
 
 #include <cmath>
@@ -52,14 +53,15 @@ inline void sinCosLanes(L h, typename L::Mask on, L& s, L& c) {
 // keep q; returns the lanes that stepped (where the scalar step returns true). eps_scale = eps |A|_F, the product
 // the scalar step forms each time (the same bits).
 template <class L>
-inline typename L::Mask extractRotationStepLanes(const Mat3<L>& a, L eps_scale, pbd::Quat<L>& q, typename L::Mask live) {
+inline typename L::Mask extractRotationStepLanes(const Mat3<L>& a, L eps_scale, pbd::Quat<L>& q,
+                                                 typename L::Mask live) {
   using T = typename L::Scalar;
   const L eps(sizeof(T) == 4 ? T(1e-6) : T(1e-12));
   const Mat3<L> r = pbd::quatToMatrix(q);
   Vec3<L> omega = cross(r.col(0), a.col(0)) + cross(r.col(1), a.col(1)) + cross(r.col(2), a.col(2));
   const L denom = abs(dot(r.col(0), a.col(0)) + dot(r.col(1), a.col(1)) + dot(r.col(2), a.col(2)));
   omega *= L(T(1)) / (denom + eps_scale);
-  const L angle = sqrt(dot(omega, omega));  // norm(omega)
+  const L angle = sqrt(dot(omega, omega));             // norm(omega)
   const typename L::Mask step = live & (angle > eps);  // the scalar step's `if (!(angle > eps)) return false`
   if (!step.any()) return step;
   // quatFromAxisAngle(omega * (1 / angle), angle)
@@ -136,7 +138,8 @@ class RotationLanes {
       q_[g].x.store(qv[1]);
       q_[g].y.store(qv[2]);
       q_[g].z.store(qv[3]);
-      for (int k = 0; k < W && g * W + k < count; ++k) q[g * W + k] = pbd::Quat<T>{qv[0][k], qv[1][k], qv[2][k], qv[3][k]};
+      for (int k = 0; k < W && g * W + k < count; ++k)
+        q[g * W + k] = pbd::Quat<T>{qv[0][k], qv[1][k], qv[2][k], qv[3][k]};
     }
   }
 
@@ -161,9 +164,16 @@ inline void extractRotationsLanes(const Mat3<typename L::Scalar>* a, pbd::Quat<t
 }
 
 // The lane type of a scalar type.
-template <typename T> struct RotationLanesOf;
-template <> struct RotationLanesOf<float> { using type = F32x4; };
-template <> struct RotationLanesOf<double> { using type = F64x2; };
+template <typename T>
+struct RotationLanesOf;
+template <>
+struct RotationLanesOf<float> {
+  using type = F32x4;
+};
+template <>
+struct RotationLanesOf<double> {
+  using type = F64x2;
+};
 #endif
 
 }  // namespace inc::cpu

@@ -1,11 +1,12 @@
-// CPU PBD/XPBD frame: predict, per-block Jacobi (slot output + per-particle gather) or coloured Gauss-Seidel, contacts, velocities, radii.
+// CPU PBD/XPBD frame: predict, per-block Jacobi (slot output + per-particle gather) or coloured Gauss-Seidel, contacts,
+// velocities, radii.
 #include "cpu_fallback/pbd_solver_cpu.h"
 
 #include <algorithm>
-#include <cstring>
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <type_traits>
 
 #if defined(__SSE2__)
@@ -13,8 +14,8 @@
 #endif
 
 #include "base/parallel.h"
-#include "cpu_fallback/pbd_rotation_lanes.h"
 #include "base/team.h"
+#include "cpu_fallback/pbd_rotation_lanes.h"
 #include "physics/pbd_block.h"
 #include "physics/pbd_terms3.h"
 #include "physics/pbd_volume.h"
@@ -306,8 +307,8 @@ void projectLaplacianCpu<float>(const pbd::BlockView<float>& b, int c, const pbd
   }
   float inv_n;
   F4 d_center;
-  const F4 dl = pbd::laplacianFromSums3(loadVec3(ctx.x[ids[0]]), ctx.w[ids[0]], mean_sum, wn, count, loadVec3(rest), term,
-                                        loadVec3(b.lambda[c]), inv_n, d_center);
+  const F4 dl = pbd::laplacianFromSums3(loadVec3(ctx.x[ids[0]]), ctx.w[ids[0]], mean_sum, wn, count, loadVec3(rest),
+                                        term, loadVec3(b.lambda[c]), inv_n, d_center);
   if (ctx.jacobi) {
     storeVec3(b.slot_corr[s0], d_center * scale);
     for (std::int32_t s = s0 + 1; s < s1; ++s) storeVec3(b.slot_corr[s], dl * (-ctx.w[b.ids[s]] * inv_n) * scale);
@@ -432,9 +433,7 @@ void projectRange(const pbd::BlockView<T> v, const std::int32_t* order, std::int
     return;
   }
   switch (v.kind) {
-    case pbd::kDistance:
-      projectDistanceRange(v, order, q0, q1, ctx);
-      break;
+    case pbd::kDistance: projectDistanceRange(v, order, q0, q1, ctx); break;
     case pbd::kLaplacian:
       for (std::int32_t q = q0; q < q1; ++q) projectLaplacianCpu(v, order ? order[q] : q, ctx);
       break;
@@ -545,7 +544,8 @@ class PbdCpuBackend final : public PbdBackend<T> {
     }
     if (in.kinematic_from_positions) {
       kinematic_from_.resize(in.kinematic_ids.size());
-      for (std::size_t k = 0; k < in.kinematic_ids.size(); ++k) kinematic_from_[k] = state_.positions[in.kinematic_ids[k]];
+      for (std::size_t k = 0; k < in.kinematic_ids.size(); ++k)
+        kinematic_from_[k] = state_.positions[in.kinematic_ids[k]];
     }
     attach_lambda_.assign(in.attach_ids.size(), Vec3<T>());
     if (p.chebyshev_rho > T(0)) sizeChebyshev(in.attach_ids.size());
@@ -559,7 +559,8 @@ class PbdCpuBackend final : public PbdBackend<T> {
     ctx.dt = dt;
     ctx.jacobi = p.solver == PbdSolverKind::Jacobi;
     if (!ctx.jacobi && !has_coloring_)
-      throw InputError("pbd frame", "solver", "the model was built without a colouring (Jacobi only): use the Jacobi solver");
+      throw InputError("pbd frame", "solver",
+                       "the model was built without a colouring (Jacobi only): use the Jacobi solver");
     ctx.omega = p.jacobi_omega;
     ctx.rotation_iterations = p.rotation_iterations;
     // compliance / dt^2 of every multiplier, once per frame instead of once per projection (the same value).
@@ -583,8 +584,11 @@ class PbdCpuBackend final : public PbdBackend<T> {
     for (std::int32_t id : in.kinematic_ids) kinematic_of_[id] = -1;
     st.iterations = p.substeps * p.iterations;
     summarize(st);
-    st.stages = {{"predict", tm.predict}, {"constraints", tm.constraints}, {"collisions", tm.collisions},
-                 {"velocities", tm.velocities}, {"volume", tm.volume}};
+    st.stages = {{"predict", tm.predict},
+                 {"constraints", tm.constraints},
+                 {"collisions", tm.collisions},
+                 {"velocities", tm.velocities},
+                 {"volume", tm.volume}};
     return st;
   }
 
@@ -602,9 +606,10 @@ class PbdCpuBackend final : public PbdBackend<T> {
              FrameTimes& tm) {
     const bool lead = t.lead();
     const T dt = ctx.dt;
-    pbd::GoalCorrection<T>* goals = ctx.jacobi || goals_distinct_
-                                        ? goal_scratch_.data() + std::size_t(t.id()) * std::max<std::size_t>(max_cluster_, 1)
-                                        : nullptr;
+    pbd::GoalCorrection<T>* goals =
+        ctx.jacobi || goals_distinct_
+            ? goal_scratch_.data() + std::size_t(t.id()) * std::max<std::size_t>(max_cluster_, 1)
+            : nullptr;
     Clock::time_point t0;
 
     T cheb_weight = T(1);  // every thread walks the same weights (pbd::chebyshevIteration)
@@ -690,7 +695,8 @@ class PbdCpuBackend final : public PbdBackend<T> {
     return particle_phase;
   }
 
-  void projectJacobiBlock(const Team& t, std::size_t bi, const pbd::SolveContext<T>& ctx, pbd::GoalCorrection<T>* goals) {
+  void projectJacobiBlock(const Team& t, std::size_t bi, const pbd::SolveContext<T>& ctx,
+                          pbd::GoalCorrection<T>* goals) {
     const std::int64_t ni = std::int64_t(model_.size());
     Vec3<T>* x = state_.positions.data();
     const pbd::BlockView<T>& view = views_[bi];
@@ -702,17 +708,20 @@ class PbdCpuBackend final : public PbdBackend<T> {
     }
     projectRange(view, nullptr, q0, q1, ctx, goals);
     t.barrier();
-    for (std::int64_t i = t.begin(ni), i1 = t.end(ni); i < i1; ++i) x[i] += pbd::gatherCorrection(view, std::int32_t(i));
+    for (std::int64_t i = t.begin(ni), i1 = t.end(ni); i < i1; ++i)
+      x[i] += pbd::gatherCorrection(view, std::int32_t(i));
   }
 
-  void projectColoredBlock(const Team& t, std::size_t bi, const pbd::SolveContext<T>& ctx, pbd::GoalCorrection<T>* goals) {
+  void projectColoredBlock(const Team& t, std::size_t bi, const pbd::SolveContext<T>& ctx,
+                           pbd::GoalCorrection<T>* goals) {
     const pbd::BlockView<T>& view = views_[bi];
     const ConstraintColoring& col = model_.blocks[bi].coloring;
     for (int k = 0; k < col.colorCount(); ++k) {
       const std::int32_t c0 = col.color_offsets[k], c1 = col.color_offsets[k + 1];
       std::int32_t q0 = c0 + std::int32_t(t.begin(c1 - c0)), q1 = c0 + std::int32_t(t.end(c1 - c0));
       if (t.size() == split_parts_ && t.id() < split_parts_) {
-        const std::int32_t* sp = &color_split_[bi][std::size_t(k) * std::size_t(split_parts_ + 1) + std::size_t(t.id())];
+        const std::int32_t* sp =
+            &color_split_[bi][std::size_t(k) * std::size_t(split_parts_ + 1) + std::size_t(t.id())];
         q0 = c0 + sp[0];
         q1 = c0 + sp[1];
       }
@@ -754,9 +763,10 @@ class PbdCpuBackend final : public PbdBackend<T> {
     for (std::int64_t i = t.begin(ni), i1 = t.end(ni); i < i1; ++i)
       x[i] = pbd::endIteration(x[i], w_[i] > T(0), on ? &cheb_.x1[i] : nullptr, on ? &cheb_.x2[i] : nullptr,
                                cheb_weight, mode, [&](const Vec3<T>& q) {
-                                 return pbd::resolveContacts(q, r[i], inset.empty() ? T(0) : inset[i], &x_prev_[i], model_.planes.data(), int(model_.planes.size()),
-                                                             model_.boxes.data(), int(model_.boxes.size()),
-                                                             in.tools_from.data(), in.tools_to.data(), nt, t_start, t_end);
+                                 return pbd::resolveContacts(
+                                     q, r[i], inset.empty() ? T(0) : inset[i], &x_prev_[i], model_.planes.data(),
+                                     int(model_.planes.size()), model_.boxes.data(), int(model_.boxes.size()),
+                                     in.tools_from.data(), in.tools_to.data(), nt, t_start, t_end);
                                });
   }
 
@@ -833,7 +843,8 @@ class PbdCpuBackend final : public PbdBackend<T> {
     st.residual_rms = residual_.empty() ? 0.0 : std::sqrt(rsum / double(residual_.size()));
     const std::size_t n = model_.size();
     for (std::size_t i = 0; i < n; ++i)
-      if (!isFinite(state_.positions[i]) || !isFinite(state_.velocities[i]) || !std::isfinite(double(state_.radii[i]))) {
+      if (!isFinite(state_.positions[i]) || !isFinite(state_.velocities[i]) ||
+          !std::isfinite(double(state_.radii[i]))) {
         st.finite = false;
         st.failure_particle = std::int64_t(i);
         break;
@@ -909,7 +920,8 @@ class PbdCpuBackend final : public PbdBackend<T> {
   void updateRadii(const Team& t, const PbdStepParams<T>& p, const PbdFrameInput<T>& in) {
     const std::size_t n = model_.size();
     const std::int64_t ni = std::int64_t(n);
-    const bool have_volume = p.volume_preservation && model_.rest_cell_volume.size() == n && !model_.ball_samples.empty();
+    const bool have_volume =
+        p.volume_preservation && model_.rest_cell_volume.size() == n && !model_.ball_samples.empty();
     const Vec3<T>* x = state_.positions.data();
     for (std::int64_t i = t.begin(ni), i1 = t.end(ni); i < i1; ++i) {
       std::uint8_t a = 0;
@@ -933,10 +945,10 @@ class PbdCpuBackend final : public PbdBackend<T> {
           continue;
         }
         const std::int32_t b = model_.overlap_offsets[i], e = model_.overlap_offsets[i + 1];
-        radii_next_[i] = pbd::radiusForCellVolume(x[i], r0, r0 * p.max_radius_growth, model_.rest_cell_volume[i], x,
-                                                  state_.radii.data(), model_.overlap_ids.data() + b, e - b,
-                                                  model_.ball_samples.data(), int(model_.ball_samples.size()),
-                                                  p.bisection_steps);
+        radii_next_[i] =
+            pbd::radiusForCellVolume(x[i], r0, r0 * p.max_radius_growth, model_.rest_cell_volume[i], x,
+                                     state_.radii.data(), model_.overlap_ids.data() + b, e - b,
+                                     model_.ball_samples.data(), int(model_.ball_samples.size()), p.bisection_steps);
       }
       t.barrier();
       if (t.lead()) state_.radii.swap(radii_next_);
@@ -950,27 +962,27 @@ class PbdCpuBackend final : public PbdBackend<T> {
   std::vector<Vec3<T>> x_prev_;
   std::vector<T> w_;
   std::vector<T> radii_next_;
-  std::vector<std::uint8_t> active_;         // spheres whose radius is solved this frame
-  std::vector<std::int32_t> kinematic_of_;   // per particle: its index in this frame's kinematic list, or -1
-  std::vector<Vec3<T>> kinematic_from_;      // the frame's start positions (PbdFrameInput::kinematic_from_positions)
+  std::vector<std::uint8_t> active_;        // spheres whose radius is solved this frame
+  std::vector<std::int32_t> kinematic_of_;  // per particle: its index in this frame's kinematic list, or -1
+  std::vector<Vec3<T>> kinematic_from_;     // the frame's start positions (PbdFrameInput::kinematic_from_positions)
   std::vector<std::vector<Vec3<T>>> lambda_;
   std::vector<std::vector<Vec3<T>>> slot_corr_;
   std::vector<std::vector<T>> alpha_tilde_;  // per block and multiplier: compliance / dt^2 of this frame
   std::vector<Vec3<T>> attach_lambda_;
   struct {
-    std::vector<Vec3<T>> x1, x2;                   // positions one and two iterations back
-    std::vector<std::vector<Vec3<T>>> l1, l2;      // per block: multipliers one and two back
-    std::vector<Vec3<T>> a1, a2;                   // attachment multipliers one and two back
-  } cheb_;                                         // Chebyshev iterates (PbdStepParams::chebyshev_rho > 0)
+    std::vector<Vec3<T>> x1, x2;               // positions one and two iterations back
+    std::vector<std::vector<Vec3<T>>> l1, l2;  // per block: multipliers one and two back
+    std::vector<Vec3<T>> a1, a2;               // attachment multipliers one and two back
+  } cheb_;                                     // Chebyshev iterates (PbdStepParams::chebyshev_rho > 0)
   std::vector<pbd::BlockView<T>> views_;
-  std::vector<double> residual_;             // per solved distance constraint, this frame
-  std::int64_t solved_slots_ = 0;            // constraint slots of the solved blocks (one iteration's work)
-  int split_parts_ = 0;                      // team size the splits and scratch are planned for
+  std::vector<double> residual_;                         // per solved distance constraint, this frame
+  std::int64_t solved_slots_ = 0;                        // constraint slots of the solved blocks (one iteration's work)
+  int split_parts_ = 0;                                  // team size the splits and scratch are planned for
   std::vector<std::vector<std::int32_t>> jacobi_split_;  // per block: parts + 1 constraint indices
   std::vector<std::vector<std::int32_t>> color_split_;   // per block: per colour parts + 1 positions in the colour
-  std::size_t max_cluster_ = 0;              // most members of a solved shape-matching cluster
-  bool goals_distinct_ = true;               // no particle twice in one cluster
-  std::vector<pbd::GoalCorrection<T>> goal_scratch_;  // per thread: max_cluster_ members' goal corrections
+  std::size_t max_cluster_ = 0;                          // most members of a solved shape-matching cluster
+  bool goals_distinct_ = true;                           // no particle twice in one cluster
+  std::vector<pbd::GoalCorrection<T>> goal_scratch_;     // per thread: max_cluster_ members' goal corrections
   TeamRunner team_;
 };
 

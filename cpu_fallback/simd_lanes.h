@@ -16,9 +16,18 @@ struct F32x4 {
   F32x4() : v(_mm_setzero_ps()) {}
   explicit F32x4(float s) : v(_mm_set1_ps(s)) {}  // T(1), T(2) in the shared templates
   explicit F32x4(__m128 x) : v(x) {}
-  F32x4& operator+=(F32x4 o) { v = _mm_add_ps(v, o.v); return *this; }
-  F32x4& operator-=(F32x4 o) { v = _mm_sub_ps(v, o.v); return *this; }
-  F32x4& operator*=(F32x4 o) { v = _mm_mul_ps(v, o.v); return *this; }
+  F32x4& operator+=(F32x4 o) {
+    v = _mm_add_ps(v, o.v);
+    return *this;
+  }
+  F32x4& operator-=(F32x4 o) {
+    v = _mm_sub_ps(v, o.v);
+    return *this;
+  }
+  F32x4& operator*=(F32x4 o) {
+    v = _mm_mul_ps(v, o.v);
+    return *this;
+  }
   friend F32x4 operator+(F32x4 a, F32x4 b) { return F32x4(_mm_add_ps(a.v, b.v)); }
   friend F32x4 operator-(F32x4 a, F32x4 b) { return F32x4(_mm_sub_ps(a.v, b.v)); }
   friend F32x4 operator*(F32x4 a, F32x4 b) { return F32x4(_mm_mul_ps(a.v, b.v)); }
@@ -34,9 +43,9 @@ struct F32x4 {
   friend F32x4 select(Mask k, F32x4 a, F32x4 b) {
     return F32x4(_mm_or_ps(_mm_and_ps(k.m, a.v), _mm_andnot_ps(k.m, b.v)));
   }
-  friend F32x4 sqrt(F32x4 a) { return F32x4(_mm_sqrt_ps(a.v)); }                            // sqrtf per lane
-  friend F32x4 abs(F32x4 a) { return F32x4(_mm_andnot_ps(_mm_set1_ps(-0.0f), a.v)); }        // fabsf per lane
-  static Mask lanesBelow(int count) {  // lanes [0, count)
+  friend F32x4 sqrt(F32x4 a) { return F32x4(_mm_sqrt_ps(a.v)); }                       // sqrtf per lane
+  friend F32x4 abs(F32x4 a) { return F32x4(_mm_andnot_ps(_mm_set1_ps(-0.0f), a.v)); }  // fabsf per lane
+  static Mask lanesBelow(int count) {                                                  // lanes [0, count)
     const __m128i idx = _mm_setr_epi32(0, 1, 2, 3);
     return {_mm_castsi128_ps(_mm_cmplt_epi32(idx, _mm_set1_epi32(count)))};
   }
@@ -55,9 +64,18 @@ struct F64x2 {
   F64x2() : v(_mm_setzero_pd()) {}
   explicit F64x2(double s) : v(_mm_set1_pd(s)) {}
   explicit F64x2(__m128d x) : v(x) {}
-  F64x2& operator+=(F64x2 o) { v = _mm_add_pd(v, o.v); return *this; }
-  F64x2& operator-=(F64x2 o) { v = _mm_sub_pd(v, o.v); return *this; }
-  F64x2& operator*=(F64x2 o) { v = _mm_mul_pd(v, o.v); return *this; }
+  F64x2& operator+=(F64x2 o) {
+    v = _mm_add_pd(v, o.v);
+    return *this;
+  }
+  F64x2& operator-=(F64x2 o) {
+    v = _mm_sub_pd(v, o.v);
+    return *this;
+  }
+  F64x2& operator*=(F64x2 o) {
+    v = _mm_mul_pd(v, o.v);
+    return *this;
+  }
   friend F64x2 operator+(F64x2 a, F64x2 b) { return F64x2(_mm_add_pd(a.v, b.v)); }
   friend F64x2 operator-(F64x2 a, F64x2 b) { return F64x2(_mm_sub_pd(a.v, b.v)); }
   friend F64x2 operator*(F64x2 a, F64x2 b) { return F64x2(_mm_mul_pd(a.v, b.v)); }

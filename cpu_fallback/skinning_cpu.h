@@ -13,8 +13,8 @@ void skinSurfaceCpu(const skin::SkinView<T>& view, const Vec3<T>* centres, const
 
 // normals[v] = skin::vertexNormal(v, ...) for v in [0, vertex_count).
 template <typename T>
-void vertexNormalsCpu(int vertex_count, const Vec3<T>* x, const std::int32_t* triangles, const std::int32_t* tri_offsets,
-                      const std::int32_t* tri_of_vertex, Vec3<T>* normals);
+void vertexNormalsCpu(int vertex_count, const Vec3<T>* x, const std::int32_t* triangles,
+                      const std::int32_t* tri_offsets, const std::int32_t* tri_of_vertex, Vec3<T>* normals);
 
 // Per-sphere rotations from the neighbourhoods' deformation: quats (warm start in, result out, one per sphere)
 // and rotations[i] = the matrix of quats[i]. x: current centres, x0: rest centres.

@@ -48,7 +48,9 @@ TearStepStats tearStepCpu(TearSheet<T>& s, const TearParams<T>& p, TearCandidate
     c.t_pred[i] = d.t_pred;
   });
   // Phase 2: independent set.
-  parallelFor(ni, [&](std::int64_t i) { c.accept[i] = tear::acceptSplit(view, c.yield.data(), std::int32_t(i), p.seed, s.step); });
+  parallelFor(ni, [&](std::int64_t i) {
+    c.accept[i] = tear::acceptSplit(view, c.yield.data(), std::int32_t(i), p.seed, s.step);
+  });
   // Phase 3: exclusive prefix sum (sequential on the CPU; CUB on the GPU).
   std::vector<std::int32_t> rank(n + 1, 0);
   for (std::size_t i = 0; i < n; ++i) rank[i + 1] = rank[i] + c.accept[i];
@@ -69,9 +71,9 @@ TearStepStats tearStepCpu(TearSheet<T>& s, const TearParams<T>& p, TearCandidate
   const bool debris = p.criterion != TearCriterion::Threshold;
   parallelFor(ni, [&](std::int64_t i) {
     if (!c.accept[i]) return;
-    const tear::SplitResult r = tear::splitParticle(view, std::int32_t(i), n + std::size_t(rank[i]), c.partner[i],
-                                                    c.dir[i], c.t_pred[i], debris, p.random_range, p.t_lo, p.t_hi,
-                                                    p.min_area_ratio, p.seed, s.step);
+    const tear::SplitResult r =
+        tear::splitParticle(view, std::int32_t(i), n + std::size_t(rank[i]), c.partner[i], c.dir[i], c.t_pred[i],
+                            debris, p.random_range, p.t_lo, p.t_hi, p.min_area_ratio, p.seed, s.step);
     split_bonds[i] = r.moved_triangles;
     backed[i] = r.backed_off;
   });
@@ -90,6 +92,7 @@ TearStepStats tearStepCpu(TearSheet<T>& s, const TearParams<T>& p, TearCandidate
 }
 
 template TearStepStats tearStepCpu<float>(TearSheet<float>&, const TearParams<float>&, TearCandidates<float>*, bool);
-template TearStepStats tearStepCpu<double>(TearSheet<double>&, const TearParams<double>&, TearCandidates<double>*, bool);
+template TearStepStats tearStepCpu<double>(TearSheet<double>&, const TearParams<double>&, TearCandidates<double>*,
+                                           bool);
 
 }  // namespace inc::cpu

@@ -1,4 +1,5 @@
-// CPU tearing step: yield detection, independent-set selection, prefix-sum compaction, vertex split with debris, triangle rebuild.
+// CPU tearing step: yield detection, independent-set selection, prefix-sum compaction, vertex split with debris,
+// triangle rebuild.
 #pragma once
 
 #include <cstdint>

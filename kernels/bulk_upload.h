@@ -63,7 +63,8 @@ class BulkUpload {
       if (op.zero)
         INC_CUDA(cudaMemsetAsync(op.dst, 0, op.bytes, stream));
       else
-        INC_CUDA(cudaMemcpyAsync(op.dst, static_cast<char*>(pinned_) + op.offset, op.bytes, cudaMemcpyHostToDevice, stream));
+        INC_CUDA(
+            cudaMemcpyAsync(op.dst, static_cast<char*>(pinned_) + op.offset, op.bytes, cudaMemcpyHostToDevice, stream));
     }
     INC_CUDA(cudaStreamSynchronize(stream));
     packed_.clear();

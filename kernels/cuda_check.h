@@ -9,8 +9,8 @@
 namespace inc::cuda {
 
 [[noreturn]] inline void throwCudaError(cudaError_t err, const char* what, const char* file, int line) {
-  throw std::runtime_error(std::string("CUDA error at ") + file + ":" + std::to_string(line) + " in " + what +
-                           ": " + cudaGetErrorName(err) + " (" + cudaGetErrorString(err) + ")");
+  throw std::runtime_error(std::string("CUDA error at ") + file + ":" + std::to_string(line) + " in " + what + ": " +
+                           cudaGetErrorName(err) + " (" + cudaGetErrorString(err) + ")");
 }
 
 inline void check(cudaError_t err, const char* what, const char* file, int line) {

@@ -27,7 +27,10 @@ __global__ void pairMaskKernel(const Vec3d* sv, const int* st, int nt, const Vec
   int lo = 0, hi = queries - 1;  // largest q with offsets[q] <= k
   while (lo < hi) {
     const int mid = (lo + hi + 1) / 2;
-    if (offsets[mid] <= k) lo = mid; else hi = mid - 1;
+    if (offsets[mid] <= k)
+      lo = mid;
+    else
+      hi = mid - 1;
   }
   const Vec3d p = x[lo], q = x[idx[k]];
   std::uint8_t hit = 0;
@@ -59,7 +62,7 @@ std::vector<std::uint8_t> cutSphereMaskCuda(const std::vector<Vec3d>& swept_vert
   c.upload(centres);
   r.upload(radii);
   sphereMaskKernel<<<(n + 127) / 128, 128>>>(sv.data(), st.data(), int(swept_triangles.size()), c.data(), r.data(), n,
-                                            out.data());
+                                             out.data());
   INC_CUDA_LAUNCH("sphereMaskKernel");
   return out.download();  // the mask decides a topology change on the host
 }

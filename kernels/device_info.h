@@ -7,10 +7,10 @@
 namespace inc::cuda {
 
 struct DeviceReport {
-  bool compiled = false;       // was the CUDA backend compiled into this binary
-  int device_count = 0;        // usable devices (0 when the driver or device is missing)
-  std::string error;           // why none is usable, when device_count == 0
-  std::string name;            // device 0
+  bool compiled = false;  // was the CUDA backend compiled into this binary
+  int device_count = 0;   // usable devices (0 when the driver or device is missing)
+  std::string error;      // why none is usable, when device_count == 0
+  std::string name;       // device 0
   int sm_major = 0, sm_minor = 0, multiprocessors = 0;
   std::size_t global_memory_bytes = 0;
   double peak_bandwidth_gbs = 0.0;  // from the memory clock and bus width (datasheet-style)

@@ -3,8 +3,8 @@
 
 #include <cuda_runtime.h>
 
-#include "model/device_capture_lock.h"
 #include "kernels/cuda_check.h"
+#include "model/device_capture_lock.h"
 
 namespace inc::cuda {
 

@@ -16,8 +16,8 @@
 
 #include "kernels/bulk_upload.h"
 #include "kernels/cuda_check.h"
-#include "kernels/graph_capture.h"
 #include "kernels/device_buffer.h"
+#include "kernels/graph_capture.h"
 #include "kernels/pinned_staging.h"
 #include "physics/cut_coupling.h"
 #include "physics/mls_passes.h"
@@ -317,7 +317,9 @@ class MlsCudaSolver final : public MlsSolver {
     INC_CUDA(cudaStreamSynchronize(stream_));  // step() returns with the state final (tests, benchmarks)
   }
 
-  MlsFrameStats advance(double frame_dt, int fixed_substeps) override { return frame(frame_dt, fixed_substeps, nullptr); }
+  MlsFrameStats advance(double frame_dt, int fixed_substeps) override {
+    return frame(frame_dt, fixed_substeps, nullptr);
+  }
 
   MlsFrameStats advanceCoupled(double frame_dt, int fixed_substeps, std::vector<Vec3d>& group_u) override {
     if (stage_timing_ || groups_ == 0) return MlsSolver::advanceCoupled(frame_dt, fixed_substeps, group_u);
@@ -423,7 +425,8 @@ class MlsCudaSolver final : public MlsSolver {
     reduceKernel<T><<<kReduceBlocks, kBlock, 0, stream_>>>(s, stiffening_buf_.data(), partials_.data());
     INC_CUDA_LAUNCH("mls reduceKernel");
     std::vector<Partial> p(kReduceBlocks);
-    INC_CUDA(cudaMemcpyAsync(p.data(), partials_.data(), kReduceBlocks * sizeof(Partial), cudaMemcpyDeviceToHost, stream_));
+    INC_CUDA(
+        cudaMemcpyAsync(p.data(), partials_.data(), kReduceBlocks * sizeof(Partial), cudaMemcpyDeviceToHost, stream_));
     INC_CUDA(cudaStreamSynchronize(stream_));
     double max_u2 = 0;
     long long bad = s.n * 4;
@@ -464,7 +467,8 @@ class MlsCudaSolver final : public MlsSolver {
   // Only the listed particles travel: a compact (index, target) upload and a scatter kernel (indices are
   // unique after validation, so no two threads write one particle).
   void setPrescribed(const std::vector<std::int32_t>& particles, const std::vector<Vec3d>& targets) override {
-    if (targets.size() != particles.size()) throw std::invalid_argument("MlsSolver: one target per prescribed particle");
+    if (targets.size() != particles.size())
+      throw std::invalid_argument("MlsSolver: one target per prescribed particle");
     std::vector<std::int32_t> idx;
     std::vector<Vec3<T>> tgt;
     std::vector<char> seen(size(), 0);
@@ -528,13 +532,14 @@ class MlsCudaSolver final : public MlsSolver {
     bulk_.add(cg_rotation_, std::vector<pbd::Quat<T>>(g.size()));
     bulk_.zero(cg_torque_, g.size());
     bulk_.flush(stream_);
-    setCouplingStableStep(mlsCouplingStableStep(g, std::vector<double>(model_.mass.begin(), model_.mass.end()), &frames));
+    setCouplingStableStep(
+        mlsCouplingStableStep(g, std::vector<double>(model_.mass.begin(), model_.mass.end()), &frames));
     forces_valid_ = false;
   }
   void setCouplingAnchors(const std::vector<Vec3d>& anchors) override {
     if (anchors.size() != springs_)
-      throw std::invalid_argument("MlsSolver: coupling anchors has " + std::to_string(anchors.size()) + " entries for " +
-                                  std::to_string(springs_) + " springs");
+      throw std::invalid_argument("MlsSolver: coupling anchors has " + std::to_string(anchors.size()) +
+                                  " entries for " + std::to_string(springs_) + " springs");
     std::vector<Vec3<T>> a(anchors.size());
     for (std::size_t q = 0; q < a.size(); ++q) a[q] = Vec3<T>(anchors[q] - model_.origin);
     INC_CUDA(cudaStreamSynchronize(stream_));  // the previous anchors may still be read by queued substeps
@@ -567,17 +572,17 @@ class MlsCudaSolver final : public MlsSolver {
 
   MemoryReport memory() const override {
     MemoryReport m;
-    m.device_bytes = rest_.capacityBytes() + mass_.capacityBytes() + volume_.capacityBytes() +
-                     moment_inverse_.capacityBytes() + kind_.capacityBytes() + offsets_.capacityBytes() +
-                     indices_.capacityBytes() + u_.capacityBytes() + v_.capacityBytes() + f_.capacityBytes() +
-                     target_.capacityBytes() + stress_moment_.capacityBytes() + energy_.capacityBytes() +
-                     stiffening_buf_.capacityBytes() + cg_member_offsets_.capacityBytes() +
-                     cg_members_.capacityBytes() + cg_spring_offsets_.capacityBytes() + particle_group_.capacityBytes() +
-                     cg_rest_centre_.capacityBytes() + cg_anchor_.capacityBytes() + cg_displacement_.capacityBytes() +
-                     cg_force_.capacityBytes() + cg_rest_length_.capacityBytes() + cg_stiffness_.capacityBytes() +
-                     cg_centroid_.capacityBytes() + cg_gram_.capacityBytes() + cg_inertia_inverse_.capacityBytes() +
-                     cg_torque_.capacityBytes() + cg_rotation_.capacityBytes() + saved_rotation_.capacityBytes() +
-                     partials_.capacityBytes() + saved_u_.capacityBytes() + saved_v_.capacityBytes();
+    m.device_bytes =
+        rest_.capacityBytes() + mass_.capacityBytes() + volume_.capacityBytes() + moment_inverse_.capacityBytes() +
+        kind_.capacityBytes() + offsets_.capacityBytes() + indices_.capacityBytes() + u_.capacityBytes() +
+        v_.capacityBytes() + f_.capacityBytes() + target_.capacityBytes() + stress_moment_.capacityBytes() +
+        energy_.capacityBytes() + stiffening_buf_.capacityBytes() + cg_member_offsets_.capacityBytes() +
+        cg_members_.capacityBytes() + cg_spring_offsets_.capacityBytes() + particle_group_.capacityBytes() +
+        cg_rest_centre_.capacityBytes() + cg_anchor_.capacityBytes() + cg_displacement_.capacityBytes() +
+        cg_force_.capacityBytes() + cg_rest_length_.capacityBytes() + cg_stiffness_.capacityBytes() +
+        cg_centroid_.capacityBytes() + cg_gram_.capacityBytes() + cg_inertia_inverse_.capacityBytes() +
+        cg_torque_.capacityBytes() + cg_rotation_.capacityBytes() + saved_rotation_.capacityBytes() +
+        partials_.capacityBytes() + saved_u_.capacityBytes() + saved_v_.capacityBytes();
     m.host_bytes = model_.bytes();
     return m;
   }
@@ -770,11 +775,27 @@ class MlsCudaSolver final : public MlsSolver {
     std::memcpy(&dt_bits, &dt_d, sizeof dt_bits);
     const CouplingView<T> c = couplingView();
     const auto bits = [](const void* p) { return std::uint64_t(reinterpret_cast<std::uintptr_t>(p)); };
-    return {std::uint64_t(n), dt_bits, std::uint64_t(model_.size()), std::uint64_t(groups_), bits(particle_group_.data()),
-            bits(c.member_offsets), bits(c.members), bits(c.rest_centre), bits(c.spring_offsets), bits(c.anchor),
-            bits(c.rest_length), bits(c.stiffness), bits(c.group_displacement), bits(c.member_force),
-            bits(c.rest_centroid), bits(c.rest_gram), bits(c.inertia_inverse), bits(c.rotation), bits(c.member_torque),
-            bits(bladeOn() ? blade_buf_.data() : nullptr), bits(staticsOn() ? statics_buf_.data() : nullptr)};
+    return {std::uint64_t(n),
+            dt_bits,
+            std::uint64_t(model_.size()),
+            std::uint64_t(groups_),
+            bits(particle_group_.data()),
+            bits(c.member_offsets),
+            bits(c.members),
+            bits(c.rest_centre),
+            bits(c.spring_offsets),
+            bits(c.anchor),
+            bits(c.rest_length),
+            bits(c.stiffness),
+            bits(c.group_displacement),
+            bits(c.member_force),
+            bits(c.rest_centroid),
+            bits(c.rest_gram),
+            bits(c.inertia_inverse),
+            bits(c.rotation),
+            bits(c.member_torque),
+            bits(bladeOn() ? blade_buf_.data() : nullptr),
+            bits(staticsOn() ? statics_buf_.data() : nullptr)};
   }
 
   // The blade of the coming substeps, one small upload (only where a blade contact is set). The stream is idle here
@@ -825,8 +846,7 @@ class MlsCudaSolver final : public MlsSolver {
   }
   template <typename E>
   void copy(DeviceBuffer<E>& dst, const DeviceBuffer<E>& src) {
-    if (src.size())
-      INC_CUDA(cudaMemcpyAsync(dst.data(), src.data(), src.bytes(), cudaMemcpyDeviceToDevice, stream_));
+    if (src.size()) INC_CUDA(cudaMemcpyAsync(dst.data(), src.data(), src.bytes(), cudaMemcpyDeviceToDevice, stream_));
   }
 
   MlsModel<T> model_;
@@ -846,11 +866,12 @@ class MlsCudaSolver final : public MlsSolver {
   DeviceBuffer<std::int32_t> cg_member_offsets_, cg_members_, cg_spring_offsets_, particle_group_;
   DeviceBuffer<Vec3<T>> cg_rest_centre_, cg_anchor_, cg_displacement_, cg_force_;
   DeviceBuffer<T> cg_rest_length_, cg_stiffness_;
-  DeviceBuffer<Vec3<T>> cg_centroid_;  // rotation-aware eq. 13: rest frames, rotations, moments (physics/cut_coupling.h)
+  DeviceBuffer<Vec3<T>>
+      cg_centroid_;  // rotation-aware eq. 13: rest frames, rotations, moments (physics/cut_coupling.h)
   DeviceBuffer<Mat3<T>> cg_gram_, cg_inertia_inverse_, cg_torque_;
   DeviceBuffer<pbd::Quat<T>> cg_rotation_, saved_rotation_;
-  DeviceBuffer<MlsBladeContact<T>> blade_buf_;  // one entry: MlsView::blade while bladeOn()
-  DeviceBuffer<MlsStaticContacts<T>> statics_buf_;  // one entry: MlsView::statics while staticsOn()
+  DeviceBuffer<MlsBladeContact<T>> blade_buf_;          // one entry: MlsView::blade while bladeOn()
+  DeviceBuffer<MlsStaticContacts<T>> statics_buf_;      // one entry: MlsView::statics while staticsOn()
   std::uint64_t statics_uploaded_ = ~std::uint64_t(0);  // the staticsVersion() in statics_buf_
   Vec3d statics_origin_;                                // the origin it was made relative to
   std::int32_t groups_ = 0;
@@ -859,9 +880,9 @@ class MlsCudaSolver final : public MlsSolver {
   std::vector<cudaEvent_t> events_;
   bool forces_valid_ = false;
   bool stage_timing_ = true;
-  bool persistent_ = true;   // untimed frames as one cooperative launch where it fits (substepsPersistent)
-  int coop_blocks_ = -1;     // blocks the device holds at once for the persistent kernel (-1: not asked yet)
-  int coop_lanes_ = 0;       // the lane count coop_blocks_ was asked for
+  bool persistent_ = true;  // untimed frames as one cooperative launch where it fits (substepsPersistent)
+  int coop_blocks_ = -1;    // blocks the device holds at once for the persistent kernel (-1: not asked yet)
+  int coop_lanes_ = 0;      // the lane count coop_blocks_ was asked for
   cudaGraphExec_t graph_exec_ = nullptr;  // substepsGraph's frame, for graph_key_
   BulkUpload bulk_;                       // load() and setCouplingGroups() uploads
   std::vector<std::uint64_t> graph_key_;

@@ -13,9 +13,9 @@
 #include <string>
 #include <type_traits>
 
-#include "model/input_error.h"
 #include "kernels/cuda_check.h"
 #include "kernels/graph_capture.h"
+#include "model/input_error.h"
 
 namespace inc::cuda {
 namespace {
@@ -198,8 +198,14 @@ __global__ void iotaKernel(int n, std::int32_t* values) {
 
 // The coordinates the query kernels read: float points as float4 (one 16-byte load per candidate instead of
 // three 4-byte ones; w unused), double points as they are.
-template <typename T> struct PackedPoint { using type = Vec3<T>; };
-template <> struct PackedPoint<float> { using type = float4; };
+template <typename T>
+struct PackedPoint {
+  using type = Vec3<T>;
+};
+template <>
+struct PackedPoint<float> {
+  using type = float4;
+};
 
 __device__ inline Vec3<float> unpackPoint(const float4* p, std::int32_t j) {
   const float4 v = __ldg(p + j);
@@ -397,8 +403,8 @@ __device__ void finishColumn(std::int32_t* col, std::int32_t k, const std::int32
 // kRowCap entries, leaves the sorted row in staged[t * kRowCap ...] (t = the thread's storage slot, so a
 // warp writes one contiguous block). Longer rows are only counted; fillKernel rebuilds them.
 template <typename T>
-__global__ void __launch_bounds__(kFillThreads) countStageKernel(QuerySpec<T> s, std::int32_t* counts,
-                                                                 std::int32_t* staged) {
+__global__ void __launch_bounds__(kFillThreads)
+    countStageKernel(QuerySpec<T> s, std::int32_t* counts, std::int32_t* staged) {
   __shared__ std::int32_t buf[kRowCap * kRowStride];
   const int t = blockIdx.x * blockDim.x + threadIdx.x;
   std::int32_t small_k = 0;
@@ -431,8 +437,8 @@ __global__ void __launch_bounds__(kFillThreads) countStageKernel(QuerySpec<T> s,
 // kRowCap entries are copied from staged. Either way rows are written by the whole warp (coalesced), and
 // longer rows are traversed again into global memory and sorted there.
 template <typename T>
-__global__ void __launch_bounds__(kFillThreads) fillKernel(QuerySpec<T> s, const std::int64_t* offsets,
-                                                           const std::int32_t* staged, std::int32_t* indices) {
+__global__ void __launch_bounds__(kFillThreads)
+    fillKernel(QuerySpec<T> s, const std::int64_t* offsets, const std::int32_t* staged, std::int32_t* indices) {
   __shared__ std::int32_t buf[kRowCap * kRowStride];
   const int t = blockIdx.x * blockDim.x + threadIdx.x;
   const bool active = t < s.nq;  // no early return: the whole warp takes part in the write-out below
@@ -531,9 +537,9 @@ struct SlotWriteVisit {
 // the whole list fits `capacity` (the host checks offsets[nq] and runs again with an exact buffer if not);
 // the offsets are always complete. tile_status has gridDim.x zeroed words plus the tile counter.
 template <typename T, int Cap = kRowCap, int MinBlocks = 1>
-__global__ void __launch_bounds__(kFillThreads, MinBlocks) storageSelfKernel(QuerySpec<T> s, std::int64_t* offsets,
-                                                                  std::int32_t* indices, std::uint64_t capacity,
-                                                                  std::uint64_t* tile_status) {
+__global__ void __launch_bounds__(kFillThreads, MinBlocks)
+    storageSelfKernel(QuerySpec<T> s, std::int64_t* offsets, std::int32_t* indices, std::uint64_t capacity,
+                      std::uint64_t* tile_status) {
   using Scan = cub::BlockScan<std::uint64_t, kFillThreads>;
   __shared__ std::int32_t buf[Cap * kRowStride];
   __shared__ typename Scan::TempStorage scan_tmp;
@@ -673,7 +679,8 @@ const Vec3<T>* GridNeighborSearch<T>::sortedPoints() const {
   if constexpr (std::is_same_v<T, float>) {
     if (!sorted_ready_ && n_ > 0) {
       sorted_.resize(n_);
-      unpackKernel<<<blocksFor(n_), kThreads>>>(reinterpret_cast<const float4*>(packed_.data()), int(n_), sorted_.data());
+      unpackKernel<<<blocksFor(n_), kThreads>>>(reinterpret_cast<const float4*>(packed_.data()), int(n_),
+                                                sorted_.data());
       INC_CUDA_LAUNCH("unpackKernel");
     }
   }
@@ -696,7 +703,8 @@ void GridNeighborSearch<T>::ensureParams() const {
     throw InputError("", "points[" + i + "]", "position " + describe(rb.bad) + " is not finite");
   }
   std::uint64_t used = std::uint64_t(params_.bucket_mask) + 1;
-  if (params_.dense) used = std::uint64_t(params_.dims[0]) * std::uint64_t(params_.dims[1]) * std::uint64_t(params_.dims[2]);
+  if (params_.dense)
+    used = std::uint64_t(params_.dims[0]) * std::uint64_t(params_.dims[1]) * std::uint64_t(params_.dims[2]);
   used_buckets_ = std::size_t(used);
   n_ = n;
 }
@@ -773,7 +781,8 @@ void GridNeighborSearch<T>::build(const Vec3<T>* d_points, std::size_t n, T cell
     INC_CUDA(cub::DeviceRadixSort::SortPairs(nullptr, sort_bytes, keys_.data(), keys_sorted_.data(), iota_.data(),
                                              perm_.data(), int(n), 0, 30));
     INC_CUDA(cub::DeviceScan::ExclusiveScan(nullptr, scan_bytes, cell_count_.data(), bucket_start_.data(),
-                                            ::cuda::std::plus<std::int32_t>{}, std::int32_t(0), std::size_t(buckets) + 1));
+                                            ::cuda::std::plus<std::int32_t>{}, std::int32_t(0),
+                                            std::size_t(buckets) + 1));
     scratch(std::max(sort_bytes, scan_bytes));
   }
   cudaStream_t st = static_cast<cudaStream_t>(stream_.get());
@@ -793,7 +802,8 @@ void GridNeighborSearch<T>::build(const Vec3<T>* d_points, std::size_t n, T cell
       build_graph_.reset();
       cudaGraphExec_t exec = nullptr;
       captureGraph(st, exec, [&] { enqueueBuild(d_points, n, buckets, st); });
-      build_graph_ = std::shared_ptr<void>(exec, [](void* q) { cudaGraphExecDestroy(static_cast<cudaGraphExec_t>(q)); });
+      build_graph_ =
+          std::shared_ptr<void>(exec, [](void* q) { cudaGraphExecDestroy(static_cast<cudaGraphExec_t>(q)); });
       build_key_ = key;
     }
     INC_CUDA(cudaGraphLaunch(static_cast<cudaGraphExec_t>(build_graph_.get()), st));
@@ -843,7 +853,8 @@ void GridNeighborSearch<T>::enqueueBuild(const Vec3<T>* d_points, std::size_t n,
   auto radixSort = [&](const std::uint32_t* keys_in, std::uint32_t* keys_out, const std::int32_t* vals_in,
                        std::int32_t* vals_out, int bits) {
     std::size_t bytes = temp_.size();
-    INC_CUDA(cub::DeviceRadixSort::SortPairs(temp_.data(), bytes, keys_in, keys_out, vals_in, vals_out, ni, 0, bits, st));
+    INC_CUDA(
+        cub::DeviceRadixSort::SortPairs(temp_.data(), bytes, keys_in, keys_out, vals_in, vals_out, ni, 0, bits, st));
   };
 
   // 2. Storage order. CUB's radix sort is stable, like the CPU's counting sort, so slots agree exactly.
@@ -864,8 +875,8 @@ void GridNeighborSearch<T>::enqueueBuild(const Vec3<T>* d_points, std::size_t n,
     keyed = sorted_.data();
     mark("build:morton keys+sort+gather");
   }
-  cellKeysKernel<T><<<blocksFor(n), kThreads, 0, st>>>(d_params_.data(), keyed, ni, false, keys_.data(),
-                                                       cell_count_.data());
+  cellKeysKernel<T>
+      <<<blocksFor(n), kThreads, 0, st>>>(d_params_.data(), keyed, ni, false, keys_.data(), cell_count_.data());
   INC_CUDA_LAUNCH("cellKeysKernel(bucket)");
   mark("build:bucket keys+histogram");
   if (morton_) {
@@ -874,8 +885,8 @@ void GridNeighborSearch<T>::enqueueBuild(const Vec3<T>* d_points, std::size_t n,
   } else {
     radixSort(keys_.data(), keys_sorted_.data(), iota_.data(), perm_.data(), bucket_bits);
     // float queries read the packed copy only: the Vec3 copy is made on request (sortedPoints)
-    gatherKernel<T><<<blocksFor(n), kThreads, 0, st>>>(d_points, perm_.data(), ni, packed ? nullptr : sorted_.data(),
-                                                       packed);
+    gatherKernel<T>
+        <<<blocksFor(n), kThreads, 0, st>>>(d_points, perm_.data(), ni, packed ? nullptr : sorted_.data(), packed);
     INC_CUDA_LAUNCH("gatherKernel");
   }
   mark("build:sort+gather");
@@ -942,7 +953,7 @@ void GridNeighborSearch<T>::querySelfStorage(T radius, DeviceNeighborLists& out)
   }
   mark("query:start");
   QuerySpec<T> s = querySpec(params_, packed_.data(), sorted_.data(), bucket_start_.data(),
-                              morton_ ? entries_.data() : nullptr, perm_.data(), n_);
+                             morton_ ? entries_.data() : nullptr, perm_.data(), n_);
   s.radius = radius;
   s.nq = int(nq);
   const unsigned tiles = unsigned((nq + kFillThreads - 1) / kFillThreads);
@@ -955,16 +966,17 @@ void GridNeighborSearch<T>::querySelfStorage(T radius, DeviceNeighborLists& out)
       out.indices.resize(total);
     } catch (const std::runtime_error&) {  // cudaMalloc failed: never hand out truncated lists
       cudaGetLastError();
-      throw InputError("", "radius", "the neighbour lists (" + std::to_string(total) +
-                                         " entries) do not fit in device memory; use a smaller radius");
+      throw InputError("", "radius",
+                       "the neighbour lists (" + std::to_string(total) +
+                           " entries) do not fit in device memory; use a smaller radius");
     }
   };
   grow(cap);
   cap = out.indices.capacity();
   for (int attempt = 0;; ++attempt) {
     INC_CUDA(cudaMemsetAsync(tile_status_.data(), 0, tile_status_.bytes()));
-    storageSelfKernel<T, kStorageRowCap, kStorageMinBlocks><<<tiles, kFillThreads>>>(
-        s, out.offsets.data(), out.indices.data(), cap, tile_status_.data());
+    storageSelfKernel<T, kStorageRowCap, kStorageMinBlocks>
+        <<<tiles, kFillThreads>>>(s, out.offsets.data(), out.indices.data(), cap, tile_status_.data());
     INC_CUDA_LAUNCH("storageSelfKernel");
     // Host sync 1 of 1 (2 when the lists outgrow the buffer): the total, to size the list exactly and to know
     // whether every row was written.
@@ -972,7 +984,8 @@ void GridNeighborSearch<T>::querySelfStorage(T radius, DeviceNeighborLists& out)
     INC_CUDA(cudaMemcpy(&total, out.offsets.data() + nq, sizeof(total), cudaMemcpyDeviceToHost));
     mark(attempt == 0 ? "query:storage traverse+write+sync" : "query:storage rerun");
     if (std::uint64_t(total) > std::uint64_t(std::numeric_limits<std::int64_t>::max() / 4))
-      throw InputError("", "radius", "the neighbour lists hold " + std::to_string(total) + " entries; use a smaller radius");
+      throw InputError("", "radius",
+                       "the neighbour lists hold " + std::to_string(total) + " entries; use a smaller radius");
     if (std::size_t(total) <= cap) {
       out.indices.resize(std::size_t(total));
       return;
@@ -987,10 +1000,12 @@ void GridNeighborSearch<T>::run(const Vec3<T>* d_queries, std::size_t nq, T radi
                                 std::size_t radii_count, bool self, DeviceNeighborLists& out) const {
   ensureParams();  // (a no-op after querySelf's own call)
   if (radii_count != 1 && radii_count != nq)
-    throw InputError("", "radii", "expected 1 radius or one per query (" + std::to_string(nq) + "), got " +
-                                      std::to_string(radii_count));
+    throw InputError(
+        "", "radii",
+        "expected 1 radius or one per query (" + std::to_string(nq) + "), got " + std::to_string(radii_count));
   if (nq > kMaxPoints) throw InputError("", "queries", "too many queries (" + std::to_string(nq) + " > 2^30)");
-  if (!self && nq > 0 && !d_queries) throw InputError("", "queries", "null device pointer for " + std::to_string(nq) + " queries");
+  if (!self && nq > 0 && !d_queries)
+    throw InputError("", "queries", "null device pointer for " + std::to_string(nq) + " queries");
   if (!d_radii && !neighborRadiusValid(radius))
     throw InputError("", "radius", "must be finite and >= 0, got " + std::to_string(double(radius)));
   out.offsets.resize(nq + 1);
@@ -1003,7 +1018,7 @@ void GridNeighborSearch<T>::run(const Vec3<T>* d_queries, std::size_t nq, T radi
   mark("query:start");
   status_.resize(3);
   INC_CUDA(cudaMemsetAsync(status_.data(), 0xff, status_.bytes()));  // "none" = all ones
-  const Vec3<T>* check_queries = self ? nullptr : d_queries;  // self-query points were checked by build
+  const Vec3<T>* check_queries = self ? nullptr : d_queries;         // self-query points were checked by build
   if (check_queries || d_radii) {
     const std::size_t m = std::max(check_queries ? nq : std::size_t(0), d_radii ? radii_count : std::size_t(0));
     validateKernel<T><<<blocksFor(m), kThreads>>>(check_queries, (long long)nq, d_radii, (long long)radii_count,
@@ -1012,7 +1027,7 @@ void GridNeighborSearch<T>::run(const Vec3<T>* d_queries, std::size_t nq, T radi
   }
 
   QuerySpec<T> s = querySpec(params_, packed_.data(), sorted_.data(), bucket_start_.data(),
-                              morton_ ? entries_.data() : nullptr, perm_.data(), n_);
+                             morton_ ? entries_.data() : nullptr, perm_.data(), n_);
   s.queries = self ? nullptr : d_queries;
   s.radii = d_radii;
   s.radii_stride = radii_count == nq ? 1 : 0;  // one device radius for all: every query reads radii[0]
@@ -1062,18 +1077,20 @@ void GridNeighborSearch<T>::run(const Vec3<T>* d_queries, std::size_t nq, T radi
   }
   const std::uint64_t total = st[2];
   if (total > std::uint64_t(std::numeric_limits<std::int64_t>::max() / 4))
-    throw InputError("", "radius", "the neighbour lists hold " + std::to_string(total) + " entries; use a smaller radius");
+    throw InputError("", "radius",
+                     "the neighbour lists hold " + std::to_string(total) + " entries; use a smaller radius");
   try {
     out.indices.resize(std::size_t(total));
   } catch (const std::runtime_error&) {  // cudaMalloc failed: never hand out truncated lists
     cudaGetLastError();  // clear the allocation error so that later launch checks do not report it again
-    throw InputError("", "radius", "the neighbour lists (" + std::to_string(total) +
-                                       " entries) do not fit in device memory; use a smaller radius");
+    throw InputError("", "radius",
+                     "the neighbour lists (" + std::to_string(total) +
+                         " entries) do not fit in device memory; use a smaller radius");
   }
   mark("query:sync+alloc");
   if (total == 0) return;
-  fillKernel<T><<<fill_blocks, kFillThreads>>>(s, out.offsets.data(), fused ? staged_.data() : nullptr,
-                                               out.indices.data());
+  fillKernel<T>
+      <<<fill_blocks, kFillThreads>>>(s, out.offsets.data(), fused ? staged_.data() : nullptr, out.indices.data());
   INC_CUDA_LAUNCH("fillKernel");
   mark(fused ? "query:copy staged rows" : "query:fill+sort");
 }

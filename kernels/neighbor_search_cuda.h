@@ -9,8 +9,8 @@
 #include <utility>
 #include <vector>
 
-#include "model/neighbor_lists.h"
 #include "kernels/device_buffer.h"
+#include "model/neighbor_lists.h"
 #include "physics/neighbor_grid.h"
 #include "physics/vec3.h"
 
@@ -116,15 +116,18 @@ class GridNeighborSearch {
   // neighbourhoods are traversed once; above this many scratch bytes they fall back to count + re-traverse.
   // Default 4 GiB (1.6e7 queries need 3.1 GB); 0 forces the two-pass path (tests use it to cover both).
   void setStagingLimitBytes(std::size_t bytes) { staged_limit_bytes_ = bytes; }
-  void setProfiling(bool on) { profiling_ = on; marks_.clear(); }
+  void setProfiling(bool on) {
+    profiling_ = on;
+    marks_.clear();
+  }
   std::vector<std::pair<std::string, double>> takeProfile() const;
 
  private:
-  void run(const Vec3<T>* d_queries, std::size_t nq, T radius, const T* d_radii, std::size_t radii_count,
-           bool self, DeviceNeighborLists& out) const;
+  void run(const Vec3<T>* d_queries, std::size_t nq, T radius, const T* d_radii, std::size_t radii_count, bool self,
+           DeviceNeighborLists& out) const;
   void* scratch(std::size_t bytes) const;
   void mark(const char* stage) const;  // records an event named after the stage that ends here (profiling only)
-  void ensureParams() const;  // host copy of the parameters from the pinned read-back; the non-finite check
+  void ensureParams() const;           // host copy of the parameters from the pinned read-back; the non-finite check
   void enqueueBuild(const Vec3<T>* d_points, std::size_t n, std::uint32_t buckets, struct CUstream_st* stream);
 
   // What a captured build graph depends on: its inputs and every buffer it touches.
@@ -142,32 +145,32 @@ class GridNeighborSearch {
   bool morton_ = false;
   mutable std::size_t used_buckets_ = 0;
   mutable NeighborGridParams<T> params_{};
-  DeviceBuffer<Vec3<T>> upload_;                // host-vector build only
+  DeviceBuffer<Vec3<T>> upload_;  // host-vector build only
   DeviceBuffer<GridParamsReadback<T>> d_params_;
-  std::shared_ptr<void> pinned_params_;         // GridParamsReadback<T> in page-locked host memory
-  std::shared_ptr<void> params_event_;          // cudaEvent_t: the read-back has landed
-  std::shared_ptr<void> stream_;                // cudaStream_t of the builds (blocking: ordered with stream 0)
+  std::shared_ptr<void> pinned_params_;  // GridParamsReadback<T> in page-locked host memory
+  std::shared_ptr<void> params_event_;   // cudaEvent_t: the read-back has landed
+  std::shared_ptr<void> stream_;         // cudaStream_t of the builds (blocking: ordered with stream 0)
   std::shared_ptr<void> side_stream_, fork_event_, join_event_;  // the read-back's branch of a build
-  const void* iota_for_ = nullptr;              // iota_ holds 0, 1, 2, ... (written once per allocation)
-  std::shared_ptr<void> build_graph_;           // cudaGraphExec_t of the last bucket-order build
+  const void* iota_for_ = nullptr;     // iota_ holds 0, 1, 2, ... (written once per allocation)
+  std::shared_ptr<void> build_graph_;  // cudaGraphExec_t of the last bucket-order build
   BuildGraphKey build_key_;
-  mutable DeviceBuffer<Vec3<T>> sorted_;        // points in storage order (float: made on request)
+  mutable DeviceBuffer<Vec3<T>> sorted_;  // points in storage order (float: made on request)
   mutable bool sorted_ready_ = false, inverse_ready_ = false;
-  DeviceBuffer<Packed4<T>> packed_;             // float only: the same points as 16-byte records (x, y, z, 0)
-  DeviceBuffer<std::int32_t> perm_;             // slot -> original
-  mutable DeviceBuffer<std::int32_t> inv_perm_; // original -> slot (made on request)
-  DeviceBuffer<std::int32_t> bucket_start_;     // used_buckets_ + 1
-  DeviceBuffer<std::int32_t> cell_count_;       // used_buckets_ + 1 (histogram before the scan)
-  DeviceBuffer<std::int32_t> entries_;          // Morton mode: storage slot per bucket-ordered entry
+  DeviceBuffer<Packed4<T>> packed_;              // float only: the same points as 16-byte records (x, y, z, 0)
+  DeviceBuffer<std::int32_t> perm_;              // slot -> original
+  mutable DeviceBuffer<std::int32_t> inv_perm_;  // original -> slot (made on request)
+  DeviceBuffer<std::int32_t> bucket_start_;      // used_buckets_ + 1
+  DeviceBuffer<std::int32_t> cell_count_;        // used_buckets_ + 1 (histogram before the scan)
+  DeviceBuffer<std::int32_t> entries_;           // Morton mode: storage slot per bucket-ordered entry
   DeviceBuffer<std::uint32_t> keys_, keys_sorted_;
   DeviceBuffer<std::int32_t> iota_;
-  mutable DeviceBuffer<std::int32_t> counts_;       // per query
-  mutable DeviceBuffer<std::int32_t> staged_;       // fused query: sorted short rows, kRowCap per storage slot
+  mutable DeviceBuffer<std::int32_t> counts_;  // per query
+  mutable DeviceBuffer<std::int32_t> staged_;  // fused query: sorted short rows, kRowCap per storage slot
   std::size_t staged_limit_bytes_ = std::size_t(4) << 30;
-  mutable DeviceBuffer<std::uint64_t> status_;      // {first bad query, first bad radius, total}
+  mutable DeviceBuffer<std::uint64_t> status_;       // {first bad query, first bad radius, total}
   mutable DeviceBuffer<std::uint64_t> tile_status_;  // storage query: look-back words per tile + tile counter
-  mutable DeviceBuffer<unsigned char> temp_;        // CUB temporary storage
-  DeviceBuffer<Vec3<T>> partial_lo_, partial_hi_;   // bounding-box partials per block
+  mutable DeviceBuffer<unsigned char> temp_;         // CUB temporary storage
+  DeviceBuffer<Vec3<T>> partial_lo_, partial_hi_;    // bounding-box partials per block
   DeviceBuffer<std::int64_t> partial_bad_;
   bool profiling_ = false;
   mutable std::vector<std::pair<std::string, std::shared_ptr<void>>> marks_;  // cudaEvent_t, destroyed by the deleter

@@ -8,7 +8,6 @@
 #include <cstdint>
 #include <vector>
 
-#include "model/pbd_model.h"
 #include "kernels/bulk_upload.h"
 #include "kernels/cuda_check.h"
 #include "kernels/device_buffer.h"
@@ -20,6 +19,7 @@
 #include "kernels/pbd_frame_path.cuh"
 #include "kernels/pbd_launch.cuh"
 #include "kernels/pinned_staging.h"
+#include "model/pbd_model.h"
 #include "physics/pbd_block.h"
 
 namespace inc::cuda {
@@ -33,8 +33,8 @@ struct DeviceBlock {
   DeviceBuffer<std::int32_t> offsets, ids, particle_offsets, particle_slots, order;
   DeviceBuffer<T> rest, compliance, jacobi_scale;
   DeviceBuffer<Vec3<T>> rest_vec, lambda, slot_corr;
-  DeviceBuffer<Vec3<T>> cheb1, cheb2;       // Chebyshev: multipliers one and two iterations back (sized on demand)
-  std::vector<std::int32_t> color_offsets;  // host: launch ranges
+  DeviceBuffer<Vec3<T>> cheb1, cheb2;            // Chebyshev: multipliers one and two iterations back (sized on demand)
+  std::vector<std::int32_t> color_offsets;       // host: launch ranges
   DeviceBuffer<std::int32_t> color_offsets_dev;  // the same, for the fused small-model kernel
 };
 
@@ -50,7 +50,7 @@ struct GraphKey {
   int n = 0;
   int counts[kMaxLiveBlocks] = {};
   bool patched = false;
-  std::uint64_t topo = 0;     // PbdCudaBackend::topo_version_
+  std::uint64_t topo = 0;  // PbdCudaBackend::topo_version_
 };
 
 // The backend, one class over several files (each defines the members of one concern; without relocatable device
@@ -105,13 +105,13 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
   struct LaunchFrame {
     T dt = T(0), damp = T(1);
     pbd::SolveContext<T> ctx;
-    unsigned gn = 0;               // blocks of the particle launches (over gridCount(n_))
-    unsigned gcont = 0;            // blocks of the contact launches (the particles, or every Chebyshev multiplier)
-    const int* live_n = nullptr;   // the particle count on the device (patched models)
-    bool cheb = false;             // Chebyshev-accelerated
-    ChebyshevArgs<T> ch;           // mode and weight set per iteration
-    int last_solved = -1;          // the last block solved
-    bool fuse_contacts = false;    // the contacts ride on the last block's gather
+    unsigned gn = 0;              // blocks of the particle launches (over gridCount(n_))
+    unsigned gcont = 0;           // blocks of the contact launches (the particles, or every Chebyshev multiplier)
+    const int* live_n = nullptr;  // the particle count on the device (patched models)
+    bool cheb = false;            // Chebyshev-accelerated
+    ChebyshevArgs<T> ch;          // mode and weight set per iteration
+    int last_solved = -1;         // the last block solved
+    bool fuse_contacts = false;   // the contacts ride on the last block's gather
     PbdContactScene<T> scene;
   };
   struct ProfRecord {
@@ -224,11 +224,11 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
   cudaGraphExec_t graph_exec_ = nullptr;
   BulkUpload bulk_;  // setModel's uploads
   GraphKey<T> graph_key_;
-  bool has_coloring_ = true;  // Gauss-Seidel needs every solved block coloured (pbdModelHasColoring)
-  DeviceBuffer<T> cheb_weights_;           // the grid frame's per-iteration weights
+  bool has_coloring_ = true;      // Gauss-Seidel needs every solved block coloured (pbdModelHasColoring)
+  DeviceBuffer<T> cheb_weights_;  // the grid frame's per-iteration weights
   std::vector<T> cheb_weights_host_;
-  int grid_cap_ = -1;                      // resident blocks of the grid frame (planGrid); -1 not asked yet
-  bool direct_frame_ = false;              // the frame being recorded is launched directly, not captured
+  int grid_cap_ = -1;          // resident blocks of the grid frame (planGrid); -1 not asked yet
+  bool direct_frame_ = false;  // the frame being recorded is launched directly, not captured
   DeviceBuffer<Vec3<T>> cheb_x1_, cheb_x2_, cheb_a1_, cheb_a2_;  // Chebyshev: positions, attachment multipliers
   std::uint64_t topo_version_ = 0;  // bumped by a new model and by a reallocation: the captured graph holds pointers
   DeviceBuffer<int> live_;          // the counts the frame's kernels read (uploadLive)
@@ -236,7 +236,7 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
   PinnedStaging summary_staging_, kin_to_staging_;
   bool live_dirty_ = true;
   std::uint64_t last_direct_topo_ = ~std::uint64_t(0);
-  bool patched_ = false;            // a block was rebuilt on the device: no colouring (Jacobi only)
+  bool patched_ = false;  // a block was rebuilt on the device: no colouring (Jacobi only)
   int summary_every_ = 1;
   std::uint64_t frame_count_ = 0;
   DeviceBuffer<std::uint32_t> sort_keys_, sort_keys_out_;
@@ -246,7 +246,8 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
   std::vector<ProfRecord> prof_;
   bool profile_ = false;
 
-  int n_ = 0, n_planes_ = 0, n_boxes_ = 0, n_kin_ = 0, n_att_ = 0, n_tools_ = 0, n_volume_tools_ = 0, rotation_block_ = -1;
+  int n_ = 0, n_planes_ = 0, n_boxes_ = 0, n_kin_ = 0, n_att_ = 0, n_tools_ = 0, n_volume_tools_ = 0,
+      rotation_block_ = -1;
   bool have_volume_data_ = false;
   std::vector<T> host_rest_radii_;
   DeviceBuffer<T> inset_;  // PbdModel::contact_inset where the model has one
@@ -260,23 +261,23 @@ class PbdCudaBackend final : public PbdBackend<T>, public PbdDevicePatch<T> {
   DeviceBuffer<pbd::PlaneCollider<T>> planes_;
   DeviceBuffer<pbd::BoxCollider<T>> boxes_;
   DeviceBuffer<pbd::CapsuleCollider<T>> tools_from_, tools_to_;
-  DeviceBuffer<double> partials_;           // reduction partials: per distance block (max, sum), then summary
+  DeviceBuffer<double> partials_;  // reduction partials: per distance block (max, sum), then summary
   std::vector<double> host_partials_;
   struct ClusterBlockMeta {
-    std::vector<std::int32_t> offsets;  // host copy of the block's constraint -> slot offsets
+    std::vector<std::int32_t> offsets;         // host copy of the block's constraint -> slot offsets
     std::vector<std::int32_t> particle_slots;  // and of its particle -> slot CSR entries
     bool solve = true;
     int kind = 0;
   };
   std::vector<ClusterBlockMeta> cluster_meta_;
-  const char* last_path_ = "launches";      // the frame kernel recordFrame chose last (reported in the stats)
+  const char* last_path_ = "launches";  // the frame kernel recordFrame chose last (reported in the stats)
   std::vector<DeviceBuffer<std::int32_t>> cluster_home_;  // ClusterSplit::slot_home, per block
-  DeviceBuffer<long long> cluster_profile_;  // INCISION_PBD_CLUSTER_PROFILE: cycles per phase kind and CTA
-  int cluster_planned_for_ = -1;            // the cluster_ctas the current plan was made for (-1: none)
-  bool cluster_ok_ = false;                 // the cluster frame can run this model (planCluster)
+  DeviceBuffer<long long> cluster_profile_;               // INCISION_PBD_CLUSTER_PROFILE: cycles per phase kind and CTA
+  int cluster_planned_for_ = -1;                          // the cluster_ctas the current plan was made for (-1: none)
+  bool cluster_ok_ = false;                               // the cluster frame can run this model (planCluster)
   ClusterSplit cluster_split_;
   std::size_t cluster_bytes_ = 0;
-  bool staged_ = false;                     // fused kernel stages particles in shared memory
+  bool staged_ = false;  // fused kernel stages particles in shared memory
   std::size_t stage_bytes_ = 0;
   std::vector<DeviceBlock<T>> blocks_;
 };

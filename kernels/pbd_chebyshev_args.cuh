@@ -1,4 +1,5 @@
-// Device views of the Chebyshev-accelerated Jacobi iterates (positions and every multiplier list) and the per-iteration multiplier step.
+// Device views of the Chebyshev-accelerated Jacobi iterates (positions and every multiplier list) and the per-iteration
+// multiplier step.
 #pragma once
 
 #include "physics/pbd_chebyshev.h"

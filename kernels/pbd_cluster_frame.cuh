@@ -1,4 +1,5 @@
-// The Jacobi PBD frame of a small model in one thread-block cluster: every CTA keeps a replica of the particles in shared memory, phases are separated by hardware cluster barriers.
+// The Jacobi PBD frame of a small model in one thread-block cluster: every CTA keeps a replica of the particles in
+// shared memory, phases are separated by hardware cluster barriers.
 #pragma once
 
 #include <cooperative_groups.h>
@@ -79,8 +80,8 @@ __device__ inline void gatherOwned(cooperative_groups::cluster_group& cl, const 
 // Writes the owned particles' positions [p0, p1) into every other CTA's replica, one (particle, CTA) pair per
 // thread.
 template <typename T>
-__device__ inline void broadcastPositions(cooperative_groups::cluster_group& cl, Vec3<T>* sx, int p0, int p1,
-                                          int rank, int ctas) {
+__device__ inline void broadcastPositions(cooperative_groups::cluster_group& cl, Vec3<T>* sx, int p0, int p1, int rank,
+                                          int ctas) {
   const int others = ctas - 1;
   if (others == 0) return;
   const int pairs = (p1 - p0) * others;
@@ -155,7 +156,8 @@ __global__ void __launch_bounds__(kClusterThreads, 1) clusterFrameKernel(FusedFr
     __syncthreads();
     for (int i = p0 + tid; i < p1; i += nth)
       if (sw[i] > T(0))
-        sx[i] = pbd::resolveContacts(sx[i], sr[i], f.inset ? f.inset[i] : T(0), f.x_prev + i, f.planes, f.np, f.boxes, f.nb, f.tools_from, f.tools_to, f.nt, t_start, t_end);
+        sx[i] = pbd::resolveContacts(sx[i], sr[i], f.inset ? f.inset[i] : T(0), f.x_prev + i, f.planes, f.np, f.boxes,
+                                     f.nb, f.tools_from, f.tools_to, f.nt, t_start, t_end);
     __syncthreads();
   };
 

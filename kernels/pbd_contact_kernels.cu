@@ -1,4 +1,5 @@
-// Contact PBD kernels of the per-block frame and their host launch wrappers: a particle's end of an iteration (colliders, Chebyshev step), alone or after the last Jacobi gather.
+// Contact PBD kernels of the per-block frame and their host launch wrappers: a particle's end of an iteration
+// (colliders, Chebyshev step), alone or after the last Jacobi gather.
 #include "kernels/pbd_contact_kernels.cuh"
 
 #include "kernels/cuda_check.h"
@@ -13,9 +14,8 @@ namespace {
 
 template <typename T>
 __global__ void contactKernel(int n, const int* live_n, Vec3<T>* x, const T* r, const T* inset, const Vec3<T>* x_prev,
-                              const T* w,
-                              const pbd::PlaneCollider<T>* planes,
-                              int np, const pbd::BoxCollider<T>* boxes, int nb, const pbd::CapsuleCollider<T>* tools_from,
+                              const T* w, const pbd::PlaneCollider<T>* planes, int np, const pbd::BoxCollider<T>* boxes,
+                              int nb, const pbd::CapsuleCollider<T>* tools_from,
                               const pbd::CapsuleCollider<T>* tools_to, int nt, T t0, T t, ChebyshevArgs<T> ch) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i < liveCount(live_n, n))
@@ -35,8 +35,8 @@ __global__ void gatherContactKernel(int n, const int* live_n, pbd::BlockView<T> 
                                     const pbd::CapsuleCollider<T>* tools_to, int nt, T t0, T t, ChebyshevArgs<T> ch) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i < liveCount(live_n, n))
-    x[i] = endIterationAt(i, x[i] + gatherSum(b, i), r, inset, x_prev, w, planes, np, boxes, nb, tools_from, tools_to, nt, t0,
-                          t, ch);
+    x[i] = endIterationAt(i, x[i] + gatherSum(b, i), r, inset, x_prev, w, planes, np, boxes, nb, tools_from, tools_to,
+                          nt, t0, t, ch);
   chebyshevMultipliers(ch);
 }
 

@@ -1,4 +1,5 @@
-// Host launch wrappers of the contact PBD kernels (kernels/pbd_contact_kernels.cu): a particle's end of an iteration, alone or fused with the last Jacobi gather.
+// Host launch wrappers of the contact PBD kernels (kernels/pbd_contact_kernels.cu): a particle's end of an iteration,
+// alone or fused with the last Jacobi gather.
 #pragma once
 
 #include <cuda_runtime.h>
@@ -36,9 +37,8 @@ struct PbdContactKernels {
   static void contacts(unsigned blocks, cudaStream_t stream, int n, const int* live_n, Vec3<T>* x,
                        const PbdContactScene<T>& scene, T t0, T t, const ChebyshevArgs<T>& ch);
   // Block b's Jacobi gather, then the iteration's end, per particle in one pass.
-  static void gatherContacts(unsigned blocks, cudaStream_t stream, int n, const int* live_n,
-                             const pbd::BlockView<T>& b, Vec3<T>* x, const PbdContactScene<T>& scene, T t0, T t,
-                             const ChebyshevArgs<T>& ch);
+  static void gatherContacts(unsigned blocks, cudaStream_t stream, int n, const int* live_n, const pbd::BlockView<T>& b,
+                             Vec3<T>* x, const PbdContactScene<T>& scene, T t0, T t, const ChebyshevArgs<T>& ch);
 };
 
 }  // namespace inc::cuda

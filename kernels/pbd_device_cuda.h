@@ -1,4 +1,5 @@
-// In-place device patching of the CUDA PBD backend's model: appended particles, constraint blocks rewritten on the device, incidence by radix sort or from the caller.
+// In-place device patching of the CUDA PBD backend's model: appended particles, constraint blocks rewritten on the
+// device, incidence by radix sort or from the caller.
 #pragma once
 
 #include <cstddef>
@@ -28,9 +29,9 @@ template <typename T>
 struct PbdDeviceBlock {
   int arity = 0;
   std::size_t capacity = 0;
-  std::int32_t* ids = nullptr;   // arity per constraint
-  T* rest = nullptr;             // one per constraint
-  T* compliance = nullptr;       // one per constraint
+  std::int32_t* ids = nullptr;  // arity per constraint
+  T* rest = nullptr;            // one per constraint
+  T* compliance = nullptr;      // one per constraint
 };
 
 // Device pointers of one block's particle -> slot CSR, for a caller that derives it itself

@@ -1,4 +1,5 @@
-// A frame of the CUDA PBD backend: advanceFrame's orchestration, the frame's inputs and Chebyshev iterates, the per-block launches of a substep, stage profiling.
+// A frame of the CUDA PBD backend: advanceFrame's orchestration, the frame's inputs and Chebyshev iterates, the
+// per-block launches of a substep, stage profiling.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -42,9 +43,11 @@ PbdFrameStats PbdCudaBackend<T>::advanceFrame(const PbdStepParams<T>& p, const P
 
   const bool jacobi = p.solver == PbdSolverKind::Jacobi;
   if (!jacobi && patched_)
-    throw InputError("pbd frame", "solver", "the model was patched on the device (no colouring): use the Jacobi solver");
+    throw InputError("pbd frame", "solver",
+                     "the model was patched on the device (no colouring): use the Jacobi solver");
   if (!jacobi && !has_coloring_)
-    throw InputError("pbd frame", "solver", "the model was built without a colouring (Jacobi only): use the Jacobi solver");
+    throw InputError("pbd frame", "solver",
+                     "the model was built without a colouring (Jacobi only): use the Jacobi solver");
   if (p.chebyshev_rho > T(0)) ensureChebyshev(p);
   if (!jacobi)
     for (const DeviceBlock<T>& d : blocks_)
@@ -86,8 +89,7 @@ void PbdCudaBackend<T>::recordProfiledFrame(const PbdStepParams<T>& p, PbdFrameS
   for (int k = 0; k < 5; ++k) st.stages.push_back({names[k], ms[std::size_t(k)]});
   for (std::size_t bi = 0; bi < blocks_.size(); ++bi)
     if (blocks_[bi].solve && blocks_[bi].count > 0)
-      st.stages.push_back({std::string(kindName(blocks_[bi].kind)) + "#" + std::to_string(bi),
-                           ms[5 + bi]});
+      st.stages.push_back({std::string(kindName(blocks_[bi].kind)) + "#" + std::to_string(bi), ms[5 + bi]});
 }
 
 // The frame replayed from its graph or launched directly, between two events; the "frame" stage on summary frames.
@@ -117,7 +119,9 @@ void PbdCudaBackend<T>::uploadFrameInput(const PbdFrameInput<T>& in) {
     kin_ids_.upload(in.kinematic_ids);
     kin_ids_host_ = in.kinematic_ids;
   }
-  if (n_ > 0) INC_CUDA(cudaMemcpyAsync(w_.data(), inv_mass_.data(), std::size_t(n_) * sizeof(T), cudaMemcpyDeviceToDevice, stream_));
+  if (n_ > 0)
+    INC_CUDA(
+        cudaMemcpyAsync(w_.data(), inv_mass_.data(), std::size_t(n_) * sizeof(T), cudaMemcpyDeviceToDevice, stream_));
   if (!in.kinematic_ids.empty())
     PbdParticleKernels<T>::zeroKinematic(blocksFor(std::int64_t(in.kinematic_ids.size())), stream_,
                                          int(in.kinematic_ids.size()), w_.data(), kin_ids_.data());
@@ -153,8 +157,9 @@ void PbdCudaBackend<T>::ensureChebyshev(const PbdStepParams<T>& p) {
   if (patched_)
     throw InputError("pbd frame", "chebyshev_rho", "not supported on a model patched on the device (tearing): use 0");
   if (int(blocks_.size()) + 1 > kMaxChebyshevLists)
-    throw InputError("pbd frame", "chebyshev_rho", "supported for up to " + std::to_string(kMaxChebyshevLists - 1) +
-                                                       " constraint blocks, the model has " + std::to_string(blocks_.size()));
+    throw InputError("pbd frame", "chebyshev_rho",
+                     "supported for up to " + std::to_string(kMaxChebyshevLists - 1) +
+                         " constraint blocks, the model has " + std::to_string(blocks_.size()));
   bool moved = false;
   const auto fit = [&](DeviceBuffer<Vec3<T>>& b, std::size_t n) {
     const void* before = b.data();
@@ -350,8 +355,7 @@ void PbdCudaBackend<T>::recordSubstep(const PbdStepParams<T>& p, LaunchFrame& lf
     PbdParticleKernels<T>::kinematic(blocksFor(n_kin_), stream_, n_kin_, x_.data(), kin_ids_.data(), kin_from_.data(),
                                      kin_to_.data(), t_end);
   for (DeviceBlock<T>& d : blocks_)
-    if (d.lambda.size())
-      INC_CUDA(cudaMemsetAsync(d.lambda.data(), 0, bucketBytes(d.lambda), stream_));
+    if (d.lambda.size()) INC_CUDA(cudaMemsetAsync(d.lambda.data(), 0, bucketBytes(d.lambda), stream_));
   if (n_att_ > 0) INC_CUDA(cudaMemsetAsync(att_lambda_.data(), 0, att_lambda_.bytes(), stream_));
   stageEnd(0, ev);
 

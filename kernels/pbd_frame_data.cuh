@@ -1,4 +1,5 @@
-// The arguments of the whole-frame PBD kernels (single block and thread-block cluster): raw device views of the model, the frame's inputs and step parameters, the cluster's split of the work.
+// The arguments of the whole-frame PBD kernels (single block and thread-block cluster): raw device views of the model,
+// the frame's inputs and step parameters, the cluster's split of the work.
 #pragma once
 
 #include <cstddef>

@@ -28,8 +28,8 @@
 
 #include <algorithm>
 
-#include "model/pbd_model.h"
 #include "kernels/pbd_frame_data.cuh"
+#include "model/pbd_model.h"
 
 namespace inc::cuda {
 
@@ -54,12 +54,12 @@ constexpr int kFusedJacobiMaxParticles = 256;
 // What the choice depends on besides the step parameters: the backend's state for this frame.
 struct FramePathFacts {
   int particles = 0;
-  int blocks = 0;                 // constraint blocks of the model
-  bool profiling = false;         // stages are timed (PbdStepParams::profile_stages): per-block launches only
-  bool patched = false;           // the model was patched on the device (tearing): counts read on the device
-  bool direct = false;            // the frame is launched as it is recorded, not captured into a graph
-  bool cluster_planned = false;   // planCluster found a cluster that runs this model here
-  int grid_resident_blocks = 0;   // planGrid: the grid frame's resident blocks (0: no cooperative launch)
+  int blocks = 0;                // constraint blocks of the model
+  bool profiling = false;        // stages are timed (PbdStepParams::profile_stages): per-block launches only
+  bool patched = false;          // the model was patched on the device (tearing): counts read on the device
+  bool direct = false;           // the frame is launched as it is recorded, not captured into a graph
+  bool cluster_planned = false;  // planCluster found a cluster that runs this model here
+  int grid_resident_blocks = 0;  // planGrid: the grid frame's resident blocks (0: no cooperative launch)
 };
 
 // The first of the four paths (the list at the top of this file) whose conditions hold.

@@ -1,4 +1,5 @@
-// The PBD frame of a small model in one thread block: every phase a block-strided loop, phases separated by __syncthreads(), particles optionally staged in shared memory.
+// The PBD frame of a small model in one thread block: every phase a block-strided loop, phases separated by
+// __syncthreads(), particles optionally staged in shared memory.
 #pragma once
 
 #include <cuda_runtime.h>
@@ -74,8 +75,8 @@ __global__ void __launch_bounds__(kFusedThreads) fusedFrameKernel(FusedFrame<T> 
         if (ctx.jacobi) {
           if (group)  // the same trip count for every thread: all lanes of a warp reach the shuffles
             for (int base = 0; base < fb.view.count; base += per_pass)
-              pbdgroup::projectGroup(fb.view, base + tid / pbdgroup::kGroup, base + tid / pbdgroup::kGroup < fb.view.count,
-                                     ctx, lane);
+              pbdgroup::projectGroup(fb.view, base + tid / pbdgroup::kGroup,
+                                     base + tid / pbdgroup::kGroup < fb.view.count, ctx, lane);
           else
             for (int c = tid; c < fb.view.count; c += nth) pbd::projectConstraint(fb.view, c, ctx);
           __syncthreads();
@@ -97,14 +98,14 @@ __global__ void __launch_bounds__(kFusedThreads) fusedFrameKernel(FusedFrame<T> 
       }
       for (int q = tid; q < f.n_att; q += nth) {
         const std::int32_t id = f.att_ids[q];
-        pbd::projectAttachment(x[id], w[id], pbd::lerp(f.att_from[q], f.att_to[q], t_end), f.att_comp[q],
-                               ctx.xpbd, f.dt, f.att_lambda[q]);
+        pbd::projectAttachment(x[id], w[id], pbd::lerp(f.att_from[q], f.att_to[q], t_end), f.att_comp[q], ctx.xpbd,
+                               f.dt, f.att_lambda[q]);
       }
       __syncthreads();
       for (int i = tid; i < f.n; i += nth)
         if (w[i] > T(0))
-          x[i] = pbd::resolveContacts(x[i], f.r[i], f.inset ? f.inset[i] : T(0), f.x_prev + i, f.planes, f.np, f.boxes, f.nb, f.tools_from, f.tools_to, f.nt,
-                                        t_start, t_end);
+          x[i] = pbd::resolveContacts(x[i], f.r[i], f.inset ? f.inset[i] : T(0), f.x_prev + i, f.planes, f.np, f.boxes,
+                                      f.nb, f.tools_from, f.tools_to, f.nt, t_start, t_end);
       __syncthreads();
     }
     const T inv_dt = T(1) / f.dt;

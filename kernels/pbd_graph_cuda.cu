@@ -1,4 +1,5 @@
-// The CUDA PBD backend's frame graph: what a captured frame depends on, when it is (re)captured, when a frame is launched directly instead, the replay.
+// The CUDA PBD backend's frame graph: what a captured frame depends on, when it is (re)captured, when a frame is
+// launched directly instead, the replay.
 #include <algorithm>
 #include <cstddef>
 
@@ -20,9 +21,8 @@ bool sameKey(const GraphKey<T>& a, const GraphKey<T>& b) {
          x.volume_passes == y.volume_passes && x.bisection_steps == y.bisection_steps &&
          x.fused_max_particles == y.fused_max_particles && x.cluster_max_particles == y.cluster_max_particles &&
          x.cluster_ctas == y.cluster_ctas && x.grid_max_particles == y.grid_max_particles &&
-         x.chebyshev_rho == y.chebyshev_rho &&
-         a.kinematic == b.kinematic &&
-         a.tools == b.tools && a.volume_tools == b.volume_tools && a.attached == b.attached && std::equal(a.ptrs, a.ptrs + 11, b.ptrs) &&
+         x.chebyshev_rho == y.chebyshev_rho && a.kinematic == b.kinematic && a.tools == b.tools &&
+         a.volume_tools == b.volume_tools && a.attached == b.attached && std::equal(a.ptrs, a.ptrs + 11, b.ptrs) &&
          a.n == b.n && std::equal(a.counts, a.counts + kMaxLiveBlocks, b.counts) && a.patched == b.patched &&
          a.topo == b.topo;
 }
@@ -39,9 +39,9 @@ void PbdCudaBackend<T>::launchGraphFrame(const PbdStepParams<T>& p, const PbdFra
   key.tools = in.tools_from.size();
   key.volume_tools = std::size_t(in.volumeToolCount());
   key.attached = in.attach_ids.size();
-  const void* ptrs[11] = {kin_ids_.data(),    kin_from_.data(),  kin_to_.data(),      tools_from_.data(),
-                          tools_to_.data(),   w_.data(),         att_ids_.data(),     att_from_.data(),
-                          att_to_.data(),     att_comp_.data(),  att_lambda_.data()};
+  const void* ptrs[11] = {kin_ids_.data(),  kin_from_.data(), kin_to_.data(),    tools_from_.data(),
+                          tools_to_.data(), w_.data(),        att_ids_.data(),   att_from_.data(),
+                          att_to_.data(),   att_comp_.data(), att_lambda_.data()};
   std::copy(ptrs, ptrs + 11, key.ptrs);
   // The single-kernel frames take the counts as arguments: a new count is a new graph.
   const bool exact = framePath(p) != FramePath::Launches;

@@ -1,4 +1,5 @@
-// The whole Jacobi PBD frame as one cooperative grid launch: the per-block launches' phases, separated by grid-wide barriers.
+// The whole Jacobi PBD frame as one cooperative grid launch: the per-block launches' phases, separated by grid-wide
+// barriers.
 #pragma once
 
 #include <cooperative_groups.h>
@@ -19,10 +20,10 @@ constexpr int kGridFrameThreads = 256;  // a multiple of pbdgroup::kGroup: a clu
 template <typename T>
 struct GridFrame {
   FusedFrame<T> f;
-  ChebyshevArgs<T> ch;                // views of the iterates; mode and weight are set per iteration
-  const T* cheb_weights = nullptr;    // weight of each iteration (host: pbd::chebyshevIteration); null: no acceleration
+  ChebyshevArgs<T> ch;              // views of the iterates; mode and weight are set per iteration
+  const T* cheb_weights = nullptr;  // weight of each iteration (host: pbd::chebyshevIteration); null: no acceleration
   T cheb_rho = T(0);
-  int last_solved = -1;               // without attachments the iteration's contacts ride on this block's gather
+  int last_solved = -1;  // without attachments the iteration's contacts ride on this block's gather
 };
 
 // Why: on a liver-sized model each Jacobi iteration is six dependent phases (three blocks, each a projection and
@@ -78,8 +79,8 @@ __global__ void __launch_bounds__(kGridFrameThreads) gridFrameKernel(GridFrame<T
         grid.sync();
         if (fuse_contacts && b == g.last_solved) {
           for (int i = tid; i < f.n; i += nth)
-            x[i] = endIterationAt(i, x[i] + gatherSum(fb.view, i), f.r, f.inset, f.x_prev, f.w, f.planes, f.np, f.boxes, f.nb,
-                                  f.tools_from, f.tools_to, f.nt, t_start, t_end, ch);
+            x[i] = endIterationAt(i, x[i] + gatherSum(fb.view, i), f.r, f.inset, f.x_prev, f.w, f.planes, f.np, f.boxes,
+                                  f.nb, f.tools_from, f.tools_to, f.nt, t_start, t_end, ch);
           chebyshevMultipliers(ch);
         } else {
           for (int i = tid; i < f.n; i += nth) x[i] += gatherSum(fb.view, i);
@@ -96,8 +97,8 @@ __global__ void __launch_bounds__(kGridFrameThreads) gridFrameKernel(GridFrame<T
           grid.sync();
         }
         for (int i = tid; i < f.n; i += nth)
-          x[i] = endIterationAt(i, x[i], f.r, f.inset, f.x_prev, f.w, f.planes, f.np, f.boxes, f.nb, f.tools_from, f.tools_to, f.nt,
-                                t_start, t_end, ch);
+          x[i] = endIterationAt(i, x[i], f.r, f.inset, f.x_prev, f.w, f.planes, f.np, f.boxes, f.nb, f.tools_from,
+                                f.tools_to, f.nt, t_start, t_end, ch);
         chebyshevMultipliers(ch);
         grid.sync();
       }

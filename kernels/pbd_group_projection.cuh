@@ -106,7 +106,7 @@ __device__ void laplacianGroup(const pbd::BlockView<T>& b, int c, bool valid, co
                                term, b.lambda[c]);
     scale = pbd::slotScale(b, ctx, s0);
   }
-  __syncwarp();  // every lane has read x and lambda before any lane writes them (Gauss-Seidel writes in place)
+  __syncwarp();        // every lane has read x and lambda before any lane writes them (Gauss-Seidel writes in place)
   if (!valid) return;  // a lone centre (count < 2) still writes its zero correction, as the serial case does
   if (lane == 0) {
     pbd::emitCorrection(b, ctx, s0, r.d_center, scale);

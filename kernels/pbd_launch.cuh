@@ -1,4 +1,5 @@
-// Launch geometry shared by the PBD kernels and the CUDA PBD backend: threads per block, grid sizes, reduction sizes and the live counts of a patched model.
+// Launch geometry shared by the PBD kernels and the CUDA PBD backend: threads per block, grid sizes, reduction sizes
+// and the live counts of a patched model.
 #pragma once
 
 #include <algorithm>
@@ -13,7 +14,8 @@ constexpr int kThreads = 128;
 // of the H100's warps and took 19 us (ncu, 2026-11-27).
 constexpr int kReduceBlocks = 1024;
 inline int reduceBlocksFor(std::int64_t count) {
-  return int(std::max<std::int64_t>(1, std::min<std::int64_t>(kReduceBlocks, (count + 4 * kThreads - 1) / (4 * kThreads))));
+  return int(
+      std::max<std::int64_t>(1, std::min<std::int64_t>(kReduceBlocks, (count + 4 * kThreads - 1) / (4 * kThreads))));
 }
 
 // The device copies of the counts a frame's kernels read (PbdCudaBackend::live_): entry 0 the particle count, entry

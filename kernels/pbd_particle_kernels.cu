@@ -1,4 +1,5 @@
-// Per-particle PBD kernels of the per-block frame and their host launch wrappers: prediction, kinematic targets, velocities, sphere radii.
+// Per-particle PBD kernels of the per-block frame and their host launch wrappers: prediction, kinematic targets,
+// velocities, sphere radii.
 #include "kernels/pbd_particle_kernels.cuh"
 
 #include <cstdint>
@@ -15,8 +16,8 @@ namespace {
 // Each kernel is one loop of the CPU backend (cpu_fallback/pbd_solver_cpu.cpp) with the same physics calls.
 
 template <typename T>
-__global__ void predictKernel(int n, const int* live_n, Vec3<T>* x, Vec3<T>* v, Vec3<T>* x_prev, const T* w, Vec3<T> g, T damp,
-                              T dt, Vec3<T>* cheb_x1) {
+__global__ void predictKernel(int n, const int* live_n, Vec3<T>* x, Vec3<T>* v, Vec3<T>* x_prev, const T* w, Vec3<T> g,
+                              T damp, T dt, Vec3<T>* cheb_x1) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i >= liveCount(live_n, n)) return;
   pbd::predictParticle(x[i], v[i], x_prev[i], w[i], g, damp, dt);
@@ -46,7 +47,8 @@ __global__ void zeroKinematicKernel(int k, T* w, const std::int32_t* ids) {
 }
 
 template <typename T>
-__global__ void velocityKernel(int n, const int* live_n, const Vec3<T>* x, const Vec3<T>* x_prev, Vec3<T>* v, T inv_dt) {
+__global__ void velocityKernel(int n, const int* live_n, const Vec3<T>* x, const Vec3<T>* x_prev, Vec3<T>* v,
+                               T inv_dt) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i >= liveCount(live_n, n)) return;
   v[i] = (x[i] - x_prev[i]) * inv_dt;
@@ -126,8 +128,8 @@ void PbdParticleKernels<T>::velocity(unsigned blocks, cudaStream_t stream, int n
 }
 
 template <typename T>
-void PbdParticleKernels<T>::volumeActive(unsigned blocks, cudaStream_t stream, int n, const Vec3<T>* x,
-                                         const T* rest_r, const pbd::CapsuleCollider<T>* tools_to, int nt, T influence,
+void PbdParticleKernels<T>::volumeActive(unsigned blocks, cudaStream_t stream, int n, const Vec3<T>* x, const T* rest_r,
+                                         const pbd::CapsuleCollider<T>* tools_to, int nt, T influence,
                                          std::uint8_t* active) {
   volumeActiveKernel<T><<<blocks, kThreads, 0, stream>>>(n, x, rest_r, tools_to, nt, influence, active);
   INC_CUDA_LAUNCH("pbd volume active");

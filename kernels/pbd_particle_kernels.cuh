@@ -1,4 +1,5 @@
-// Host launch wrappers of the per-particle PBD kernels (kernels/pbd_particle_kernels.cu): prediction, kinematic targets, velocities, sphere radii.
+// Host launch wrappers of the per-particle PBD kernels (kernels/pbd_particle_kernels.cu): prediction, kinematic
+// targets, velocities, sphere radii.
 #pragma once
 
 #include <cuda_runtime.h>

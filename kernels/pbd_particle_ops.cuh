@@ -1,4 +1,5 @@
-// Per-particle device steps shared by the per-block PBD kernels and the grid frame: the Jacobi gather and a particle's end of an iteration.
+// Per-particle device steps shared by the per-block PBD kernels and the grid frame: the Jacobi gather and a particle's
+// end of an iteration.
 #pragma once
 
 #include <cstdint>
@@ -35,17 +36,16 @@ __device__ __forceinline__ Vec3<T> gatherSum(const pbd::BlockView<T>& b, int i) 
 // A particle's end of an iteration (pbd::endIteration): the Chebyshev step, the contacts, the record.
 template <typename T>
 __device__ __forceinline__ Vec3<T> endIterationAt(int i, Vec3<T> xi, const T* r, const T* inset, const Vec3<T>* x_prev,
-                                                  const T* w,
-                                                  const pbd::PlaneCollider<T>* planes,
-                                                  int np, const pbd::BoxCollider<T>* boxes, int nb,
+                                                  const T* w, const pbd::PlaneCollider<T>* planes, int np,
+                                                  const pbd::BoxCollider<T>* boxes, int nb,
                                                   const pbd::CapsuleCollider<T>* tools_from,
                                                   const pbd::CapsuleCollider<T>* tools_to, int nt, T t0, T t,
                                                   const ChebyshevArgs<T>& ch) {
   const bool on = ch.mode != pbd::ChebyshevMode::Off;
   return pbd::endIteration(xi, w[i] > T(0), on ? ch.x1 + i : nullptr, on ? ch.x2 + i : nullptr, ch.weight, ch.mode,
                            [&](const Vec3<T>& p) {
-                             return pbd::resolveContacts(p, r[i], inset ? inset[i] : T(0), x_prev + i, planes, np, boxes, nb, tools_from,
-                                                                       tools_to, nt, t0, t);
+                             return pbd::resolveContacts(p, r[i], inset ? inset[i] : T(0), x_prev + i, planes, np,
+                                                         boxes, nb, tools_from, tools_to, nt, t0, t);
                            });
 }
 

@@ -1,4 +1,5 @@
-// The CUDA PBD backend's topology patches (PbdDevicePatch): particles appended and constraint blocks rewritten on the device after a tear, their incidence by radix sort, the live counts a captured frame reads.
+// The CUDA PBD backend's topology patches (PbdDevicePatch): particles appended and constraint blocks rewritten on the
+// device after a tear, their incidence by radix sort, the live counts a captured frame reads.
 #include <cub/cub.cuh>
 
 #include <algorithm>
@@ -154,7 +155,9 @@ PbdDeviceBlock<T> PbdCudaBackend<T>::reserveBlock(int block, std::size_t constra
 }
 
 template <typename T>
-void PbdCudaBackend<T>::commitBlock(int block, int count) { commit(block, count, false); }
+void PbdCudaBackend<T>::commitBlock(int block, int count) {
+  commit(block, count, false);
+}
 
 template <typename T>
 PbdDeviceIncidence PbdCudaBackend<T>::reserveIncidence(int block, std::size_t constraints) {
@@ -172,7 +175,9 @@ PbdDeviceIncidence PbdCudaBackend<T>::reserveIncidence(int block, std::size_t co
 }
 
 template <typename T>
-void PbdCudaBackend<T>::commitBlockIncidence(int block, int count) { commit(block, count, true); }
+void PbdCudaBackend<T>::commitBlockIncidence(int block, int count) {
+  commit(block, count, true);
+}
 
 template <typename T>
 void PbdCudaBackend<T>::setSummaryEvery(int k) {
@@ -259,8 +264,8 @@ void PbdCudaBackend<T>::commit(int block, int count, bool caller_csr) {
   const std::size_t cnt = std::size_t(count), slots = std::size_t(a) * cnt;
   // The caller's CSR must not be reallocated here (growKeep with nothing kept would drop it).
   if (caller_csr && (slots > capacityOf(d.particle_slots) || std::size_t(n_) + 1 > capacityOf(d.particle_offsets)))
-    throw InputError("pbd patch", "incidence", "call reserveIncidence after appendParticles (" +
-                                                   std::to_string(count) + " constraints)");
+    throw InputError("pbd patch", "incidence",
+                     "call reserveIncidence after appendParticles (" + std::to_string(count) + " constraints)");
   d.ids.resize(slots);
   d.rest.resize(cnt);
   d.compliance.resize(cnt);
@@ -278,9 +283,9 @@ void PbdCudaBackend<T>::commit(int block, int count, bool caller_csr) {
   d.particle_offsets.resize(std::size_t(n_) + 1);
   d.count = count;
   if (!caller_csr) sortIncidence(d, slots);
-  commitBlockKernel<T><<<blocksFor(count + 1), kThreads, 0, stream_>>>(count, a, d.ids.data(), d.particle_offsets.data(),
-                                                                       inv_mass_.data(), d.offsets.data(),
-                                                                       d.jacobi_scale.data(), d.lambda.data());
+  commitBlockKernel<T><<<blocksFor(count + 1), kThreads, 0, stream_>>>(
+      count, a, d.ids.data(), d.particle_offsets.data(), inv_mass_.data(), d.offsets.data(), d.jacobi_scale.data(),
+      d.lambda.data());
   INC_CUDA_LAUNCH("pbd patch block");
   d.order.resize(0);
   d.color_offsets.assign(1, 0);
@@ -299,13 +304,14 @@ void PbdCudaBackend<T>::sortIncidence(DeviceBlock<T>& d, std::size_t slots) {
   sort_keys_out_.resize(std::max<std::size_t>(slots, 1));
   sort_vals_.resize(std::max<std::size_t>(slots, 1));
   if (slots > 0) {
-    slotIotaKernel<<<blocksFor(std::int64_t(slots)), kThreads, 0, stream_>>>(int(slots), d.ids.data(), sort_keys_.data(),
-                                                                             sort_vals_.data());
+    slotIotaKernel<<<blocksFor(std::int64_t(slots)), kThreads, 0, stream_>>>(int(slots), d.ids.data(),
+                                                                             sort_keys_.data(), sort_vals_.data());
     INC_CUDA_LAUNCH("pbd patch slot keys");
     const int end_bit = tear::indexBits(n_);
     std::size_t bytes = 0;
-    INC_CUDA(cub::DeviceRadixSort::SortPairs(nullptr, bytes, sort_keys_.data(), sort_keys_out_.data(), sort_vals_.data(),
-                                             d.particle_slots.data(), int(slots), 0, end_bit, stream_));
+    INC_CUDA(cub::DeviceRadixSort::SortPairs(nullptr, bytes, sort_keys_.data(), sort_keys_out_.data(),
+                                             sort_vals_.data(), d.particle_slots.data(), int(slots), 0, end_bit,
+                                             stream_));
     cub_temp_.resize(std::max<std::size_t>(bytes, 1));
     INC_CUDA(cub::DeviceRadixSort::SortPairs(cub_temp_.data(), bytes, sort_keys_.data(), sort_keys_out_.data(),
                                              sort_vals_.data(), d.particle_slots.data(), int(slots), 0, end_bit,
@@ -361,8 +367,8 @@ template std::vector<float> PbdCudaBackend<float>::downloadInverseMasses() const
 template std::vector<double> PbdCudaBackend<double>::downloadInverseMasses() const;
 template void PbdCudaBackend<float>::setBlockFromHost(int, const std::vector<std::int32_t>&, const std::vector<float>&,
                                                       const std::vector<float>&);
-template void PbdCudaBackend<double>::setBlockFromHost(int, const std::vector<std::int32_t>&, const std::vector<double>&,
-                                                       const std::vector<double>&);
+template void PbdCudaBackend<double>::setBlockFromHost(int, const std::vector<std::int32_t>&,
+                                                       const std::vector<double>&, const std::vector<double>&);
 template void PbdCudaBackend<float>::appendParticlesFromHost(const std::vector<Vec3<float>>&,
                                                              const std::vector<Vec3<float>>&,
                                                              const std::vector<Vec3<float>>&, const std::vector<float>&,

@@ -1,4 +1,5 @@
-// Constraint-projection PBD kernels of the per-block frame and their host launch wrappers: per-kind, staged, generic and cluster-group projections, the Jacobi gather, attachments, cluster rotations.
+// Constraint-projection PBD kernels of the per-block frame and their host launch wrappers: per-kind, staged, generic
+// and cluster-group projections, the Jacobi gather, attachments, cluster rotations.
 #include "kernels/pbd_projection_kernels.cuh"
 
 #include <cstddef>
@@ -39,7 +40,9 @@ __global__ void projectAllKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx, 
 // 46.1 at 32 (spilling) on the H100 (ncu, 2026-11-27); distance needs 32 on its own.
 constexpr int kFourParticleMinBlocks = 12;
 template <typename T, int Kind, int MinBlocks = 1>
-__global__ void __launch_bounds__(kThreads, MinBlocks) projectKindKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx, const std::int32_t* order, int count, const int* live_count) {
+__global__ void __launch_bounds__(kThreads, MinBlocks)
+    projectKindKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx, const std::int32_t* order, int count,
+                      const int* live_count) {
   const int q = blockIdx.x * blockDim.x + threadIdx.x;
   count = liveCount(live_count, count);
   if (q >= count) return;
@@ -63,7 +66,8 @@ __global__ void __launch_bounds__(kThreads, MinBlocks) projectKindKernel(pbd::Bl
 constexpr int kStagedBendingMinBlocks = 10;
 constexpr int kStagedDistanceMinBlocks = 16;
 template <typename T, int Kind, int MinBlocks = 1>
-__global__ void __launch_bounds__(kThreads, MinBlocks) projectKindStagedKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx, int count, const int* live_count) {
+__global__ void __launch_bounds__(kThreads, MinBlocks)
+    projectKindStagedKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx, int count, const int* live_count) {
   count = liveCount(live_count, count);
   constexpr int A = Kind == pbd::kDistance ? 2 : 4;
   // Raw bytes: a __shared__ array may not have a constructor (Vec3 zero-initialises).
@@ -102,7 +106,8 @@ __global__ void __launch_bounds__(kThreads, MinBlocks) projectKindStagedKernel(p
 // Gauss-Seidel: constraints order[0 .. count) of one colour share no movable particle, so in-place writes
 // do not race.
 template <typename T>
-__global__ void projectColorKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx, const std::int32_t* order, int count) {
+__global__ void projectColorKernel(pbd::BlockView<T> b, pbd::SolveContext<T> ctx, const std::int32_t* order,
+                                   int count) {
   const int q = blockIdx.x * blockDim.x + threadIdx.x;
   if (q >= count) return;
   pbd::projectConstraint(b, order[q], ctx);
@@ -119,24 +124,31 @@ void launchProjection(const pbd::BlockView<T>& b, const pbd::SolveContext<T>& ct
   if (ctx.jacobi && !order) {
     switch (b.kind) {
       case pbd::kDistance:
-        projectKindStagedKernel<T, pbd::kDistance, kStagedDistanceMinBlocks><<<blocks, kThreads, 0, stream>>>(b, ctx, count, live_count);
+        projectKindStagedKernel<T, pbd::kDistance, kStagedDistanceMinBlocks>
+            <<<blocks, kThreads, 0, stream>>>(b, ctx, count, live_count);
         return;
       case pbd::kBending:
-        projectKindStagedKernel<T, pbd::kBending, kStagedBendingMinBlocks><<<blocks, kThreads, 0, stream>>>(b, ctx, count, live_count);
+        projectKindStagedKernel<T, pbd::kBending, kStagedBendingMinBlocks>
+            <<<blocks, kThreads, 0, stream>>>(b, ctx, count, live_count);
         return;
       case pbd::kTetVolume:
-        projectKindStagedKernel<T, pbd::kTetVolume, kFourParticleMinBlocks><<<blocks, kThreads, 0, stream>>>(b, ctx, count, live_count);
+        projectKindStagedKernel<T, pbd::kTetVolume, kFourParticleMinBlocks>
+            <<<blocks, kThreads, 0, stream>>>(b, ctx, count, live_count);
         return;
       default: break;
     }
   }
   switch (b.kind) {
-    case pbd::kDistance: projectKindKernel<T, pbd::kDistance><<<blocks, kThreads, 0, stream>>>(b, ctx, order, count, live_count); break;
+    case pbd::kDistance:
+      projectKindKernel<T, pbd::kDistance><<<blocks, kThreads, 0, stream>>>(b, ctx, order, count, live_count);
+      break;
     case pbd::kBending:
-      projectKindKernel<T, pbd::kBending, kFourParticleMinBlocks><<<blocks, kThreads, 0, stream>>>(b, ctx, order, count, live_count);
+      projectKindKernel<T, pbd::kBending, kFourParticleMinBlocks>
+          <<<blocks, kThreads, 0, stream>>>(b, ctx, order, count, live_count);
       break;
     case pbd::kTetVolume:
-      projectKindKernel<T, pbd::kTetVolume, kFourParticleMinBlocks><<<blocks, kThreads, 0, stream>>>(b, ctx, order, count, live_count);
+      projectKindKernel<T, pbd::kTetVolume, kFourParticleMinBlocks>
+          <<<blocks, kThreads, 0, stream>>>(b, ctx, order, count, live_count);
       break;
     default:
       if (order)

@@ -1,4 +1,5 @@
-// Host launch wrappers of the constraint-projection PBD kernels (kernels/pbd_projection_kernels.cu): a block's projection, the Jacobi gather, attachments, cluster rotations.
+// Host launch wrappers of the constraint-projection PBD kernels (kernels/pbd_projection_kernels.cu): a block's
+// projection, the Jacobi gather, attachments, cluster rotations.
 #pragma once
 
 #include <cuda_runtime.h>
@@ -27,8 +28,8 @@ struct PbdProjectionKernels {
                      Vec3<T>* x);
   // The k attachments (pbd::projectAttachment towards lerp(from, to, t)), `blocks` blocks of kThreads.
   static void attachments(unsigned blocks, cudaStream_t stream, int k, Vec3<T>* x, const T* w, const std::int32_t* ids,
-                          const Vec3<T>* from, const Vec3<T>* to, const T* compliance, Vec3<T>* lambda, bool xpbd,
-                          T dt, T t);
+                          const Vec3<T>* from, const Vec3<T>* to, const T* compliance, Vec3<T>* lambda, bool xpbd, T dt,
+                          T t);
   // pbd::updateClusterRotation of every cluster of block b (not solved this frame), `blocks` blocks of kThreads.
   static void rotations(unsigned blocks, cudaStream_t stream, const pbd::BlockView<T>& b,
                         const pbd::SolveContext<T>& ctx, const int* live_count);

@@ -1,4 +1,5 @@
-// The CUDA PBD/XPBD backend's model upload, state and factory; its other parts are listed in kernels/pbd_backend_cuda.cuh.
+// The CUDA PBD/XPBD backend's model upload, state and factory; its other parts are listed in
+// kernels/pbd_backend_cuda.cuh.
 #include "kernels/pbd_solver_cuda.h"
 
 #include <cstddef>
@@ -64,8 +65,8 @@ void PbdCudaBackend<T>::setModel(const PbdModel<T>& m) {
   bulk_.add(ov_ids_, m.overlap_ids);
   bulk_.add(rest_cell_, m.rest_cell_volume);
   bulk_.add(samples_, m.ball_samples);
-  have_volume_data_ = m.rest_cell_volume.size() == m.size() && !m.ball_samples.empty() &&
-                      m.overlap_offsets.size() == m.size() + 1;
+  have_volume_data_ =
+      m.rest_cell_volume.size() == m.size() && !m.ball_samples.empty() && m.overlap_offsets.size() == m.size() + 1;
   updateStaging();
   blocks_.resize(m.blocks.size());
   for (std::size_t bi = 0; bi < m.blocks.size(); ++bi) {

@@ -1,4 +1,5 @@
-// The CUDA PBD backend's frame summary: residual, finiteness and volume statistics reduced on the device in a fixed order and downloaded once.
+// The CUDA PBD backend's frame summary: residual, finiteness and volume statistics reduced on the device in a fixed
+// order and downloaded once.
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
@@ -42,8 +43,7 @@ __global__ void residualKernel(pbd::BlockView<T> b, const Vec3<T>* x, bool xpbd,
 // Per-block partials over particles: first non-finite particle (n if none), active count, max radius ratio.
 template <typename T>
 __global__ void summaryKernel(int n, const Vec3<T>* x, const Vec3<T>* v, const T* r, const T* rest_r,
-                              const std::uint8_t* active, double* part_bad, double* part_active,
-                              double* part_ratio) {
+                              const std::uint8_t* active, double* part_bad, double* part_active, double* part_ratio) {
   __shared__ long long sbad[kThreads];
   __shared__ long long sact[kThreads];
   __shared__ double srat[kThreads];
@@ -84,10 +84,12 @@ struct FinishPlan {
   int nd = 0;
   int used[2 * kMaxLiveBlocks + 3] = {};
 };
-__global__ void __launch_bounds__(kReduceBlocks) finishPartialsKernel(const double* part, FinishPlan plan, double* totals) {
+__global__ void __launch_bounds__(kReduceBlocks)
+    finishPartialsKernel(const double* part, FinishPlan plan, double* totals) {
   __shared__ double s[kReduceBlocks];
   const int g = blockIdx.x, t = threadIdx.x, nd = plan.nd;
-  const int op = g < 2 * nd ? (g % 2 == 0 ? 2 : 0) : (g == 2 * nd ? 1 : (g == 2 * nd + 1 ? 0 : 2));  // 0 sum, 1 min, 2 max
+  const int op =
+      g < 2 * nd ? (g % 2 == 0 ? 2 : 0) : (g == 2 * nd ? 1 : (g == 2 * nd + 1 ? 0 : 2));  // 0 sum, 1 min, 2 max
   const double identity = op == 0 ? 0.0 : (op == 1 ? DBL_MAX : -DBL_MAX);
   s[t] = t < plan.used[g] ? part[std::size_t(g) * kReduceBlocks + t] : identity;
   __syncthreads();
@@ -117,8 +119,8 @@ void PbdCudaBackend<T>::summarize(const PbdStepParams<T>& p, PbdFrameStats& st) 
     if (d.kind != PbdConstraintKind::Distance || !d.solve || d.count == 0) continue;
     plan.used[2 * nd] = plan.used[2 * nd + 1] = reduceBlocksFor(d.count);
     residualKernel<T><<<plan.used[2 * nd], kThreads, 0, stream_>>>(view(d), x_.data(), p.xpbd, dt,
-                                                                part + std::size_t(2 * nd) * kReduceBlocks,
-                                                                part + std::size_t(2 * nd + 1) * kReduceBlocks);
+                                                                   part + std::size_t(2 * nd) * kReduceBlocks,
+                                                                   part + std::size_t(2 * nd + 1) * kReduceBlocks);
     INC_CUDA_LAUNCH("pbd residual");
     rcount += std::size_t(d.count);
     ++nd;
@@ -126,9 +128,9 @@ void PbdCudaBackend<T>::summarize(const PbdStepParams<T>& p, PbdFrameStats& st) 
   double* sum_part = part + std::size_t(2 * nd) * kReduceBlocks;
   if (n_ > 0) {
     plan.used[2 * nd] = plan.used[2 * nd + 1] = plan.used[2 * nd + 2] = reduceBlocksFor(n_);
-    summaryKernel<T><<<plan.used[2 * nd], kThreads, 0, stream_>>>(n_, x_.data(), v_.data(), radii_.data(),
-                                                               rest_radii_.data(), active_.data(), sum_part,
-                                                               sum_part + kReduceBlocks, sum_part + 2 * kReduceBlocks);
+    summaryKernel<T><<<plan.used[2 * nd], kThreads, 0, stream_>>>(
+        n_, x_.data(), v_.data(), radii_.data(), rest_radii_.data(), active_.data(), sum_part, sum_part + kReduceBlocks,
+        sum_part + 2 * kReduceBlocks);
     INC_CUDA_LAUNCH("pbd summary");
   }
   const int groups = 2 * nd + (n_ > 0 ? 3 : 0);

@@ -1,4 +1,5 @@
-// The CUDA PBD backend's single-launch frames: planning (kernel attributes, the cluster's split, the grid's size) and launching the fused, cluster and grid frame kernels.
+// The CUDA PBD backend's single-launch frames: planning (kernel attributes, the cluster's split, the grid's size) and
+// launching the fused, cluster and grid frame kernels.
 #include <algorithm>
 #include <cstdint>
 #include <cstdio>
@@ -51,7 +52,8 @@ void PbdCudaBackend<T>::planCluster(int forced_ctas) {
     const int c = int(b.offsets.size()) - 1;
     if (!b.solve || c <= 0) continue;
     const bool group = pbdgroup::usesGroup(b.kind);
-    want = std::max(want, group ? (c + groups_per_cta - 1) / groups_per_cta : (c + kClusterThreads - 1) / kClusterThreads);
+    want =
+        std::max(want, group ? (c + groups_per_cta - 1) / groups_per_cta : (c + kClusterThreads - 1) / kClusterThreads);
   }
   int ctas = forced_ctas > 0 ? forced_ctas : std::min(want, kMaxClusterCtas);
   ClusterSplit sp;
@@ -144,8 +146,9 @@ void PbdCudaBackend<T>::launchGridFrame(const PbdStepParams<T>& p, const FusedFr
   }
   const std::int64_t blocks = std::min<std::int64_t>(grid_cap_, (want + kGridFrameThreads - 1) / kGridFrameThreads);
   void* args[] = {&g};
-  INC_CUDA(cudaLaunchCooperativeKernel(reinterpret_cast<const void*>(gridFrameKernel<T>), dim3(unsigned(std::max<std::int64_t>(1, blocks))),
-                                       dim3(kGridFrameThreads), args, 0, stream_));
+  INC_CUDA(cudaLaunchCooperativeKernel(reinterpret_cast<const void*>(gridFrameKernel<T>),
+                                       dim3(unsigned(std::max<std::int64_t>(1, blocks))), dim3(kGridFrameThreads), args,
+                                       0, stream_));
   INC_CUDA_LAUNCH("pbd grid frame");
 }
 
@@ -196,7 +199,8 @@ template void PbdCudaBackend<double>::planCluster(int);
 template void PbdCudaBackend<float>::planGrid();
 template void PbdCudaBackend<double>::planGrid();
 template void PbdCudaBackend<float>::launchWholeFrame(FramePath, const PbdStepParams<float>&, const FusedFrame<float>&);
-template void PbdCudaBackend<double>::launchWholeFrame(FramePath, const PbdStepParams<double>&, const FusedFrame<double>&);
+template void PbdCudaBackend<double>::launchWholeFrame(FramePath, const PbdStepParams<double>&,
+                                                       const FusedFrame<double>&);
 template void PbdCudaBackend<float>::printClusterProfile();
 template void PbdCudaBackend<double>::printClusterProfile();
 

@@ -76,7 +76,8 @@ SkinningCuda<T>::~SkinningCuda() = default;
 
 template <typename T>
 void SkinningCuda<T>::upload(const skin::SkinView<T>& h, int sphere_count, const std::vector<std::int32_t>& triangles,
-                             const std::vector<std::int32_t>& tri_offsets, const std::vector<std::int32_t>& tri_of_vertex) {
+                             const std::vector<std::int32_t>& tri_offsets,
+                             const std::vector<std::int32_t>& tri_of_vertex) {
   if (h.vertex_count < 0 || h.k < 1 || sphere_count < 1)
     throw std::invalid_argument("SkinningCuda::upload: empty binding");
   if (!tri_offsets.empty() && tri_offsets.size() != std::size_t(h.vertex_count) + 1)
@@ -103,8 +104,8 @@ template <typename T>
 void SkinningCuda<T>::deformDevice(const Vec3<T>* d_centres, const Mat3<T>* d_rotations, void* stream) {
   Impl& m = *impl_;
   if (m.vertex_count == 0) return;
-  skinKernel<T><<<blocks(m.vertex_count), kBlock, 0, static_cast<cudaStream_t>(stream)>>>(m.view(), d_centres, d_rotations,
-                                                                                          m.positions.data());
+  skinKernel<T><<<blocks(m.vertex_count), kBlock, 0, static_cast<cudaStream_t>(stream)>>>(
+      m.view(), d_centres, d_rotations, m.positions.data());
   INC_CUDA_LAUNCH("skinKernel");
 }
 
@@ -113,7 +114,7 @@ void SkinningCuda<T>::deformDeviceFromQuats(const Vec3<T>* d_centres, const pbd:
   Impl& m = *impl_;
   if (m.vertex_count == 0) return;
   quatKernel<T><<<blocks(m.sphere_count), kBlock, 0, static_cast<cudaStream_t>(stream)>>>(m.sphere_count, d_quats,
-                                                                                        m.rotations.data());
+                                                                                          m.rotations.data());
   INC_CUDA_LAUNCH("quatKernel");
   deformDevice(d_centres, m.rotations.data(), stream);
 }
@@ -131,8 +132,8 @@ void SkinningCuda<T>::normalsDevice(void* stream) {
 }
 
 template <typename T>
-void SkinningCuda<T>::uploadNeighbourhoods(const std::vector<std::int32_t>& offsets, const std::vector<std::int32_t>& neighbours,
-                                           const std::vector<T>& masses) {
+void SkinningCuda<T>::uploadNeighbourhoods(const std::vector<std::int32_t>& offsets,
+                                           const std::vector<std::int32_t>& neighbours, const std::vector<T>& masses) {
   Impl& m = *impl_;
   if (offsets.size() != std::size_t(m.sphere_count) + 1 || masses.size() != std::size_t(m.sphere_count))
     throw std::invalid_argument("SkinningCuda::uploadNeighbourhoods: sizes do not match the uploaded spheres");
@@ -156,7 +157,9 @@ void SkinningCuda<T>::estimateRotationsDevice(const Vec3<T>* d_centres, int iter
 }
 
 template <typename T>
-const Mat3<T>* SkinningCuda<T>::rotations() const { return impl_->estimated.data(); }
+const Mat3<T>* SkinningCuda<T>::rotations() const {
+  return impl_->estimated.data();
+}
 
 template <typename T>
 void SkinningCuda<T>::deformWithEstimatedRotationsHost(const Vec3<T>* centres, int iterations,
@@ -176,13 +179,21 @@ void SkinningCuda<T>::deformWithEstimatedRotationsHost(const Vec3<T>* centres, i
 }
 
 template <typename T>
-const Vec3<T>* SkinningCuda<T>::positions() const { return impl_->positions.data(); }
+const Vec3<T>* SkinningCuda<T>::positions() const {
+  return impl_->positions.data();
+}
 template <typename T>
-const Vec3<T>* SkinningCuda<T>::normals() const { return impl_->normals.data(); }
+const Vec3<T>* SkinningCuda<T>::normals() const {
+  return impl_->normals.data();
+}
 template <typename T>
-int SkinningCuda<T>::vertexCount() const { return impl_->vertex_count; }
+int SkinningCuda<T>::vertexCount() const {
+  return impl_->vertex_count;
+}
 template <typename T>
-int SkinningCuda<T>::sphereCount() const { return impl_->sphere_count; }
+int SkinningCuda<T>::sphereCount() const {
+  return impl_->sphere_count;
+}
 
 template <typename T>
 void SkinningCuda<T>::deformHost(const Vec3<T>* centres, const Mat3<T>* rotations, std::vector<Vec3<T>>& positions_out,

@@ -1,4 +1,5 @@
-// CUDA tearing step: the physics/tearing_phases.h bodies as kernels, CUB exclusive sum and DeviceSelect for the split list; device-resident sheet with the adjacency and PBD model rebuilt per particle (or by the older radix sorts).
+// CUDA tearing step: the physics/tearing_phases.h bodies as kernels, CUB exclusive sum and DeviceSelect for the split
+// list; device-resident sheet with the adjacency and PBD model rebuilt per particle (or by the older radix sorts).
 #include "kernels/tearing_cuda.h"
 
 #include <cub/cub.cuh>
@@ -9,11 +10,11 @@
 #include <vector>
 
 #include "kernels/cuda_check.h"
-#include "model/input_error.h"
 #include "kernels/device_buffer.h"
 #include "kernels/device_grow.h"
 #include "kernels/pbd_device_cuda.h"
 #include "kernels/pinned_staging.h"
+#include "model/input_error.h"
 #include "physics/tearing_phases.h"
 #include "physics/tearing_rebuild.h"
 
@@ -240,8 +241,8 @@ __global__ void fanCountsKernel(tear::Fan f, int n, tear::FanCounts* counts) {
 constexpr int kFanBlock = 128;
 constexpr int kStagedPartners = 8 * kFanBlock, kStagedEdges = 4 * kFanBlock, kStagedBends = 4 * kFanBlock;
 template <typename T>
-__global__ void __launch_bounds__(kFanBlock, 9) fanEdgesKernel(tear::Fan f, tear::FanOutputs<T> o, int n,
-                                                               std::int32_t* zero_counts) {
+__global__ void __launch_bounds__(kFanBlock, 9)
+    fanEdgesKernel(tear::Fan f, tear::FanOutputs<T> o, int n, std::int32_t* zero_counts) {
   __shared__ std::int32_t s_partner[kStagedPartners], s_slot[kStagedPartners];
   __shared__ std::int32_t s_dist_ids[2 * kStagedEdges], s_bend_ids[4 * kStagedBends];
   __shared__ T s_dist_rest[kStagedEdges], s_bend_rest[kStagedBends];
@@ -353,7 +354,8 @@ class TearCudaWorkspace {
     detectKernel<T><<<gridFor(n), kBlock>>>(view, ni, int(p.criterion), p.break_strain, yield_.data(), partner_.data(),
                                             dir_.data(), t_pred_.data());
     INC_CUDA_LAUNCH("tear detect");
-    acceptKernel<T><<<gridFor(n), kBlock>>>(view, ni, yield_.data(), p.seed, s.step, accept_.data(), accept_i32_.data());
+    acceptKernel<T>
+        <<<gridFor(n), kBlock>>>(view, ni, yield_.data(), p.seed, s.step, accept_.data(), accept_i32_.data());
     INC_CUDA_LAUNCH("tear accept");
     // Prefix sum: rank[i] = accepted particles before i; rank[n] = their number (inclusive end via n + 1).
     std::size_t bytes = 0;
@@ -365,7 +367,8 @@ class TearCudaWorkspace {
     INC_CUDA_LAUNCH("tear iota");
     INC_CUDA(cub::DeviceScan::ExclusiveSum(temp_.data(), bytes, accept_i32_.data(), rank_.data(), ni));
     // Stream compaction: the accepted particle ids, ascending.
-    INC_CUDA(cub::DeviceSelect::Flagged(temp_.data(), bytes2, ids_.data(), accept_.data(), list_.data(), count_.data(), ni));
+    INC_CUDA(
+        cub::DeviceSelect::Flagged(temp_.data(), bytes2, ids_.data(), accept_.data(), list_.data(), count_.data(), ni));
     // One synchronisation: the number of new particles sizes the arrays and the split launch.
     int splits = 0;
     INC_CUDA(cudaMemcpy(&splits, count_.data(), sizeof(int), cudaMemcpyDeviceToHost));
@@ -390,10 +393,9 @@ class TearCudaWorkspace {
     moved_.resize(std::size_t(splits));
     backed_.resize(std::size_t(splits));
     const bool debris = p.criterion != TearCriterion::Threshold;
-    splitKernel<T><<<gridFor(std::size_t(splits)), kBlock>>>(view, list_.data(), splits, accept_.data(), rank_.data(),
-                                                              ni, partner_.data(), dir_.data(), t_pred_.data(), debris,
-                                                              p.random_range, p.t_lo, p.t_hi, p.min_area_ratio, p.seed,
-                                                              s.step, moved_.data(), backed_.data());
+    splitKernel<T><<<gridFor(std::size_t(splits)), kBlock>>>(
+        view, list_.data(), splits, accept_.data(), rank_.data(), ni, partner_.data(), dir_.data(), t_pred_.data(),
+        debris, p.random_range, p.t_lo, p.t_hi, p.min_area_ratio, p.seed, s.step, moved_.data(), backed_.data());
     INC_CUDA_LAUNCH("tear split");
     if (nt > 0) {
       triangleKernel<T><<<gridFor(nt), kBlock>>>(view, int(nt), accept_.data(), dir_.data(), rank_.data(), ni);
@@ -419,7 +421,7 @@ class TearCudaWorkspace {
  private:
   template <typename U>
   static void reserveAndUpload(DeviceBuffer<U>& b, const std::vector<U>& host, std::size_t capacity) {
-    b.resize(capacity);             // grows only; never shrinks
+    b.resize(capacity);                  // grows only; never shrinks
     b.upload(host.data(), host.size());  // within capacity: no reallocation
   }
 
@@ -508,8 +510,8 @@ class TearResident {
     // Synchronisation 1: the yield and split counts (one reduction); the split count sizes the split launch and
     // the particle append. A frame without splits (most frames) stops here.
     std::size_t bytes = temp_.capacity();
-    INC_CUDA(cub::DeviceReduce::Reduce(temp_.data(), bytes, yield_accept_.data(), yield_accept_sum_.data(), n, AddInt2(),
-                                       make_int2(0, 0)));
+    INC_CUDA(cub::DeviceReduce::Reduce(temp_.data(), bytes, yield_accept_.data(), yield_accept_sum_.data(), n,
+                                       AddInt2(), make_int2(0, 0)));
     int2 cnt = make_int2(0, 0);
     staging_.download(&cnt, yield_accept_sum_.data(), 1, cudaStreamLegacy);
     const int splits = cnt.y;
@@ -542,8 +544,8 @@ class TearResident {
     const int zero_n = sorted_ ? 0 : m + 1;
     pt_count_.resize(std::size_t(m) + 1);
     if (std::max(nt_, zero_n) > 0) {
-      triangleKernel<T><<<gridFor(std::size_t(std::max(nt_, zero_n))), kBlock>>>(view, nt_, accept_.data(), dir_.data(),
-                                                                                  rank_.data(), n, pt_count_.data(), zero_n);
+      triangleKernel<T><<<gridFor(std::size_t(std::max(nt_, zero_n))), kBlock>>>(
+          view, nt_, accept_.data(), dir_.data(), rank_.data(), n, pt_count_.data(), zero_n);
       INC_CUDA_LAUNCH("tear triangles");
     }
     stage("tear_split");
@@ -647,7 +649,8 @@ class TearResident {
     std::size_t b1 = temp_.capacity(), b2 = temp_.capacity();
     INC_CUDA(cub::DeviceScan::ExclusiveSum(temp_.data(), b1, pt_count_.data(), pt_off_.data(), n + 1));
     if (nh > 0) {
-      rowScatterKernel<<<gridFor(nhz), kBlock>>>(tris_.data(), nh, 3, pt_off_.data(), pt_count_.data(), pt_tris_.data());
+      rowScatterKernel<<<gridFor(nhz), kBlock>>>(tris_.data(), nh, 3, pt_off_.data(), pt_count_.data(),
+                                                 pt_tris_.data());
       INC_CUDA_LAUNCH("tear corner scatter");
     }
     if (n > 0) {
@@ -672,7 +675,8 @@ class TearResident {
     staging_.download(&total, fan_off_.data() + n, 1, cudaStreamLegacy);
     const int ne = total.upper, nb = total.bend_upper;
     if (total.partners != 2 * ne)
-      throw InputError("tearing", "topology", "device rebuild: inconsistent counts (a degenerate or duplicated triangle)");
+      throw InputError("tearing", "topology",
+                       "device rebuild: inconsistent counts (a degenerate or duplicated triangle)");
     stage("rebuild_edges");
     // 3: partner rows, edges as constraints, the distance rows' upper parts, CSR offsets.
     pe_off_.resize(nz + 1);
@@ -701,8 +705,8 @@ class TearResident {
       o.bend_particle_slots = inc_b.particle_slots;
     }
     if (bending_) bend_count_.resize(nz + 1);
-    fanEdgesKernel<T><<<unsigned((nz + 1 + kFanBlock - 1) / kFanBlock), kFanBlock>>>(fan, o, n,
-                                                                                   bending_ ? bend_count_.data() : nullptr);
+    fanEdgesKernel<T><<<unsigned((nz + 1 + kFanBlock - 1) / kFanBlock), kFanBlock>>>(
+        fan, o, n, bending_ ? bend_count_.data() : nullptr);
     INC_CUDA_LAUNCH("tear fan edges");
     stage("rebuild_adjacency");
     // 4: the rest of the distance rows (per edge) and the bending rows (from the bending constraints, as the
@@ -711,8 +715,8 @@ class TearResident {
     // launch.
     const int bs = bending_ ? 4 * nb : 0;
     if (ne + bs > 0) {
-      lowerSlotsAndCountsKernel<T><<<gridFor(std::size_t(ne) + std::size_t(bs)), kBlock>>>(o, ne, bend.ids, bs,
-                                                                                            bend_count_.data());
+      lowerSlotsAndCountsKernel<T>
+          <<<gridFor(std::size_t(ne) + std::size_t(bs)), kBlock>>>(o, ne, bend.ids, bs, bend_count_.data());
       INC_CUDA_LAUNCH("tear lower distance slots and bending slot counts");
     }
     if (bending_) {
@@ -720,8 +724,8 @@ class TearResident {
       b1 = temp_.capacity();
       INC_CUDA(cub::DeviceScan::ExclusiveSum(temp_.data(), b1, bend_count_.data(), inc_b.particle_offsets, n + 1));
       if (bs > 0) {
-        rowScatterKernel<<<gridFor(std::size_t(bs)), kBlock>>>(bend.ids, bs, 1, inc_b.particle_offsets, bend_count_.data(),
-                                                               inc_b.particle_slots);
+        rowScatterKernel<<<gridFor(std::size_t(bs)), kBlock>>>(bend.ids, bs, 1, inc_b.particle_offsets,
+                                                               bend_count_.data(), inc_b.particle_slots);
         INC_CUDA_LAUNCH("tear bending slot rows");
       }
       if (n > 0) {
@@ -816,7 +820,8 @@ class TearResident {
       std::size_t bytes = 0;
       INC_CUDA(cub::DeviceRadixSort::SortKeys(nullptr, bytes, p_key_.data(), p_key_out_.data(), int(np), 0, 2 * bits));
       temp_.resize(std::max<std::size_t>(bytes, 1));
-      INC_CUDA(cub::DeviceRadixSort::SortKeys(temp_.data(), bytes, p_key_.data(), p_key_out_.data(), int(np), 0, 2 * bits));
+      INC_CUDA(
+          cub::DeviceRadixSort::SortKeys(temp_.data(), bytes, p_key_.data(), p_key_out_.data(), int(np), 0, 2 * bits));
       partnerListKernel<<<gridFor(np), kBlock>>>(p_key_out_.data(), int(np), bits, pe_partner_.data());
       INC_CUDA_LAUNCH("tear partners");
     }
@@ -847,7 +852,7 @@ class TearResident {
   DeviceBuffer<unsigned char> temp_;
   DeviceBuffer<int2> yield_accept_, yield_accept_sum_;
   std::size_t temp_items_ = 0;  // the item count temp_ was sized for (ensureTemp)
-  PinnedStaging staging_;  // the two count read-backs of a tearing step
+  PinnedStaging staging_;       // the two count read-backs of a tearing step
 };
 
 template <typename T>

@@ -1,4 +1,5 @@
-// CUDA tearing step: yield detection, independent set, CUB prefix sum + stream compaction, particle creation and triangle rebuild on the device.
+// CUDA tearing step: yield detection, independent set, CUB prefix sum + stream compaction, particle creation and
+// triangle rebuild on the device.
 #pragma once
 
 #include <memory>

@@ -27,7 +27,7 @@ ConstraintColoring colorConstraints(const std::vector<std::int32_t>& offsets, co
   ConstraintColoring out;
   out.color.assign(nc, -1);
   std::vector<std::vector<std::int32_t>> used(particle_count);  // colours already touching each particle
-  std::vector<std::int64_t> forbidden_stamp;                     // forbidden_stamp[col] == c: taken for c
+  std::vector<std::int64_t> forbidden_stamp;                    // forbidden_stamp[col] == c: taken for c
   int colors = 0;
   for (std::size_t c = 0; c < nc; ++c) {
     for (std::int32_t k = offsets[c]; k < offsets[c + 1]; ++k) {

@@ -17,8 +17,8 @@ namespace inc {
 
 // The material of an MLS body: the scene's Material (model/material.h) and the volume penalty only MLS has.
 struct MlsMaterial : Material {
-  bool volume_preservation = true;   // penalty k_v/2 (det F - 1)^2
-  double volume_stiffness = 1.0;     // k_v as a multiple of the bulk modulus, >= 0
+  bool volume_preservation = true;  // penalty k_v/2 (det F - 1)^2
+  double volume_stiffness = 1.0;    // k_v as a multiple of the bulk modulus, >= 0
 };
 
 // How the rest volume v_i = m_i / rho_i gets its density rho_i.
@@ -42,9 +42,9 @@ struct MlsBuildInput {
   double condition_limit = 1.0e6;     // cond(A_i) above this gets a regularised inverse; > 1
   MlsVolumeEstimate volume_estimate = MlsVolumeEstimate::ShepardKernelSum;
   MlsMaterial material;
-  Vec3d gravity{0, 0, -9.81};         // m/s^2
-  double safety = 0.5;                // fraction of the stable step used when substepping, (0, 1]
-  std::string source = "<mls>";       // for error messages (scene file)
+  Vec3d gravity{0, 0, -9.81};    // m/s^2
+  double safety = 0.5;           // fraction of the stable step used when substepping, (0, 1]
+  std::string source = "<mls>";  // for error messages (scene file)
   // Optional rest neighbourhoods chosen by the caller (a cut's visibility-filtered supports): CSR over the
   // particles, symmetric, no self pairs, each pair within the support h. Empty (no offsets): the closed ball of
   // radius h found by the grid search.
@@ -55,15 +55,15 @@ struct MlsBuildInput {
 struct MlsModelStats {
   std::int64_t particles = 0;
   std::int64_t isolated = 0, few_neighbors = 0, coplanar = 0, collinear = 0, ill_conditioned = 0;
-  std::int64_t regularised = 0;         // any of the above: got a ridge or a zero inverse
+  std::int64_t regularised = 0;  // any of the above: got a ridge or a zero inverse
   std::int64_t fixed = 0, prescribed = 0;
   std::int64_t min_neighbors = 0, max_neighbors = 0;
   double mean_neighbors = 0.0;
-  double max_condition = 0.0;           // largest finite cond(A_i)
+  double max_condition = 0.0;                   // largest finite cond(A_i)
   double min_density = 0.0, max_density = 0.0;  // kg/m^3
-  double total_mass = 0.0;              // kg
-  double total_volume = 0.0;            // m^3
-  double stable_dt = 0.0;               // s, safety 1
+  double total_mass = 0.0;                      // kg
+  double total_volume = 0.0;                    // m^3
+  double stable_dt = 0.0;                       // s, safety 1
 };
 
 template <typename T>
@@ -79,7 +79,7 @@ struct MlsModel {
   NeighborLists neighbors;               // rest neighbourhoods, closed ball of radius h, symmetric
   T spacing = T(0), support = T(0);      // m
   MlsCoefficients<T> coeffs;
-  Vec3<T> gravity;                       // m/s^2
+  Vec3<T> gravity;  // m/s^2
   MlsMaterial material;
   double safety = 0.5;
   MlsModelStats stats;
@@ -95,12 +95,12 @@ struct MlsModel {
 // Per-particle dynamic state (host copy; the CUDA solver keeps its own resident on the device).
 template <typename T>
 struct MlsState {
-  std::vector<Vec3<T>> displacement;  // u_i (m)
-  std::vector<Vec3<T>> velocity;      // m/s
-  std::vector<Vec3<T>> force;         // elastic force (N) at the current displacement
-  std::vector<Vec3<T>> target;        // prescribed displacement (m), used where kind == prescribed
-  std::vector<Mat3<T>> stress_moment; // pass-1 scratch M_i
-  std::vector<T> energy;              // pass-1 scratch v_i psi_i (J)
+  std::vector<Vec3<T>> displacement;   // u_i (m)
+  std::vector<Vec3<T>> velocity;       // m/s
+  std::vector<Vec3<T>> force;          // elastic force (N) at the current displacement
+  std::vector<Vec3<T>> target;         // prescribed displacement (m), used where kind == prescribed
+  std::vector<Mat3<T>> stress_moment;  // pass-1 scratch M_i
+  std::vector<T> energy;               // pass-1 scratch v_i psi_i (J)
   void resize(std::size_t n) {
     displacement.assign(n, Vec3<T>());
     velocity.assign(n, Vec3<T>());

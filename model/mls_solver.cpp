@@ -94,7 +94,8 @@ double mlsCouplingStableStep(const MlsCouplingGroups& g, const std::vector<doubl
     omega = std::max(omega, couplingGroupOmega(g.stiffnesses.data(), g.spring_offsets[k], g.spring_offsets[k + 1], m));
     if (fr && fr->min_inertia[k] > 0.0 && m_min > 0.0) {
       double ksum = 0.0;
-      for (std::int32_t s = g.spring_offsets[k]; s < g.spring_offsets[k + 1]; ++s) ksum += g.stiffnesses[std::size_t(s)];
+      for (std::int32_t s = g.spring_offsets[k]; s < g.spring_offsets[k + 1]; ++s)
+        ksum += g.stiffnesses[std::size_t(s)];
       const Vec3d arm = g.rest_centres[k] - fr->centroid[k];
       omega = std::max(omega, std::sqrt(ksum * dot(arm, arm) / (m_min * fr->min_inertia[k])));
     }

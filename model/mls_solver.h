@@ -21,25 +21,25 @@ namespace inc {
 
 // Once-per-frame reductions (device reductions on the GPU; one small download).
 struct MlsReduction {
-  double kinetic_energy = 0.0;     // J, 1/2 sum m v^2
-  double elastic_energy = 0.0;     // J, sum v_i psi_i (eq. 8, with the volume penalty)
-  double potential_energy = 0.0;   // J, -sum m g . u (gravity, relative to rest)
-  double max_displacement = 0.0;   // m
-  double stiffening = 1.0;         // largest mlsStiffening (>= 1): the stable step is divided by its sqrt
+  double kinetic_energy = 0.0;    // J, 1/2 sum m v^2
+  double elastic_energy = 0.0;    // J, sum v_i psi_i (eq. 8, with the volume penalty)
+  double potential_energy = 0.0;  // J, -sum m g . u (gravity, relative to rest)
+  double max_displacement = 0.0;  // m
+  double stiffening = 1.0;        // largest mlsStiffening (>= 1): the stable step is divided by its sqrt
   bool finite = true;
-  std::int64_t first_bad = -1;     // lowest index with a non-finite u, v, f or energy
-  std::string bad_stage;           // "integrate" (u, v), "forces" (f) or "stress" (energy)
+  std::int64_t first_bad = -1;  // lowest index with a non-finite u, v, f or energy
+  std::string bad_stage;        // "integrate" (u, v), "forces" (f) or "stress" (energy)
   double total() const { return kinetic_energy + elastic_energy + potential_energy; }
 };
 
 struct MlsFrameStats {
   int substeps = 0;
-  double dt = 0.0;                 // s
-  double ms_integrate = 0.0;       // first half kick + drift, summed over substeps
-  double ms_stress = 0.0;          // pass 1
-  double ms_forces = 0.0;          // pass 2 + second half kick
+  double dt = 0.0;            // s
+  double ms_integrate = 0.0;  // first half kick + drift, summed over substeps
+  double ms_stress = 0.0;     // pass 1
+  double ms_forces = 0.0;     // pass 2 + second half kick
   double ms_reduce = 0.0;
-  double ms_coupling = 0.0;        // coupling group pass (eqs. 11-13), summed over substeps
+  double ms_coupling = 0.0;  // coupling group pass (eqs. 11-13), summed over substeps
   // All substeps together, when the stages are not timed apart (setStageTiming(false) on the GPU: the frame's
   // substeps replay as one CUDA graph); the per-stage fields above are then zero.
   double ms_substeps = 0.0;
@@ -109,20 +109,22 @@ constexpr std::int64_t kMlsMaxSubsteps = 10000000;
 // 0 takes ceil(frame_dt / (safety * stable_dt)). Throws InputError naming `key` when refused.
 inline int planMlsSubsteps(double frame_dt, double stable_dt, double safety, int fixed, const std::string& file = "",
                            const std::string& key = "solver.substeps") {
-  if (!(frame_dt > 0) || !std::isfinite(frame_dt)) throw InputError(file, "solver.frame_dt_s", "must be a positive number");
+  if (!(frame_dt > 0) || !std::isfinite(frame_dt))
+    throw InputError(file, "solver.frame_dt_s", "must be a positive number");
   if (fixed > 0) {
     const double dt = frame_dt / fixed;
     if (dt > stable_dt * (1.0 + 1e-12))
       throw InputError(file, key,
-                       std::to_string(fixed) + " substeps give dt = " + std::to_string(dt) + " s, above the stable limit " +
-                           std::to_string(stable_dt) + " s (needs at least " +
+                       std::to_string(fixed) + " substeps give dt = " + std::to_string(dt) +
+                           " s, above the stable limit " + std::to_string(stable_dt) + " s (needs at least " +
                            std::to_string(std::int64_t(std::ceil(frame_dt / stable_dt))) + "); refused");
     return fixed;
   }
   const double n = std::ceil(frame_dt / (safety * stable_dt) * (1.0 - 1e-12));
   if (!(n <= double(kMlsMaxSubsteps)))
-    throw InputError(file, key, "the stable step " + std::to_string(stable_dt) + " s needs " + std::to_string(n) +
-                                    " substeps per frame; refused (stiffer than the frame rate can afford)");
+    throw InputError(file, key,
+                     "the stable step " + std::to_string(stable_dt) + " s needs " + std::to_string(n) +
+                         " substeps per frame; refused (stiffer than the frame rate can afford)");
   return int(std::max(1.0, n));
 }
 
@@ -133,7 +135,7 @@ class MlsSolver {
   virtual Precision precision() const = 0;
   virtual std::size_t size() const = 0;
   virtual const MlsModelStats& modelStats() const = 0;
-  virtual Vec3d origin() const = 0;                 // rest positions are relative to this (m)
+  virtual Vec3d origin() const = 0;                      // rest positions are relative to this (m)
   virtual std::vector<Vec3d> restPositions() const = 0;  // absolute (m)
   // s, safety 1, rest state; with coupling springs (setCouplingGroups) combined with their limit 2 / omega
   // as 1 / sqrt(1/dt_e^2 + 1/dt_c^2), below the true limit 2 / sqrt(omega_e^2 + omega_c^2) of both together.
@@ -171,13 +173,13 @@ class MlsSolver {
   virtual void computeForces() = 0;
   virtual MlsReduction reduce() = 0;
 
-  virtual void setDisplacements(const std::vector<Vec3d>& u) = 0;   // m, one per particle
-  virtual void setVelocities(const std::vector<Vec3d>& v) = 0;      // m/s
+  virtual void setDisplacements(const std::vector<Vec3d>& u) = 0;  // m, one per particle
+  virtual void setVelocities(const std::vector<Vec3d>& v) = 0;     // m/s
   virtual void displacements(std::vector<Vec3d>& out) const = 0;
   virtual void velocities(std::vector<Vec3d>& out) const = 0;
-  virtual void forces(std::vector<Vec3d>& out) const = 0;           // elastic (+ coupling) forces (N), current u
-  virtual void energies(std::vector<double>& out) const = 0;        // v_i psi_i (J), current u
-  void positions(std::vector<Vec3d>& out) const;                    // origin + X_i + u_i (m)
+  virtual void forces(std::vector<Vec3d>& out) const = 0;     // elastic (+ coupling) forces (N), current u
+  virtual void energies(std::vector<double>& out) const = 0;  // v_i psi_i (J), current u
+  void positions(std::vector<Vec3d>& out) const;              // origin + X_i + u_i (m)
 
   // Tools: the listed particles become prescribed, moving linearly to `targets` (displacements, m) over
   // the next frame (or step() call); release() returns them to free dynamics. Fixed particles stay fixed.
@@ -205,8 +207,10 @@ class MlsSolver {
   // MlsStaticContacts::kMax of a kind (scenes are refused earlier, naming the key) or for a radius < 0.
   void setStaticColliders(const std::vector<pbd::PlaneCollider<double>>& planes,
                           const std::vector<pbd::BoxCollider<double>>& boxes, double radius = 0.0) {
-    if (!(radius >= 0.0) || !std::isfinite(radius)) throw std::invalid_argument("MlsSolver: contact radius must be >= 0");
-    if (planes.size() > std::size_t(MlsStaticContacts<double>::kMax) || boxes.size() > std::size_t(MlsStaticContacts<double>::kMax))
+    if (!(radius >= 0.0) || !std::isfinite(radius))
+      throw std::invalid_argument("MlsSolver: contact radius must be >= 0");
+    if (planes.size() > std::size_t(MlsStaticContacts<double>::kMax) ||
+        boxes.size() > std::size_t(MlsStaticContacts<double>::kMax))
       throw std::invalid_argument("MlsSolver: at most " + std::to_string(MlsStaticContacts<double>::kMax) +
                                   " planes and as many boxes");
     planes_ = planes;
@@ -220,10 +224,10 @@ class MlsSolver {
   virtual MemoryReport memory() const = 0;
 
   // Replaces the model in place, as a new solver of the same backend and precision would start: state at rest,
-  // no coupling groups, no checkpoint, safety from the model (the stage-timing setting is kept). Returns false (model untouched) where a backend
-  // keeps nothing worth reusing (the CPU); rebuildMlsSolver then makes a new solver. The CUDA solver keeps its
-  // device buffers (grown, never shrunk), its stream, events and executable graph: a cut rebuilds the solver
-  // every frame the blade enters spheres, and allocating and freeing ~30 buffers was a third of that.
+  // no coupling groups, no checkpoint, safety from the model (the stage-timing setting is kept). Returns false (model
+  // untouched) where a backend keeps nothing worth reusing (the CPU); rebuildMlsSolver then makes a new solver. The
+  // CUDA solver keeps its device buffers (grown, never shrunk), its stream, events and executable graph: a cut rebuilds
+  // the solver every frame the blade enters spheres, and allocating and freeing ~30 buffers was a third of that.
   virtual bool replaceModel(MlsModel<float>& model) {
     (void)model;
     return false;
@@ -290,8 +294,8 @@ class MlsSolver {
   }
   bool staticsOn() const { return !planes_.empty() || !boxes_.empty(); }
   std::uint64_t staticsVersion() const { return statics_version_; }  // changes with every setStaticColliders
-  void forgetStiffening() { stiffening_known_ = false; }  // the state was replaced: measure again
-  void setCouplingStableStep(double dt) { coupling_dt_ = dt; }  // s; infinity: no coupling springs
+  void forgetStiffening() { stiffening_known_ = false; }             // the state was replaced: measure again
+  void setCouplingStableStep(double dt) { coupling_dt_ = dt; }       // s; infinity: no coupling springs
   double withCoupling(double dt) const {
     return std::isfinite(coupling_dt_) ? 1.0 / std::sqrt(1.0 / (dt * dt) + 1.0 / (coupling_dt_ * coupling_dt_)) : dt;
   }

@@ -30,8 +30,9 @@ PbdSolverKind parsePbdSolver(const std::string& text, const std::string& file, c
 
 double checkChebyshevRho(double rho, PbdSolverKind solver, const std::string& file, const std::string& key) {
   if (!(rho >= 0 && rho <= pbd::kChebyshevMaxRho))
-    throw InputError(file, key, "must be in [0, 0.9] (larger estimates gained energy or diverged in our tests; got " +
-                                    std::to_string(rho) + ")");
+    throw InputError(file, key,
+                     "must be in [0, 0.9] (larger estimates gained energy or diverged in our tests; got " +
+                         std::to_string(rho) + ")");
   if (rho > 0 && solver != PbdSolverKind::Jacobi)
     throw InputError(file, key, "accelerates the Jacobi solver only: use 0 with gauss_seidel");
   return rho;
@@ -50,14 +51,16 @@ void validateBlock(const PbdConstraintBlock<T>& b, std::size_t n, const std::str
     if (b.kind == PbdConstraintKind::Distance) need = 2;
     if (b.kind == PbdConstraintKind::Bending || b.kind == PbdConstraintKind::TetVolume) need = 4;
     if ((need > 0 && len != need) || len < 1)
-      throw InputError(kFile, key + "[" + std::to_string(c) + "]", "wrong number of particles (" + std::to_string(len) + ")");
+      throw InputError(kFile, key + "[" + std::to_string(c) + "]",
+                       "wrong number of particles (" + std::to_string(len) + ")");
   }
   for (std::int32_t p : b.ids)
     if (p < 0 || std::size_t(p) >= n)
       throw InputError(kFile, key + ".ids", "particle index " + std::to_string(p) + " out of range");
   const bool scalar_rest = b.kind == PbdConstraintKind::Distance || b.kind == PbdConstraintKind::Bending ||
                            b.kind == PbdConstraintKind::TetVolume;
-  if (scalar_rest && b.rest.size() != b.count()) throw InputError(kFile, key + ".rest", "one rest value per constraint");
+  if (scalar_rest && b.rest.size() != b.count())
+    throw InputError(kFile, key + ".rest", "one rest value per constraint");
   if (b.kind == PbdConstraintKind::Laplacian && b.rest_vec.size() != b.count())
     throw InputError(kFile, key + ".rest_vec", "one rest Laplacian per constraint");
   if (b.kind == PbdConstraintKind::ShapeMatching && b.rest_vec.size() != b.slotCount())
@@ -65,7 +68,8 @@ void validateBlock(const PbdConstraintBlock<T>& b, std::size_t n, const std::str
   if (b.compliance.size() != b.multiplierCount())
     throw InputError(kFile, key + ".compliance", "one compliance per multiplier");
   for (T a : b.compliance)
-    if (!(a >= T(0)) || !std::isfinite(double(a))) throw InputError(kFile, key + ".compliance", "must be finite and >= 0");
+    if (!(a >= T(0)) || !std::isfinite(double(a)))
+      throw InputError(kFile, key + ".compliance", "must be finite and >= 0");
   if (!(b.stiffness >= T(0) && b.stiffness <= T(1))) throw InputError(kFile, key + ".stiffness", "must be in [0, 1]");
 }
 }  // namespace
@@ -76,13 +80,15 @@ void finalizePbdModel(PbdModel<T>& model, bool coloring) {
   if (model.masses.size() != n || model.inv_mass.size() != n || model.rest_radii.size() != n)
     throw InputError(kFile, "particles", "masses, inverse masses and radii must have one entry per particle");
   if (!model.contact_inset.empty()) {
-    if (model.contact_inset.size() != n) throw InputError(kFile, "contact_inset", "must have one entry per particle (or none)");
+    if (model.contact_inset.size() != n)
+      throw InputError(kFile, "contact_inset", "must have one entry per particle (or none)");
     for (std::size_t i = 0; i < n; ++i)
       if (!(model.contact_inset[i] >= T(0) && model.contact_inset[i] <= model.rest_radii[i]))
         throw InputError(kFile, "contact_inset[" + std::to_string(i) + "]", "must lie in [0, the particle's radius]");
   }
   for (std::size_t i = 0; i < n; ++i) {
-    if (!isFinite(model.rest_positions[i])) throw InputError(kFile, "rest_positions[" + std::to_string(i) + "]", "not finite");
+    if (!isFinite(model.rest_positions[i]))
+      throw InputError(kFile, "rest_positions[" + std::to_string(i) + "]", "not finite");
     if (!(model.masses[i] > T(0)) || !(model.inv_mass[i] >= T(0)))
       throw InputError(kFile, "masses[" + std::to_string(i) + "]", "mass must be > 0 and inverse mass >= 0");
   }
@@ -137,10 +143,9 @@ void computeRestCellVolumes(PbdModel<T>& model, int sample_count, const std::vec
       return;
     }
     const std::int32_t b = model.overlap_offsets[i], e = model.overlap_offsets[i + 1];
-    model.rest_cell_volume[i] =
-        pbd::powerCellVolume(model.rest_positions[i], model.rest_radii[i], model.rest_positions.data(),
-                             model.rest_radii.data(), model.overlap_ids.data() + b, e - b, model.ball_samples.data(),
-                             sample_count);
+    model.rest_cell_volume[i] = pbd::powerCellVolume(
+        model.rest_positions[i], model.rest_radii[i], model.rest_positions.data(), model.rest_radii.data(),
+        model.overlap_ids.data() + b, e - b, model.ball_samples.data(), sample_count);
   });
 }
 

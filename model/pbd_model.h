@@ -1,4 +1,5 @@
-// PBD/XPBD model (constraint blocks, colliders), state, per-frame inputs and the backend interface both solvers implement.
+// PBD/XPBD model (constraint blocks, colliders), state, per-frame inputs and the backend interface both solvers
+// implement.
 #pragma once
 
 #include <cmath>
@@ -34,8 +35,8 @@ double checkChebyshevRho(double rho, PbdSolverKind solver, const std::string& fi
 template <typename T>
 struct PbdConstraintBlock {
   PbdConstraintKind kind = PbdConstraintKind::Distance;
-  bool solve = true;            // false: a ShapeMatching block kept only to estimate rotations
-  T stiffness = T(1);           // plain PBD k in [0, 1]
+  bool solve = true;   // false: a ShapeMatching block kept only to estimate rotations
+  T stiffness = T(1);  // plain PBD k in [0, 1]
   std::vector<std::int32_t> offsets{0};
   std::vector<std::int32_t> ids;
   std::vector<T> rest;            // Distance: d (m); Bending: psi0 (rad); TetVolume: V0 (m^3); per constraint
@@ -45,8 +46,8 @@ struct PbdConstraintBlock {
   // Derived by finalizePbdModel (topology changes only):
   std::vector<std::int32_t> particle_offsets;  // particle p's slots: particle_slots[particle_offsets[p]..[p+1])
   std::vector<std::int32_t> particle_slots;
-  std::vector<T> jacobi_scale;                 // per slot: 1 / (constraints of this block on the busiest movable
-                                               // participant); uniform within a constraint except ShapeMatching
+  std::vector<T> jacobi_scale;  // per slot: 1 / (constraints of this block on the busiest movable
+                                // participant); uniform within a constraint except ShapeMatching
   ConstraintColoring coloring;
 
   std::size_t count() const { return offsets.empty() ? 0 : offsets.size() - 1; }
@@ -60,18 +61,18 @@ struct PbdConstraintBlock {
 
 template <typename T>
 struct PbdModel {
-  std::vector<Vec3<T>> rest_positions;  // m
-  std::vector<T> masses;                // kg
-  std::vector<T> inv_mass;              // 1/kg; 0 = fixed (Dirichlet)
-  std::vector<T> rest_radii;            // m; contact radius (0 for mesh vertices)
+  std::vector<Vec3<T>> rest_positions;        // m
+  std::vector<T> masses;                      // kg
+  std::vector<T> inv_mass;                    // 1/kg; 0 = fixed (Dirichlet)
+  std::vector<T> rest_radii;                  // m; contact radius (0 for mesh vertices)
   std::vector<PbdConstraintBlock<T>> blocks;  // solved in this order each iteration
-  int rotation_block = -1;              // ShapeMatching block whose clusters give per-particle rotations
+  int rotation_block = -1;                    // ShapeMatching block whose clusters give per-particle rotations
 
   // Local volume preservation (physics/pbd_volume.h): spheres that may overlap each sphere, the rest
   // power-cell volumes, and the fixed unit-ball samples both backends use.
   std::vector<std::int32_t> overlap_offsets{0};
   std::vector<std::int32_t> overlap_ids;
-  std::vector<T> rest_cell_volume;      // m^3
+  std::vector<T> rest_cell_volume;  // m^3
   std::vector<Vec3<T>> ball_samples;
 
   std::vector<pbd::PlaneCollider<T>> planes;
@@ -85,37 +86,37 @@ struct PbdModel {
 
 template <typename T>
 struct PbdStepParams {
-  T frame_dt = T(1.0 / 60.0);   // s
-  int substeps = 4;             // >= 1; small steps, few iterations (Macklin et al. 2019)
-  int iterations = 5;           // >= 1 per substep
-  bool xpbd = true;             // false: plain PBD, block stiffness k per projection, no multipliers
+  T frame_dt = T(1.0 / 60.0);  // s
+  int substeps = 4;            // >= 1; small steps, few iterations (Macklin et al. 2019)
+  int iterations = 5;          // >= 1 per substep
+  bool xpbd = true;            // false: plain PBD, block stiffness k per projection, no multipliers
   PbdSolverKind solver = PbdSolverKind::Jacobi;
-  T jacobi_omega = T(1.5);      // over-relaxation of the averaged Jacobi step, (0, 2)
-  T chebyshev_rho = T(0);       // Jacobi: Chebyshev semi-iterative acceleration with this spectral-radius estimate,
-                                // [0, 0.9]; 0 off (physics/pbd_chebyshev.h, docs/pbd.md)
+  T jacobi_omega = T(1.5);  // over-relaxation of the averaged Jacobi step, (0, 2)
+  T chebyshev_rho = T(0);   // Jacobi: Chebyshev semi-iterative acceleration with this spectral-radius estimate,
+                            // [0, 0.9]; 0 off (physics/pbd_chebyshev.h, docs/pbd.md)
   Vec3<T> gravity{T(0), T(0), T(-9.81)};  // m/s^2
-  T damping = T(1);             // 1/s, velocities scaled by exp(-damping dt) each substep
-  int rotation_iterations = 4;  // polar-decomposition steps per cluster per projection (warm-started)
+  T damping = T(1);                       // 1/s, velocities scaled by exp(-damping dt) each substep
+  int rotation_iterations = 4;            // polar-decomposition steps per cluster per projection (warm-started)
   bool volume_preservation = true;
-  T volume_influence = T(0);    // m: spheres within this distance of a tool's surface adjust radii; < 0: all
-  T max_radius_growth = T(1.5); // radius stays in [r0, growth * r0]
-  int volume_passes = 3;        // Jacobi passes of the radius solve per frame
+  T volume_influence = T(0);     // m: spheres within this distance of a tool's surface adjust radii; < 0: all
+  T max_radius_growth = T(1.5);  // radius stays in [r0, growth * r0]
+  int volume_passes = 3;         // Jacobi passes of the radius solve per frame
   int bisection_steps = 12;
-  bool use_graph = true;        // CUDA backend: capture the frame in a CUDA graph
-  bool profile_stages = false;  // CUDA backend: time each stage with events (no graph, no fusion)
-  int fused_max_particles = 4096; // CUDA backend: models up to this size run all substeps and iterations in one
-                                  // single-block kernel (no launch per colour/block); 0 disables; Jacobi models
-                                  // use it only up to 256 particles (above, per-block launches measured faster)
-  int cluster_max_particles = 256; // CUDA backend, Jacobi: models up to this size run the frame in one thread-block
-                                   // cluster kernel (one launch, hardware barriers between phases) when it can
-                                   // (sm_90+, the replica fits shared memory); 0 disables. Measured faster than
-                                   // per-block launches up to ~250 spheres (docs/pbd.md)
-  int cluster_ctas = 0;          // CUDA cluster frame: CTAs of the cluster (1..16); 0 picks as many as the model needs
-  int grid_max_particles = 2048; // CUDA backend, Jacobi: a frame launched directly (use_graph off, or the first frame
-                                 // of a new model) of a model up to this size (not on the cluster frame) runs as one
-                                 // cooperative grid launch (grid-wide barriers between phases instead of ~170 kernel
-                                 // launches; Chebyshev included); 0 disables. Measured faster up to ~1000
-                                 // spheres, slower from ~3000 on an H100 (docs/pbd.md)
+  bool use_graph = true;            // CUDA backend: capture the frame in a CUDA graph
+  bool profile_stages = false;      // CUDA backend: time each stage with events (no graph, no fusion)
+  int fused_max_particles = 4096;   // CUDA backend: models up to this size run all substeps and iterations in one
+                                    // single-block kernel (no launch per colour/block); 0 disables; Jacobi models
+                                    // use it only up to 256 particles (above, per-block launches measured faster)
+  int cluster_max_particles = 256;  // CUDA backend, Jacobi: models up to this size run the frame in one thread-block
+                                    // cluster kernel (one launch, hardware barriers between phases) when it can
+                                    // (sm_90+, the replica fits shared memory); 0 disables. Measured faster than
+                                    // per-block launches up to ~250 spheres (docs/pbd.md)
+  int cluster_ctas = 0;           // CUDA cluster frame: CTAs of the cluster (1..16); 0 picks as many as the model needs
+  int grid_max_particles = 2048;  // CUDA backend, Jacobi: a frame launched directly (use_graph off, or the first frame
+                                  // of a new model) of a model up to this size (not on the cluster frame) runs as one
+                                  // cooperative grid launch (grid-wide barriers between phases instead of ~170 kernel
+                                  // launches; Chebyshev included); 0 disables. Measured faster up to ~1000
+                                  // spheres, slower from ~3000 on an H100 (docs/pbd.md)
 };
 
 // What the host prescribes for one frame: kinematic particles move linearly from `from` to `to` over the
@@ -128,9 +129,9 @@ struct PbdFrameInput {
   // kinematic_from left empty: each kinematic particle starts the frame where it is (a caller whose state stays on
   // the device need not download those positions only to send them back).
   bool kinematic_from_positions = false;
-  std::vector<std::int32_t> attach_ids;        // unique, not kinematic
-  std::vector<Vec3<T>> attach_from, attach_to; // target at the frame's start and end (m)
-  std::vector<T> attach_compliance;            // m/N, >= 0
+  std::vector<std::int32_t> attach_ids;         // unique, not kinematic
+  std::vector<Vec3<T>> attach_from, attach_to;  // target at the frame's start and end (m)
+  std::vector<T> attach_compliance;             // m/N, >= 0
   std::vector<pbd::CapsuleCollider<T>> tools_from, tools_to;
   // The first volume_tools tools also switch on local volume preservation near them (the paper's squeezing tools:
   // graspers, probes); the others are contacts only (a scalpel's blade). -1: every tool.
@@ -143,25 +144,25 @@ struct PbdFrameInput {
 
 template <typename T>
 struct PbdState {
-  std::vector<Vec3<T>> positions;      // m
-  std::vector<Vec3<T>> velocities;     // m/s
-  std::vector<T> radii;                // m (volume preservation changes them)
-  std::vector<pbd::Quat<T>> rotations; // per particle, from its shape-matching cluster (identity if none)
+  std::vector<Vec3<T>> positions;       // m
+  std::vector<Vec3<T>> velocities;      // m/s
+  std::vector<T> radii;                 // m (volume preservation changes them)
+  std::vector<pbd::Quat<T>> rotations;  // per particle, from its shape-matching cluster (identity if none)
 };
 
 struct PbdFrameStats {
   std::vector<StageTime> stages;
-  double residual_max = 0.0;   // max |C + alpha~ lambda| over Distance constraints after the last substep (m)
+  double residual_max = 0.0;  // max |C + alpha~ lambda| over Distance constraints after the last substep (m)
   double residual_rms = 0.0;
-  std::string path;            // CUDA: the frame kernel that ran (cluster | grid | fused | launches); empty on the CPU
-  int colors = 0;              // Gauss-Seidel: total colours over the solved blocks (0 for Jacobi)
-  int iterations = 0;          // constraint iterations this frame (substeps * iterations)
-  int volume_active = 0;       // spheres whose radius was solved this frame
+  std::string path;       // CUDA: the frame kernel that ran (cluster | grid | fused | launches); empty on the CPU
+  int colors = 0;         // Gauss-Seidel: total colours over the solved blocks (0 for Jacobi)
+  int iterations = 0;     // constraint iterations this frame (substeps * iterations)
+  int volume_active = 0;  // spheres whose radius was solved this frame
   double max_radius_ratio = 1.0;
   bool finite = true;
   std::int64_t failure_particle = -1;
-  int threads = 0;             // CPU backend: threads the frame started on (1 while backing off after a stalled team)
-  bool team_stalled = false;   // CPU backend: the team stalled and the lead thread finished the frame alone
+  int threads = 0;            // CPU backend: threads the frame started on (1 while backing off after a stalled team)
+  bool team_stalled = false;  // CPU backend: the team stalled and the lead thread finished the frame alone
 };
 
 // The state PbdBackend::setModel starts a model in: rest positions, zero velocities, rest radii, identity rotations
@@ -252,7 +253,8 @@ void fillParticleSlots(PbdConstraintBlock<T>& b, std::size_t n) {
   for (std::size_t p = 0; p < n; ++p) b.particle_offsets[p + 1] += b.particle_offsets[p];
   b.particle_slots.resize(b.ids.size());
   std::vector<std::int32_t> fill(b.particle_offsets.begin(), b.particle_offsets.end() - 1);
-  for (std::size_t s = 0; s < b.ids.size(); ++s) b.particle_slots[std::size_t(fill[std::size_t(b.ids[s])]++)] = std::int32_t(s);
+  for (std::size_t s = 0; s < b.ids.size(); ++s)
+    b.particle_slots[std::size_t(fill[std::size_t(b.ids[s])]++)] = std::int32_t(s);
 }
 
 // Fills the derived data of every block (particle->slot CSR, Jacobi scales, colouring unless `coloring` is

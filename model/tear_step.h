@@ -1,4 +1,5 @@
-// The tearing step's interface: what a step reports, its per-particle candidates, and the backend both solvers implement.
+// The tearing step's interface: what a step reports, its per-particle candidates, and the backend both solvers
+// implement.
 #pragma once
 
 #include <cstdint>
@@ -13,31 +14,31 @@
 namespace inc {
 
 struct TearStepStats {
-  int yielding = 0;        // particles past the criterion whose split is possible
-  int splits = 0;          // particles split this step (= new particles)
-  int deferred = 0;        // yielding but sharing a triangle with a higher-priority yielding particle
-  int moved_triangles = 0; // triangles moved from split particles to their new particles
-  int backed_off = 0;      // splits whose fraction t was reduced to keep triangles valid
+  int yielding = 0;         // particles past the criterion whose split is possible
+  int splits = 0;           // particles split this step (= new particles)
+  int deferred = 0;         // yielding but sharing a triangle with a higher-priority yielding particle
+  int moved_triangles = 0;  // triangles moved from split particles to their new particles
+  int backed_off = 0;       // splits whose fraction t was reduced to keep triangles valid
 };
 
 // Per-particle results of the detection pass (kept for tests and the GPU parity check).
 template <typename T>
 struct TearCandidates {
-  std::vector<std::uint8_t> yield;      // criterion passed and the split separates triangles
-  std::vector<std::uint8_t> accept;     // in this step's independent set
-  std::vector<std::int32_t> partner;    // j: the broken bond's other particle
-  std::vector<Vec3<T>> dir;             // crack-opening direction (split plane normal), towards j
-  std::vector<T> t_pred;                // predicted fraction before the random perturbation
+  std::vector<std::uint8_t> yield;    // criterion passed and the split separates triangles
+  std::vector<std::uint8_t> accept;   // in this step's independent set
+  std::vector<std::int32_t> partner;  // j: the broken bond's other particle
+  std::vector<Vec3<T>> dir;           // crack-opening direction (split plane normal), towards j
+  std::vector<T> t_pred;              // predicted fraction before the random perturbation
 };
 
 struct TearFrameStats {
-  int splits = 0;            // new particles this frame
+  int splits = 0;  // new particles this frame
   int yielding = 0;
   int deferred = 0;
-  int removed = 0;           // particles removed by a tool this frame
-  double solve_ms = 0.0;     // PBD frame
-  double tear_ms = 0.0;      // detection + split + triangle rebuild
-  double rebuild_ms = 0.0;   // adjacency + PBD model rebuild + upload after a topology change
+  int removed = 0;               // particles removed by a tool this frame
+  double solve_ms = 0.0;         // PBD frame
+  double tear_ms = 0.0;          // detection + split + triangle rebuild
+  double rebuild_ms = 0.0;       // adjacency + PBD model rebuild + upload after a topology change
   bool device_resident = false;  // the frame ran on the device-resident path (no host sheet, model patched)
   // Wall-clock stages of the frame (ms). Always: the coarse ones; with TearingDriver::profile the device work
   // is synchronised around each stage so that each one holds its own GPU time, and the PBD backend's own

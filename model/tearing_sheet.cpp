@@ -63,7 +63,10 @@ void TearSheet<T>::rebuildTopology() {
   own.reserve(tris.size() * 3);
   val.reserve(tris.size() * 3);
   for (std::size_t t = 0; t < tris.size(); ++t)
-    for (int c = 0; c < 3; ++c) { own.push_back(tris[t][c]); val.push_back(std::int32_t(t)); }
+    for (int c = 0; c < 3; ++c) {
+      own.push_back(tris[t][c]);
+      val.push_back(std::int32_t(t));
+    }
   buildCsr(n, own, val, pt_offsets, pt_tris);
   // Unique bonds sorted by (a, b), a < b, without a global sort: particle a lists its larger neighbours over
   // its own triangles (sorted, unique; a handful), counts them, and after a prefix sum writes them in place.
@@ -103,8 +106,14 @@ void TearSheet<T>::rebuildTopology() {
   // partners below p ascending and then those above p ascending.
   own.clear();
   val.clear();
-  for (std::size_t e = 0; e < ne; ++e) { own.push_back(edge_b[e]); val.push_back(edge_a[e]); }
-  for (std::size_t e = 0; e < ne; ++e) { own.push_back(edge_a[e]); val.push_back(edge_b[e]); }
+  for (std::size_t e = 0; e < ne; ++e) {
+    own.push_back(edge_b[e]);
+    val.push_back(edge_a[e]);
+  }
+  for (std::size_t e = 0; e < ne; ++e) {
+    own.push_back(edge_a[e]);
+    val.push_back(edge_b[e]);
+  }
   buildCsr(n, own, val, pe_offsets, pe_partner);
 }
 
@@ -212,7 +221,8 @@ void fixTearParticles(TearSheet<T>& s, const Vec3d& lo, const Vec3d& hi) {
 
 template <typename T>
 PbdModel<T> buildTearPbdModel(const TearSheet<T>& s, const TearModelOptions& opt) {
-  if (opt.stretch_compliance < 0 || opt.bending_compliance < 0) throw InputError("tearing", "compliance", "must be >= 0");
+  if (opt.stretch_compliance < 0 || opt.bending_compliance < 0)
+    throw InputError("tearing", "compliance", "must be >= 0");
   const std::size_t n = s.size();
   PbdModel<T> m;
   m.rest_positions = s.rest;
@@ -249,8 +259,14 @@ PbdModel<T> buildTearPbdModel(const TearSheet<T>& s, const TearModelOptions& opt
     const std::int32_t ea = s.pt_offsets[a + 1], eb = s.pt_offsets[b + 1];
     while (ia < ea && ib < eb) {
       const std::int32_t ta = s.pt_tris[ia], tb = s.pt_tris[ib];
-      if (ta < tb) { ++ia; continue; }
-      if (tb < ta) { ++ib; continue; }
+      if (ta < tb) {
+        ++ia;
+        continue;
+      }
+      if (tb < ta) {
+        ++ib;
+        continue;
+      }
       const auto& tr = s.tris[ta];
       std::int32_t o = -1;
       for (int c = 0; c < 3; ++c)
@@ -494,20 +510,20 @@ int removeTearParticles(TearSheet<T>& s, const std::vector<std::uint8_t>& mark, 
   return int(n) - int(next);
 }
 
-
-#define INC_TEAR_INSTANTIATE(T)                                                                                  \
-  template struct TearSheet<T>;                                                                                  \
-  template TearSheet<T> makeTearGrid<T>(int, int, double, double, const Vec3d&, double, double);                 \
-  template TearSheet<T> makeTearTube<T>(int, int, double, double, double, double, double);                       \
-  template void applyTearRegions<T>(TearSheet<T>&, const std::vector<TearRegion>&);                             \
-  template void fixTearParticles<T>(TearSheet<T>&, const Vec3d&, const Vec3d&);                                  \
-  template PbdModel<T> buildTearPbdModel<T>(const TearSheet<T>&, const TearModelOptions&);                       \
-  template TearMeshCheck checkTearMesh<T>(const TearSheet<T>&);                                                  \
-  template double tearBoundaryLength<T>(const TearSheet<T>&, bool);                                              \
-  template double totalMass<T>(const TearSheet<T>&);                                                             \
-  template Vec3d totalMomentum<T>(const TearSheet<T>&);                                                          \
-  template int removeTearParticles<T>(TearSheet<T>&, const std::vector<std::uint8_t>&, bool, const TearParams<T>&, std::vector<std::int32_t>*); \
-  template std::vector<std::uint8_t> markInBox<T>(const TearSheet<T>&, const Vec3d&, const Vec3d&);              \
+#define INC_TEAR_INSTANTIATE(T)                                                                                    \
+  template struct TearSheet<T>;                                                                                    \
+  template TearSheet<T> makeTearGrid<T>(int, int, double, double, const Vec3d&, double, double);                   \
+  template TearSheet<T> makeTearTube<T>(int, int, double, double, double, double, double);                         \
+  template void applyTearRegions<T>(TearSheet<T>&, const std::vector<TearRegion>&);                                \
+  template void fixTearParticles<T>(TearSheet<T>&, const Vec3d&, const Vec3d&);                                    \
+  template PbdModel<T> buildTearPbdModel<T>(const TearSheet<T>&, const TearModelOptions&);                         \
+  template TearMeshCheck checkTearMesh<T>(const TearSheet<T>&);                                                    \
+  template double tearBoundaryLength<T>(const TearSheet<T>&, bool);                                                \
+  template double totalMass<T>(const TearSheet<T>&);                                                               \
+  template Vec3d totalMomentum<T>(const TearSheet<T>&);                                                            \
+  template int removeTearParticles<T>(TearSheet<T>&, const std::vector<std::uint8_t>&, bool, const TearParams<T>&, \
+                                      std::vector<std::int32_t>*);                                                 \
+  template std::vector<std::uint8_t> markInBox<T>(const TearSheet<T>&, const Vec3d&, const Vec3d&);                \
   template std::vector<std::uint8_t> markNearSegment<T>(const TearSheet<T>&, const Vec3d&, const Vec3d&, double);
 
 INC_TEAR_INSTANTIATE(float)

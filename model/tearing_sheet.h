@@ -1,4 +1,5 @@
-// A tearable triangle sheet: particles, triangles, derived bond/triangle adjacency, PBD model assembly, removal tools and mesh checks.
+// A tearable triangle sheet: particles, triangles, derived bond/triangle adjacency, PBD model assembly, removal tools
+// and mesh checks.
 #pragma once
 
 #include <array>
@@ -24,10 +25,10 @@ TearCriterion parseTearCriterion(const std::string& text, const std::string& fil
 template <typename T>
 struct TearParams {
   TearCriterion criterion = TearCriterion::TrescaBonds;
-  T break_strain = T(0.5);     // Threshold: bond strain at which a bond breaks
-  T random_range = T(0.1);     // the paper's 10 %: t (1 + range u), u in [-1, 1)
+  T break_strain = T(0.5);  // Threshold: bond strain at which a bond breaks
+  T random_range = T(0.1);  // the paper's 10 %: t (1 + range u), u in [-1, 1)
   T t_lo = T(0.05), t_hi = T(0.95);
-  T min_area_ratio = T(0.1);   // a moved triangle must keep this fraction of its area, same orientation
+  T min_area_ratio = T(0.1);  // a moved triangle must keep this fraction of its area, same orientation
   std::uint32_t seed = 1;
 };
 
@@ -44,7 +45,7 @@ struct TearSheet {
   std::vector<Vec3<T>> x, v;  // m, m/s
   std::vector<T> mass;        // kg (lumped area mass)
   std::vector<std::uint8_t> fixed;
-  std::vector<T> k, tau_f;    // Pa: eq. 6 modulus and yield shear stress
+  std::vector<T> k, tau_f;  // Pa: eq. 6 modulus and yield shear stress
   // Per triangle: counter-clockwise about ref_normal (the rest normal when it was made; never flips).
   std::vector<std::array<std::int32_t, 3>> tris;
   std::vector<Vec3<T>> ref_normal;
@@ -106,13 +107,13 @@ PbdModel<T> buildTearPbdModel(const TearSheet<T>& s, const TearModelOptions& opt
 
 // Validity after topology changes: every count must be 0 for a valid mesh.
 struct TearMeshCheck {
-  int dead_refs = 0;            // triangle index out of range, or a particle without triangles
-  int degenerate = 0;           // repeated index, or rest area below 1e-6 of the mean
-  int inverted = 0;             // rest area vector against the triangle's reference normal
-  int inverted_current = 0;     // current area vector against the reference normal (info: folds are legal)
-  int duplicates = 0;           // two triangles with the same vertex set
-  int non_manifold_edges = 0;   // edges in more than two triangles
-  int inconsistent_edges = 0;   // interior edges traversed the same way by both triangles
+  int dead_refs = 0;           // triangle index out of range, or a particle without triangles
+  int degenerate = 0;          // repeated index, or rest area below 1e-6 of the mean
+  int inverted = 0;            // rest area vector against the triangle's reference normal
+  int inverted_current = 0;    // current area vector against the reference normal (info: folds are legal)
+  int duplicates = 0;          // two triangles with the same vertex set
+  int non_manifold_edges = 0;  // edges in more than two triangles
+  int inconsistent_edges = 0;  // interior edges traversed the same way by both triangles
   bool valid() const {
     return dead_refs == 0 && degenerate == 0 && inverted == 0 && duplicates == 0 && non_manifold_edges == 0 &&
            inconsistent_edges == 0;
@@ -144,6 +145,5 @@ template <typename T>
 std::vector<std::uint8_t> markInBox(const TearSheet<T>& s, const Vec3d& lo, const Vec3d& hi);
 template <typename T>
 std::vector<std::uint8_t> markNearSegment(const TearSheet<T>& s, const Vec3d& a, const Vec3d& b, double radius);
-
 
 }  // namespace inc

@@ -25,12 +25,12 @@ struct CouplingView {
   Vec3<T>* group_displacement = nullptr;         // out: u_a of eq. 13 (m)
   Vec3<T>* member_force = nullptr;               // out: force on each member of the group (N), eq. 12
   // Rotation-aware eq. 13 (couplingGroupFinish); rest_centroid null: every group follows the plain mean.
-  const Vec3<T>* member_rest = nullptr;          // rest position X_i of every particle (m), indexed by particle
-  const Vec3<T>* rest_centroid = nullptr;        // Xbar_a, the mean of the group's member rest positions (m)
-  const Mat3<T>* rest_gram = nullptr;            // Q_a = sum q q^T, q = X_i - Xbar_a (m^2)
-  const Mat3<T>* inertia_inverse = nullptr;      // J_a^-1, J_a = sum (|q|^2 I - q q^T) (1/m^2); zero: no rotation
-  pbd::Quat<T>* rotation = nullptr;              // in/out: the group's best-fit rotation (the warm start)
-  Mat3<T>* member_torque = nullptr;              // out: member i's force is member_force + member_torque (X_i - Xbar_a)
+  const Vec3<T>* member_rest = nullptr;      // rest position X_i of every particle (m), indexed by particle
+  const Vec3<T>* rest_centroid = nullptr;    // Xbar_a, the mean of the group's member rest positions (m)
+  const Mat3<T>* rest_gram = nullptr;        // Q_a = sum q q^T, q = X_i - Xbar_a (m^2)
+  const Mat3<T>* inertia_inverse = nullptr;  // J_a^-1, J_a = sum (|q|^2 I - q q^T) (1/m^2); zero: no rotation
+  pbd::Quat<T>* rotation = nullptr;          // in/out: the group's best-fit rotation (the warm start)
+  Mat3<T>* member_torque = nullptr;          // out: member i's force is member_force + member_torque (X_i - Xbar_a)
 };
 
 // Whether group g follows the rotation-aware eq. 13: the view carries the rest frames and the group's points span

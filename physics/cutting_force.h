@@ -8,9 +8,9 @@ namespace inc {
 // Tissue thresholds of one material, newtons; friction slope in newtons per metre of blade depth.
 template <typename T>
 struct CutThresholds {
-  T press_n = T(1.0);     // F_p: the blade enters the tissue when |f_n| > F_p
-  T static_n = T(0.6);    // F_s: cutting starts when |f_t| > F_s (static friction of the tissue)
-  T dynamic_n = T(0.3);   // F_d: cutting stops when |f_t| < F_d (dynamic friction), F_d < F_s
+  T press_n = T(1.0);                       // F_p: the blade enters the tissue when |f_n| > F_p
+  T static_n = T(0.6);                      // F_s: cutting starts when |f_t| > F_s (static friction of the tissue)
+  T dynamic_n = T(0.3);                     // F_d: cutting stops when |f_t| < F_d (dynamic friction), F_d < F_s
   T friction_per_depth_n_per_m = T(200.0);  // |friction| = k * depth while cutting
 };
 

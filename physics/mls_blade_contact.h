@@ -17,7 +17,7 @@ struct MlsBladeContact {
   T radius = T(0);         // m
   T duration = T(0);       // s, > 0 where radius > 0
   int substeps = 1;
-  T friction = T(0);       // Coulomb coefficient mu >= 0 (0: frictionless)
+  T friction = T(0);  // Coulomb coefficient mu >= 0 (0: frictionless)
 };
 
 // Particle k after its drift in the substep with `remaining` substeps left (this one included): where its current
@@ -53,7 +53,8 @@ INC_HD void mlsBladeContactAt(const MlsBladeContact<T>& c, const Vec3<T>& rest, 
     n = n * (T(1) / norm(n));
   }
   u = q + n * c.radius - rest;
-  const Vec3<T> w = ((c.a1 - c.a0) * (T(1) - t) + (c.b1 - c.b0) * t) * (T(1) / c.duration);  // the blade's velocity at q
+  const Vec3<T> w =
+      ((c.a1 - c.a0) * (T(1) - t) + (c.b1 - c.b0) * t) * (T(1) / c.duration);  // the blade's velocity at q
   Vec3<T> friction_dv;
   mlsContactVelocity(v, w, n, c.friction, friction_dv);
 }

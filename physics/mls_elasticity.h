@@ -14,10 +14,10 @@ namespace inc {
 // the small-strain material exactly the requested (E, nu) while J = det F resists collapse and inversion.
 template <typename T>
 struct MlsCoefficients {
-  T mu = T(0);          // Lame shear modulus
-  T lambda = T(0);      // coefficient of tr(E) in S (Lame lambda minus the moved bulk part; may be < 0)
-  T k_volume = T(0);    // volume penalty modulus (0: off)
-  T damping = T(0);     // mass-proportional damping, 1/s
+  T mu = T(0);        // Lame shear modulus
+  T lambda = T(0);    // coefficient of tr(E) in S (Lame lambda minus the moved bulk part; may be < 0)
+  T k_volume = T(0);  // volume penalty modulus (0: off)
+  T damping = T(0);   // mass-proportional damping, 1/s
 };
 
 // Lame parameters from Young's modulus (Pa) and Poisson ratio (-1 < nu < 0.5).
@@ -92,13 +92,15 @@ INC_HD T volumeChange(const Mat3<T>& g) {
 
 // Cofactor matrix cof(F) = dJ/dF = J F^{-T} (defined for singular and inverted F as well).
 template <typename T>
-INC_HD Mat3<T> cofactor(const Mat3<T>& f) { return transpose(adjugate(f)); }
+INC_HD Mat3<T> cofactor(const Mat3<T>& f) {
+  return transpose(adjugate(f));
+}
 
 // Everything pass 1 derives at one particle from its gradient G.
 template <typename T>
 struct MlsStressPoint {
-  Mat3<T> piola;        // P = F S + k_v (J - 1) cof(F)  (Pa)
-  T energy_density;     // psi + k_v/2 (J - 1)^2  (J/m^3)
+  Mat3<T> piola;     // P = F S + k_v (J - 1) cof(F)  (Pa)
+  T energy_density;  // psi + k_v/2 (J - 1)^2  (J/m^3)
 };
 
 // T may be a lane type (cpu_fallback/mls_stress_lanes.h: four particles at once, the coefficients broadcast);

@@ -54,17 +54,29 @@ INC_HD void symmetricEigenvalues(const Mat3<T>& a, T& e0, T& e1, T& e2) {
     e0 = q + T(2) * p * std::cos(phi + two_pi_3);
     e1 = T(3) * q - e0 - e2;
   } else {
-    const T sum = T(3) * q - e2;           // e0 + e1
-    const T prod = det(a) / e2;            // e0 e1
+    const T sum = T(3) * q - e2;  // e0 + e1
+    const T prod = det(a) / e2;   // e0 e1
     T disc = sum * sum - T(4) * prod;
     disc = disc > T(0) ? disc : T(0);
     const T big = T(0.5) * (sum + (sum >= T(0) ? std::sqrt(disc) : -std::sqrt(disc)));
     e1 = big;
     e0 = big != T(0) ? prod / big : T(0);
   }
-  if (e1 < e0) { const T t = e0; e0 = e1; e1 = t; }
-  if (e2 < e1) { const T t = e1; e1 = e2; e2 = t; }
-  if (e1 < e0) { const T t = e0; e0 = e1; e1 = t; }
+  if (e1 < e0) {
+    const T t = e0;
+    e0 = e1;
+    e1 = t;
+  }
+  if (e2 < e1) {
+    const T t = e1;
+    e1 = e2;
+    e2 = t;
+  }
+  if (e1 < e0) {
+    const T t = e0;
+    e0 = e1;
+    e1 = t;
+  }
 }
 
 // Why a neighbourhood got a regularised inverse (bit flags, counted in the metrics).
@@ -84,9 +96,9 @@ constexpr double kMlsFewNeighborRidge = 1.0e-2;
 
 template <typename T>
 struct MomentInverse {
-  Mat3<T> inverse;          // (A_i + ridge I)^{-1}; zero for an isolated particle
-  T condition = T(1);       // cond(A_i) before regularisation (lambda_max / lambda_min; inf when singular)
-  T ridge = T(0);           // added to the diagonal (units of A_i: 1/m)
+  Mat3<T> inverse;     // (A_i + ridge I)^{-1}; zero for an isolated particle
+  T condition = T(1);  // cond(A_i) before regularisation (lambda_max / lambda_min; inf when singular)
+  T ridge = T(0);      // added to the diagonal (units of A_i: 1/m)
   std::uint8_t flags = kMlsRegular;
 };
 
@@ -103,14 +115,16 @@ INC_HD MomentInverse<T> regularisedMomentInverse(const Mat3<T>& a, int weighted_
   if (weighted_neighbors == 0 || !(e2 > T(0)) || !isFinite(a)) {
     out.flags = kMlsIsolated | kMlsFewNeighbors | kMlsIllConditioned;
     out.condition = T(1) / T(0);  // inf
-    return out;                    // inverse stays zero
+    return out;                   // inverse stays zero
   }
   const T lmin = e0 > T(0) ? e0 : T(0);
   const T lmid = e1 > T(0) ? e1 : T(0);
   // Rank decisions at a relative tolerance well above rounding of the closed-form eigenvalues.
   const T rank_tol = T(64) * (sizeof(T) == 4 ? T(1.1920929e-7) : T(2.220446049250313e-16)) * e2;
-  if (lmid <= rank_tol) out.flags |= kMlsCollinear;
-  else if (lmin <= rank_tol) out.flags |= kMlsCoplanar;
+  if (lmid <= rank_tol)
+    out.flags |= kMlsCollinear;
+  else if (lmin <= rank_tol)
+    out.flags |= kMlsCoplanar;
   out.condition = lmin > T(0) ? e2 / lmin : T(1) / T(0);
   T eps = T(0);
   if (!(out.condition <= condition_limit)) {

@@ -21,24 +21,24 @@ template <typename T>
 struct MlsView {
   std::int64_t n = 0;
   // model (rest configuration)
-  const Vec3<T>* rest = nullptr;          // X_i relative to the model origin (m)
-  const T* mass = nullptr;                // kg
-  const T* volume = nullptr;              // rest volume v_i (m^3)
+  const Vec3<T>* rest = nullptr;            // X_i relative to the model origin (m)
+  const T* mass = nullptr;                  // kg
+  const T* volume = nullptr;                // rest volume v_i (m^3)
   const Mat3<T>* moment_inverse = nullptr;  // regularised A_i^{-1} (m)
-  const std::uint8_t* kind = nullptr;     // MlsParticleKind
-  const std::int64_t* offsets = nullptr;  // CSR rest neighbourhoods
+  const std::uint8_t* kind = nullptr;       // MlsParticleKind
+  const std::int64_t* offsets = nullptr;    // CSR rest neighbourhoods
   const std::int32_t* indices = nullptr;
-  T support = T(0);                       // h (m)
+  T support = T(0);  // h (m)
   MlsCoefficients<T> coeffs;
-  Vec3<T> gravity;                        // m/s^2
+  Vec3<T> gravity;  // m/s^2
   // state
-  Vec3<T>* displacement = nullptr;        // u_i (m)
-  Vec3<T>* velocity = nullptr;            // m/s
-  Vec3<T>* force = nullptr;               // elastic force f_i (N), at the current displacement
-  const Vec3<T>* target = nullptr;        // prescribed displacement at the end of the frame (m)
+  Vec3<T>* displacement = nullptr;  // u_i (m)
+  Vec3<T>* velocity = nullptr;      // m/s
+  Vec3<T>* force = nullptr;         // elastic force f_i (N), at the current displacement
+  const Vec3<T>* target = nullptr;  // prescribed displacement at the end of the frame (m)
   // pass-1 output consumed by pass 2
-  Mat3<T>* stress_moment = nullptr;       // M_i = v_i P_i A_i^{-1} (N m^2)
-  T* energy = nullptr;                    // v_i psi_i (J)
+  Mat3<T>* stress_moment = nullptr;  // M_i = v_i P_i A_i^{-1} (N m^2)
+  T* energy = nullptr;               // v_i psi_i (J)
   // Optional coupling to PBD spheres (physics/cut_coupling.h): particle k's group (-1: none) and each group's
   // force per member (N), recomputed from the displacement before every force pass. Null: no coupling.
   const std::int32_t* coupling_group = nullptr;

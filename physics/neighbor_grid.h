@@ -1,4 +1,5 @@
-// Uniform-grid cell keys, bucket hashing, Morton keys and the per-query cell traversal shared by the CPU and CUDA neighbour searches.
+// Uniform-grid cell keys, bucket hashing, Morton keys and the per-query cell traversal shared by the CPU and CUDA
+// neighbour searches.
 #pragma once
 
 #include <cstddef>
@@ -16,13 +17,16 @@ constexpr std::int32_t kNeighborGridMaxCells = 1 << 21;
 constexpr std::int32_t kNeighborMortonBits = 10;
 
 // Machine constants written out so that device code needs no std::numeric_limits.
-template <typename T> struct NeighborFloatTraits;
-template <> struct NeighborFloatTraits<float> {
-  static constexpr float epsilon = 1.1920928955078125e-7f;   // 2^-23
+template <typename T>
+struct NeighborFloatTraits;
+template <>
+struct NeighborFloatTraits<float> {
+  static constexpr float epsilon = 1.1920928955078125e-7f;           // 2^-23
   static constexpr float sqrt_min_normal = 1.0842021724855044e-19f;  // sqrt(2^-126) = 2^-63
 };
-template <> struct NeighborFloatTraits<double> {
-  static constexpr double epsilon = 2.220446049250313e-16;  // 2^-52
+template <>
+struct NeighborFloatTraits<double> {
+  static constexpr double epsilon = 2.220446049250313e-16;            // 2^-52
   static constexpr double sqrt_min_normal = 1.4916681462400413e-154;  // sqrt(2^-1022) = 2^-511
 };
 
@@ -30,14 +34,14 @@ template <> struct NeighborFloatTraits<double> {
 // the finite points (on the device this happens in a one-thread kernel, so the host never needs the box).
 template <typename T>
 struct NeighborGridParams {
-  Vec3<T> origin;               // lower corner of the points' bounding box (cell (0,0,0) starts here)
-  T inv_cell;                   // 1 / cell size (y and z)
-  T inv_cell_x;                 // 1 / cell size along x: x_refine / cell size (see makeNeighborGridParams)
-  std::int32_t dims[3];         // occupied cells per axis (after clamping); 0 when there are no finite points
-  std::uint32_t bucket_mask;    // bucket count - 1 (the bucket count is a power of two, about 2 n)
-  std::int32_t dense;           // 1: bucket = row-major cell index (no collisions); 0: bucket = hash & mask
-  std::int32_t morton_shift;    // Morton keys use (cell >> morton_shift), 10 bits per axis
-  std::int64_t first_bad;       // index of the first non-finite point, or n when all are finite
+  Vec3<T> origin;             // lower corner of the points' bounding box (cell (0,0,0) starts here)
+  T inv_cell;                 // 1 / cell size (y and z)
+  T inv_cell_x;               // 1 / cell size along x: x_refine / cell size (see makeNeighborGridParams)
+  std::int32_t dims[3];       // occupied cells per axis (after clamping); 0 when there are no finite points
+  std::uint32_t bucket_mask;  // bucket count - 1 (the bucket count is a power of two, about 2 n)
+  std::int32_t dense;         // 1: bucket = row-major cell index (no collisions); 0: bucket = hash & mask
+  std::int32_t morton_shift;  // Morton keys use (cell >> morton_shift), 10 bits per axis
+  std::int64_t first_bad;     // index of the first non-finite point, or n when all are finite
 };
 
 // Bucket count for n points: the power of two >= 2 n (at least 2). Host only: it sizes the start table.
@@ -71,10 +75,10 @@ INC_HD std::uint32_t neighborCellHash(std::int32_t cx, std::int32_t cy, std::int
 }
 
 template <typename T>
-INC_HD std::uint32_t neighborBucket(const NeighborGridParams<T>& p, std::int32_t cx, std::int32_t cy,
-                                    std::int32_t cz) {
+INC_HD std::uint32_t neighborBucket(const NeighborGridParams<T>& p, std::int32_t cx, std::int32_t cy, std::int32_t cz) {
   if (p.dense)  // dims[0] * dims[1] * dims[2] <= bucket count <= 2^31, so this cannot overflow
-    return std::uint32_t(cx) + std::uint32_t(p.dims[0]) * (std::uint32_t(cy) + std::uint32_t(p.dims[1]) * std::uint32_t(cz));
+    return std::uint32_t(cx) +
+           std::uint32_t(p.dims[0]) * (std::uint32_t(cy) + std::uint32_t(p.dims[1]) * std::uint32_t(cz));
   return neighborCellHash(cx, cy, cz) & p.bucket_mask;
 }
 
@@ -190,8 +194,8 @@ template <typename T>
 INC_HD T neighborAxisGap(T c, std::int32_t c_cell, std::int32_t cell, T origin, T h) {
   if (cell == c_cell) return T(0);
   const T ac = c < T(0) ? -c : c, ao = origin < T(0) ? -origin : origin;
-  const T slack = T(8) * NeighborFloatTraits<T>::epsilon * (ao + ac + T(cell + 1) * h) +
-                  NeighborFloatTraits<T>::sqrt_min_normal;
+  const T slack =
+      T(8) * NeighborFloatTraits<T>::epsilon * (ao + ac + T(cell + 1) * h) + NeighborFloatTraits<T>::sqrt_min_normal;
   const T gap = cell > c_cell ? (origin + T(cell) * h) - c : c - (origin + T(cell + 1) * h);
   const T g = gap - slack;
   return g > T(0) ? g : T(0);
@@ -235,8 +239,8 @@ INC_HD void neighborTestPoint(const Vec3<T>& x, const Vec3<T>& y, T r2, std::int
 // One contiguous run of slots [e, e1) of a dense grid, in slot order. Four candidates are loaded before the
 // first of them is tested: the loop is bound by the latency of those loads, and independent loads overlap.
 template <typename T, typename View, typename Visit>
-INC_HD void neighborScanRun(const View& g, const Vec3<T>& x, T r2, std::int32_t e, std::int32_t e1,
-                            std::int32_t skip, Visit& visit) {
+INC_HD void neighborScanRun(const View& g, const Vec3<T>& x, T r2, std::int32_t e, std::int32_t e1, std::int32_t skip,
+                            Visit& visit) {
   for (; e + 4 <= e1; e += 4) {
     const std::int32_t j0 = g.entries ? g.entries[e] : e, j1 = g.entries ? g.entries[e + 1] : e + 1,
                        j2 = g.entries ? g.entries[e + 2] : e + 2, j3 = g.entries ? g.entries[e + 3] : e + 3;

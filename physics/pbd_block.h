@@ -1,4 +1,5 @@
-// One constraint of a block projected from raw arrays (Jacobi slot output or in-place Gauss-Seidel), and the per-particle substep steps.
+// One constraint of a block projected from raw arrays (Jacobi slot output or in-place Gauss-Seidel), and the
+// per-particle substep steps.
 #pragma once
 
 #include <cmath>
@@ -38,14 +39,14 @@ struct BlockView {
 // What every projection reads besides its block.
 template <typename T>
 struct SolveContext {
-  Vec3<T>* x = nullptr;          // positions (read; written in place by Gauss-Seidel)
-  const T* w = nullptr;          // inverse masses of this frame (kinematic particles 0)
-  const T* mass = nullptr;       // masses (shape-matching centre of mass)
-  Quat<T>* rotation = nullptr;   // per-particle rotation, updated by the particle's own cluster
+  Vec3<T>* x = nullptr;         // positions (read; written in place by Gauss-Seidel)
+  const T* w = nullptr;         // inverse masses of this frame (kinematic particles 0)
+  const T* mass = nullptr;      // masses (shape-matching centre of mass)
+  Quat<T>* rotation = nullptr;  // per-particle rotation, updated by the particle's own cluster
   bool xpbd = true;
   T dt = T(0);
   bool jacobi = true;
-  T omega = T(1);                // Jacobi over-relaxation
+  T omega = T(1);  // Jacobi over-relaxation
   int rotation_iterations = 4;
 };
 
@@ -173,7 +174,8 @@ INC_HD void projectDistanceConstraintIds(const BlockView<T>& b, int c, const Sol
   const std::int32_t s0 = b.offsets[c];
   const T scale = ctx.jacobi ? ctx.omega * b.jacobi_scale[s0] : T(1);
   const XpbdTerm<T> term = blockTerm(b, ctx, c);
-  const DistanceCorrection<T> r = projectDistance(ctx.x[i], ctx.x[j], ctx.w[i], ctx.w[j], b.rest[c], term, b.lambda[c].x);
+  const DistanceCorrection<T> r =
+      projectDistance(ctx.x[i], ctx.x[j], ctx.w[i], ctx.w[j], b.rest[c], term, b.lambda[c].x);
   emit(s0, i, r.dp0, scale);
   emit(s0 + 1, j, r.dp1, scale);
   b.lambda[c].x += r.dlambda * scale;
@@ -326,8 +328,7 @@ INC_HD void updateClusterRotation(const BlockView<T>& b, int c, const SolveConte
 // C = x - target (3-vector) with compliance alpha (m/N); alpha = 0 holds the particle rigidly in the jaws.
 // Each attached particle has one attachment, so all of them are projected in parallel without conflict.
 template <typename T>
-INC_HD void projectAttachment(Vec3<T>& x, T w, const Vec3<T>& target, T compliance, bool xpbd, T dt,
-                              Vec3<T>& lambda) {
+INC_HD void projectAttachment(Vec3<T>& x, T w, const Vec3<T>& target, T compliance, bool xpbd, T dt, Vec3<T>& lambda) {
   const XpbdTerm<T> term = xpbdTerm(xpbd, compliance, T(1), dt);
   const GoalCorrection<T> r = projectGoal(x, w, target, term, lambda);
   x += r.dp;
@@ -338,7 +339,8 @@ INC_HD void projectAttachment(Vec3<T>& x, T w, const Vec3<T>& target, T complian
 template <typename T>
 INC_HD Vec3<T> gatherCorrection(const BlockView<T>& b, std::int32_t p) {
   Vec3<T> sum;
-  for (std::int32_t k = b.particle_offsets[p]; k < b.particle_offsets[p + 1]; ++k) sum += b.slot_corr[b.particle_slots[k]];
+  for (std::int32_t k = b.particle_offsets[p]; k < b.particle_offsets[p + 1]; ++k)
+    sum += b.slot_corr[b.particle_slots[k]];
   return sum;
 }
 
@@ -385,8 +387,8 @@ INC_HD CapsuleCollider<T> lerpCapsule(const CapsuleCollider<T>& a, const Capsule
 // (PbdModel::contact_inset); tools meet the whole ball. With `x_prev` (the sphere's substep start) each push is
 // followed by its collider's Coulomb friction (coulombAfterContact; toolCoulombAfterContact relative to a tool).
 template <typename T>
-INC_HD Vec3<T> resolveContacts(Vec3<T> x, T r, T inset, const Vec3<T>* x_prev, const PlaneCollider<T>* planes,
-                               int np, const BoxCollider<T>* boxes, int nb, const CapsuleCollider<T>* tools_from,
+INC_HD Vec3<T> resolveContacts(Vec3<T> x, T r, T inset, const Vec3<T>* x_prev, const PlaneCollider<T>* planes, int np,
+                               const BoxCollider<T>* boxes, int nb, const CapsuleCollider<T>* tools_from,
                                const CapsuleCollider<T>* tools_to, int nt, T t0, T t) {
   const T rs = r > inset ? r - inset : T(0);
   for (int k = 0; k < np; ++k) {

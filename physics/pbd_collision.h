@@ -47,8 +47,14 @@ INC_HD Vec3<T> boxContact(const Vec3<T>& x, T r, const BoxCollider<T>& b) {
   bool inside = true;
   for (int k = 0; k < 3; ++k) {
     T v = x[k];
-    if (v < b.min[k]) { v = b.min[k]; inside = false; }
-    if (v > b.max[k]) { v = b.max[k]; inside = false; }
+    if (v < b.min[k]) {
+      v = b.min[k];
+      inside = false;
+    }
+    if (v > b.max[k]) {
+      v = b.max[k];
+      inside = false;
+    }
     q[k] = v;
   }
   if (!inside) {
@@ -62,8 +68,16 @@ INC_HD Vec3<T> boxContact(const Vec3<T>& x, T r, const BoxCollider<T>& b) {
   T best = x[0] - b.min[0], sign = T(-1);
   for (int k = 0; k < 3; ++k) {
     const T to_min = x[k] - b.min[k], to_max = b.max[k] - x[k];
-    if (to_min < best) { best = to_min; axis = k; sign = T(-1); }
-    if (to_max < best) { best = to_max; axis = k; sign = T(1); }
+    if (to_min < best) {
+      best = to_min;
+      axis = k;
+      sign = T(-1);
+    }
+    if (to_max < best) {
+      best = to_max;
+      axis = k;
+      sign = T(1);
+    }
   }
   Vec3<T> out;
   out[axis] = sign * (best + r);

@@ -1,4 +1,5 @@
-// PBD/XPBD constraint projections: pure functions from positions, inverse masses, rest values and compliance to corrections.
+// PBD/XPBD constraint projections: pure functions from positions, inverse masses, rest values and compliance to
+// corrections.
 #pragma once
 
 #include <cmath>
@@ -108,7 +109,8 @@ INC_HD T dihedralAngle(const Vec3<T>& p0, const Vec3<T>& p1, const Vec3<T>& p2, 
 // dpsi/dp2 = -|e| n1/|n1|^2, dpsi/dp3 = +|e| n2/|n2|^2; the edge ends share the wing gradients in proportion to
 // where each wing's foot lies along the edge (translation invariance: the four gradients sum to zero).
 template <typename T>
-INC_HD bool dihedralGradients(const Vec3<T>& p0, const Vec3<T>& p1, const Vec3<T>& p2, const Vec3<T>& p3, Vec3<T> g[4]) {
+INC_HD bool dihedralGradients(const Vec3<T>& p0, const Vec3<T>& p1, const Vec3<T>& p2, const Vec3<T>& p3,
+                              Vec3<T> g[4]) {
   const Vec3<T> e = p1 - p0;
   const Vec3<T> n1 = cross(e, p2 - p0), n2 = cross(e, p3 - p0);
   const T le2 = norm2(e), n1l2 = norm2(n1), n2l2 = norm2(n2);
@@ -179,10 +181,10 @@ INC_HD TetVolumeCorrection<T> projectTetVolume(const Vec3<T>& p0, const Vec3<T>&
 // dC/dc_i = I, dC/dc_j = -I/n). Its multiplier lambda is a 3-vector too.
 template <typename T>
 struct LaplacianCorrection {
-  Vec3<T> d_center;    // correction of c_i
-  Vec3<T> dlambda;     // correction of c_j (j in N(i)) is -w_j / n * dlambda
+  Vec3<T> d_center;  // correction of c_i
+  Vec3<T> dlambda;   // correction of c_j (j in N(i)) is -w_j / n * dlambda
   T inv_n = T(0);
-  Vec3<T> c;           // constraint value before the correction (m)
+  Vec3<T> c;  // constraint value before the correction (m)
 };
 
 // The Laplacian correction from the sums over the neighbours (mean_sum = sum_j x_j, wn = sum_j w_j over the

@@ -39,9 +39,15 @@ INC_HD Mat3<T> quatToMatrix(const Quat<T>& q) {
   Mat3<T> r;
   const T xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z;
   const T xy = q.x * q.y, xz = q.x * q.z, yz = q.y * q.z, wx = q.w * q.x, wy = q.w * q.y, wz = q.w * q.z;
-  r.m[0][0] = T(1) - T(2) * (yy + zz); r.m[0][1] = T(2) * (xy - wz);        r.m[0][2] = T(2) * (xz + wy);
-  r.m[1][0] = T(2) * (xy + wz);        r.m[1][1] = T(1) - T(2) * (xx + zz); r.m[1][2] = T(2) * (yz - wx);
-  r.m[2][0] = T(2) * (xz - wy);        r.m[2][1] = T(2) * (yz + wx);        r.m[2][2] = T(1) - T(2) * (xx + yy);
+  r.m[0][0] = T(1) - T(2) * (yy + zz);
+  r.m[0][1] = T(2) * (xy - wz);
+  r.m[0][2] = T(2) * (xz + wy);
+  r.m[1][0] = T(2) * (xy + wz);
+  r.m[1][1] = T(1) - T(2) * (xx + zz);
+  r.m[1][2] = T(2) * (yz - wx);
+  r.m[2][0] = T(2) * (xz - wy);
+  r.m[2][1] = T(2) * (yz + wx);
+  r.m[2][2] = T(1) - T(2) * (xx + yy);
   return r;
 }
 

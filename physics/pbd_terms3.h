@@ -1,4 +1,6 @@
-// Shape-matching terms written for 3-vectors of any type (a CPU vector holding x, y, z in its lanes), with the operations and order of clusterFrame, Mat3 * Vec3 and the member passes (the goal and Laplacian corrections for any 3-vector type are in physics/pbd_constraints.h).
+// Shape-matching terms written for 3-vectors of any type (a CPU vector holding x, y, z in its lanes), with the
+// operations and order of clusterFrame, Mat3 * Vec3 and the member passes (the goal and Laplacian corrections for any
+// 3-vector type are in physics/pbd_constraints.h).
 #pragma once
 
 #include "physics/hd.h"

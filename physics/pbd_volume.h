@@ -1,4 +1,5 @@
-// Local volume preservation by radius adjustment: power-cell volume of a sphere within the union, and the radius that restores it.
+// Local volume preservation by radius adjustment: power-cell volume of a sphere within the union, and the radius that
+// restores it.
 #pragma once
 
 #include <cmath>

@@ -37,7 +37,7 @@ template <typename T>
 struct Detection {
   std::uint8_t yield = 0;
   std::int32_t partner = -1;
-  Vec3<T> dir;     // unit, towards the partner's side
+  Vec3<T> dir;  // unit, towards the partner's side
   T t_pred = T(0);
 };
 

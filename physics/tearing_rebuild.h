@@ -1,4 +1,5 @@
-// Per-element bodies of the adjacency and PBD constraint rebuild of a torn sheet (per-particle fans, and the older sort-based path), shared by the CPU reference and the CUDA kernels.
+// Per-element bodies of the adjacency and PBD constraint rebuild of a torn sheet (per-particle fans, and the older
+// sort-based path), shared by the CPU reference and the CUDA kernels.
 #pragma once
 
 #include <cstdint>
@@ -93,8 +94,8 @@ INC_HD void writeEdgeConstraint(std::int32_t a, std::int32_t b, std::int32_t w0,
 }
 
 template <typename T>
-INC_HD void writeEdgeConstraints(const std::uint64_t* keys, const std::int32_t* opp, std::int64_t h, int run,
-                                 int bits, std::int64_t e, std::int64_t c, const Vec3<T>* rest, T stretch_compliance,
+INC_HD void writeEdgeConstraints(const std::uint64_t* keys, const std::int32_t* opp, std::int64_t h, int run, int bits,
+                                 std::int64_t e, std::int64_t c, const Vec3<T>* rest, T stretch_compliance,
                                  T bending_compliance, std::int32_t* edge_a, std::int32_t* edge_b,
                                  std::int32_t* dist_ids, T* dist_rest, T* dist_compliance, std::int32_t* bend_ids,
                                  T* bend_rest, T* bend_compliance) {

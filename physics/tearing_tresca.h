@@ -1,4 +1,5 @@
-// Tresca tearing math (tresca paper eqs. 5-6): bond strains, per-particle extrema, yield tests, split side, seeded new-particle position, principal stresses.
+// Tresca tearing math (tresca paper eqs. 5-6): bond strains, per-particle extrema, yield tests, split side, seeded
+// new-particle position, principal stresses.
 #pragma once
 
 #include <cmath>
@@ -181,8 +182,14 @@ INC_HD Vec3<T> symmetricEigenvector(const Mat3<T>& a, T lambda) {
   const T n01 = norm2(c01), n02 = norm2(c02), n12 = norm2(c12);
   Vec3<T> best = c01;
   T nb = n01;
-  if (n02 > nb) { best = c02; nb = n02; }
-  if (n12 > nb) { best = c12; nb = n12; }
+  if (n02 > nb) {
+    best = c02;
+    nb = n02;
+  }
+  if (n12 > nb) {
+    best = c12;
+    nb = n12;
+  }
   const T scale = frobeniusNorm(a);
   const T tiny = (sizeof(T) == 4 ? T(1e-10) : T(1e-24)) * scale * scale * scale * scale;
   if (!(nb > tiny)) return Vec3<T>();

@@ -16,24 +16,68 @@ struct Vec3 {
   INC_HD explicit Vec3(const Vec3<U>& o) : x(T(o.x)), y(T(o.y)), z(T(o.z)) {}
   INC_HD T& operator[](int i) { return i == 0 ? x : (i == 1 ? y : z); }
   INC_HD const T& operator[](int i) const { return i == 0 ? x : (i == 1 ? y : z); }
-  INC_HD Vec3& operator+=(const Vec3& o) { x += o.x; y += o.y; z += o.z; return *this; }
-  INC_HD Vec3& operator-=(const Vec3& o) { x -= o.x; y -= o.y; z -= o.z; return *this; }
-  INC_HD Vec3& operator*=(T s) { x *= s; y *= s; z *= s; return *this; }
+  INC_HD Vec3& operator+=(const Vec3& o) {
+    x += o.x;
+    y += o.y;
+    z += o.z;
+    return *this;
+  }
+  INC_HD Vec3& operator-=(const Vec3& o) {
+    x -= o.x;
+    y -= o.y;
+    z -= o.z;
+    return *this;
+  }
+  INC_HD Vec3& operator*=(T s) {
+    x *= s;
+    y *= s;
+    z *= s;
+    return *this;
+  }
 };
 
-template <typename T> INC_HD Vec3<T> operator+(Vec3<T> a, const Vec3<T>& b) { return a += b; }
-template <typename T> INC_HD Vec3<T> operator-(Vec3<T> a, const Vec3<T>& b) { return a -= b; }
-template <typename T> INC_HD Vec3<T> operator-(const Vec3<T>& a) { return {-a.x, -a.y, -a.z}; }
-template <typename T> INC_HD Vec3<T> operator*(Vec3<T> a, T s) { return a *= s; }
-template <typename T> INC_HD Vec3<T> operator*(T s, Vec3<T> a) { return a *= s; }
-template <typename T> INC_HD Vec3<T> operator/(const Vec3<T>& a, T s) { return {a.x / s, a.y / s, a.z / s}; }
-template <typename T> INC_HD T dot(const Vec3<T>& a, const Vec3<T>& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-template <typename T> INC_HD Vec3<T> cross(const Vec3<T>& a, const Vec3<T>& b) {
+template <typename T>
+INC_HD Vec3<T> operator+(Vec3<T> a, const Vec3<T>& b) {
+  return a += b;
+}
+template <typename T>
+INC_HD Vec3<T> operator-(Vec3<T> a, const Vec3<T>& b) {
+  return a -= b;
+}
+template <typename T>
+INC_HD Vec3<T> operator-(const Vec3<T>& a) {
+  return {-a.x, -a.y, -a.z};
+}
+template <typename T>
+INC_HD Vec3<T> operator*(Vec3<T> a, T s) {
+  return a *= s;
+}
+template <typename T>
+INC_HD Vec3<T> operator*(T s, Vec3<T> a) {
+  return a *= s;
+}
+template <typename T>
+INC_HD Vec3<T> operator/(const Vec3<T>& a, T s) {
+  return {a.x / s, a.y / s, a.z / s};
+}
+template <typename T>
+INC_HD T dot(const Vec3<T>& a, const Vec3<T>& b) {
+  return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+template <typename T>
+INC_HD Vec3<T> cross(const Vec3<T>& a, const Vec3<T>& b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
-template <typename T> INC_HD T norm2(const Vec3<T>& a) { return dot(a, a); }
-template <typename T> INC_HD T norm(const Vec3<T>& a) { return std::sqrt(dot(a, a)); }
-template <typename T> INC_HD bool isFinite(const Vec3<T>& a) {
+template <typename T>
+INC_HD T norm2(const Vec3<T>& a) {
+  return dot(a, a);
+}
+template <typename T>
+INC_HD T norm(const Vec3<T>& a) {
+  return std::sqrt(dot(a, a));
+}
+template <typename T>
+INC_HD bool isFinite(const Vec3<T>& a) {
   return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z);
 }
 
@@ -57,7 +101,11 @@ struct Mat3 {
   }
   INC_HD static Mat3 fromRows(const Vec3<T>& r0, const Vec3<T>& r1, const Vec3<T>& r2) {
     Mat3 a;
-    for (int c = 0; c < 3; ++c) { a.m[0][c] = r0[c]; a.m[1][c] = r1[c]; a.m[2][c] = r2[c]; }
+    for (int c = 0; c < 3; ++c) {
+      a.m[0][c] = r0[c];
+      a.m[1][c] = r1[c];
+      a.m[2][c] = r2[c];
+    }
     return a;
   }
   template <typename U>
@@ -86,51 +134,72 @@ struct Mat3 {
   }
 };
 
-template <typename T> INC_HD Mat3<T> operator+(Mat3<T> a, const Mat3<T>& b) { return a += b; }
-template <typename T> INC_HD Mat3<T> operator-(Mat3<T> a, const Mat3<T>& b) { return a -= b; }
-template <typename T> INC_HD Mat3<T> operator*(Mat3<T> a, T s) { return a *= s; }
-template <typename T> INC_HD Mat3<T> operator*(T s, Mat3<T> a) { return a *= s; }
+template <typename T>
+INC_HD Mat3<T> operator+(Mat3<T> a, const Mat3<T>& b) {
+  return a += b;
+}
+template <typename T>
+INC_HD Mat3<T> operator-(Mat3<T> a, const Mat3<T>& b) {
+  return a -= b;
+}
+template <typename T>
+INC_HD Mat3<T> operator*(Mat3<T> a, T s) {
+  return a *= s;
+}
+template <typename T>
+INC_HD Mat3<T> operator*(T s, Mat3<T> a) {
+  return a *= s;
+}
 
-template <typename T> INC_HD Mat3<T> operator*(const Mat3<T>& a, const Mat3<T>& b) {
+template <typename T>
+INC_HD Mat3<T> operator*(const Mat3<T>& a, const Mat3<T>& b) {
   Mat3<T> c;
   for (int r = 0; r < 3; ++r)
     for (int k = 0; k < 3; ++k)
       for (int j = 0; j < 3; ++j) c.m[r][j] += a.m[r][k] * b.m[k][j];
   return c;
 }
-template <typename T> INC_HD Vec3<T> operator*(const Mat3<T>& a, const Vec3<T>& v) {
-  return {a.m[0][0] * v.x + a.m[0][1] * v.y + a.m[0][2] * v.z,
-          a.m[1][0] * v.x + a.m[1][1] * v.y + a.m[1][2] * v.z,
+template <typename T>
+INC_HD Vec3<T> operator*(const Mat3<T>& a, const Vec3<T>& v) {
+  return {a.m[0][0] * v.x + a.m[0][1] * v.y + a.m[0][2] * v.z, a.m[1][0] * v.x + a.m[1][1] * v.y + a.m[1][2] * v.z,
           a.m[2][0] * v.x + a.m[2][1] * v.y + a.m[2][2] * v.z};
 }
-template <typename T> INC_HD Mat3<T> transpose(const Mat3<T>& a) {
+template <typename T>
+INC_HD Mat3<T> transpose(const Mat3<T>& a) {
   Mat3<T> t;
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) t.m[r][c] = a.m[c][r];
   return t;
 }
 // a b^T
-template <typename T> INC_HD Mat3<T> outer(const Vec3<T>& a, const Vec3<T>& b) {
+template <typename T>
+INC_HD Mat3<T> outer(const Vec3<T>& a, const Vec3<T>& b) {
   Mat3<T> o;
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) o.m[r][c] = a[r] * b[c];
   return o;
 }
-template <typename T> INC_HD T trace(const Mat3<T>& a) { return a.m[0][0] + a.m[1][1] + a.m[2][2]; }
+template <typename T>
+INC_HD T trace(const Mat3<T>& a) {
+  return a.m[0][0] + a.m[1][1] + a.m[2][2];
+}
 // Frobenius inner product A : B.
-template <typename T> INC_HD T ddot(const Mat3<T>& a, const Mat3<T>& b) {
+template <typename T>
+INC_HD T ddot(const Mat3<T>& a, const Mat3<T>& b) {
   T s = T(0);
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) s += a.m[r][c] * b.m[r][c];
   return s;
 }
-template <typename T> INC_HD T det(const Mat3<T>& a) {
+template <typename T>
+INC_HD T det(const Mat3<T>& a) {
   return a.m[0][0] * (a.m[1][1] * a.m[2][2] - a.m[1][2] * a.m[2][1]) -
          a.m[0][1] * (a.m[1][0] * a.m[2][2] - a.m[1][2] * a.m[2][0]) +
          a.m[0][2] * (a.m[1][0] * a.m[2][1] - a.m[1][1] * a.m[2][0]);
 }
 // Transposed cofactor matrix: adj(A) with A adj(A) = det(A) I.
-template <typename T> INC_HD Mat3<T> adjugate(const Mat3<T>& a) {
+template <typename T>
+INC_HD Mat3<T> adjugate(const Mat3<T>& a) {
   Mat3<T> c;
   c.m[0][0] = a.m[1][1] * a.m[2][2] - a.m[1][2] * a.m[2][1];
   c.m[0][1] = a.m[0][2] * a.m[2][1] - a.m[0][1] * a.m[2][2];
@@ -143,8 +212,12 @@ template <typename T> INC_HD Mat3<T> adjugate(const Mat3<T>& a) {
   c.m[2][2] = a.m[0][0] * a.m[1][1] - a.m[0][1] * a.m[1][0];
   return c;
 }
-template <typename T> INC_HD T frobeniusNorm(const Mat3<T>& a) { return std::sqrt(ddot(a, a)); }
-template <typename T> INC_HD bool isFinite(const Mat3<T>& a) {
+template <typename T>
+INC_HD T frobeniusNorm(const Mat3<T>& a) {
+  return std::sqrt(ddot(a, a));
+}
+template <typename T>
+INC_HD bool isFinite(const Mat3<T>& a) {
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c)
       if (!std::isfinite(a.m[r][c])) return false;

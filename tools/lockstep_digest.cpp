@@ -16,13 +16,13 @@
 #include <string>
 #include <vector>
 
-#include "host/scene/scene_compile.h"
-#include "host/sim/dissection_simulation.h"
 #include "host/haptics/haptic_cut_session.h"
 #include "host/haptics/scene_haptics.h"
 #include "host/haptics/tip_contact.h"
-#include "model/input_error.h"
+#include "host/scene/scene_compile.h"
 #include "host/scene/scene_loader.h"
+#include "host/sim/dissection_simulation.h"
+#include "model/input_error.h"
 
 namespace {
 
@@ -168,7 +168,8 @@ int runDigest(const Options& opt) {
   if (!scene.models.cutting || !scene.models.haptics)
     throw InputError(scene.file, "models", "lockstep_digest needs a scene with models.cutting and models.haptics");
   const HapticDeviceSpec& hand = scene.haptics.devices.at(0);
-  const int frames = opt.frames > 0 ? opt.frames : std::max(1, int(std::lround(scene.duration / scene.solver.frame_dt)));
+  const int frames =
+      opt.frames > 0 ? opt.frames : std::max(1, int(std::lround(scene.duration / scene.solver.frame_dt)));
 
   auto sim = makeDissectionSimulation(compileScene(scene), BackendKind::Cpu, Precision::Float64);
   const std::unique_ptr<HapticDevice> device = makeSceneHapticDevice(compileScene(scene), 0);

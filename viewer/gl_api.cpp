@@ -54,7 +54,8 @@ GLint uniform(GLuint program, const char* name) { return glGetUniformLocation(pr
 
 void checkGl(const char* where) {
   const GLenum e = glGetError();
-  if (e != GL_NO_ERROR) throw std::runtime_error(std::string("viewer: OpenGL error 0x") + std::to_string(e) + " in " + where);
+  if (e != GL_NO_ERROR)
+    throw std::runtime_error(std::string("viewer: OpenGL error 0x") + std::to_string(e) + " in " + where);
 }
 
 }  // namespace inc::viewer

@@ -9,7 +9,7 @@ struct GLFWwindow;
 namespace inc::viewer {
 
 struct GlWindowOptions {
-  int width = 1280;   // screen coordinates
+  int width = 1280;  // screen coordinates
   int height = 800;
   bool visible = true;
   bool vsync = true;

@@ -36,9 +36,12 @@ void LivePlots::push(const SimSnapshot& s) {
   displacement_.push(r.max_displacement);
   particles_.push(double(s.particles));
   for (const auto& [k, v] : r.counters) {
-    if (k == kHapticRateCounter) haptic_hz_.push(v);
-    else if (k == kHapticP99Counter) haptic_p99_.push(v);
-    else counters_[k].push(v);
+    if (k == kHapticRateCounter)
+      haptic_hz_.push(v);
+    else if (k == kHapticP99Counter)
+      haptic_p99_.push(v);
+    else
+      counters_[k].push(v);
   }
 }
 

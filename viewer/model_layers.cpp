@@ -33,9 +33,12 @@ void ModelLayerRenderer::upload(const RenderLayers& layers, double point_radius_
   for (std::int32_t i : layers.held_ids)
     if (i >= 0 && std::size_t(i) < marks.size()) marks[std::size_t(i)] = 2;
   spheres_.upload(layers.sphere_centres, layers.sphere_radii, marks);
-  nodal_.upload(particleSplats(layers.nodal_points, markerRadius(layers.nodal_points, point_radius_m), ModelLayerColours::nodal));
-  fixed_.upload(particleSplats(layers.fixed_points, markerRadius(layers.fixed_points, point_radius_m), ModelLayerColours::fixed));
-  held_.upload(particleSplats(layers.held_points, markerRadius(layers.held_points, point_radius_m), ModelLayerColours::held));
+  nodal_.upload(
+      particleSplats(layers.nodal_points, markerRadius(layers.nodal_points, point_radius_m), ModelLayerColours::nodal));
+  fixed_.upload(
+      particleSplats(layers.fixed_points, markerRadius(layers.fixed_points, point_radius_m), ModelLayerColours::fixed));
+  held_.upload(
+      particleSplats(layers.held_points, markerRadius(layers.held_points, point_radius_m), ModelLayerColours::held));
 }
 
 void ModelLayerRenderer::drawOpaque(const ViewCamera& cam, const ModelLayerToggles& on, const SplatParams& splat) {

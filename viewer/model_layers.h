@@ -12,12 +12,12 @@
 namespace inc::viewer {
 
 struct ModelLayerToggles {
-  bool spheres = false;        // metaball spheres, ray-cast at their radius
-  bool nodal_points = false;   // MLS nodal points as view-facing splats
-  bool constrained = false;    // fixed particles and particles held by a tool (with spheres: those spheres recoloured)
-  bool swept_surface = true;   // the scalpel's swept surface, translucent
-  bool forces = true;          // force arrows, drawn on top
-  bool colliders = true;       // the scene's static colliders (planes, boxes), translucent grey
+  bool spheres = false;       // metaball spheres, ray-cast at their radius
+  bool nodal_points = false;  // MLS nodal points as view-facing splats
+  bool constrained = false;   // fixed particles and particles held by a tool (with spheres: those spheres recoloured)
+  bool swept_surface = true;  // the scalpel's swept surface, translucent
+  bool forces = true;         // force arrows, drawn on top
+  bool colliders = true;      // the scene's static colliders (planes, boxes), translucent grey
 };
 
 // Layer colours (linear RGB; splats and spheres get the headlight on top of these).

@@ -39,8 +39,8 @@ ViewCamera OrbitCamera::view(int width_px, int height_px) const {
   const Vec3d e = eye();
   // Near/far bracket the bounding sphere implied by the distance so depth precision stays useful.
   const double near_m = std::max(1e-4, 0.01 * distance_m);
-  return ViewCamera::lookAlong(e, target - e, up(), false, std::tan(0.5 * fovy_rad), near_m,
-                               100.0 * distance_m, std::max(1, width_px), std::max(1, height_px));
+  return ViewCamera::lookAlong(e, target - e, up(), false, std::tan(0.5 * fovy_rad), near_m, 100.0 * distance_m,
+                               std::max(1, width_px), std::max(1, height_px));
 }
 
 bool pointFromWindowDepth(const ViewCamera& cam, double px, double py, double window_depth, Vec3d& out) {

@@ -7,10 +7,10 @@
 namespace inc::viewer {
 
 struct OrbitCamera {
-  Vec3d target{0, 0, 0};  // m, the point orbited about
-  bool z_up = false;      // world +z is up (the scenes' convention: gravity along -z); false: +y
-  double yaw_rad = 0.6;   // about the up axis
-  double pitch_rad = 0.4; // above the horizontal, clamped to +-(pi/2 - 0.01)
+  Vec3d target{0, 0, 0};   // m, the point orbited about
+  bool z_up = false;       // world +z is up (the scenes' convention: gravity along -z); false: +y
+  double yaw_rad = 0.6;    // about the up axis
+  double pitch_rad = 0.4;  // above the horizontal, clamped to +-(pi/2 - 0.01)
   double distance_m = 1.0;
   double fovy_rad = 0.8;
 

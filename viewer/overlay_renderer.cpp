@@ -23,7 +23,8 @@ void main() { frag = u_rgba; }
 }  // namespace
 
 double pixelSizeAt(const ViewCamera& cam, const Vec3d& p) {
-  const double span = cam.orthographic ? 2.0 * cam.half_height : 2.0 * cam.half_height * std::max(cam.viewDepth(p), cam.near_m);
+  const double span =
+      cam.orthographic ? 2.0 * cam.half_height : 2.0 * cam.half_height * std::max(cam.viewDepth(p), cam.near_m);
   return span / double(cam.height);
 }
 

@@ -1,14 +1,14 @@
 // Material / Solver knobs over a shared, edited copy of the scene, and the model factory reading it.
-#include "host/scene/scene_compile.h"
 #include "viewer/scene_knobs.h"
+#include "host/scene/scene_compile.h"
 
 #include <algorithm>
 #include <cmath>
 
+#include "host/app/runner.h"
 #include "host/backends/backend_choice.h"
 #include "model/backend.h"
 #include "model/input_error.h"
-#include "host/app/runner.h"
 
 namespace inc::viewer {
 
@@ -16,8 +16,8 @@ namespace {
 
 using SceneEdit = std::function<void(double)>;
 
-ViewerKnob sliderKnob(const char* group, const char* label, double lo, double hi, double value, bool log,
-                      bool integer, SceneEdit edit) {
+ViewerKnob sliderKnob(const char* group, const char* label, double lo, double hi, double value, bool log, bool integer,
+                      SceneEdit edit) {
   ViewerKnob k;
   k.group = group;
   k.label = label;
@@ -46,7 +46,8 @@ ViewerKnob choiceKnob(const char* group, const char* label, std::vector<std::str
 ModelFactory sceneModelFactory(std::shared_ptr<Scene> sc) {
   return [sc]() -> std::unique_ptr<SimulationModel> {
     const BackendKind kind = resolveBackend(sc->solver.backend).kind;
-    if (kind != sc->solver.backend) throw InputError(sc->file, "solver.backend", "the requested backend is not available here");
+    if (kind != sc->solver.backend)
+      throw InputError(sc->file, "solver.backend", "the requested backend is not available here");
     auto models = createSceneModels(compileScene(*sc), kind);
     if (models.empty()) throw InputError(sc->file, "models", "the scene switches on no model to show");
     return std::move(models.front());
@@ -83,11 +84,11 @@ void addCuttingKnobs(const std::shared_ptr<Scene>& sc, std::vector<ViewerKnob>& 
   out.push_back(sliderKnob("Cutting", "stroke end delay [frames]", 0, 30, s.cutting.stroke_end_frames, false, true,
                            [sc](double v) { sc->cutting.stroke_end_frames = int(std::lround(v)); }));
   // Each conversion's rest-configuration work beside the frame, applied at the next one (0: in the frame).
-  out.push_back(sliderKnob("Cutting", "conversion delay [frames]", 0, 1, s.cutting.conversion_delay_frames, false,
-                           true, [sc](double v) { sc->cutting.conversion_delay_frames = int(std::lround(v)); }));
+  out.push_back(sliderKnob("Cutting", "conversion delay [frames]", 0, 1, s.cutting.conversion_delay_frames, false, true,
+                           [sc](double v) { sc->cutting.conversion_delay_frames = int(std::lround(v)); }));
   // The surface opened along the sweep while the blade is in, every so many frames (0: when the stroke ends).
-  out.push_back(sliderKnob("Cutting", "open surface every [frames]", 0, 30, s.cutting.open_surface_frames, false,
-                           true, [sc](double v) { sc->cutting.open_surface_frames = int(std::lround(v)); }));
+  out.push_back(sliderKnob("Cutting", "open surface every [frames]", 0, 30, s.cutting.open_surface_frames, false, true,
+                           [sc](double v) { sc->cutting.open_surface_frames = int(std::lround(v)); }));
   out.push_back(sliderKnob("Cutting", "blade contact radius [m]", 0.0, 0.005, s.cutting.blade_radius_m, false, false,
                            [sc](double v) { sc->cutting.blade_radius_m = v; }));
   out.push_back(sliderKnob("Cutting", "blade friction", 0.0, 1.0, s.cutting.blade_friction, false, false,
@@ -103,8 +104,9 @@ void addSolverKnobs(const std::shared_ptr<Scene>& sc, std::vector<ViewerKnob>& o
                              [sc](double v) { sc->solver.frame_dt = v; });
   dt.frame_dt = true;
   out.push_back(std::move(dt));
-  out.push_back(choiceKnob("Solver", "precision", {"float32", "float64"}, s.solver.precision == Precision::Float64 ? 1 : 0,
-                           [sc](double v) { sc->solver.precision = v > 0.5 ? Precision::Float64 : Precision::Float32; }));
+  out.push_back(
+      choiceKnob("Solver", "precision", {"float32", "float64"}, s.solver.precision == Precision::Float64 ? 1 : 0,
+                 [sc](double v) { sc->solver.precision = v > 0.5 ? Precision::Float64 : Precision::Float32; }));
   std::vector<std::string> backends = {"cpu"};
 #if INCISION_HAVE_CUDA
   backends.push_back("cuda");

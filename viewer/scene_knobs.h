@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "host/scene/scene.h"
 #include "host/backends/backend_choice.h"
+#include "host/scene/scene.h"
 #include "viewer/sim_runner.h"
 
 namespace inc::viewer {

@@ -16,7 +16,10 @@ double msSince(Clock::time_point t0) { return std::chrono::duration<double, std:
 
 SimRunner::SimRunner(std::unique_ptr<SimulationModel> model, ModelFactory factory, std::vector<ViewerKnob> knobs,
                      double frame_dt_s, bool threaded)
-    : model_(std::move(model)), factory_(std::move(factory)), frame_dt_s_(frame_dt_s), threaded_(threaded),
+    : model_(std::move(model)),
+      factory_(std::move(factory)),
+      frame_dt_s_(frame_dt_s),
+      threaded_(threaded),
       knobs_(std::move(knobs)) {
   if (!(frame_dt_s > 0.0) || !std::isfinite(frame_dt_s))
     throw InputError("viewer", "frame_dt", "must be a positive number of seconds");
@@ -30,7 +33,8 @@ SimRunner::SimRunner(std::unique_ptr<SimulationModel> model, ModelFactory factor
       k.logarithmic = false;
     }
     if (!(k.min_value <= k.max_value)) throw InputError("viewer", "knob " + k.label, "min exceeds max");
-    if (k.logarithmic && !(k.min_value > 0.0)) throw InputError("viewer", "knob " + k.label, "logarithmic needs min > 0");
+    if (k.logarithmic && !(k.min_value > 0.0))
+      throw InputError("viewer", "knob " + k.label, "logarithmic needs min > 0");
     k.value = std::clamp(k.value, k.min_value, k.max_value);
   }
   knob_dirty_.assign(knobs_.size(), 0);

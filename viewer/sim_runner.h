@@ -52,14 +52,14 @@ struct SimSnapshot {
   std::string name;
   BackendKind backend = BackendKind::Cpu;
   std::size_t particles = 0;
-  bool failed = false;      // a frame was non-finite: the state was rolled back and the run paused
+  bool failed = false;  // a frame was non-finite: the state was rolled back and the run paused
   std::string failure;
-  ToolSupport tool_support;         // what the model's interactive tool can do
-  ToolResult last_tool;             // result of the last tool event applied
+  ToolSupport tool_support;             // what the model's interactive tool can do
+  ToolResult last_tool;                 // result of the last tool event applied
   std::vector<std::uint8_t> cut_walls;  // per surface triangle: 1 = cut wall (SimulationModel::cutWallTriangles)
-  RenderLayers layers;              // SimulationModel::renderLayers, while the viewer wants them (else empty)
-  std::string message;              // the last knob rebuild or tool error, empty when none
-  std::uint64_t rebuilds = 0;       // models built by resets and scene edits
+  RenderLayers layers;                  // SimulationModel::renderLayers, while the viewer wants them (else empty)
+  std::string message;                  // the last knob rebuild or tool error, empty when none
+  std::uint64_t rebuilds = 0;           // models built by resets and scene edits
 };
 
 class SimRunner {
@@ -75,7 +75,7 @@ class SimRunner {
 
   void setPaused(bool paused);
   bool paused() const;
-  void stepOnce();                  // advance exactly one frame (while paused)
+  void stepOnce();  // advance exactly one frame (while paused)
   bool canReset() const { return bool(factory_); }
   void reset();                     // rebuild from the factory; knobs are re-applied
   void setTimeScale(double scale);  // slow motion: simulated seconds per wall second, (0, 1]

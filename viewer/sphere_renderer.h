@@ -31,7 +31,9 @@ class SphereRenderer {
   // with the surface's headlight Phong (ambient 0.25, diffuse 0.75, specular 0.25, shininess 24).
   // colours[0] for plain spheres; with show_marks, colours[m] for spheres marked m.
   void draw(const ViewCamera& cam, const std::array<std::array<float, 3>, 3>& colours, bool show_marks) const;
-  void draw(const ViewCamera& cam, const std::array<float, 3>& colour) const { draw(cam, {colour, colour, colour}, false); }
+  void draw(const ViewCamera& cam, const std::array<float, 3>& colour) const {
+    draw(cam, {colour, colour, colour}, false);
+  }
   std::size_t size() const { return count_; }
 
  private:

@@ -24,8 +24,8 @@ Vec3d splatNormalForView(const ViewCamera& cam, const Vec3d& center, const Vec3d
   return cam.orthographic ? -cam.forward : normalizeOr(cam.eye - center, -cam.forward);
 }
 
-bool splatPixelBounds(const ViewCamera& cam, const Vec3d& c, const Vec3d& n, double radius, int& x0, int& y0,
-                      int& x1, int& y1) {
+bool splatPixelBounds(const ViewCamera& cam, const Vec3d& c, const Vec3d& n, double radius, int& x0, int& y0, int& x1,
+                      int& y1) {
   // The disc lies inside the square c +- r u +- r v of its plane; a convex quad in front of the eye projects
   // to a convex region holding the disc's projection, so the corners' pixel box bounds the footprint.
   const Vec3d u = anyPerpendicular(n);
@@ -76,7 +76,8 @@ void rasterizeSplats(const ViewCamera& cam, const SplatCloud& cloud, const Splat
   std::vector<Box> boxes(n);
   std::vector<char> on_screen(n, 0);
   cpu::parallelFor(std::int64_t(n), [&](std::int64_t i) {
-    normals[i] = splatNormalForView(cam, cloud.centers[i], i < std::int64_t(cloud.normals.size()) ? cloud.normals[i] : Vec3d{});
+    normals[i] =
+        splatNormalForView(cam, cloud.centers[i], i < std::int64_t(cloud.normals.size()) ? cloud.normals[i] : Vec3d{});
     Box& b = boxes[i];
     on_screen[i] = splatPixelBounds(cam, cloud.centers[i], normals[i], cloud.radii[i], b.x0, b.y0, b.x1, b.y1) ? 1 : 0;
   });
@@ -141,7 +142,8 @@ void rasterizeSplats(const ViewCamera& cam, const SplatCloud& cloud, const Splat
         if (!(wsum > 0.0f)) continue;
         out.blended_depth[p] = float(acc_z[std::size_t(y - row0) * w + x] / wsum);
         for (int k = 0; k < 3; ++k) out.rgb[3 * p + k] /= wsum;
-        const Vec3d nn = normalizeOr(Vec3d{out.normal[3 * p], out.normal[3 * p + 1], out.normal[3 * p + 2]}, -cam.forward);
+        const Vec3d nn =
+            normalizeOr(Vec3d{out.normal[3 * p], out.normal[3 * p + 1], out.normal[3 * p + 2]}, -cam.forward);
         for (int k = 0; k < 3; ++k) out.normal[3 * p + k] = float(nn[k]);
       }
   });

@@ -50,8 +50,8 @@ Vec3d splatNormalForView(const ViewCamera& cam, const Vec3d& center, const Vec3d
 
 // Screen-space bounding box of a disc (inclusive pixel range); false when it lies off screen or straddles
 // the eye plane (such a splat is skipped: the renderer's near plane clips it too).
-bool splatPixelBounds(const ViewCamera& cam, const Vec3d& c, const Vec3d& n, double radius, int& x0, int& y0,
-                      int& x1, int& y1);
+bool splatPixelBounds(const ViewCamera& cam, const Vec3d& c, const Vec3d& n, double radius, int& x0, int& y0, int& x1,
+                      int& y1);
 
 // Two passes as on the GPU: visibility (nearest depth), then accumulation of every splat within
 // depth_epsilon_m of it. O(total footprint area); parallel over rows.

@@ -11,9 +11,9 @@
 #include "viewer/gl_window.h"
 
 #include <GLFW/glfw3.h>
-#include <imgui.h>
 #include <backends/imgui_impl_glfw.h>
 #include <backends/imgui_impl_opengl3.h>
+#include <imgui.h>
 
 #include "viewer/screenshot.h"
 #include "viewer/splat_sources.h"
@@ -61,8 +61,9 @@ void validateOptions(const ViewerOptions& opt) {
   if (!opt.model && !opt.factory) throw InputError("view", "model", "no model to show");
   if (opt.width < 16 || opt.height < 16) throw InputError("view", "window", "width and height must be >= 16");
   if (opt.frames < 0) throw InputError("view", "--frames", "must be >= 0");
-  if (opt.camera && !(std::isfinite(opt.camera->yaw_deg) && opt.camera->pitch_deg >= -89.0 && opt.camera->pitch_deg <= 89.0 &&
-                      opt.camera->distance_m >= 0.0 && std::isfinite(opt.camera->distance_m)))
+  if (opt.camera &&
+      !(std::isfinite(opt.camera->yaw_deg) && opt.camera->pitch_deg >= -89.0 && opt.camera->pitch_deg <= 89.0 &&
+        opt.camera->distance_m >= 0.0 && std::isfinite(opt.camera->distance_m)))
     throw InputError("view", "--camera", "yaw finite, pitch in [-89, 89] degrees, distance >= 0 m");
 }
 
@@ -145,9 +146,7 @@ void ViewerApp::applyCameraOption() {
   if (opt_.camera->distance_m > 0.0) orbit_.distance_m = opt_.camera->distance_m;
 }
 
-bool ViewerApp::running() const {
-  return !glfwWindowShouldClose(win_) && (!scripted_ || frame_index_ < opt_.frames);
-}
+bool ViewerApp::running() const { return !glfwWindowShouldClose(win_) && (!scripted_ || frame_index_ < opt_.frames); }
 
 void ViewerApp::frame() {
   glfwPollEvents();

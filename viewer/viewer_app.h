@@ -16,18 +16,18 @@
 namespace inc::viewer {
 
 struct ViewLayers {
-  bool surface = true;    // the model's surface mesh, Phong shaded (inner side in the cut-wall colour)
-  bool splats = false;    // the surface drawn as Gaussian point splats instead (paper, section 3)
-  bool particles = false; // every particle (nodal points, metaball centres) as view-facing splats
+  bool surface = true;     // the model's surface mesh, Phong shaded (inner side in the cut-wall colour)
+  bool splats = false;     // the surface drawn as Gaussian point splats instead (paper, section 3)
+  bool particles = false;  // every particle (nodal points, metaball centres) as view-facing splats
   bool wireframe = false;
-  bool tool = true;       // the tool tip under the mouse
+  bool tool = true;  // the tool tip under the mouse
   // The model's own layers (SimulationModel::renderLayers; viewer/model_layers.h):
-  bool spheres = false;        // metaball spheres at their radius (ray-cast impostors)
-  bool nodal_points = false;   // MLS nodal points (green splats)
-  bool constrained = false;    // fixed particles (yellow) and particles a tool holds (magenta)
-  bool swept_surface = true;   // the scalpel's swept cut surface (translucent cyan)
-  bool forces = true;          // tool reaction (orange) and per-particle external forces (white), on top
-  bool colliders = true;       // the scene's static colliders (translucent grey)
+  bool spheres = false;       // metaball spheres at their radius (ray-cast impostors)
+  bool nodal_points = false;  // MLS nodal points (green splats)
+  bool constrained = false;   // fixed particles (yellow) and particles a tool holds (magenta)
+  bool swept_surface = true;  // the scalpel's swept cut surface (translucent cyan)
+  bool forces = true;         // tool reaction (orange) and per-particle external forces (white), on top
+  bool colliders = true;      // the scene's static colliders (translucent grey)
 };
 
 // What the left mouse button does over the model.
@@ -38,8 +38,8 @@ enum class ToolMode {
 };
 
 enum class ToolCollision {
-  DepthBuffer,  // the tip sits on the drawn surface under the cursor (z-buffer read-back)
-  SplatZBuffer, // the paper's z-buffer collision against the particle splats along the eye ray
+  DepthBuffer,   // the tip sits on the drawn surface under the cursor (z-buffer read-back)
+  SplatZBuffer,  // the paper's z-buffer collision against the particle splats along the eye ray
 };
 
 // What a frame showed, for scripted runs and tests (ViewerOptions::on_frame).
@@ -70,18 +70,18 @@ struct ViewerOptions {
   std::string record_dir;          // non-empty: every frame written as record_dir/frame_00000.png
   bool show_ui = true;
   bool start_paused = false;
-  double particle_radius_m = 0.0;  // 0: from the particles' mean spacing
-  bool z_up = false;               // the camera keeps world +z up (scenes with gravity along -z); false: +y
+  double particle_radius_m = 0.0;      // 0: from the particles' mean spacing
+  bool z_up = false;                   // the camera keeps world +z up (scenes with gravity along -z); false: +y
   std::optional<CameraAngles> camera;  // the first view's yaw, pitch (and distance); unset: the default framing
   ViewLayers layers;
   double force_scale_m_per_n = 0.0;  // force arrows, metres per newton; 0: the longest is a quarter of the scene radius
   ToolCollision collision = ToolCollision::DepthBuffer;
   ToolMode tool_mode = ToolMode::Camera;
-  double grasp_radius_m = 0.0;     // 0: 8 % of the scene's radius
-  double blade_length_m = 0.0;     // 0: the scene's diameter (the blade, centred on the tip, cuts through)
+  double grasp_radius_m = 0.0;  // 0: 8 % of the scene's radius
+  double blade_length_m = 0.0;  // 0: the scene's diameter (the blade, centred on the tip, cuts through)
   // Scripted cursor in window fractions (0, 0 top-left .. 1, 1 bottom-right); negative: the real mouse.
   double cursor_x = -1.0, cursor_y = -1.0;
-  double press_depth_m = 0.0;      // m, the tool tip below the surface under the cursor (negative: above)
+  double press_depth_m = 0.0;  // m, the tool tip below the surface under the cursor (negative: above)
   // Scripted mouse for tests and captures: called every frame with the frame index; returns whether the left
   // button is down and may set the cursor (window fractions; negative: unchanged). Overrides the real button
   // for the grasp / cut tool.
@@ -92,10 +92,10 @@ struct ViewerOptions {
   // while a grasp / cut drag is held the tip moves in its view plane. In cut mode the haptic cutting tool's
   // decisions (eqs. 15-16) cut instead of the mouse stroke. The loop's force shows as the tool arrow.
   std::shared_ptr<PointerDevice> haptic_pointer;
-  Vec3d haptic_plane_point_m;             // the tissue plane of the haptic contact model (SceneHaptics::plane)
+  Vec3d haptic_plane_point_m;  // the tissue plane of the haptic contact model (SceneHaptics::plane)
   Vec3d haptic_plane_normal{0, 0, 1};
   std::function<void(const ViewerFrameInfo&)> on_frame;  // called after each frame is drawn
-  bool verbose = false;            // print the GL version and progress to stdout
+  bool verbose = false;                                  // print the GL version and progress to stdout
 };
 
 // Runs until the window closes (or `frames` frames). Returns 0 on success, 1 when no display or no

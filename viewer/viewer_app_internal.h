@@ -33,15 +33,15 @@ struct SceneRenderers {
 // This frame's framebuffer, window and camera.
 struct FrameView {
   ViewCamera cam;
-  int fb_w = 1, fb_h = 1;      // framebuffer pixels
-  int win_w = 1, win_h = 1;    // window, screen coordinates
-  double px_scale = 1.0;       // framebuffer pixels per screen coordinate
+  int fb_w = 1, fb_h = 1;    // framebuffer pixels
+  int win_w = 1, win_h = 1;  // window, screen coordinates
+  double px_scale = 1.0;     // framebuffer pixels per screen coordinate
 };
 
 // This frame's cursor: the real mouse or the scripted one.
 struct PointerInput {
-  double x = 0, y = 0;         // screen coordinates, origin top-left
-  double gl_x = 0, gl_y = 0;   // framebuffer pixels, origin bottom-left (GL's)
+  double x = 0, y = 0;           // screen coordinates, origin top-left
+  double gl_x = 0, gl_y = 0;     // framebuffer pixels, origin bottom-left (GL's)
   bool scripted_cursor = false;  // placed by ViewerOptions::cursor_* or scripted_mouse, not the mouse
   bool scripted_down = false;    // scripted_mouse's left button
   bool inFramebuffer(const FrameView& v) const { return gl_x >= 0 && gl_y >= 0 && gl_x < v.fb_w && gl_y < v.fb_h; }
@@ -54,15 +54,15 @@ struct ToolState {
   double press_depth_m = 0.0;
   double grasp_radius_m = 0.0;
   double blade_length_m = 0.0;
-  bool active = false;                 // the left button is down in grasp / cut mode and an event was sent
+  bool active = false;                     // the left button is down in grasp / cut mode and an event was sent
   ToolKind active_kind = ToolKind::Grasp;  // of the press (a mode switch mid-drag still releases it)
-  double view_depth = 0;               // m, the pressed tip's view depth: the drag moves the tip in that plane
-  Vec3d sent;                          // the last tip sent
-  bool valid = false;                  // this frame has a tip
-  Vec3d tip, surface_hit;              // the tip, and the drawn surface under the cursor (when the tip is on it)
-  bool tip_on_surface = false;         // this frame's tip is surface_hit pressed in by press_depth_m
-  double haptic_shift_m = 0.0;         // pointer pose = tip + plane normal x this (frozen while a drag is held)
-  ZContact contact;                    // of the active collision mode
+  double view_depth = 0;                   // m, the pressed tip's view depth: the drag moves the tip in that plane
+  Vec3d sent;                              // the last tip sent
+  bool valid = false;                      // this frame has a tip
+  Vec3d tip, surface_hit;                  // the tip, and the drawn surface under the cursor (when the tip is on it)
+  bool tip_on_surface = false;             // this frame's tip is surface_hit pressed in by press_depth_m
+  double haptic_shift_m = 0.0;             // pointer pose = tip + plane normal x this (frozen while a drag is held)
+  ZContact contact;                        // of the active collision mode
 };
 
 // Panel state that outlives a frame.
@@ -93,14 +93,14 @@ class ViewerApp {
 
  private:
   // Setup (viewer_app.cpp, viewer_draw.cpp).
-  void frameScene();        // the orbit camera framing the model; sets the scene radius
+  void frameScene();         // the orbit camera framing the model; sets the scene radius
   void applyCameraOption();  // ViewerOptions::camera over the framing
   void uploadToolMesh();
 
   // The simulation (viewer_app.cpp).
-  void stepSimulation();    // pump, model layers wanted, the newest snapshot
+  void stepSimulation();  // pump, model layers wanted, the newest snapshot
   void measureFrameRate();
-  void beginFrame();        // framebuffer and window sizes, ImGui's new frame
+  void beginFrame();  // framebuffer and window sizes, ImGui's new frame
 
   // Input (viewer_input.cpp).
   void readPointer();
@@ -157,7 +157,7 @@ class ViewerApp {
   bool need_upload_ = true;
   bool layers_wanted_ = false;  // snapshots carry the model's RenderLayers
   OrbitCamera orbit_;
-  double scene_radius_ = 0.1;   // m, half the model's bounding-box diagonal
+  double scene_radius_ = 0.1;  // m, half the model's bounding-box diagonal
   LivePlots plots_;
   double force_scale_m_per_n_ = 0.0;  // fixed scale; 0: automatic
   double force_scale_used_ = 0.0;

@@ -1,4 +1,5 @@
-// The viewer's drawing: snapshot uploads, the scene (surface, splats, particles, model layers), forces and the tool tip.
+// The viewer's drawing: snapshot uploads, the scene (surface, splats, particles, model layers), forces and the tool
+// tip.
 #include <algorithm>
 #include <array>
 #include <map>

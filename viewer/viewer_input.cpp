@@ -28,9 +28,7 @@ constexpr LayerKey kLayerKeys[] = {
 };
 
 // G / C switch to that tool, or back to the camera when it is already on.
-ToolMode toggledMode(ToolMode current, ToolMode key_mode) {
-  return current == key_mode ? ToolMode::Camera : key_mode;
-}
+ToolMode toggledMode(ToolMode current, ToolMode key_mode) { return current == key_mode ? ToolMode::Camera : key_mode; }
 
 }  // namespace
 

@@ -137,7 +137,8 @@ void ViewerApp::sendToolEvents(bool supported, bool down) {
 void ViewerApp::driveHapticPointer(bool down) {
   if (!(opt_.haptic_pointer && tool_.valid)) return;
   const Vec3d& n = opt_.haptic_plane_normal;
-  if (!tool_.active && tool_.tip_on_surface) tool_.haptic_shift_m = dot(opt_.haptic_plane_point_m - tool_.surface_hit, n);
+  if (!tool_.active && tool_.tip_on_surface)
+    tool_.haptic_shift_m = dot(opt_.haptic_plane_point_m - tool_.surface_hit, n);
   const double identity[4] = {1.0, 0.0, 0.0, 0.0};
   opt_.haptic_pointer->setPose(tool_.tip + n * tool_.haptic_shift_m, identity, down ? 1u : 0u);
 }

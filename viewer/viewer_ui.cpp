@@ -65,8 +65,10 @@ void drawKnobs(SimRunner& runner, const std::string& group, std::map<std::size_t
     if (k.group != group) continue;
     auto it = editing.find(i);
     const double v = it != editing.end() ? it->second : k.value;
-    if (!k.choices.empty()) drawChoiceKnob(runner, i, k, v);
-    else drawSliderKnob(runner, i, k, v, editing);
+    if (!k.choices.empty())
+      drawChoiceKnob(runner, i, k, v);
+    else
+      drawSliderKnob(runner, i, k, v, editing);
   }
 }
 
@@ -191,8 +193,10 @@ void ViewerApp::drawForceScale(const RenderLayers& rl) {
   double fmax = 0;
   for (const ForceArrow& a : rl.forces)
     if (a.kind == ForceArrowKind::Tool) fmax = std::max(fmax, norm(a.force_n));
-  if (fmax > 0) ImGui::TextDisabled("tool %.3g N", fmax);
-  else ImGui::TextDisabled("%zu arrows", rl.forces.size());
+  if (fmax > 0)
+    ImGui::TextDisabled("tool %.3g N", fmax);
+  else
+    ImGui::TextDisabled("%zu arrows", rl.forces.size());
   bool auto_scale = force_scale_m_per_n_ <= 0;
   if (ImGui::Checkbox("auto force scale", &auto_scale))
     force_scale_m_per_n_ = auto_scale ? 0.0 : std::max(force_scale_used_, 1e-6);

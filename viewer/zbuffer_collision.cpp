@@ -83,8 +83,8 @@ ZContact readTipContact(const ViewCamera& cam, const TipDepthBuffers& buf, const
     cam.pixelRay(x + 0.5, y + 0.5, o, d);
     const double t = c.before_depth / dot(d, cam.forward);
     c.surface_point = o + d * t;
-    c.normal = normalizeOr(Vec3d{buf.before_normal[3 * p], buf.before_normal[3 * p + 1], buf.before_normal[3 * p + 2]},
-                           -d);
+    c.normal =
+        normalizeOr(Vec3d{buf.before_normal[3 * p], buf.before_normal[3 * p + 1], buf.before_normal[3 * p + 2]}, -d);
     // Along the ray: the tip sits on the centre ray, so this is its distance past the entry point.
     c.penetration_m = norm(tip - o) - t;
   }

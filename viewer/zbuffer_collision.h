@@ -19,11 +19,11 @@ namespace inc::viewer {
 // For a ray that crosses the surface twice this is exactly the paper's test (a) and (b).
 struct TipDepthBuffers {
   int width = 0, height = 0;
-  double tip_depth = 0.0;             // m, view depth of the tip that split the passes
-  std::vector<float> before_depth;    // m; -inf where no surface lies in front of the tip
-  std::vector<float> before_facing;   // +1 front facing (normal towards the viewer), -1 back facing, 0 none
-  std::vector<float> before_normal;   // 3 per pixel: the splat's world normal (unturned)
-  std::vector<float> after_depth;     // m; +inf where no surface lies behind the tip
+  double tip_depth = 0.0;            // m, view depth of the tip that split the passes
+  std::vector<float> before_depth;   // m; -inf where no surface lies in front of the tip
+  std::vector<float> before_facing;  // +1 front facing (normal towards the viewer), -1 back facing, 0 none
+  std::vector<float> before_normal;  // 3 per pixel: the splat's world normal (unturned)
+  std::vector<float> after_depth;    // m; +inf where no surface lies behind the tip
   std::vector<float> after_facing;
   std::vector<float> after_normal;
   std::size_t index(int x, int y) const { return std::size_t(y) * width + x; }
@@ -44,10 +44,10 @@ void rasterizeTipDepth(const ViewCamera& cam, const SplatCloud& cloud, const Vec
 
 struct ZContact {
   bool inside = false;
-  double penetration_m = 0.0;  // along the view ray, from the entry surface to the tip (>= 0 when inside)
-  Vec3d surface_point;         // entry point on the surface (on the ray), m
-  Vec3d normal;                // outward unit normal of the entry splat
-  bool surface_before = false; // some surface lies in front of the tip on the ray
+  double penetration_m = 0.0;   // along the view ray, from the entry surface to the tip (>= 0 when inside)
+  Vec3d surface_point;          // entry point on the surface (on the ray), m
+  Vec3d normal;                 // outward unit normal of the entry splat
+  bool surface_before = false;  // some surface lies in front of the tip on the ray
   bool surface_after = false;
   double before_depth = 0.0, after_depth = 0.0;  // m, view depths read under the tip
 };

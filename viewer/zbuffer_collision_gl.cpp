@@ -69,7 +69,8 @@ void ZBufferCollider::ensureTarget(int w, int h) {
   h_ = h;
 }
 
-void ZBufferCollider::render(const ViewCamera& cam, const SplatRenderer& splats, const Vec3d& tip, TipDepthBuffers& out) {
+void ZBufferCollider::render(const ViewCamera& cam, const SplatRenderer& splats, const Vec3d& tip,
+                             TipDepthBuffers& out) {
   GLint prev_fbo = 0, prev_viewport[4];
   glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &prev_fbo);
   glGetIntegerv(GL_VIEWPORT, prev_viewport);

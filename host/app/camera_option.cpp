@@ -24,8 +24,9 @@ CameraAngles parseCameraAngles(const std::string& text, const std::string& optio
   }
   if (!text.empty() && text.back() == ',') throw InputError("", option, "ends with a comma");
   if (v.size() < 2 || v.size() > 3)
-    throw InputError("", option,
-                     "expected YAW,PITCH[,DISTANCE] (degrees, degrees, metres), got " + std::to_string(v.size()) + " numbers");
+    throw InputError(
+        "", option,
+        "expected YAW,PITCH[,DISTANCE] (degrees, degrees, metres), got " + std::to_string(v.size()) + " numbers");
   CameraAngles a;
   a.yaw_deg = v[0];
   a.pitch_deg = v[1];

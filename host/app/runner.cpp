@@ -1,6 +1,6 @@
 // Frame loop of `incision run`: advance, guard (rollback + one retry), metrics, periodic and final outputs.
-#include "host/scene/scene_compile.h"
 #include "host/app/runner.h"
+#include "host/scene/scene_compile.h"
 
 #include <algorithm>
 #include <chrono>
@@ -10,13 +10,13 @@
 #include <sstream>
 #include <thread>
 
+#include "base/progress.h"
+#include "host/app/metrics_csv.h"
 #include "host/backends/backend_choice.h"
 #include "host/haptics/haptic_scene_model.h"
-#include "model/input_error.h"
-#include "host/app/metrics_csv.h"
-#include "host/sim/numerical_guard.h"
 #include "host/io/point_io.h"
-#include "base/progress.h"
+#include "host/sim/numerical_guard.h"
+#include "model/input_error.h"
 
 namespace inc {
 namespace fs = std::filesystem;
@@ -40,8 +40,8 @@ double sceneEnergyFloor(const Scene& scene, const std::vector<Vec3d>& positions)
   return scene.material.density_kg_m3 * vol * g * L;
 }
 
-void writeState(const std::vector<std::unique_ptr<SimulationModel>>& models, const Scene& scene,
-                const fs::path& dir, const std::string& stem) {
+void writeState(const std::vector<std::unique_ptr<SimulationModel>>& models, const Scene& scene, const fs::path& dir,
+                const std::string& stem) {
   std::vector<Vec3d> pts;
   TriangleMesh surface;
   for (const auto& m : models) {
@@ -112,8 +112,8 @@ void advanceGuarded(SimulationModel& m, NumericalGuard& guard, std::size_t k, lo
   GuardVerdict v = guard.check(r);
   if (!v.ok && opt.retry_once) {
     // Roll back to the last good state and retry once with half the step.
-    if (!opt.quiet) std::fprintf(stderr, "\nguard: %s; rolling back and retrying with half the step\n",
-                                 describe(f, v).c_str());
+    if (!opt.quiet)
+      std::fprintf(stderr, "\nguard: %s; rolling back and retrying with half the step\n", describe(f, v).c_str());
     m.restoreCheckpoint();
     m.scaleTimeStep(0.5);
     ++sum.retries;
@@ -144,8 +144,9 @@ void runFrames(const std::vector<std::unique_ptr<SimulationModel>>& models, std:
   const auto t0 = std::chrono::steady_clock::now();
   for (long f = 1; f <= sum.frames_requested && !sum.failed; ++f) {
     // A haptics run is real time: the device moves in wall time, so frame f starts no earlier than (f - 1) dt.
-    if (paced) std::this_thread::sleep_until(t0 + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                                      std::chrono::duration<double>(double(f - 1) * dt)));
+    if (paced)
+      std::this_thread::sleep_until(t0 + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                             std::chrono::duration<double>(double(f - 1) * dt)));
     for (std::size_t k = 0; k < models.size() && !sum.failed; ++k)
       advanceGuarded(*models[k], guards[k], k, f, dt, opt, csv, sum);
     if (sum.failed) break;
@@ -188,9 +189,9 @@ std::string RunSummary::line() const {
   s.precision(3);
   s << (failed ? "FAILED " : "done ") << frames_done << "/" << frames_requested << " frames (" << simulated_s
     << " s simulated, " << total_substeps << " substeps) in " << wall_s << " s wall, "
-    << (wall_s > 0 ? double(frames_done) / wall_s : 0.0) << " frames/s; models: " << model_names << "; "
-    << backend_note << "; max displacement " << std::scientific << std::setprecision(3) << max_displacement
-    << " m; energy " << final_total_energy << " J; memory host " << std::fixed << std::setprecision(1)
+    << (wall_s > 0 ? double(frames_done) / wall_s : 0.0) << " frames/s; models: " << model_names << "; " << backend_note
+    << "; max displacement " << std::scientific << std::setprecision(3) << max_displacement << " m; energy "
+    << final_total_energy << " J; memory host " << std::fixed << std::setprecision(1)
     << double(memory.host_bytes) / 1048576.0 << " MiB, device " << double(memory.device_bytes) / 1048576.0
     << " MiB; retries " << retries;
   if (!haptic.empty()) s << "; " << haptic;

@@ -7,21 +7,21 @@
 #include <string>
 #include <vector>
 
-#include "host/sim/model_factory.h"
 #include "host/haptics/haptic_loop.h"
 #include "host/scene/scene.h"
+#include "host/sim/model_factory.h"
 #include "host/sim/simulation_model.h"
 
 namespace inc {
 
 struct RunOptions {
-  long frames = -1;                      // --steps N: frames of scene.solver.frame_dt (default: duration)
-  double seconds = -1.0;                 // --seconds T: simulated seconds
-  std::optional<BackendKind> backend;    // --backend overrides the scene
-  std::optional<Precision> precision;    // --precision overrides the scene
+  long frames = -1;                    // --steps N: frames of scene.solver.frame_dt (default: duration)
+  double seconds = -1.0;               // --seconds T: simulated seconds
+  std::optional<BackendKind> backend;  // --backend overrides the scene
+  std::optional<Precision> precision;  // --precision overrides the scene
   std::string out_dir = "out";
   bool quiet = false;
-  bool retry_once = true;                // guard: roll back and retry a failed frame once with half the step
+  bool retry_once = true;  // guard: roll back and retry a failed frame once with half the step
 };
 
 struct RunSummary {
@@ -32,15 +32,15 @@ struct RunSummary {
   long total_substeps = 0;
   int retries = 0;
   bool failed = false;
-  std::string failure;        // which frame, stage, particle, why
+  std::string failure;  // which frame, stage, particle, why
   std::string backend_note;
   std::string model_names;
   double max_displacement = 0.0;
   double final_total_energy = 0.0;
   MemoryReport memory;
-  std::string haptic;         // a models.haptics scene: each haptic loop's statistics (SceneHaptics::summary)
+  std::string haptic;  // a models.haptics scene: each haptic loop's statistics (SceneHaptics::summary)
   std::vector<PeriodStats> haptic_stats;  // ... and its period statistics, one per device (empty: no haptic loop)
-  std::string line() const;  // the one-line summary printed at the end
+  std::string line() const;               // the one-line summary printed at the end
 };
 
 // Creates the models the scene switches on (createSceneModels, host/sim/model_factory.h) or a test's own.

@@ -1,6 +1,6 @@
 // The speed/accuracy sweep: one knob at a time per model, timed frames, error vs an analytic or converged reference.
-#include "host/scene/scene_compile.h"
 #include "host/app/tradeoff.h"
+#include "host/scene/scene_compile.h"
 
 #include <algorithm>
 #include <chrono>
@@ -10,11 +10,11 @@
 #include <ctime>
 #include <sstream>
 
+#include "host/app/runner.h"
 #include "host/backends/backend_choice.h"
 #include "host/haptics/mfs_punch.h"
-#include "model/input_error.h"
 #include "host/sim/metaball_simulation.h"
-#include "host/app/runner.h"
+#include "model/input_error.h"
 
 namespace inc {
 namespace {
@@ -119,7 +119,9 @@ std::string fmt(double v) {
 
 std::vector<TradeoffSetting> tradeoffSettings(const Scene& base, const std::string& model, bool quick) {
   std::vector<TradeoffSetting> out;
-  auto add = [&](const std::string& knob, const std::string& value, Scene s) { out.push_back({knob, value, std::move(s)}); };
+  auto add = [&](const std::string& knob, const std::string& value, Scene s) {
+    out.push_back({knob, value, std::move(s)});
+  };
   add("baseline", "", base);
   const std::vector<double> spacing_f = quick ? std::vector<double>{1.5} : std::vector<double>{2.0, 1.5, 0.75, 0.5};
   const Precision other = base.solver.precision == Precision::Float32 ? Precision::Float64 : Precision::Float32;
@@ -181,8 +183,9 @@ std::vector<TradeoffSetting> tradeoffSettings(const Scene& base, const std::stri
         add("spheres", "", s);  // value: the sphere count, filled in after the build
       }
     const int n0 = packed ? base.pbd.target_spheres : int(buildSceneMetaballs(compileScene(base)).size());
-    const std::vector<double> fractions = packed ? (quick ? std::vector<double>{0.5} : std::vector<double>{0.25, 0.5, 2.0})
-                                                 : (quick ? std::vector<double>{0.25} : std::vector<double>{0.125, 0.25, 0.5, 1.0});
+    const std::vector<double> fractions =
+        packed ? (quick ? std::vector<double>{0.5} : std::vector<double>{0.25, 0.5, 2.0})
+               : (quick ? std::vector<double>{0.25} : std::vector<double>{0.125, 0.25, 0.5, 1.0});
     for (double f : fractions) {
       Scene s = base;
       s.pbd.target_spheres = std::max(8, int(std::lround(f * n0)));
@@ -224,12 +227,11 @@ void sweepMfs(const Scene& scene, bool quick, bool cpu_cost, TradeoffResult& res
   const Material& material = scene.material;
   const double delta = 1e-3 * spec.radius_m;
   const double reference = flatPunchForce(spec.radius_m, material.youngs_modulus_pa, material.poisson_ratio, delta);
-  res.references.push_back("mfs: flat rigid punch on a half-space, F = 2 a E delta / (1 - nu^2) (a = " +
-                           fmt(spec.radius_m * 1e3) + " mm, delta = " + fmt(delta * 1e6) + " um, E = " +
-                           fmt(material.youngs_modulus_pa) + " Pa, nu = " + fmt(material.poisson_ratio) +
-                           "): " + fmt(reference) +
-                           " N; MFS half-ball of radius " + fmt(spec.domain_over_radius) +
-                           " a held at its outer shell; cost: ms per haptic tick");
+  res.references.push_back(
+      "mfs: flat rigid punch on a half-space, F = 2 a E delta / (1 - nu^2) (a = " + fmt(spec.radius_m * 1e3) +
+      " mm, delta = " + fmt(delta * 1e6) + " um, E = " + fmt(material.youngs_modulus_pa) +
+      " Pa, nu = " + fmt(material.poisson_ratio) + "): " + fmt(reference) + " N; MFS half-ball of radius " +
+      fmt(spec.domain_over_radius) + " a held at its outer shell; cost: ms per haptic tick");
   for (int shells : quick ? std::vector<int>{1} : std::vector<int>{1, 2, 3, 4}) {
     spec.contact_shells = shells;
     TradeoffRow row;
@@ -253,8 +255,9 @@ void sweepMfs(const Scene& scene, bool quick, bool cpu_cost, TradeoffResult& res
       row.finite = false;
       row.note = std::string("refused: ") + e.what();
     }
-    if (!quick) std::fprintf(stderr, "tradeoff: mfs nodes %s: %.3g ms/tick, setup %.3g s, error %.3g\n",
-                             row.value.c_str(), row.ms_per_frame, row.setup_s, row.error);
+    if (!quick)
+      std::fprintf(stderr, "tradeoff: mfs nodes %s: %.3g ms/tick, setup %.3g s, error %.3g\n", row.value.c_str(),
+                   row.ms_per_frame, row.setup_s, row.error);
     res.rows.push_back(row);
   }
 }
@@ -306,10 +309,10 @@ TradeoffResult runTradeoff(const Scene& scene, const TradeoffOptions& opt) {
   }
   if (opt.quick) frames = std::min(frames, 4);
   frames = std::max(frames, opt.quick ? 2 : 4);  // at least 3 timed frames outside --quick
-  const std::string settle = std::to_string(frames) + " frames, damping " +
-                             (ac.kind != AnalyticCase::Kind::None
-                                  ? "2 omega_1 = " + fmt(base.material.damping_per_s) + " 1/s"
-                                  : fmt(base.material.damping_per_s) + " 1/s (the scene's)");
+  const std::string settle =
+      std::to_string(frames) + " frames, damping " +
+      (ac.kind != AnalyticCase::Kind::None ? "2 omega_1 = " + fmt(base.material.damping_per_s) + " 1/s"
+                                           : fmt(base.material.damping_per_s) + " 1/s (the scene's)");
   const std::string strain_note =
       ac.max_strain > 0.05 ? " (largest strain " + fmt(100.0 * ac.max_strain) + " %: beyond linear theory)" : "";
 
@@ -361,11 +364,11 @@ TradeoffResult runTradeoff(const Scene& scene, const TradeoffOptions& opt) {
       row.finite = r.finite;
       row.held = r.held;
       row.note = r.note;
-      row.error = std::abs(reference) > 0.0 ? std::abs(r.observable - reference) / std::abs(reference)
-                                            : std::abs(r.observable);
-      if (!opt.quick) std::fprintf(stderr, "tradeoff: %s %s %s: %.3g ms/frame, setup %.3g s, error %.3g\n",
-                                   model.c_str(), row.knob.c_str(), row.value.c_str(), row.ms_per_frame, row.setup_s,
-                                   row.error);
+      row.error =
+          std::abs(reference) > 0.0 ? std::abs(r.observable - reference) / std::abs(reference) : std::abs(r.observable);
+      if (!opt.quick)
+        std::fprintf(stderr, "tradeoff: %s %s %s: %.3g ms/frame, setup %.3g s, error %.3g\n", model.c_str(),
+                     row.knob.c_str(), row.value.c_str(), row.ms_per_frame, row.setup_s, row.error);
       res.rows.push_back(row);
     }
   }
@@ -412,8 +415,7 @@ std::string tradeoffMarkdown(const TradeoffResult& r, const std::vector<double>&
   std::ostringstream o;
   o << "# Trade-off: " << r.scene << " (" << r.backend << ", cost: " << r.cost << " time)\n\nReferences:\n";
   for (const std::string& s : r.references) o << "- " << s << "\n";
-  const char* header =
-      "| model | knob | value | particles | ms | setup s | error |\n|---|---|---|---|---|---|---|\n";
+  const char* header = "| model | knob | value | particles | ms | setup s | error |\n|---|---|---|---|---|---|---|\n";
   auto row = [&](const TradeoffRow& x) {
     o << "| " << x.model << " | " << x.knob << " | " << x.value << " | " << x.particles << " | "
       << (x.finite ? fmt(x.ms_per_frame) : "-") << " | " << (x.finite ? fmt(x.setup_s) : "-") << " | "

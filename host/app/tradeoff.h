@@ -1,12 +1,13 @@
-// The speed/accuracy trade of a scene: sweeps each model's knobs, measures ms per frame and the error against a reference.
+// The speed/accuracy trade of a scene: sweeps each model's knobs, measures ms per frame and the error against a
+// reference.
 #pragma once
 
 #include <string>
 #include <vector>
 
-#include "model/backend.h"
-#include "host/scene/scene.h"
 #include "host/app/tradeoff_analytic.h"
+#include "host/scene/scene.h"
+#include "model/backend.h"
 
 namespace inc {
 
@@ -21,26 +22,26 @@ struct TradeoffOptions {
 
 // One measured setting. `knob` is "baseline" for the scene's own settings.
 struct TradeoffRow {
-  std::string model;       // "mls" | "pbd" | "mfs" (the haptic local model)
+  std::string model;  // "mls" | "pbd" | "mfs" (the haptic local model)
   // mls: "spacing" | "support_factor" | "safety" | "precision"; pbd: "iterations" | "substeps" | "spheres"
   // (lattice spacing) | "target_spheres" (the packer) | "precision"; mfs: "nodes"; all: "baseline"
   std::string knob;
-  std::string value;       // the knob's value as text (spheres, nodes: the count built; target_spheres: the count asked)
-  std::size_t particles = 0;   // particles / spheres / MFS nodes
+  std::string value;  // the knob's value as text (spheres, nodes: the count built; target_spheres: the count asked)
+  std::size_t particles = 0;  // particles / spheres / MFS nodes
   // The cost: wall_ms, or cpu_ms with TradeoffOptions::cpu_cost.
   double ms_per_frame = 0.0;
   // mls, pbd: medians over the timed frames of one advance(frame_dt) (wall: host clock, includes GPU sync;
   // cpu: CPU time of the whole process, all threads). mfs: the same for one haptic tick (eq. 6 condensed force).
   double wall_ms = 0.0, cpu_ms = 0.0;
-  double setup_s = 0.0;        // building the model (sampling or packing, neighbourhoods; mfs: assembly + condensation)
-  double observable = 0.0;     // in `unit`: tip deflection / tip drop / centroid displacement (m), punch force (N)
+  double setup_s = 0.0;     // building the model (sampling or packing, neighbourhoods; mfs: assembly + condensation)
+  double observable = 0.0;  // in `unit`: tip deflection / tip drop / centroid displacement (m), punch force (N)
   std::string unit = "m";
-  double error = 0.0;          // |observable - reference| / |reference|
+  double error = 0.0;  // |observable - reference| / |reference|
   bool finite = true;
   // false: no particle (sphere centre) lay in the scene's fixed boxes, so the body fell: the setting changed
   // the problem, not its accuracy. Kept in the table, never Pareto-optimal.
   bool held = true;
-  std::string note;            // refusal / failure / not-held text, empty when the run completed normally
+  std::string note;  // refusal / failure / not-held text, empty when the run completed normally
 };
 
 struct TradeoffResult {

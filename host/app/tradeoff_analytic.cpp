@@ -25,8 +25,7 @@ double eulerBernoulliTipDeflection(double length, double width, double height, d
   return q * std::pow(length, 4) / (8.0 * youngs_modulus_pa * I);
 }
 
-double hangingBarDisplacement(double s, double length, double youngs_modulus_pa, double density_kg_m3,
-                              double gravity) {
+double hangingBarDisplacement(double s, double length, double youngs_modulus_pa, double density_kg_m3, double gravity) {
   // d/ds (E du/ds) = -rho g, u(0) = 0, E du/ds (L) = 0 (free end).
   return density_kg_m3 * gravity * (2.0 * length * s - s * s) / (2.0 * youngs_modulus_pa);
 }
@@ -100,8 +99,9 @@ AnalyticCase detectAnalyticCase(const Scene& s) {
   c.omega1 = 0.5 * M_PI * std::sqrt(E / rho) / c.length_m;
   c.reference_m = hangingBarDisplacement(c.length_m, c.length_m, E, rho, gmag);
   c.max_strain = rho * gmag * c.length_m / E;  // at the clamp
-  c.describe = "tip drop of the bar hanging under its own weight, uniaxial stress rho g L^2 / (2 E) (L = " +
-               mm(c.length_m) + "): " + mm(c.reference_m);
+  c.describe =
+      "tip drop of the bar hanging under its own weight, uniaxial stress rho g L^2 / (2 E) (L = " + mm(c.length_m) +
+      "): " + mm(c.reference_m);
   return c;
 }
 

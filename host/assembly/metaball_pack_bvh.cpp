@@ -24,10 +24,16 @@ Vec3d closestOnSegment(const Vec3d& p, const Vec3d& a, const Vec3d& b, double& t
 Vec3d closestPointOnTriangle(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c, int& feature) {
   const Vec3d ab = b - a, ac = c - a, ap = p - a;
   const double d1 = dot(ab, ap), d2 = dot(ac, ap);
-  if (d1 <= 0.0 && d2 <= 0.0) { feature = kVertex0; return a; }
+  if (d1 <= 0.0 && d2 <= 0.0) {
+    feature = kVertex0;
+    return a;
+  }
   const Vec3d bp = p - b;
   const double d3 = dot(ab, bp), d4 = dot(ac, bp);
-  if (d3 >= 0.0 && d4 <= d3) { feature = kVertex1; return b; }
+  if (d3 >= 0.0 && d4 <= d3) {
+    feature = kVertex1;
+    return b;
+  }
   const double vc = d1 * d4 - d3 * d2;
   if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 && d1 - d3 > 0.0) {
     feature = kEdge01;
@@ -35,7 +41,10 @@ Vec3d closestPointOnTriangle(const Vec3d& p, const Vec3d& a, const Vec3d& b, con
   }
   const Vec3d cp = p - c;
   const double d5 = dot(ab, cp), d6 = dot(ac, cp);
-  if (d6 >= 0.0 && d5 <= d6) { feature = kVertex2; return c; }
+  if (d6 >= 0.0 && d5 <= d6) {
+    feature = kVertex2;
+    return c;
+  }
   const double vb = d5 * d2 - d1 * d6;
   if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 && d2 - d6 > 0.0) {
     feature = kEdge20;
@@ -58,7 +67,8 @@ Vec3d closestPointOnTriangle(const Vec3d& p, const Vec3d& a, const Vec3d& b, con
   double best2 = norm2(p - best);
   const Vec3d q1 = closestOnSegment(p, b, c, t);
   if (norm2(p - q1) < best2) {
-    best = q1; best2 = norm2(p - q1);
+    best = q1;
+    best2 = norm2(p - q1);
     feature = t <= 0.0 ? kVertex1 : (t >= 1.0 ? kVertex2 : kEdge12);
   }
   const Vec3d q2 = closestOnSegment(p, c, a, t);
@@ -103,9 +113,8 @@ void TriangleBvh::build(int node, int begin, int end, std::vector<Vec3d>& centro
   const Vec3d e = cbox.extent();
   const int axis = (e.x >= e.y && e.x >= e.z) ? 0 : (e.y >= e.z ? 1 : 2);
   const int mid = (begin + end) / 2;
-  std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end, [&](int a, int b) {
-    return centroids[std::size_t(a)][axis] < centroids[std::size_t(b)][axis];
-  });
+  std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
+                   [&](int a, int b) { return centroids[std::size_t(a)][axis] < centroids[std::size_t(b)][axis]; });
   const int left = int(nodes_.size());
   nodes_.emplace_back();
   nodes_.emplace_back();

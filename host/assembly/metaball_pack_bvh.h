@@ -1,4 +1,5 @@
-// Triangle bounding-volume hierarchy: exact nearest point, signed distance by angle-weighted pseudonormals, box overlap.
+// Triangle bounding-volume hierarchy: exact nearest point, signed distance by angle-weighted pseudonormals, box
+// overlap.
 #pragma once
 
 #include <array>
@@ -12,8 +13,7 @@
 namespace inc::pack {
 
 struct Aabb {
-  Vec3d lo{std::numeric_limits<double>::max(), std::numeric_limits<double>::max(),
-           std::numeric_limits<double>::max()};
+  Vec3d lo{std::numeric_limits<double>::max(), std::numeric_limits<double>::max(), std::numeric_limits<double>::max()};
   Vec3d hi{-std::numeric_limits<double>::max(), -std::numeric_limits<double>::max(),
            -std::numeric_limits<double>::max()};
   void grow(const Vec3d& p) {
@@ -22,7 +22,10 @@ struct Aabb {
       hi[a] = p[a] > hi[a] ? p[a] : hi[a];
     }
   }
-  void grow(const Aabb& b) { grow(b.lo); grow(b.hi); }
+  void grow(const Aabb& b) {
+    grow(b.lo);
+    grow(b.hi);
+  }
   bool overlaps(const Aabb& b) const {
     return lo.x <= b.hi.x && b.lo.x <= hi.x && lo.y <= b.hi.y && b.lo.y <= hi.y && lo.z <= b.hi.z && b.lo.z <= hi.z;
   }
@@ -38,7 +41,15 @@ struct Aabb {
 };
 
 // Which part of a triangle the nearest point lies on: 0 face, 1..3 edges (v0v1, v1v2, v2v0), 4..6 vertices.
-enum NearestFeature : int { kFace = 0, kEdge01 = 1, kEdge12 = 2, kEdge20 = 3, kVertex0 = 4, kVertex1 = 5, kVertex2 = 6 };
+enum NearestFeature : int {
+  kFace = 0,
+  kEdge01 = 1,
+  kEdge12 = 2,
+  kEdge20 = 3,
+  kVertex0 = 4,
+  kVertex1 = 5,
+  kVertex2 = 6
+};
 
 // Exact closest point of p on triangle (a, b, c) by Voronoi-region classification; zero-area triangles
 // fall back to their closest edge.

@@ -7,8 +7,8 @@
 #include <sstream>
 #include <tuple>
 
-#include "model/input_error.h"
 #include "host/assembly/metaball_pack_bvh.h"
+#include "model/input_error.h"
 
 namespace inc {
 namespace {
@@ -28,13 +28,17 @@ bool planeInterval(const Vec3d p[3], const double d[3], const Vec3d& dir, double
   for (int i = 0; i < 3; ++i) {
     if (std::fabs(d[i]) <= eps) {
       const double s = dot(p[i], dir);
-      lo = std::min(lo, s); hi = std::max(hi, s); any = true;
+      lo = std::min(lo, s);
+      hi = std::max(hi, s);
+      any = true;
     }
     const int j = (i + 1) % 3;
     if ((d[i] > eps && d[j] < -eps) || (d[i] < -eps && d[j] > eps)) {
       const Vec3d x = p[i] + (p[j] - p[i]) * (d[i] / (d[i] - d[j]));
       const double s = dot(x, dir);
-      lo = std::min(lo, s); hi = std::max(hi, s); any = true;
+      lo = std::min(lo, s);
+      hi = std::max(hi, s);
+      any = true;
     }
   }
   return any;
@@ -46,18 +50,23 @@ double orient2(const double a[2], const double b[2], const double c[2]) {
 
 // Coplanar triangles: proper edge crossings or a vertex strictly inside the other triangle.
 bool coplanarOverlap(const Vec3d p[3], const Vec3d q[3], const Vec3d& n, double eps2) {
-  const int drop = (std::fabs(n.x) >= std::fabs(n.y) && std::fabs(n.x) >= std::fabs(n.z)) ? 0
-                   : (std::fabs(n.y) >= std::fabs(n.z) ? 1 : 2);
+  const int drop = (std::fabs(n.x) >= std::fabs(n.y) && std::fabs(n.x) >= std::fabs(n.z))
+                       ? 0
+                       : (std::fabs(n.y) >= std::fabs(n.z) ? 1 : 2);
   const int u = (drop + 1) % 3, v = (drop + 2) % 3;
   double P[3][2], Q[3][2];
   for (int i = 0; i < 3; ++i) {
-    P[i][0] = p[i][u]; P[i][1] = p[i][v];
-    Q[i][0] = q[i][u]; Q[i][1] = q[i][v];
+    P[i][0] = p[i][u];
+    P[i][1] = p[i][v];
+    Q[i][0] = q[i][u];
+    Q[i][1] = q[i][v];
   }
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) {
-      const double* a = P[i]; const double* b = P[(i + 1) % 3];
-      const double* c = Q[j]; const double* d = Q[(j + 1) % 3];
+      const double* a = P[i];
+      const double* b = P[(i + 1) % 3];
+      const double* c = Q[j];
+      const double* d = Q[(j + 1) % 3];
       const double o1 = orient2(a, b, c), o2 = orient2(a, b, d), o3 = orient2(c, d, a), o4 = orient2(c, d, b);
       if (((o1 > eps2 && o2 < -eps2) || (o1 < -eps2 && o2 > eps2)) &&
           ((o3 > eps2 && o4 < -eps2) || (o3 < -eps2 && o4 > eps2)))
@@ -84,8 +93,7 @@ bool trianglesIntersect(const Vec3d p[3], const Vec3d q[3], double eps, double e
   for (int i = 0; i < 3; ++i) dp[i] = dot(p[i] - q[0], nq);
   if ((dp[0] > eps && dp[1] > eps && dp[2] > eps) || (dp[0] < -eps && dp[1] < -eps && dp[2] < -eps)) return false;
   const Vec3d dir = cross(np, nq);
-  if (norm(dir) < 1e-12 ||
-      (std::fabs(dq[0]) <= eps && std::fabs(dq[1]) <= eps && std::fabs(dq[2]) <= eps))
+  if (norm(dir) < 1e-12 || (std::fabs(dq[0]) <= eps && std::fabs(dq[1]) <= eps && std::fabs(dq[2]) <= eps))
     return coplanarOverlap(p, q, norm2(np) > 0.0 ? np : nq, eps2);
   double plo, phi, qlo, qhi;
   if (!planeInterval(p, dp, dir, eps, plo, phi) || !planeInterval(q, dq, dir, eps, qlo, qhi)) return false;
@@ -104,9 +112,7 @@ bool segmentPiercesTriangle(const Vec3d& a, const Vec3d& b, const Vec3d t[3], do
   return true;
 }
 
-std::string edgeName(int a, int b) {
-  return "edge (" + std::to_string(a) + ", " + std::to_string(b) + ")";
-}
+std::string edgeName(int a, int b) { return "edge (" + std::to_string(a) + ", " + std::to_string(b) + ")"; }
 
 }  // namespace
 
@@ -135,7 +141,11 @@ std::vector<std::array<int, 2>> findSelfIntersections(const TriangleMesh& mesh, 
       int shared = 0, ia = -1, ib = -1;  // indices (within A, B) of a shared vertex
       for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j)
-          if (A[std::size_t(i)] == B[std::size_t(j)]) { ++shared; ia = i; ib = j; }
+          if (A[std::size_t(i)] == B[std::size_t(j)]) {
+            ++shared;
+            ia = i;
+            ib = j;
+          }
       const Vec3d p[3] = {V[std::size_t(A[0])], V[std::size_t(A[1])], V[std::size_t(A[2])]};
       const Vec3d q[3] = {V[std::size_t(B[0])], V[std::size_t(B[1])], V[std::size_t(B[2])]};
       bool hit = false;
@@ -192,7 +202,10 @@ void weldDuplicatesAndDropDegenerate(TriangleMesh& mesh, PackInputReport& rep) {
   kept.reserve(mesh.triangles.size());
   for (auto tri : mesh.triangles) {
     for (auto& v : tri) v = remap[std::size_t(v)];
-    if (tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0]) { ++rep.removed_triangles; continue; }
+    if (tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0]) {
+      ++rep.removed_triangles;
+      continue;
+    }
     kept.push_back(tri);
   }
   mesh.triangles.swap(kept);
@@ -200,7 +213,9 @@ void weldDuplicatesAndDropDegenerate(TriangleMesh& mesh, PackInputReport& rep) {
 
 // Edge topology: every undirected edge must have exactly two triangles traversing it in opposite directions.
 void checkEdgeTopology(const TriangleMesh& mesh, const std::string& file, const std::string& key) {
-  struct DirectedEdge { int lo, hi, forward, tri; };
+  struct DirectedEdge {
+    int lo, hi, forward, tri;
+  };
   std::vector<DirectedEdge> edges;
   edges.reserve(mesh.triangles.size() * 3);
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
@@ -230,15 +245,20 @@ void checkEdgeTopology(const TriangleMesh& mesh, const std::string& file, const 
     i = j;
   }
   if (open)
-    throw InputError(file, key, "open surface: " + std::to_string(open) + " boundary edge(s), first " + first_open +
-                                    "; the packer needs a closed surface (not repaired: filling holes would invent "
-                                    "geometry)");
+    throw InputError(file, key,
+                     "open surface: " + std::to_string(open) + " boundary edge(s), first " + first_open +
+                         "; the packer needs a closed surface (not repaired: filling holes would invent "
+                         "geometry)");
   if (nonmanifold)
-    throw InputError(file, key, "non-manifold surface: " + std::to_string(nonmanifold) + " edge(s) with more than "
-                                    "two faces, first " + first_nonmanifold);
+    throw InputError(file, key,
+                     "non-manifold surface: " + std::to_string(nonmanifold) +
+                         " edge(s) with more than "
+                         "two faces, first " +
+                         first_nonmanifold);
   if (inconsistent)
-    throw InputError(file, key, "inconsistent orientation: " + std::to_string(inconsistent) + " edge(s), first " +
-                                    first_inconsistent);
+    throw InputError(
+        file, key,
+        "inconsistent orientation: " + std::to_string(inconsistent) + " edge(s), first " + first_inconsistent);
 }
 
 // Volume by the divergence theorem; an inward-oriented surface is flipped (safe: orientation is consistent).
@@ -258,8 +278,9 @@ void orientOutwardAndMeasure(TriangleMesh& mesh, const std::string& file, const 
   const Vec3d e = box.extent();
   const double scale3 = std::pow(norm(e), 3.0);
   if (!(std::fabs(volume) > 1e-9 * scale3))
-    throw InputError(file, key, "zero volume: the closed surface encloses " + std::to_string(volume) +
-                                    " (flat or doubled-over surface)");
+    throw InputError(
+        file, key,
+        "zero volume: the closed surface encloses " + std::to_string(volume) + " (flat or doubled-over surface)");
   if (volume < 0.0) {
     for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
     volume = -volume;
@@ -282,7 +303,10 @@ void checkSelfIntersections(const TriangleMesh& mesh, const std::string& file, c
   const auto pairs = findSelfIntersections(mesh, std::max<std::size_t>(4, allowed_faces + 1));
   if (pairs.empty()) return;
   std::vector<int> faces;
-  for (const auto& pr : pairs) { faces.push_back(pr[0]); faces.push_back(pr[1]); }
+  for (const auto& pr : pairs) {
+    faces.push_back(pr[0]);
+    faces.push_back(pr[1]);
+  }
   std::sort(faces.begin(), faces.end());
   faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
   if (faces.size() > allowed_faces || pairs.size() > allowed_faces) {
@@ -301,9 +325,18 @@ void checkSelfIntersections(const TriangleMesh& mesh, const std::string& file, c
 std::string describeRepairs(const PackInputReport& rep) {
   std::ostringstream r;
   const char* sep = "";
-  if (rep.welded_vertices) { r << sep << "welded " << rep.welded_vertices << " duplicate vertices"; sep = "; "; }
-  if (rep.removed_triangles) { r << sep << "dropped " << rep.removed_triangles << " degenerate triangles"; sep = "; "; }
-  if (rep.flipped) { r << sep << "flipped inward-oriented surface"; sep = "; "; }
+  if (rep.welded_vertices) {
+    r << sep << "welded " << rep.welded_vertices << " duplicate vertices";
+    sep = "; ";
+  }
+  if (rep.removed_triangles) {
+    r << sep << "dropped " << rep.removed_triangles << " degenerate triangles";
+    sep = "; ";
+  }
+  if (rep.flipped) {
+    r << sep << "flipped inward-oriented surface";
+    sep = "; ";
+  }
   if (rep.self_intersecting_faces) {
     r << sep << "tolerated " << rep.self_intersecting_faces << " locally self-intersecting faces";
     sep = "; ";

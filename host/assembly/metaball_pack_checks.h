@@ -17,13 +17,13 @@ namespace inc {
 std::vector<std::array<int, 2>> findSelfIntersections(const TriangleMesh& mesh, std::size_t max_pairs = 16);
 
 struct PackInputReport {
-  int welded_vertices = 0;      // vertices merged with an earlier vertex at bit-identical coordinates
-  int removed_triangles = 0;    // triangles with a repeated vertex index (after welding) dropped
-  int zero_area_triangles = 0;  // kept; they carry no normal and so do not affect distances or signs
-  bool flipped = false;         // the surface was consistently inward-oriented and has been flipped
+  int welded_vertices = 0;          // vertices merged with an earlier vertex at bit-identical coordinates
+  int removed_triangles = 0;        // triangles with a repeated vertex index (after welding) dropped
+  int zero_area_triangles = 0;      // kept; they carry no normal and so do not affect distances or signs
+  bool flipped = false;             // the surface was consistently inward-oriented and has been flipped
   int self_intersecting_faces = 0;  // faces in an intersecting pair, when tolerated (see below)
-  double volume = 0.0;          // enclosed volume after repair (mesh units^3)
-  std::string repairs;          // one line listing the repairs made, "" when none
+  double volume = 0.0;              // enclosed volume after repair (mesh units^3)
+  std::string repairs;              // one line listing the repairs made, "" when none
 };
 
 // Prepares a copy of a mesh for packing. Repairs what is safe and says so (welding bit-identical

@@ -1,4 +1,5 @@
-// Sphere placement for the packer: interior sample grid, greedy cover by near-medial balls, radius tightening, bridging.
+// Sphere placement for the packer: interior sample grid, greedy cover by near-medial balls, radius tightening,
+// bridging.
 #include "host/assembly/metaball_pack_cover.h"
 
 #include <functional>
@@ -76,7 +77,8 @@ SphereCover GreedyCover::run(double cap, int max_count) const {
   for (int s = 0; s < S; ++s) {
     if (stride > 1 && D[std::size_t(s)] + protrusion_ >= cap) {
       const std::int64_t id = samples_.cell_of[std::size_t(s)];
-      const std::int64_t i = id % grid.n[0], j = (id / grid.n[0]) % grid.n[1], k = id / (std::int64_t(grid.n[0]) * grid.n[1]);
+      const std::int64_t i = id % grid.n[0], j = (id / grid.n[0]) % grid.n[1],
+                         k = id / (std::int64_t(grid.n[0]) * grid.n[1]);
       if (i % stride || j % stride || k % stride) continue;
     }
     const double rr = ballRadius(s, cap) / grid.h + 0.8660254037844386;
@@ -117,8 +119,8 @@ SphereCover coverNearTarget(const GreedyCover& cover, double volume, const Packi
   SphereCover best;
   bool have_best = false;
   int best_score = -1;
-  double too_small = 0.0;                                     // largest cap known to need too many spheres
-  double fits = std::numeric_limits<double>::infinity();       // smallest cap known to fit the target
+  double too_small = 0.0;                                 // largest cap known to need too many spheres
+  double fits = std::numeric_limits<double>::infinity();  // smallest cap known to fit the target
   const double cap_max = protrusion + *std::max_element(D.begin(), D.end());  // beyond this the cap never binds
   double largest_full_cap = 0.0;
   const int accept = target + std::max(1, target / 10);
@@ -137,7 +139,10 @@ SphereCover coverNearTarget(const GreedyCover& cover, double volume, const Packi
       }
       if (n >= int(0.95 * target) || cap >= cap_max) break;  // close enough, or the cap no longer binds
     }
-    if (full && n <= target) fits = cap; else too_small = cap;
+    if (full && n <= target)
+      fits = cap;
+    else
+      too_small = cap;
     double next = cap * std::clamp(std::cbrt(full ? double(std::max(n, 1)) / target : 2.5), 0.6, 1.6);
     if (!(next > too_small && next < fits))
       next = std::isfinite(fits) ? std::sqrt(std::max(too_small, 1e-3 * fits) * fits) : 1.6 * cap;
@@ -187,7 +192,8 @@ int bridgeNarrowGaps(const std::vector<Vec3d>& centre, std::vector<double>& radi
     UnionFind g(N);
     for (int i = 0; i < N; ++i)
       for (int j = i + 1; j < N; ++j)
-        if (norm(centre[std::size_t(i)] - centre[std::size_t(j)]) < radius[std::size_t(i)] + radius[std::size_t(j)]) g.join(i, j);
+        if (norm(centre[std::size_t(i)] - centre[std::size_t(j)]) < radius[std::size_t(i)] + radius[std::size_t(j)])
+          g.join(i, j);
     const int root0 = g.find(0);
     int bi = -1, bj = -1;
     double gap = std::numeric_limits<double>::infinity();
@@ -195,8 +201,13 @@ int bridgeNarrowGaps(const std::vector<Vec3d>& centre, std::vector<double>& radi
       if (g.find(i) == root0) continue;  // grow the group not holding sphere 0 towards any other group
       for (int j = 0; j < N; ++j) {
         if (g.find(j) == g.find(i)) continue;
-        const double d = norm(centre[std::size_t(i)] - centre[std::size_t(j)]) - radius[std::size_t(i)] - radius[std::size_t(j)];
-        if (d < gap) { gap = d; bi = i; bj = j; }
+        const double d =
+            norm(centre[std::size_t(i)] - centre[std::size_t(j)]) - radius[std::size_t(i)] - radius[std::size_t(j)];
+        if (d < gap) {
+          gap = d;
+          bi = i;
+          bj = j;
+        }
       }
     }
     // Only a narrow gap (a sampling artefact) is bridged; separate shells of the mesh stay separate groups.

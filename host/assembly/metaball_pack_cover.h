@@ -1,4 +1,5 @@
-// Sphere placement for the packer: interior sample grid, greedy cover by near-medial balls, radius tightening, bridging.
+// Sphere placement for the packer: interior sample grid, greedy cover by near-medial balls, radius tightening,
+// bridging.
 #pragma once
 
 #include <algorithm>

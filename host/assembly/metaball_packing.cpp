@@ -1,4 +1,5 @@
-// Packs a closed mesh with overlapping spheres: the phases in order (placement in metaball_pack_cover), links, masses, report, cache.
+// Packs a closed mesh with overlapping spheres: the phases in order (placement in metaball_pack_cover), links, masses,
+// report, cache.
 #include "host/assembly/metaball_packing.h"
 
 #include <algorithm>
@@ -16,10 +17,10 @@
 #include <vector>
 
 #include "base/parallel.h"
-#include "model/input_error.h"
 #include "host/assembly/metaball_pack_bvh.h"
 #include "host/assembly/metaball_pack_checks.h"
 #include "host/assembly/metaball_pack_cover.h"
+#include "model/input_error.h"
 
 namespace inc {
 namespace {
@@ -33,7 +34,9 @@ void progress(const PackingOptions& o, const char* stage, double f) {
 }
 
 void validateOptions(const PackingOptions& o, const std::string& file) {
-  auto bad = [&](const char* key, const std::string& why) { throw InputError(file, std::string("packing.") + key, why); };
+  auto bad = [&](const char* key, const std::string& why) {
+    throw InputError(file, std::string("packing.") + key, why);
+  };
   if (o.target_spheres < 1 || o.target_spheres > 1'000'000) bad("target_spheres", "must be in [1, 1000000]");
   if (!(o.stop_coverage > 0.0 && o.stop_coverage <= 1.0)) bad("stop_coverage", "must be in (0, 1]");
   if (o.samples < 1000 || o.samples > 20'000'000) bad("samples", "must be in [1000, 20000000]");
@@ -126,7 +129,9 @@ struct Fnv {
     for (std::size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 1099511628211ULL;
   }
   template <typename T>
-  void value(const T& v) { bytes(&v, sizeof(T)); }
+  void value(const T& v) {
+    bytes(&v, sizeof(T));
+  }
 };
 
 }  // namespace
@@ -135,9 +140,17 @@ std::uint64_t packCacheKey(const TriangleMesh& mesh, const PackingOptions& o) {
   Fnv f;
   f.value(kFormatVersion);
   f.value(std::uint64_t(mesh.vertices.size()));
-  for (const auto& v : mesh.vertices) { f.value(v.x); f.value(v.y); f.value(v.z); }
+  for (const auto& v : mesh.vertices) {
+    f.value(v.x);
+    f.value(v.y);
+    f.value(v.z);
+  }
   f.value(std::uint64_t(mesh.triangles.size()));
-  for (const auto& t : mesh.triangles) { f.value(t[0]); f.value(t[1]); f.value(t[2]); }
+  for (const auto& t : mesh.triangles) {
+    f.value(t[0]);
+    f.value(t[1]);
+    f.value(t[2]);
+  }
   f.value(o.target_spheres);
   f.value(o.stop_coverage);
   f.value(o.samples);
@@ -165,7 +178,8 @@ LinkFigures linkOverlappingSpheres(MetaballModel& mb, const SphereHash& hash) {
   for (int i = 0; i < N; ++i) {
     std::vector<int> js;
     hash.forNear(centre[std::size_t(i)], [&](int j) {
-      if (j > i && norm(centre[std::size_t(i)] - centre[std::size_t(j)]) < radius[std::size_t(i)] + radius[std::size_t(j)])
+      if (j > i &&
+          norm(centre[std::size_t(i)] - centre[std::size_t(j)]) < radius[std::size_t(i)] + radius[std::size_t(j)])
         js.push_back(j);
     });
     std::sort(js.begin(), js.end());
@@ -202,12 +216,18 @@ void weighSpheres(MetaballModel& mb, const pack::InteriorSamples& samples, const
     int who = -1;
     hash.forNear(p, [&](int i) {
       const double pw = norm2(p - centre[std::size_t(i)]) - radius[std::size_t(i)] * radius[std::size_t(i)];
-      if (pw <= 0.0 && (pw < best || (pw == best && i < who))) { best = pw; who = i; }
+      if (pw <= 0.0 && (pw < best || (pw == best && i < who))) {
+        best = pw;
+        who = i;
+      }
     });
     if (who < 0)
       for (int i = 0; i < N; ++i) {
         const double d = norm(p - centre[std::size_t(i)]) - radius[std::size_t(i)];
-        if (d < best) { best = d; who = i; }
+        if (d < best) {
+          best = d;
+          who = i;
+        }
       }
     owner[std::size_t(s)] = who;
   });
@@ -228,7 +248,10 @@ double staggeredCoverage(const pack::SampleGrid& grid, const pack::SurfaceDistan
     if (surface.insideByRays(p)) inside[std::size_t(id)] = hash.covers(p) ? 2 : 1;
   });
   std::int64_t in_count = 0, cov = 0;
-  for (unsigned char v : inside) { in_count += v > 0; cov += v == 2; }
+  for (unsigned char v : inside) {
+    in_count += v > 0;
+    cov += v == 2;
+  }
   return in_count ? double(cov) / double(in_count) : 0.0;
 }
 
@@ -240,9 +263,13 @@ void measureSurfaceToUnion(const TriangleMesh& mesh, const SphereHash& hash, Pac
   for (const auto& t : F)
     pts.push_back((V[std::size_t(t[0])] + V[std::size_t(t[1])] + V[std::size_t(t[2])]) * (1.0 / 3.0));
   std::vector<double> dev(pts.size());
-  cpu::parallelFor(std::int64_t(pts.size()), [&](std::int64_t i) { dev[std::size_t(i)] = std::fabs(hash.unionDistance(pts[std::size_t(i)])); });
+  cpu::parallelFor(std::int64_t(pts.size()),
+                   [&](std::int64_t i) { dev[std::size_t(i)] = std::fabs(hash.unionDistance(pts[std::size_t(i)])); });
   double sum = 0.0, mx = 0.0;
-  for (double d : dev) { sum += d; mx = std::max(mx, d); }
+  for (double d : dev) {
+    sum += d;
+    mx = std::max(mx, d);
+  }
   rep.surface_mean = sum / double(dev.size());
   rep.surface_max = mx;
 }
@@ -260,14 +287,19 @@ void measureUnionToSurface(const MetaballModel& mb, const SphereHash& hash, cons
     const Vec3d q = centre[i] + dirs[std::size_t(k) % dirs.size()] * radius[i];
     bool buried = false;
     hash.forNear(q, [&](int j) {
-      buried = buried || (std::size_t(j) != i && norm(q - centre[std::size_t(j)]) < radius[std::size_t(j)] * (1.0 - 1e-9));
+      buried =
+          buried || (std::size_t(j) != i && norm(q - centre[std::size_t(j)]) < radius[std::size_t(j)] * (1.0 - 1e-9));
     });
     if (!buried) dev[std::size_t(k)] = std::sqrt(surface.bvh().nearest(q).distance2);
   });
   double sum = 0.0, mx = 0.0;
   std::int64_t n = 0;
   for (double d : dev)
-    if (d >= 0.0) { sum += d; mx = std::max(mx, d); ++n; }
+    if (d >= 0.0) {
+      sum += d;
+      mx = std::max(mx, d);
+      ++n;
+    }
   rep.union_mean = n ? sum / double(n) : 0.0;
   rep.union_max = mx;
 }
@@ -299,8 +331,9 @@ PackedOrgan packOrgan(const TriangleMesh& input, const PackingOptions& opt, cons
   const pack::InteriorSamples samples = pack::collectSamples(grid, pack::interiorDepth(grid, surface));
   progress(opt, "sampled interior", 1.0);
   if (samples.count() < 8)
-    throw InputError(file, "mesh", "the surface encloses fewer than 8 grid samples (spacing " +
-                                       std::to_string(grid.h) + "); it is too thin to pack at this resolution (raise packing.samples)");
+    throw InputError(file, "mesh",
+                     "the surface encloses fewer than 8 grid samples (spacing " + std::to_string(grid.h) +
+                         "); it is too thin to pack at this resolution (raise packing.samples)");
 
   // 2. Greedy cover by near-medial balls, its radius cap tuned to the target count.
   const pack::GreedyCover cover(samples, protrusion, opt.stop_coverage);
@@ -354,9 +387,13 @@ PackedOrgan packOrgan(const TriangleMesh& input, const PackingOptions& opt, cons
 namespace {
 
 template <typename T>
-void put(std::ostream& s, const T& v) { s.write(reinterpret_cast<const char*>(&v), sizeof(T)); }
+void put(std::ostream& s, const T& v) {
+  s.write(reinterpret_cast<const char*>(&v), sizeof(T));
+}
 template <typename T>
-bool get(std::istream& s, T& v) { return bool(s.read(reinterpret_cast<char*>(&v), sizeof(T))); }
+bool get(std::istream& s, T& v) {
+  return bool(s.read(reinterpret_cast<char*>(&v), sizeof(T)));
+}
 
 void writePack(const std::string& path, const PackedOrgan& p) {
   std::ofstream s(path, std::ios::binary | std::ios::trunc);
@@ -367,12 +404,17 @@ void writePack(const std::string& path, const PackedOrgan& p) {
   put(s, r.key);
   put(s, std::uint64_t(m.size()));
   for (std::size_t i = 0; i < m.size(); ++i) {
-    put(s, m.rest_centers[i].x); put(s, m.rest_centers[i].y); put(s, m.rest_centers[i].z);
-    put(s, m.rest_radii[i]); put(s, m.masses[i]);
+    put(s, m.rest_centers[i].x);
+    put(s, m.rest_centers[i].y);
+    put(s, m.rest_centers[i].z);
+    put(s, m.rest_radii[i]);
+    put(s, m.masses[i]);
   }
   put(s, std::uint64_t(m.links.size()));
   for (std::size_t i = 0; i < m.links.size(); ++i) {
-    put(s, m.links[i][0]); put(s, m.links[i][1]); put(s, m.link_rest_lengths[i]);
+    put(s, m.links[i][0]);
+    put(s, m.links[i][1]);
+    put(s, m.link_rest_lengths[i]);
   }
   put(s, r.components);
   for (double v : {r.mesh_volume, r.sample_spacing, r.coverage, r.surface_mean, r.surface_max, r.union_mean,

@@ -1,22 +1,23 @@
-// Sphere packing of a closed surface mesh into a metaball organ (greedy medial-ball cover), with coverage report and cache.
+// Sphere packing of a closed surface mesh into a metaball organ (greedy medial-ball cover), with coverage report and
+// cache.
 #pragma once
 
 #include <cstdint>
 #include <functional>
 #include <string>
 
-#include "host/io/mesh.h"
 #include "host/assembly/metaball_model.h"
+#include "host/io/mesh.h"
 
 namespace inc {
 
 struct PackingOptions {
-  int target_spheres = 550;         // spheres placed at most (the paper's liver: 570); the cover stops earlier
-                                    // only when every interior sample is covered or stop_coverage is reached
-  double stop_coverage = 1.0;       // stop once this fraction of the interior samples is covered
-  int samples = 40000;              // approximate number of interior grid samples (sets the grid spacing h)
-  double max_protrusion = 0.01;     // farthest a sphere may reach beyond the surface, fraction of the bbox diagonal
-  double density_kg_m3 = 1060.0;    // tissue density; masses = density * volume share (power cell)
+  int target_spheres = 550;       // spheres placed at most (the paper's liver: 570); the cover stops earlier
+                                  // only when every interior sample is covered or stop_coverage is reached
+  double stop_coverage = 1.0;     // stop once this fraction of the interior samples is covered
+  int samples = 40000;            // approximate number of interior grid samples (sets the grid spacing h)
+  double max_protrusion = 0.01;   // farthest a sphere may reach beyond the surface, fraction of the bbox diagonal
+  double density_kg_m3 = 1060.0;  // tissue density; masses = density * volume share (power cell)
   double max_self_intersecting_fraction = 0.01;  // tolerated locally folded faces (see preparePackInput)
   // Progress (stage name, fraction in [0, 1]); not part of the cache key. May be empty.
   std::function<void(const char* stage, double fraction)> progress;
@@ -24,25 +25,25 @@ struct PackingOptions {
 
 struct PackReport {
   int spheres = 0;
-  int links = 0;                 // overlapping pairs
-  int components = 0;            // connected components of the overlap graph (1 for a connected organ; one per
-                                 // separate shell of a multi-shell mesh)
-  int bridged = 0;               // spheres grown to join a detached group to the rest
-  double mesh_volume = 0.0;      // enclosed volume, mesh units^3
-  double sample_spacing = 0.0;   // grid spacing h, mesh units
-  double coverage = 0.0;         // fraction of interior points (grid staggered by h/2 against the packing grid)
-                                 // inside the sphere union
-  double surface_mean = 0.0;     // mesh surface -> union boundary, mean |min_i(|p - c_i| - r_i)| over vertices and
-  double surface_max = 0.0;      //   triangle centroids (exact outside the union, a lower bound inside)
-  double union_mean = 0.0;       // union boundary -> mesh surface: mean and max |signed distance| of points on
-  double union_max = 0.0;        //   sphere surfaces not inside another sphere
-  double max_protrusion = 0.0;   // max_i (r_i + sdf(c_i)): how far a sphere reaches beyond the surface
-  double mean_overlap = 0.0;     // mean over links of (r_i + r_j - d_ij) / min(r_i, r_j)
-  double mean_degree = 0.0;      // mean links per sphere
-  double seconds = 0.0;          // packing time (0 when loaded from the cache)
+  int links = 0;                // overlapping pairs
+  int components = 0;           // connected components of the overlap graph (1 for a connected organ; one per
+                                // separate shell of a multi-shell mesh)
+  int bridged = 0;              // spheres grown to join a detached group to the rest
+  double mesh_volume = 0.0;     // enclosed volume, mesh units^3
+  double sample_spacing = 0.0;  // grid spacing h, mesh units
+  double coverage = 0.0;        // fraction of interior points (grid staggered by h/2 against the packing grid)
+                                // inside the sphere union
+  double surface_mean = 0.0;    // mesh surface -> union boundary, mean |min_i(|p - c_i| - r_i)| over vertices and
+  double surface_max = 0.0;     //   triangle centroids (exact outside the union, a lower bound inside)
+  double union_mean = 0.0;      // union boundary -> mesh surface: mean and max |signed distance| of points on
+  double union_max = 0.0;       //   sphere surfaces not inside another sphere
+  double max_protrusion = 0.0;  // max_i (r_i + sdf(c_i)): how far a sphere reaches beyond the surface
+  double mean_overlap = 0.0;    // mean over links of (r_i + r_j - d_ij) / min(r_i, r_j)
+  double mean_degree = 0.0;     // mean links per sphere
+  double seconds = 0.0;         // packing time (0 when loaded from the cache)
   bool from_cache = false;
-  std::uint64_t key = 0;         // cache key (mesh + options)
-  std::string repairs;           // input repairs made or tolerated (see preparePackInput), "" when none
+  std::uint64_t key = 0;  // cache key (mesh + options)
+  std::string repairs;    // input repairs made or tolerated (see preparePackInput), "" when none
 };
 
 struct PackedOrgan {

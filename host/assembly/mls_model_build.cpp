@@ -5,8 +5,8 @@
 #include <cmath>
 #include <limits>
 
-#include "cpu_fallback/neighbor_search_cpu.h"
 #include "base/parallel.h"
+#include "cpu_fallback/neighbor_search_cpu.h"
 #include "host/compiled/material_checks.h"
 #include "model/input_error.h"
 
@@ -27,8 +27,8 @@ void validateMlsBuildInput(const MlsBuildInput& in) {
   require(n > 0, in, "geometry", "no particles: the geometry sampled to an empty set");
   require(n < std::size_t(std::numeric_limits<std::int32_t>::max()), in, "geometry", "more than 2^31 particles");
   require(finite(in.spacing) && in.spacing > 0, in, "geometry.spacing_m", "must be a positive number");
-  require(finite(in.support_factor) && in.support_factor >= 1.2 && in.support_factor <= 4.0, in,
-          "mls.support_factor", "must lie in [1.2, 4] (h = factor * spacing)");
+  require(finite(in.support_factor) && in.support_factor >= 1.2 && in.support_factor <= 4.0, in, "mls.support_factor",
+          "must lie in [1.2, 4] (h = factor * spacing)");
   require(finite(in.condition_limit) && in.condition_limit > 1.0, in, "mls.condition_limit", "must be > 1");
   const MlsMaterial& m = in.material;
   validateMaterial(m, in.source);  // the scene's own check: an MLS build also comes from tests and tools
@@ -44,7 +44,8 @@ void validateMlsBuildInput(const MlsBuildInput& in) {
     if (!(finite(in.masses[i]) && in.masses[i] > 0))
       require(false, in, "masses", "particle " + std::to_string(i) + ": mass must be > 0");
   for (std::size_t i = 0; i < in.kinds.size(); ++i)
-    if (!(in.kinds[i] <= kMlsPrescribed)) require(false, in, "kinds", "particle " + std::to_string(i) + ": unknown kind");
+    if (!(in.kinds[i] <= kMlsPrescribed))
+      require(false, in, "kinds", "particle " + std::to_string(i) + ": unknown kind");
   for (std::size_t i = 0; i < n; ++i)
     if (!isFinite(in.rest_positions[i]))
       require(false, in, "geometry", "particle " + std::to_string(i) + ": non-finite position");

@@ -19,12 +19,12 @@ Vec3d normalized(const Vec3d& v) { return v * (1.0 / norm(v)); }
 // Icosahedron with counter-clockwise faces seen from outside.
 void icosahedron(std::vector<Vec3d>& v, std::vector<std::array<int, 3>>& f) {
   const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-  v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-       {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  v = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+       {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
   for (auto& p : v) p = normalized(p);
-  f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+  f = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
        {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
-       {3, 8, 9},  {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+       {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
 }
 
 // Unit geodesic sphere of the given frequency. Vertices on an icosahedron edge are keyed by the edge's
@@ -59,12 +59,15 @@ TriangleMesh unitGeodesic(int frequency) {
     for (int i = 0; i <= n; ++i)
       for (int j = 0; i + j <= n; ++j) {
         int id;
-        if (j == 0) id = edgePoint(A, B, i);
-        else if (i == 0) id = edgePoint(A, C, j);
-        else if (i + j == n) id = edgePoint(B, C, j);
+        if (j == 0)
+          id = edgePoint(A, B, i);
+        else if (i == 0)
+          id = edgePoint(A, C, j);
+        else if (i + j == n)
+          id = edgePoint(B, C, j);
         else {
-          const Vec3d p = corners[A] + (corners[B] - corners[A]) * (double(i) / n) +
-                          (corners[C] - corners[A]) * (double(j) / n);
+          const Vec3d p =
+              corners[A] + (corners[B] - corners[A]) * (double(i) / n) + (corners[C] - corners[A]) * (double(j) / n);
           mesh.vertices.push_back(normalized(p));
           id = int(mesh.vertices.size()) - 1;
         }

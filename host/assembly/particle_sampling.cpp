@@ -100,8 +100,8 @@ std::vector<Vec3d> sampleEllipsoid(const Vec3d& center, const Vec3d& radii, cons
     for (std::int64_t j = -m[1]; j <= m[1]; ++j)
       for (std::int64_t i = -m[0]; i <= m[0]; ++i) {
         const Vec3d d(double(i) * l.spacing, double(j) * l.spacing, double(k) * l.spacing);
-        const double q = (d.x / radii.x) * (d.x / radii.x) + (d.y / radii.y) * (d.y / radii.y) +
-                         (d.z / radii.z) * (d.z / radii.z);
+        const double q =
+            (d.x / radii.x) * (d.x / radii.x) + (d.y / radii.y) * (d.y / radii.y) + (d.z / radii.z) * (d.z / radii.z);
         if (q <= 1.0) out.push_back(center + d + jitterOffset(l, i, j, k));
       }
   return out;
@@ -139,8 +139,10 @@ std::vector<Vec3d> sampleMesh(const TriangleMesh& mesh, const LatticeSpec& l) {
     double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
     for (int c = 0; c < 3; ++c) {
       const Vec3d& v = mesh.vertices[std::size_t(mesh.triangles[f][std::size_t(c)])];
-      x0 = std::min(x0, v.x); x1 = std::max(x1, v.x);
-      y0 = std::min(y0, v.y); y1 = std::max(y1, v.y);
+      x0 = std::min(x0, v.x);
+      x1 = std::max(x1, v.x);
+      y0 = std::min(y0, v.y);
+      y1 = std::max(y1, v.y);
     }
     const std::int64_t i0 = std::max<std::int64_t>(0, std::int64_t(std::ceil((x0 - origin.x) / s)));
     const std::int64_t i1 = std::min<std::int64_t>(n[0] - 1, std::int64_t(std::floor((x1 - origin.x) / s)));
@@ -171,7 +173,8 @@ std::vector<Vec3d> sampleMesh(const TriangleMesh& mesh, const LatticeSpec& l) {
         const auto& h = hits[std::size_t(j * n[0] + i)];
         int w = 0;
         for (auto it = h.rbegin(); it != h.rend() && it->first > pz; ++it) w += it->second;
-        if (w != 0) out.push_back(Vec3d(origin.x + double(i) * s, origin.y + double(j) * s, pz) + jitterOffset(l, i, j, k));
+        if (w != 0)
+          out.push_back(Vec3d(origin.x + double(i) * s, origin.y + double(j) * s, pz) + jitterOffset(l, i, j, k));
       }
   }
   return out;

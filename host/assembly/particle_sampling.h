@@ -4,8 +4,8 @@
 #include <string>
 #include <vector>
 
-#include "host/io/mesh.h"
 #include "host/compiled/model_specs.h"
+#include "host/io/mesh.h"
 #include "physics/vec3.h"
 
 namespace inc {

@@ -6,9 +6,9 @@
 #include <map>
 #include <string>
 
-#include "model/input_error.h"
 #include "host/compiled/material_checks.h"
 #include "host/compiled/scene_colliders.h"
+#include "model/input_error.h"
 #include "physics/pbd_constraints.h"
 
 namespace inc {
@@ -28,7 +28,8 @@ void validateMetaballs(const MetaballModel& mb) {
   const auto at = [](const char* key, std::size_t i) { return std::string(key) + "[" + std::to_string(i) + "]"; };
   for (std::size_t i = 0; i < n; ++i) {
     if (!isFinite(mb.rest_centers[i])) throw InputError(f, at("rest_centers", i), "not finite");
-    if (!(mb.rest_radii[i] > 0) || !std::isfinite(mb.rest_radii[i])) throw InputError(f, at("rest_radii", i), "must be > 0");
+    if (!(mb.rest_radii[i] > 0) || !std::isfinite(mb.rest_radii[i]))
+      throw InputError(f, at("rest_radii", i), "must be > 0");
     if (!(mb.masses[i] > 0) || !std::isfinite(mb.masses[i])) throw InputError(f, at("masses", i), "must be > 0");
   }
   std::vector<std::pair<int, int>> seen;
@@ -249,7 +250,8 @@ PbdModel<T> buildMetaballPbdModel(const MetaballModel& mb, const MetaballPbdOpti
 MetaballModel makeLatticeMetaballs(const Vec3d& lo, const Vec3d& hi, double spacing, double radius_factor,
                                    double density) {
   const char* f = "lattice";
-  if (!(spacing > 0) || !(radius_factor > 0) || !(density > 0)) throw InputError(f, "spacing", "parameters must be > 0");
+  if (!(spacing > 0) || !(radius_factor > 0) || !(density > 0))
+    throw InputError(f, "spacing", "parameters must be > 0");
   int cells[3];
   for (int k = 0; k < 3; ++k) {
     if (!(hi[k] >= lo[k])) throw InputError(f, "bounds", "hi must be >= lo");
@@ -288,7 +290,8 @@ MetaballModel makeLatticeMetaballs(const Vec3d& lo, const Vec3d& hi, double spac
 }
 
 template <typename T>
-PbdModel<T> buildSheetPbdModel(const std::vector<Vec3d>& vertices, const std::vector<std::array<std::int32_t, 3>>& triangles,
+PbdModel<T> buildSheetPbdModel(const std::vector<Vec3d>& vertices,
+                               const std::vector<std::array<std::int32_t, 3>>& triangles,
                                const std::vector<double>& masses, const SheetPbdOptions& opt) {
   const char* f = "sheet";
   const std::size_t n = vertices.size();
@@ -307,7 +310,8 @@ PbdModel<T> buildSheetPbdModel(const std::vector<Vec3d>& vertices, const std::ve
   for (std::size_t t = 0; t < triangles.size(); ++t) {
     const auto& tri = triangles[t];
     for (int k = 0; k < 3; ++k)
-      if (tri[k] < 0 || std::size_t(tri[k]) >= n) throw InputError(f, "triangles[" + std::to_string(t) + "]", "index out of range");
+      if (tri[k] < 0 || std::size_t(tri[k]) >= n)
+        throw InputError(f, "triangles[" + std::to_string(t) + "]", "index out of range");
     for (int k = 0; k < 3; ++k) {
       const int a = tri[k], b = tri[(k + 1) % 3], o = tri[(k + 2) % 3];
       if (a == b) throw InputError(f, "triangles[" + std::to_string(t) + "]", "degenerate triangle");
@@ -328,7 +332,8 @@ PbdModel<T> buildSheetPbdModel(const std::vector<Vec3d>& vertices, const std::ve
       const std::int32_t ids[4] = {e.first, e.second, opp[0], opp[1]};
       bend.ids.insert(bend.ids.end(), ids, ids + 4);
       bend.offsets.push_back(std::int32_t(bend.ids.size()));
-      bend.rest.push_back(T(pbd::dihedralAngle(vertices[ids[0]], vertices[ids[1]], vertices[ids[2]], vertices[ids[3]])));
+      bend.rest.push_back(
+          T(pbd::dihedralAngle(vertices[ids[0]], vertices[ids[1]], vertices[ids[2]], vertices[ids[3]])));
       bend.compliance.push_back(T(opt.bending_compliance));
     }
   }
@@ -341,9 +346,11 @@ PbdModel<T> buildSheetPbdModel(const std::vector<Vec3d>& vertices, const std::ve
 
 template PbdModel<float> buildMetaballPbdModel<float>(const MetaballModel&, const MetaballPbdOptions&);
 template PbdModel<double> buildMetaballPbdModel<double>(const MetaballModel&, const MetaballPbdOptions&);
-template PbdModel<float> buildSheetPbdModel<float>(const std::vector<Vec3d>&, const std::vector<std::array<std::int32_t, 3>>&,
+template PbdModel<float> buildSheetPbdModel<float>(const std::vector<Vec3d>&,
+                                                   const std::vector<std::array<std::int32_t, 3>>&,
                                                    const std::vector<double>&, const SheetPbdOptions&);
-template PbdModel<double> buildSheetPbdModel<double>(const std::vector<Vec3d>&, const std::vector<std::array<std::int32_t, 3>>&,
+template PbdModel<double> buildSheetPbdModel<double>(const std::vector<Vec3d>&,
+                                                     const std::vector<std::array<std::int32_t, 3>>&,
                                                      const std::vector<double>&, const SheetPbdOptions&);
 
 }  // namespace inc

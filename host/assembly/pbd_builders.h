@@ -1,4 +1,5 @@
-// Assembles PBD models: a metaball organ (links, Laplacian coordinates, shape matching) and a triangle sheet (stretch + dihedral bending).
+// Assembles PBD models: a metaball organ (links, Laplacian coordinates, shape matching) and a triangle sheet (stretch +
+// dihedral bending).
 #pragma once
 
 #include <array>
@@ -8,25 +9,25 @@
 #include <vector>
 
 #include "host/assembly/metaball_model.h"
-#include "model/pbd_model.h"
 #include "host/compiled/model_specs.h"
+#include "model/pbd_model.h"
 
 namespace inc {
 
 struct MetaballPbdOptions {
-  double youngs_modulus_pa = 3.0e3;  // Material::youngs_modulus_pa: sets the compliances below that are left at 0
-  double stretch_compliance = 0.0;   // m/N per link; 0: d_ij / (E pi rbar^2) (a rod of the spheres' mean radius)
-  double laplacian_compliance = 0.0; // m/N per sphere; 0: 1 / (E r_i)
-  double shape_compliance = 0.0;     // m/N per cluster member; 0: n_j / (E r_j), n_j = clusters holding j
-  double pbd_stiffness = 1.0;        // plain PBD k of every block
+  double youngs_modulus_pa = 3.0e3;   // Material::youngs_modulus_pa: sets the compliances below that are left at 0
+  double stretch_compliance = 0.0;    // m/N per link; 0: d_ij / (E pi rbar^2) (a rod of the spheres' mean radius)
+  double laplacian_compliance = 0.0;  // m/N per sphere; 0: 1 / (E r_i)
+  double shape_compliance = 0.0;      // m/N per cluster member; 0: n_j / (E r_j), n_j = clusters holding j
+  double pbd_stiffness = 1.0;         // plain PBD k of every block
   bool laplacian = true;
-  bool shape_matching = true;        // false: clusters kept only for the rotations skinning needs
-  std::vector<FixedRegion> fixed;    // spheres whose rest centre lies inside are fixed; a box that holds no
-                                     // centre is an InputError naming fixed[k] (the body would fall)
+  bool shape_matching = true;             // false: clusters kept only for the rotations skinning needs
+  std::vector<FixedRegion> fixed;         // spheres whose rest centre lies inside are fixed; a box that holds no
+                                          // centre is an InputError naming fixed[k] (the body would fall)
   std::string file = "metaball options";  // named in errors (the scene file when built from a scene)
-  bool require_fixed_held = true;    // false: a box that holds no centre is allowed (a re-packed organ whose
-                                     // clamped part was cut away: the scene was checked when it was built)
-  int volume_samples = 64;           // per sphere, for the power-cell volumes (0: no volume preservation)
+  bool require_fixed_held = true;         // false: a box that holds no centre is allowed (a re-packed organ whose
+                                          // clamped part was cut away: the scene was checked when it was built)
+  int volume_samples = 64;                // per sphere, for the power-cell volumes (0: no volume preservation)
   // Rest power-cell volumes to reuse, one per sphere (NaN: compute; empty: compute all). A sphere's volume depends
   // only on its rest ball and its linked neighbours' balls, so one whose link set is unchanged since an earlier
   // build may pass that build's value (a cut's stroke model drops only the cut spheres: the dissection does).
@@ -38,9 +39,9 @@ struct MetaballPbdOptions {
   // Contact insets to reuse, one per sphere (NaN: compute; empty: compute all): a sphere's depends only on its rest
   // ball, so a sphere kept from an earlier build may pass that build's value (the dissection's stroke models do).
   std::vector<double> known_contact_insets;
-  bool coloring = true;              // false: no Gauss-Seidel colouring (a Jacobi-only model; a cut rebuilds the
-                                     // model every frame the blade enters spheres, and the colouring is its
-                                     // largest host cost after the volumes); Gauss-Seidel on it is refused
+  bool coloring = true;  // false: no Gauss-Seidel colouring (a Jacobi-only model; a cut rebuilds the
+                         // model every frame the blade enters spheres, and the colouring is its
+                         // largest host cost after the volumes); Gauss-Seidel on it is refused
 };
 
 // Throws InputError("metaball model", key, reason) on inconsistent or non-physical input.
@@ -61,7 +62,8 @@ struct SheetPbdOptions {
 // Triangle mesh -> Distance block on the unique edges and Bending block on every edge shared by exactly two
 // triangles (rest angles from `vertices`). Masses per vertex as given. Throws InputError on bad indices.
 template <typename T>
-PbdModel<T> buildSheetPbdModel(const std::vector<Vec3d>& vertices, const std::vector<std::array<std::int32_t, 3>>& triangles,
+PbdModel<T> buildSheetPbdModel(const std::vector<Vec3d>& vertices,
+                               const std::vector<std::array<std::int32_t, 3>>& triangles,
                                const std::vector<double>& masses, const SheetPbdOptions& opt);
 
 }  // namespace inc

@@ -4,8 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "model/input_error.h"
 #include "host/assembly/organ_shapes.h"
+#include "model/input_error.h"
 
 namespace inc {
 

@@ -1,8 +1,8 @@
 // The closed surface of a scene's body (what the skin draws, what the packer fills).
 #pragma once
 
-#include "host/io/mesh.h"
 #include "host/compiled/compiled_scene.h"
+#include "host/io/mesh.h"
 
 namespace inc {
 

@@ -1,4 +1,5 @@
-// bindSkin: exact k-nearest spheres by signed sphere distance through a centre grid, distance-field weights, normal adjacency.
+// bindSkin: exact k-nearest spheres by signed sphere distance through a centre grid, distance-field weights, normal
+// adjacency.
 #include "host/assembly/skin_binding.h"
 
 #include <algorithm>
@@ -109,7 +110,8 @@ SkinBinding bindSkin(const TriangleMesh& surface, const MetaballModel& mb, int k
 
 SkinBinding bindSkin(const TriangleMesh& surface, const MetaballModel& mb, int k, const std::string& file,
                      const SkinFilter& allowed) {
-  if (k < 1 || k > 16) throw InputError(file, "skinning.k", "spheres per vertex must be in [1, 16], got " + std::to_string(k));
+  if (k < 1 || k > 16)
+    throw InputError(file, "skinning.k", "spheres per vertex must be in [1, 16], got " + std::to_string(k));
   if (mb.size() == 0) throw InputError(file, "skinning", "the metaball model has no spheres");
   if (mb.rest_radii.size() != mb.size()) throw InputError(file, "skinning", "radii and centres differ in count");
   for (std::size_t i = 0; i < mb.size(); ++i)
@@ -176,7 +178,8 @@ SkinArrays<T> skinArrays(const SkinBinding& b) {
   // Renormalise in T so that the weights sum to 1 to the precision of T (the rigid-motion property).
   for (std::size_t v = 0; v < b.rest_vertices.size(); ++v) {
     T sum = T(0);
-    for (int j = 0; j < b.k; ++j) sum += (a.weight[v * std::size_t(b.k) + std::size_t(j)] = T(b.weight[v * std::size_t(b.k) + std::size_t(j)]));
+    for (int j = 0; j < b.k; ++j)
+      sum += (a.weight[v * std::size_t(b.k) + std::size_t(j)] = T(b.weight[v * std::size_t(b.k) + std::size_t(j)]));
     for (int j = 0; j < b.k; ++j) a.weight[v * std::size_t(b.k) + std::size_t(j)] /= sum;
   }
   a.triangles = b.triangles;
@@ -193,7 +196,8 @@ SphereNeighbourhoods<T> sphereNeighbourhoods(const MetaballModel& mb) {
   h.offsets.assign(std::size_t(n) + 1, 0);
   for (const auto& l : mb.links) {
     if (l[0] < 0 || l[1] < 0 || l[0] >= n || l[1] >= n || l[0] == l[1])
-      throw InputError("metaball model", "links", "link (" + std::to_string(l[0]) + ", " + std::to_string(l[1]) + ") out of range");
+      throw InputError("metaball model", "links",
+                       "link (" + std::to_string(l[0]) + ", " + std::to_string(l[1]) + ") out of range");
     ++h.offsets[std::size_t(l[0]) + 1];
     ++h.offsets[std::size_t(l[1]) + 1];
   }

@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "host/io/mesh.h"
 #include "host/assembly/metaball_model.h"
+#include "host/io/mesh.h"
 #include "physics/skinning.h"
 
 namespace inc {
@@ -30,7 +30,8 @@ struct SkinBinding {
 // with weights skin::bindWeight(d_i - d_min, d_(k+1) - d_min) normalised to sum 1. Uses a uniform grid over the
 // centres (exact k-nearest, not approximate). Deterministic. Throws InputError(file, "skinning", reason) for
 // k outside [1, 16], no spheres, a non-positive radius, or a triangle index out of range.
-SkinBinding bindSkin(const TriangleMesh& surface, const MetaballModel& spheres, int k = 4, const std::string& file = "");
+SkinBinding bindSkin(const TriangleMesh& surface, const MetaballModel& spheres, int k = 4,
+                     const std::string& file = "");
 // The same over the spheres `allowed(vertex, sphere)` accepts (e.g. those a vertex sees without crossing a cut:
 // no skin weight across the swept surface, section 5.4); a vertex that none is allowed for binds unfiltered.
 using SkinFilter = std::function<bool(int vertex, int sphere)>;

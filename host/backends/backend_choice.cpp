@@ -1,8 +1,8 @@
 // Resolves --backend auto|cuda|cpu against what this build and this machine can run.
 #include "host/backends/backend_choice.h"
 
-#include "model/input_error.h"
 #include "kernels/device_info.h"
+#include "model/input_error.h"
 
 namespace inc {
 

@@ -4,8 +4,8 @@
 #include <algorithm>
 #include <string>
 
-#include "host/backends/backend_choice.h"
 #include "cpu_fallback/neighbor_search_cpu.h"
+#include "host/backends/backend_choice.h"
 #include "model/input_error.h"
 #include "physics/neighbor_grid.h"
 #if INCISION_HAVE_CUDA
@@ -72,8 +72,9 @@ NeighborLists findNeighbors(BackendKind backend, const std::vector<Vec3<T>>& que
                             const std::vector<Vec3<T>>& points, const std::vector<T>& radii,
                             const NeighborSearchOptions& options) {
   if (radii.size() != 1 && radii.size() != queries.size())
-    throw InputError("", "radii", "expected 1 radius or one per query (" + std::to_string(queries.size()) +
-                                      "), got " + std::to_string(radii.size()));
+    throw InputError("", "radii",
+                     "expected 1 radius or one per query (" + std::to_string(queries.size()) + "), got " +
+                         std::to_string(radii.size()));
   const BackendChoice choice = resolveBackend(backend);
   const T cell = chooseCellSize(points, radii, options, choice.kind == BackendKind::Cuda);
 #if INCISION_HAVE_CUDA
@@ -92,7 +93,8 @@ NeighborLists findNeighbors(BackendKind backend, const std::vector<Vec3<T>>& que
   return cpu::GridNeighborSearch<T>(points, cell, options.morton_order).query(queries, radii);
 }
 
-template NeighborLists findNeighbors<float>(BackendKind, const std::vector<Vec3f>&, float, const NeighborSearchOptions&);
+template NeighborLists findNeighbors<float>(BackendKind, const std::vector<Vec3f>&, float,
+                                            const NeighborSearchOptions&);
 template NeighborLists findNeighbors<double>(BackendKind, const std::vector<Vec3d>&, double,
                                              const NeighborSearchOptions&);
 template NeighborLists findNeighbors<float>(BackendKind, const std::vector<Vec3f>&, const std::vector<Vec3f>&,

@@ -22,7 +22,7 @@ std::unique_ptr<MlsSolver> makeMlsSolver(const MlsBuildInput& input, BackendKind
 // (host work, rest configuration only) while the current solver runs, and loads it later (loadMlsSolver).
 struct MlsBuiltModel {
   Precision precision = Precision::Float32;
-  MlsModel<float> f32;   // the one of `precision`; the other stays empty
+  MlsModel<float> f32;  // the one of `precision`; the other stays empty
   MlsModel<double> f64;
 };
 MlsBuiltModel buildMlsModelIn(const MlsBuildInput& input, Precision precision);

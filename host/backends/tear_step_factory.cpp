@@ -34,7 +34,6 @@ std::unique_ptr<TearStepBackend<T>> makeTearStepBackend(BackendKind kind) {
   return std::make_unique<TearStepCpu<T>>();
 }
 
-
 template std::unique_ptr<TearStepBackend<float>> makeTearStepBackend<float>(BackendKind);
 template std::unique_ptr<TearStepBackend<double>> makeTearStepBackend<double>(BackendKind);
 

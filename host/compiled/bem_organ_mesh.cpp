@@ -14,9 +14,10 @@ TriangleMesh loadGlobalOrganMesh(const std::string& path, double scale) {
   requireClosedMesh(mesh, path, "");
   const int E = int(mesh.triangles.size());
   if (E > kMaxBemElements)
-    throw InputError(path, "", std::to_string(E) + " triangles, more than the " + std::to_string(kMaxBemElements) +
-                                   " a dense BEM model can precompute here (its matrices grow as the square and its "
-                                   "inverse as the cube of that); use a coarse organ mesh");
+    throw InputError(path, "",
+                     std::to_string(E) + " triangles, more than the " + std::to_string(kMaxBemElements) +
+                         " a dense BEM model can precompute here (its matrices grow as the square and its "
+                         "inverse as the cube of that); use a coarse organ mesh");
   for (Vec3d& v : mesh.vertices) v = v * scale;
   for (int j = 0; j < E; ++j) {
     const auto& t = mesh.triangles[std::size_t(j)];
@@ -24,7 +25,8 @@ TriangleMesh loadGlobalOrganMesh(const std::string& path, double scale) {
                 c = mesh.vertices[std::size_t(t[2])];
     const double longest = std::max({norm(b - a), norm(c - b), norm(a - c)});
     if (!(norm(cross(b - a, c - a)) > 1e-10 * longest * longest))
-      throw InputError(path, "triangle " + std::to_string(j), "is degenerate (zero area): a boundary element needs an area");
+      throw InputError(path, "triangle " + std::to_string(j),
+                       "is degenerate (zero area): a boundary element needs an area");
   }
   return mesh;
 }
@@ -40,8 +42,9 @@ std::vector<BemBc> organSupports(const TriangleMesh& mesh, const std::vector<Fix
   std::vector<BemBc> bc(mesh.triangles.size(), BemBc::kTraction);
   for (std::size_t j = 0; j < mesh.triangles.size(); ++j) {
     const auto& t = mesh.triangles[j];
-    const Vec3d c = (mesh.vertices[std::size_t(t[0])] + mesh.vertices[std::size_t(t[1])] + mesh.vertices[std::size_t(t[2])]) *
-                    (1.0 / 3.0);
+    const Vec3d c =
+        (mesh.vertices[std::size_t(t[0])] + mesh.vertices[std::size_t(t[1])] + mesh.vertices[std::size_t(t[2])]) *
+        (1.0 / 3.0);
     for (const FixedRegion& f : fixed) {
       bool inside = true;
       for (int a = 0; a < 3; ++a) inside = inside && c[a] >= f.min[a] - tol && c[a] <= f.max[a] + tol;

@@ -21,10 +21,10 @@ struct CompiledScene {
   ModelsSpec models;                     // which models to build
   MlsSpec mls;
   PbdSpec pbd;
-  SolverSpec solver;                     // frame step, substeps, precision, backend, gravity, energy guard
-  std::vector<FixedRegion> fixed;        // Dirichlet boxes
-  std::vector<ToolSpec> tools;           // scripted probes, graspers and scalpels
-  std::vector<ColliderSpec> colliders;   // static planes and boxes
+  SolverSpec solver;                    // frame step, substeps, precision, backend, gravity, energy guard
+  std::vector<FixedRegion> fixed;       // Dirichlet boxes
+  std::vector<ToolSpec> tools;          // scripted probes, graspers and scalpels
+  std::vector<ColliderSpec> colliders;  // static planes and boxes
   TearingSpec tearing;
   CuttingSpec cutting;
   HapticsSpec haptics;

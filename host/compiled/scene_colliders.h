@@ -4,8 +4,8 @@
 #include <string>
 #include <vector>
 
-#include "host/io/mesh.h"
 #include "host/compiled/compiled_scene.h"
+#include "host/io/mesh.h"
 #include "physics/pbd_collision.h"
 
 namespace inc {

@@ -18,7 +18,8 @@ bool planeOfSweptSurface(const SweptSurface& s, Vec3d& point, Vec3d& normal, dou
   Vec3d c, n;
   for (const auto& v : s.vertices) c += v;
   c *= 1.0 / double(s.vertices.size());
-  for (const auto& t : s.triangles) n += cross(s.vertices[t[1]] - s.vertices[t[0]], s.vertices[t[2]] - s.vertices[t[0]]);
+  for (const auto& t : s.triangles)
+    n += cross(s.vertices[t[1]] - s.vertices[t[0]], s.vertices[t[2]] - s.vertices[t[0]]);
   const double len = norm(n);
   if (!(len > 0.0)) return false;
   n *= 1.0 / len;

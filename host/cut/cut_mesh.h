@@ -9,11 +9,11 @@
 namespace inc {
 
 struct CutMeshResult {
-  TriangleMesh positive;  // the part on the +normal side, closed: its cut wall faces -normal
-  TriangleMesh negative;  // the part on the -normal side, closed: its cut wall faces +normal
-  int contour_loops = 0;  // closed cut contours (one per piece of the cross-section)
-  int wall_triangles = 0; // triangles of both cut walls together
-  int forced_ears = 0;    // ear-clipping steps that found no valid ear (0 on well-shaped sections)
+  TriangleMesh positive;   // the part on the +normal side, closed: its cut wall faces -normal
+  TriangleMesh negative;   // the part on the -normal side, closed: its cut wall faces +normal
+  int contour_loops = 0;   // closed cut contours (one per piece of the cross-section)
+  int wall_triangles = 0;  // triangles of both cut walls together
+  int forced_ears = 0;     // ear-clipping steps that found no valid ear (0 on well-shaped sections)
 };
 
 // Least-squares plane of the swept surface (point = centroid, normal = mean triangle normal). Returns false when

@@ -3,12 +3,12 @@
 
 #include <algorithm>
 #include <array>
-#include <map>
 #include <cmath>
+#include <map>
 #include <numeric>
 
-#include "cpu_fallback/neighbor_search_cpu.h"
 #include "base/parallel.h"
+#include "cpu_fallback/neighbor_search_cpu.h"
 #include "host/cut/cut_repack.h"
 #include "model/input_error.h"
 
@@ -114,8 +114,8 @@ namespace {
 // over the unordered pairs (lower index first, the mirror entry copies the decision), each tested only against
 // the cuts both its ends lie near (a pair no longer than L crosses a surface only when both ends are within L of
 // it). Returns the number of directed entries dropped.
-std::size_t removeCrossingPairs(NeighborLists& lists, const std::vector<Vec3d>& x, const std::vector<const SweptSurface*>& all,
-                                double max_length) {
+std::size_t removeCrossingPairs(NeighborLists& lists, const std::vector<Vec3d>& x,
+                                const std::vector<const SweptSurface*>& all, double max_length) {
   const std::size_t nq = lists.queryCount();
   std::vector<const SweptSurface*> cuts;
   for (const SweptSurface* c : all)
@@ -185,13 +185,13 @@ NeighborLists visibleSupports(const std::vector<Vec3d>& x, double h, const std::
   return lists;
 }
 
-NeighborLists visibleNodalNeighbours(const NodalPoints& p, double h, const SweptSurface& surface, std::size_t* removed) {
+NeighborLists visibleNodalNeighbours(const NodalPoints& p, double h, const SweptSurface& surface,
+                                     std::size_t* removed) {
   return visibleSupports(p.positions, h, {&surface}, removed);
 }
 
 std::size_t repackSpheres(MetaballModel& spheres, const NodalPoints& p, const SweptSurface& surface,
-                          const RepackOptions& options,
-                          const std::vector<SweptSurface>& earlier) {
+                          const RepackOptions& options, const std::vector<SweptSurface>& earlier) {
   const std::size_t np = p.size();
   if (np == 0) return 0;
   std::vector<const SweptSurface*> cuts{&surface};
@@ -229,8 +229,8 @@ std::size_t repackSpheres(MetaballModel& spheres, const NodalPoints& p, const Sw
   s.boundary_offset = options.boundary_offset;
   s.spacing_factor = options.spacing_factor;
   s.sphere_budget = options.sphere_budget;
-  s.reference_mass = options.reference_mass > 0 ? options.reference_mass
-                                                : totalMass(p) / double(std::max<std::size_t>(1, converted));
+  s.reference_mass =
+      options.reference_mass > 0 ? options.reference_mass : totalMass(p) / double(std::max<std::size_t>(1, converted));
   for (std::size_t k = 1; k < cuts.size(); ++k) s.earlier_cuts.push_back(cuts[k]);
   s.max_radius = options.max_radius > 0 ? options.max_radius : 1.5 * p.max_source_radius;
   const RepackResult r = packNodalPoints(rp, surface, s);

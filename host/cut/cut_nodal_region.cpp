@@ -1,4 +1,5 @@
-// NodalRegion: sphere -> points conversion during a stroke, visibility-filtered supports, MLS rebuilds, coupling groups.
+// NodalRegion: sphere -> points conversion during a stroke, visibility-filtered supports, MLS rebuilds, coupling
+// groups.
 #include "host/cut/cut_nodal_region.h"
 
 #include <algorithm>
@@ -9,12 +10,12 @@
 #include <numeric>
 #include <stdexcept>
 
+#include "base/elapsed_ms.h"
+#include "base/parallel.h"
 #include "host/backends/solver_factory.h"
 #include "host/compiled/material_checks.h"
-#include "base/parallel.h"
 #include "host/cut/cut_nodal_points.h"
 #include "model/device_capture_lock.h"
-#include "base/elapsed_ms.h"
 #include "model/input_error.h"
 #include "physics/cut_coupling.h"
 
@@ -30,11 +31,13 @@ bool insideBox(const Vec3d& p, const FixedRegion& r) {
 
 }  // namespace
 
-NodalRegion::NodalRegion(const MetaballModel& base, const NodalRegionSettings& s, std::vector<const SweptSurface*> earlier)
+NodalRegion::NodalRegion(const MetaballModel& base, const NodalRegionSettings& s,
+                         std::vector<const SweptSurface*> earlier)
     : base_(base), settings_(s), earlier_(std::move(earlier)) {
   if (s.samples_per_diameter < 1 || s.samples_per_diameter > 64)
     throw InputError(s.mls.source, "cutting.samples_per_diameter", "must be in [1, 64]");
-  if (s.backend == BackendKind::Auto) throw InputError(s.mls.source, "solver.backend", "the nodal region needs a resolved backend");
+  if (s.backend == BackendKind::Auto)
+    throw InputError(s.mls.source, "solver.backend", "the nodal region needs a resolved backend");
   validateMaterial(s.mls.material, s.mls.source);  // the links below divide by E
   r_.role.assign(base_.size(), SphereRole::Pbd);
   double rmean = 0.0;
@@ -214,7 +217,8 @@ void NodalRegion::preload(NodalUpdate& u) {
 }
 
 std::size_t NodalRegion::convert(const std::vector<std::int32_t>& cut,
-                                 const std::function<ConvertedSphereState(std::int32_t)>& state, const SweptSurface& stroke) {
+                                 const std::function<ConvertedSphereState(std::int32_t)>& state,
+                                 const SweptSurface& stroke) {
   NodalUpdate u = prepareConversion(takeRest(), cut, stroke);
   std::vector<ConvertedSphereState> st;
   for (std::int32_t b : u.sampled) st.push_back(state(b));
@@ -299,7 +303,8 @@ void NodalRegion::sample(NodalRest& next, const std::vector<std::int32_t>& batch
   std::map<std::int32_t, std::vector<Vec3d>> taken;
   for (const auto& [key, cand] : cells) {
     next.occupied.insert(key);
-    taken[cand.sphere].push_back(Vec3d((double(key[0]) + 0.5) * p, (double(key[1]) + 0.5) * p, (double(key[2]) + 0.5) * p));
+    taken[cand.sphere].push_back(
+        Vec3d((double(key[0]) + 0.5) * p, (double(key[1]) + 0.5) * p, (double(key[2]) + 0.5) * p));
   }
   for (std::int32_t b : batch) {
     std::vector<Vec3d>& pts = taken[b];
@@ -375,7 +380,8 @@ void NodalRegion::regroup(NodalRest& r) const {
   }
 }
 
-MlsFrameStats NodalRegion::advance(double dt, int fixed_substeps, const std::function<Vec3d(std::int32_t)>& pbd_position) {
+MlsFrameStats NodalRegion::advance(double dt, int fixed_substeps,
+                                   const std::function<Vec3d(std::int32_t)>& pbd_position) {
   MlsFrameStats st;
   if (!solver_) return st;
   for (std::size_t s = 0; s < anchors_.size(); ++s) anchors_[s] = pbd_position(r_.spring_other[s]);
@@ -386,7 +392,8 @@ MlsFrameStats NodalRegion::advance(double dt, int fixed_substeps, const std::fun
     const double need = std::ceil(dt / (solver_->safety() * solver_->currentStableTimeStep()) * (1.0 - 1e-12));
     n = std::max(fixed_substeps, int(std::min(need, double(kMlsMaxSubsteps))));
   }
-  solver_->setBladeContact(blade_from_.base, blade_from_.tip, blade_to_.base, blade_to_.tip, blade_radius_, blade_friction_);
+  solver_->setBladeContact(blade_from_.base, blade_from_.tip, blade_to_.base, blade_to_.tip, blade_radius_,
+                           blade_friction_);
   st = solver_->advanceCoupled(dt, n, group_u_);
   last_reduction_ = st.totals;
   return st;

@@ -1,24 +1,25 @@
 // The nodal points of one scalpel stroke (sections 5.1-5.3): spheres converted into MLS points while the blade is in
-// the tissue, their visibility-filtered supports, the MLS solver and the coupling groups that tie them to the PBD spheres.
+// the tissue, their visibility-filtered supports, the MLS solver and the coupling groups that tie them to the PBD
+// spheres.
 #pragma once
 
 #include <array>
 #include <cstdint>
 #include <functional>
-#include <set>
 #include <memory>
+#include <set>
 #include <vector>
 
+#include "host/assembly/metaball_model.h"
 #include "host/backends/solver_factory.h"
-#include "model/backend.h"
+#include "host/compiled/model_specs.h"
+#include "host/compiled/scene_colliders.h"
 #include "host/cut/cut_repack.h"
 #include "host/cut/cut_stroke_supports.h"
 #include "host/cut/cut_swept_surface.h"
-#include "host/compiled/scene_colliders.h"
-#include "host/assembly/metaball_model.h"
+#include "model/backend.h"
 #include "model/mls_model.h"
 #include "model/mls_solver.h"
-#include "host/compiled/model_specs.h"
 
 namespace inc {
 
@@ -28,15 +29,15 @@ namespace inc {
 enum class SphereRole : std::uint8_t { Pbd = 0, Interface = 1, Cut = 2 };
 
 struct NodalRegionSettings {
-  int samples_per_diameter = 4;        // lattice cells across a converted sphere's (mean) diameter
-  MlsBuildInput mls;                   // material, support_factor, condition_limit, gravity, safety, source; its
-                                       // youngs_modulus_pa also sets the links: k = 1 / alpha as the PBD links
+  int samples_per_diameter = 4;            // lattice cells across a converted sphere's (mean) diameter
+  MlsBuildInput mls;                       // material, support_factor, condition_limit, gravity, safety, source; its
+                                           // youngs_modulus_pa also sets the links: k = 1 / alpha as the PBD links
   BackendKind backend = BackendKind::Cpu;  // resolved (Cpu or Cuda)
   Precision precision = Precision::Float32;
-  std::vector<FixedRegion> fixed;      // a sphere whose rest centre lies inside is fixed: so are its points
-  double stretch_compliance = 0.0;     // m/N; 0: alpha = d / (E pi rbar^2) (host/assembly/pbd_builders.h)
+  std::vector<FixedRegion> fixed;            // a sphere whose rest centre lies inside is fixed: so are its points
+  double stretch_compliance = 0.0;           // m/N; 0: alpha = d / (E pi rbar^2) (host/assembly/pbd_builders.h)
   std::function<bool(const Vec3d&)> inside;  // the tissue: points are sampled only inside it (empty: everywhere)
-  StaticColliders colliders;           // the scene's planes and boxes: the points stay out of them
+  StaticColliders colliders;                 // the scene's planes and boxes: the points stay out of them
 };
 
 // A sphere's state when it is converted: its points start rigidly attached, x = x_b + R_b (X - C_b), v = v_b.
@@ -48,9 +49,9 @@ struct ConvertedSphereState {
 // What the stroke leaves when the blade exits: the cut spheres' points for re-packing (Algorithm 1) with their
 // state, and the interface spheres' state by eq. 13 (they return to PBD).
 struct NodalRegionFinal {
-  RepackPoints points;                 // all points (the interface spheres' as context), rest configuration
-  std::vector<Vec3d> displacement, velocity;   // per point of `points` (m, m/s)
-  std::vector<std::int32_t> interface_ids;     // base indices
+  RepackPoints points;                        // all points (the interface spheres' as context), rest configuration
+  std::vector<Vec3d> displacement, velocity;  // per point of `points` (m, m/s)
+  std::vector<std::int32_t> interface_ids;    // base indices
   std::vector<Vec3d> interface_position, interface_velocity;  // eq. 13 position, mean velocity of its points
 };
 
@@ -68,7 +69,7 @@ struct NodalRest {
   StrokeSupports supports;                               // visibility-filtered supports, kept across the stroke
   MlsCouplingGroups groups;                              // group g belongs to base sphere group_sphere[g]
   std::vector<std::int32_t> group_sphere;
-  std::vector<std::int32_t> spring_other;                // per spring: the base index of its PBD sphere
+  std::vector<std::int32_t> spring_other;  // per spring: the base index of its PBD sphere
 };
 
 // A conversion, or a strip that only cuts supports, worked out in the rest configuration alone
@@ -76,15 +77,15 @@ struct NodalRest {
 // changed, the MLS model built on them. NodalRegion::apply brings it in with the state of a later moment.
 struct NodalUpdate {
   NodalRest next;
-  std::vector<std::int32_t> sampled;   // base spheres whose points this update adds, in the order it adds them
-  std::size_t first_new = 0;           // next.rest[first_new ..] are those points
-  bool rebuild = false;                // the points or the supports changed: `model` is the MLS model on them
+  std::vector<std::int32_t> sampled;  // base spheres whose points this update adds, in the order it adds them
+  std::size_t first_new = 0;          // next.rest[first_new ..] are those points
+  bool rebuild = false;               // the points or the supports changed: `model` is the MLS model on them
   MlsBuiltModel model;
   // The MLS solver already loaded with `model`, its groups and the scene's colliders on a worker (preload); apply()
   // then only transfers the state into it. Null: apply() loads the model itself.
   std::unique_ptr<MlsSolver> preloaded;
-  std::size_t changed = 0;             // spheres that changed role
-  std::size_t removed = 0;             // directed supports the strip dropped
+  std::size_t changed = 0;                                    // spheres that changed role
+  std::size_t removed = 0;                                    // directed supports the strip dropped
   double sample_ms = 0, supports_ms = 0, model_build_ms = 0;  // host time of the parts (ms)
 };
 
@@ -92,7 +93,8 @@ class NodalRegion {
  public:
   // `base`: the sphere model when the stroke began (its indices are the "base" indices used below).
   // `earlier_cuts`: cuts applied before this stroke (visibility), kept by pointer: they must outlive the region.
-  NodalRegion(const MetaballModel& base, const NodalRegionSettings& settings, std::vector<const SweptSurface*> earlier_cuts);
+  NodalRegion(const MetaballModel& base, const NodalRegionSettings& settings,
+              std::vector<const SweptSurface*> earlier_cuts);
 
   const MetaballModel& base() const { return base_; }
   SphereRole role(std::int32_t b) const { return r_.role[std::size_t(b)]; }
@@ -102,9 +104,9 @@ class NodalRegion {
   std::size_t interfaceCount() const;
   std::size_t springCount() const { return r_.groups.springs(); }
   double pointSpacing() const { return spacing_; }
-  double pointMass() const;                 // kg, sum over the points
+  double pointMass() const;                                              // kg, sum over the points
   std::size_t supportsRemoved() const { return r_.supports.removed(); }  // directed pairs dropped by the cuts so far
-  double lastRebuildMs() const { return last_rebuild_ms_; }  // the last apply's MLS solver load and setup
+  double lastRebuildMs() const { return last_rebuild_ms_; }              // the last apply's MLS solver load and setup
   // The parts of the last conversion (ms): sampling, supports and the MLS model's host build (the update's
   // preparation), the model built and loaded, the rest of the load (groups, state and anchor uploads, the
   // stable-step reduction).
@@ -146,8 +148,8 @@ class NodalRegion {
   void preload(NodalUpdate& u);
   // prepareConversion on the region's own data then apply, with `state(b)` a sphere's state now. Returns the
   // number of spheres that changed role.
-  std::size_t convert(const std::vector<std::int32_t>& cut, const std::function<ConvertedSphereState(std::int32_t)>& state,
-                      const SweptSurface& stroke);
+  std::size_t convert(const std::vector<std::int32_t>& cut,
+                      const std::function<ConvertedSphereState(std::int32_t)>& state, const SweptSurface& stroke);
   // prepareStrip then apply, on the region's own data. Returns the pairs dropped.
   std::size_t cutSupports(const SweptSurface& fresh);
 
@@ -194,7 +196,7 @@ class NodalRegion {
   void sample(NodalRest& next, const std::vector<std::int32_t>& batch) const;
   void regroup(NodalRest& r) const;
   void build(NodalUpdate& u) const;  // groups and MLS model on u.next
-  void syncState();  // host copies of u, v from the solver
+  void syncState();                  // host copies of u, v from the solver
 
   MetaballModel base_;
   NodalRegionSettings settings_;
@@ -202,11 +204,12 @@ class NodalRegion {
   std::vector<std::vector<Link>> adjacency_;  // base links per sphere with their spring stiffness
   double spacing_ = 0.0;                      // m, the shared sampling lattice's spacing
   NodalRest r_;
-  std::vector<Vec3d> u_, v_;                  // host copies of the points' state (valid after syncState)
+  std::vector<Vec3d> u_, v_;  // host copies of the points' state (valid after syncState)
   std::vector<Vec3d> group_u_, anchors_;
   std::unique_ptr<MlsSolver> solver_;
   std::unique_ptr<MlsSolver> spare_;
-  void loadRestData(MlsSolver& s, const MlsCouplingGroups& groups) const;  // the solver before last: preload() loads the next model into its buffers
+  void loadRestData(MlsSolver& s, const MlsCouplingGroups& groups)
+      const;  // the solver before last: preload() loads the next model into its buffers
   MlsReduction last_reduction_;
   double safety_scale_ = 1.0;
   double last_rebuild_ms_ = 0.0;

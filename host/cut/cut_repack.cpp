@@ -8,17 +8,18 @@
 #include <string>
 
 #include "base/parallel.h"
-#include "model/input_error.h"
 #include "host/assembly/point_grid.h"
+#include "model/input_error.h"
 
 namespace inc {
 
 namespace {
 
-constexpr int kMinInteriorNeighbours = 4;  // fewer visible neighbours: the point cannot be interior
+constexpr int kMinInteriorNeighbours = 4;   // fewer visible neighbours: the point cannot be interior
 constexpr std::size_t kMinGroupPoints = 4;  // smaller components are isolated points (merged, see below)
 
-std::vector<std::vector<std::int32_t>> components(const NeighborLists& l, std::size_t n, const std::vector<std::uint8_t>& skip) {
+std::vector<std::vector<std::int32_t>> components(const NeighborLists& l, std::size_t n,
+                                                  const std::vector<std::uint8_t>& skip) {
   std::vector<std::int32_t> parent(n);
   std::iota(parent.begin(), parent.end(), 0);
   const auto find = [&](std::int32_t a) {
@@ -89,7 +90,8 @@ class Repacker {
   PointGrid grid(const std::vector<Vec3d>& x, double cell) const { return PointGrid(x, lo_, hi_, cell, max_cells_); }
   std::vector<std::int32_t> medialPoints(const std::vector<std::int32_t>& pts);
   double groupSpacing(const std::vector<std::int32_t>& medial) const;
-  std::vector<std::int32_t> packingOrder(const std::vector<std::int32_t>& medial, const std::vector<std::int32_t>& pts) const;
+  std::vector<std::int32_t> packingOrder(const std::vector<std::int32_t>& medial,
+                                         const std::vector<std::int32_t>& pts) const;
   std::vector<std::int32_t> packCentres(const std::vector<std::int32_t>& order, double d) const;
   void assignCells(const std::vector<std::int32_t>& pts, const std::vector<std::int32_t>& accepted, double d);
   std::int32_t visibleCentre(const Vec3d& x0) const;
@@ -130,7 +132,8 @@ void Repacker::measureDepth() {
   for (std::size_t i = 0; i < n_; ++i) {
     if (isContext(i)) continue;
     near[i] = 1;
-    for (std::int64_t k = p_.visible.offsets[i]; k < p_.visible.offsets[i + 1]; ++k) near[std::size_t(p_.visible.indices[std::size_t(k)])] = 1;
+    for (std::int64_t k = p_.visible.offsets[i]; k < p_.visible.offsets[i + 1]; ++k)
+      near[std::size_t(p_.visible.indices[std::size_t(k)])] = 1;
   }
   std::vector<std::int32_t> bnd;
   for (std::size_t i = 0; i < n_; ++i)
@@ -331,7 +334,8 @@ RepackResult packNodalPoints(const RepackPoints& p, const SweptSurface& cut, con
   return r;
 }
 
-std::size_t appendRepackedSpheres(MetaballModel& spheres, const RepackResult& r, const std::vector<const SweptSurface*>& cuts) {
+std::size_t appendRepackedSpheres(MetaballModel& spheres, const RepackResult& r,
+                                  const std::vector<const SweptSurface*>& cuts) {
   const std::size_t first_new = spheres.size();
   for (std::size_t k = 0; k < r.centres.size(); ++k) {
     spheres.rest_centers.push_back(r.centres[k]);

@@ -5,8 +5,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "host/cut/cut_swept_surface.h"
 #include "host/assembly/metaball_model.h"
+#include "host/cut/cut_swept_surface.h"
 #include "model/neighbor_lists.h"
 
 namespace inc {
@@ -15,39 +15,39 @@ namespace inc {
 // them (sampled alike), which take part in the boundary test and the boundary distance but are not packed, so
 // that the face a group shares with the spheres that stay is not mistaken for the tissue's surface.
 struct RepackPoints {
-  std::vector<Vec3d> rest;               // m
-  std::vector<double> mass;              // kg, > 0 (ignored for context points)
-  std::vector<std::uint8_t> context;     // 1: a context point; empty: none
-  NeighborLists visible;                 // symmetric supports (all points) with every pair across a cut removed
-  double spacing = 0.0;                  // m, the sampling lattice spacing
-  double support = 0.0;                  // m, radius of `visible`
+  std::vector<Vec3d> rest;            // m
+  std::vector<double> mass;           // kg, > 0 (ignored for context points)
+  std::vector<std::uint8_t> context;  // 1: a context point; empty: none
+  NeighborLists visible;              // symmetric supports (all points) with every pair across a cut removed
+  double spacing = 0.0;               // m, the sampling lattice spacing
+  double support = 0.0;               // m, radius of `visible`
   std::size_t size() const { return rest.size(); }
 };
 
 struct RepackSettings {
-  double boundary_offset = 0.3;    // (0, 1): |mean_j (X_j - X_i)| > offset * support marks i as boundary
-  double spacing_factor = 0.5;     // eq. 14: d = factor * max over a group's medial points of their distance to the cut
-  double sphere_budget = 1.0;      // > 0: a group keeps at most ceil(budget * group mass / reference_mass) spheres
-  double reference_mass = 0.0;     // kg, > 0: the mass of a typical sphere of the organ
-  double max_radius = 0.0;         // m; > 0: no new sphere is larger, d is at most 2/3 of it (0: no cap). Without a
-                                   // cap the medial balls of successive cuts grow towards the organ's thickness
+  double boundary_offset = 0.3;  // (0, 1): |mean_j (X_j - X_i)| > offset * support marks i as boundary
+  double spacing_factor = 0.5;   // eq. 14: d = factor * max over a group's medial points of their distance to the cut
+  double sphere_budget = 1.0;    // > 0: a group keeps at most ceil(budget * group mass / reference_mass) spheres
+  double reference_mass = 0.0;   // kg, > 0: the mass of a typical sphere of the organ
+  double max_radius = 0.0;       // m; > 0: no new sphere is larger, d is at most 2/3 of it (0: no cap). Without a
+                                 // cap the medial balls of successive cuts grow towards the organ's thickness
   std::vector<const SweptSurface*> earlier_cuts;  // also block an isolated point's view of a sphere centre
 };
 
 enum RepackPointClass : std::uint8_t { kRepackMiddle = 0, kRepackBoundary = 1, kRepackMedial = 2 };
 
 struct RepackResult {
-  std::vector<Vec3d> centres;           // m
-  std::vector<double> radii;            // m
-  std::vector<double> masses;           // kg, the sum of the masses of the points each took
-  std::vector<std::int32_t> owner;      // per point: the new sphere that took its mass (its Voronoi cell's)
+  std::vector<Vec3d> centres;             // m
+  std::vector<double> radii;              // m
+  std::vector<double> masses;             // kg, the sum of the masses of the points each took
+  std::vector<std::int32_t> owner;        // per point: the new sphere that took its mass (its Voronoi cell's)
   std::vector<std::uint8_t> point_class;  // per point: RepackPointClass
-  int groups = 0;                       // connected components of the supports
+  int groups = 0;                         // connected components of the supports
   std::size_t boundary = 0, medial = 0, middle = 0;
-  std::size_t packed = 0;               // spheres Algorithm 1 placed at eq. 14's spacing
-  std::size_t merged = 0;               // of those, merged away (small first) to respect the budget
+  std::size_t packed = 0;                       // spheres Algorithm 1 placed at eq. 14's spacing
+  std::size_t merged = 0;                       // of those, merged away (small first) to respect the budget
   double spacing_min = 0.0, spacing_max = 0.0;  // eq. 14's d over the groups (m)
-  double merge_spacing_max = 0.0;       // the largest spacing the merging widened d to (m)
+  double merge_spacing_max = 0.0;               // the largest spacing the merging widened d to (m)
 };
 
 // Per group (component of `points.visible` among the points that are not context):
@@ -77,6 +77,7 @@ RepackResult packNodalPoints(const RepackPoints& points, const SweptSurface& cut
 // Appends the spheres of `r` to `spheres` and links every new sphere to each sphere (new or old) it overlaps
 // whose centre segment crosses none of `cuts` (new spheres connect only to spheres on their own side). Returns
 // the number of links added.
-std::size_t appendRepackedSpheres(MetaballModel& spheres, const RepackResult& r, const std::vector<const SweptSurface*>& cuts);
+std::size_t appendRepackedSpheres(MetaballModel& spheres, const RepackResult& r,
+                                  const std::vector<const SweptSurface*>& cuts);
 
 }  // namespace inc

@@ -5,8 +5,8 @@
 #include <chrono>
 
 #include "base/elapsed_ms.h"
-#include "model/input_error.h"
 #include "host/assembly/metaball_model.h"
+#include "model/input_error.h"
 
 namespace inc {
 

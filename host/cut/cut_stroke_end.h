@@ -9,11 +9,11 @@
 #include <vector>
 
 #include "base/background_task.h"
+#include "host/assembly/metaball_model.h"
+#include "host/assembly/skin_binding.h"
 #include "host/cut/cut_repack.h"
 #include "host/cut/cut_surface_state.h"
 #include "host/cut/cut_swept_surface.h"
-#include "host/assembly/metaball_model.h"
-#include "host/assembly/skin_binding.h"
 
 namespace inc {
 
@@ -21,32 +21,32 @@ namespace inc {
 // (new spheres from their points' displacements, interface spheres by eq. 13) is the caller's, when it applies the
 // result. The pointers must stay valid and unchanged until computeStrokeEnd returns.
 struct StrokeEndInput {
-  MetaballModel kept;                 // the stroke's base spheres that were not cut (PBD and interface), their links
-  bool repack = false;                // the blade converted spheres: `points` holds them (else nothing is re-packed)
-  RepackPoints points;                // the region's points, rest configuration (NodalRegion::repackPoints)
-  RepackSettings settings;            // Algorithm 1's settings; earlier_cuts is filled from `cuts`
-  std::vector<SweptSurface> cuts;     // every cut in the order made, this stroke's last (rest configuration)
+  MetaballModel kept;              // the stroke's base spheres that were not cut (PBD and interface), their links
+  bool repack = false;             // the blade converted spheres: `points` holds them (else nothing is re-packed)
+  RepackPoints points;             // the region's points, rest configuration (NodalRegion::repackPoints)
+  RepackSettings settings;         // Algorithm 1's settings; earlier_cuts is filled from `cuts`
+  std::vector<SweptSurface> cuts;  // every cut in the order made, this stroke's last (rest configuration)
   // The surface before this cut (read only; shared, so that a computation the caller gave up waiting for may finish
   // on its worker while the caller has gone on to another surface).
   std::shared_ptr<const CutSurfaceState> surface;
-  int skin_k = 4;                     // spheres per surface vertex (at most the new model's size)
+  int skin_k = 4;  // spheres per surface vertex (at most the new model's size)
   // A mouse or haptic stroke: a blade path whose sweep the surface split refuses (one turning back over itself)
   // leaves the surface unsplit for this cut (split_failure says why; spheres, points and links are cut all the
   // same) instead of failing the run. A scripted path is the scene's: there it stays an error naming the file.
   bool interactive = false;
-  std::string file;                   // for error messages
+  std::string file;  // for error messages
 };
 
 struct StrokeEndResult {
-  MetaballModel spheres;              // kept, then the re-packed spheres with their links (= kept if !repacked)
+  MetaballModel spheres;  // kept, then the re-packed spheres with their links (= kept if !repacked)
   bool repacked = false;
-  RepackResult repack;                // owner[i]: the new sphere (index among the re-packed ones) point i went to
-  CutSurfaceState surface;            // after the split (a copy of the input state where the blade crossed nothing)
-  bool split = false;                 // the blade crossed the surface and the split succeeded
-  int surface_components = 0;         // of the split surface (its own output check); valid when split
-  std::string split_failure;          // why the surface was left unsplit (empty: split, or not crossed)
-  SkinBinding skin;                   // the surface bound to `spheres`, across every cut including this one
-  int sphere_components = 0;          // of `spheres`' link graph
+  RepackResult repack;         // owner[i]: the new sphere (index among the re-packed ones) point i went to
+  CutSurfaceState surface;     // after the split (a copy of the input state where the blade crossed nothing)
+  bool split = false;          // the blade crossed the surface and the split succeeded
+  int surface_components = 0;  // of the split surface (its own output check); valid when split
+  std::string split_failure;   // why the surface was left unsplit (empty: split, or not crossed)
+  SkinBinding skin;            // the surface bound to `spheres`, across every cut including this one
+  int sphere_components = 0;   // of `spheres`' link graph
   double repack_ms = 0, build_ms = 0, split_ms = 0, bind_ms = 0, total_ms = 0;  // wall times of the parts
 };
 

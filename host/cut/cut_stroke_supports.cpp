@@ -127,7 +127,8 @@ class CellGrid {
 
 }  // namespace
 
-StrokeSupports::StrokeSupports(double h, std::vector<const SweptSurface*> earlier) : h_(h), earlier_(std::move(earlier)) {
+StrokeSupports::StrokeSupports(double h, std::vector<const SweptSurface*> earlier)
+    : h_(h), earlier_(std::move(earlier)) {
   reach_ = h * (1.0 + 1e-9) + 1e-12;  // as visibleSupports (host/cut/cut_nodal_points.cpp)
   clear();
 }
@@ -185,7 +186,8 @@ std::size_t StrokeSupports::applyStrip(const std::vector<Vec3d>& x, const SweptS
   const SweptSurfaceQuery strip(fresh);
   cpu::parallelFor(std::int64_t(n), [&](std::int64_t i) {
     by_fresh[std::size_t(i)] = byBox(fresh_box, x[std::size_t(i)], h_) ? 1 : 0;
-    near_fresh[std::size_t(i)] = by_fresh[std::size_t(i)] && withinReach(strip, fresh_box, x[std::size_t(i)], reach_) ? 1 : 0;
+    near_fresh[std::size_t(i)] =
+        by_fresh[std::size_t(i)] && withinReach(strip, fresh_box, x[std::size_t(i)], reach_) ? 1 : 0;
   });
   appendTriangles(stroke_, fresh, 0);
   const SweptSurfaceQuery whole(stroke_);
@@ -316,7 +318,8 @@ void StrokeSupports::mergeRows(const NeighborLists& rows, const std::vector<char
   std::vector<std::int64_t> at(n0);  // where listed point i's next added neighbour goes
   for (std::size_t i = 0; i < n0; ++i)
     at[i] = std::copy(lists_.indices.begin() + lists_.offsets[i], lists_.indices.begin() + lists_.offsets[i + 1],
-                      out.indices.begin() + out.offsets[i]) - out.indices.begin();
+                      out.indices.begin() + out.offsets[i]) -
+            out.indices.begin();
   for (std::size_t r = 0; r < added; ++r) {
     std::int64_t w = out.offsets[n0 + r];
     for (std::int64_t k = rows.offsets[r]; k < rows.offsets[r + 1]; ++k) {

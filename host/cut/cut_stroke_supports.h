@@ -58,10 +58,10 @@ class StrokeSupports {
 
   double h_ = 0.0, reach_ = 0.0;  // m; reach: visibleSupports' "near a cut" distance
   std::vector<const SweptSurface*> earlier_;
-  SweptSurface stroke_;                             // the stroke's triangles applied so far (own copy)
-  NeighborLists lists_, spare_;                     // spare_: mergeRows' output buffer, swapped with lists_
+  SweptSurface stroke_;                                   // the stroke's triangles applied so far (own copy)
+  NeighborLists lists_, spare_;                           // spare_: mergeRows' output buffer, swapped with lists_
   std::vector<std::vector<std::uint32_t>> near_earlier_;  // per point: the earlier cuts within reach
-  std::vector<char> near_stroke_;                   // per point: within reach of stroke_
+  std::vector<char> near_stroke_;                         // per point: within reach of stroke_
   std::size_t removed_ = 0;
 };
 

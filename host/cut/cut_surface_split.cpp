@@ -95,9 +95,7 @@ bool segmentHit(const Vec3d& p, const Vec3d& q, const Vec3d& a, const Vec3d& b, 
   return t >= 0.0 && t <= 1.0;
 }
 
-bool lexLess(const Vec3d& a, const Vec3d& b) {
-  return a.x != b.x ? a.x < b.x : (a.y != b.y ? a.y < b.y : a.z < b.z);
-}
+bool lexLess(const Vec3d& a, const Vec3d& b) { return a.x != b.x ? a.x < b.x : (a.y != b.y ? a.y < b.y : a.z < b.z); }
 
 // Generalised winding number of a closed oriented mesh at p (1 inside, 0 outside), by solid angles.
 double windingNumber(const TriangleMesh& m, const Vec3d& p) {
@@ -117,16 +115,20 @@ void checkInputMesh(const TriangleMesh& mesh) {
   if (mesh.triangles.empty()) throw InputError("cut", "surface mesh", "has no triangles");
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
     for (int v : mesh.triangles[t])
-      if (v < 0 || v >= n) throw InputError("cut", "surface mesh", "triangle " + std::to_string(t) + " has a vertex index out of range");
+      if (v < 0 || v >= n)
+        throw InputError("cut", "surface mesh", "triangle " + std::to_string(t) + " has a vertex index out of range");
   for (int i = 0; i < n; ++i)
-    if (!isFinite(mesh.vertices[std::size_t(i)])) throw InputError("cut", "surface mesh", "vertex " + std::to_string(i) + " is not finite");
+    if (!isFinite(mesh.vertices[std::size_t(i)]))
+      throw InputError("cut", "surface mesh", "vertex " + std::to_string(i) + " is not finite");
   const MeshReport r = analyzeMesh(mesh);
   if (r.boundary_edges > 0)
     throw InputError("cut", "surface mesh", "not closed: " + std::to_string(r.boundary_edges) + " boundary edges");
   if (r.non_manifold_edges > 0)
-    throw InputError("cut", "surface mesh", "not manifold: " + std::to_string(r.non_manifold_edges) + " edges with more than two triangles");
+    throw InputError("cut", "surface mesh",
+                     "not manifold: " + std::to_string(r.non_manifold_edges) + " edges with more than two triangles");
   if (r.inconsistent_edges > 0)
-    throw InputError("cut", "surface mesh", "inconsistently oriented: " + std::to_string(r.inconsistent_edges) + " edges");
+    throw InputError("cut", "surface mesh",
+                     "inconsistently oriented: " + std::to_string(r.inconsistent_edges) + " edges");
   if (r.degenerate_triangles > 0)
     throw InputError("cut", "surface mesh", std::to_string(r.degenerate_triangles) + " degenerate triangles");
   const int pinched = nonManifoldVertexCount(mesh);
@@ -156,7 +158,8 @@ class Splitter {
       out.mesh = m_;
       out.vertex_side.resize(m_.vertices.size());
       for (std::size_t v = 0; v < m_.vertices.size(); ++v)
-        out.vertex_side[v] = std::int8_t(!far_[v] ? side_[v] : (projectOntoSweep(s_, dom_, query_, m_.vertices[v]).offset >= 0.0 ? 1 : -1));
+        out.vertex_side[v] = std::int8_t(
+            !far_[v] ? side_[v] : (projectOntoSweep(s_, dom_, query_, m_.vertices[v]).offset >= 0.0 ? 1 : -1));
       out.binding_probe = m_.vertices;
       out.source_triangle.resize(m_.triangles.size());
       std::iota(out.source_triangle.begin(), out.source_triangle.end(), 0);
@@ -221,12 +224,12 @@ class Splitter {
 
   // classifyVertices' working state, phase to phase.
   struct VertexSnap {
-    std::vector<Vec3d> vertex_normal;   // outward, area-weighted
-    std::vector<double> shortest;       // per vertex: its shortest edge
+    std::vector<Vec3d> vertex_normal;      // outward, area-weighted
+    std::vector<double> shortest;          // per vertex: its shortest edge
     std::vector<std::vector<int>> groups;  // coincident vertices
     std::vector<int> group_of;
-    std::vector<char> cand;             // per group: a snap candidate
-    std::vector<char> ok_over_strip;    // per candidate group: lies over the strip, away from its outline
+    std::vector<char> cand;           // per group: a snap candidate
+    std::vector<char> ok_over_strip;  // per candidate group: lies over the strip, away from its outline
     std::vector<std::vector<std::pair<int, int>>> links;  // umbrella rings (neighbours in cyclic order)
   };
 
@@ -285,7 +288,7 @@ class Splitter {
       }
       proj_[v] = projectOntoSweep(s_, dom_, query_, x);
       side_[v] = std::fabs(proj_[v].offset) <= 1e-12 * size_ ? materialSide(snap, int(v), proj_[v].offset)
-                                                               : (proj_[v].offset >= 0.0 ? 1 : -1);
+                                                             : (proj_[v].offset >= 0.0 ? 1 : -1);
     }
   }
 
@@ -379,7 +382,9 @@ class Splitter {
         if (side_[std::size_t(t[0])] != 0 || side_[std::size_t(t[1])] != 0 || side_[std::size_t(t[2])] != 0) continue;
         int far = t[0];  // a triangle of three snapped corners would lie in the cut: release the farthest one
         for (int v : t)
-          if (std::fabs(offset(v)) > std::fabs(offset(far)) || (std::fabs(offset(v)) == std::fabs(offset(far)) && v > far)) far = v;
+          if (std::fabs(offset(v)) > std::fabs(offset(far)) ||
+              (std::fabs(offset(v)) == std::fabs(offset(far)) && v > far))
+            far = v;
         unsnap(snap, std::size_t(snap.group_of[std::size_t(far)]));
         changed = true;
       }
@@ -478,14 +483,20 @@ class Splitter {
   static Corner V(int v) { return {v, -1, 0}; }
   static Corner N(int n, int s) { return {-1, n, s}; }
 
-  void addPiece(int source, const Corner& a, const Corner& b, const Corner& c) { pieces_.push_back({source, {a, b, c}}); }
+  void addPiece(int source, const Corner& a, const Corner& b, const Corner& c) {
+    pieces_.push_back({source, {a, b, c}});
+  }
 
   // Quad q0 q1 q2 q3 (convex, counter-clockwise) as two triangles over the diagonal that gives the larger
   // smallest angle.
   void addQuad(int source, const Corner q[4]) {
-    const auto pos = [&](const Corner& c) { return c.vertex >= 0 ? m_.vertices[std::size_t(c.vertex)] : nodes_[std::size_t(c.node)].x; };
-    const double a02 = std::min(triangleMinAngleDeg(pos(q[0]), pos(q[1]), pos(q[2])), triangleMinAngleDeg(pos(q[0]), pos(q[2]), pos(q[3])));
-    const double a13 = std::min(triangleMinAngleDeg(pos(q[0]), pos(q[1]), pos(q[3])), triangleMinAngleDeg(pos(q[1]), pos(q[2]), pos(q[3])));
+    const auto pos = [&](const Corner& c) {
+      return c.vertex >= 0 ? m_.vertices[std::size_t(c.vertex)] : nodes_[std::size_t(c.node)].x;
+    };
+    const double a02 = std::min(triangleMinAngleDeg(pos(q[0]), pos(q[1]), pos(q[2])),
+                                triangleMinAngleDeg(pos(q[0]), pos(q[2]), pos(q[3])));
+    const double a13 = std::min(triangleMinAngleDeg(pos(q[0]), pos(q[1]), pos(q[3])),
+                                triangleMinAngleDeg(pos(q[1]), pos(q[2]), pos(q[3])));
     if (a02 >= a13) {
       addPiece(source, q[0], q[1], q[2]);
       addPiece(source, q[0], q[2], q[3]);
@@ -506,8 +517,8 @@ class Splitter {
     const int nb = int(dom_.boundary.size());
     double best = 1.0;
     for (int i = 0; i < nb; ++i) {
-      const Vec2d &p = dom_.uv[std::size_t(dom_.boundary[std::size_t(i)])];
-      const Vec2d &q = dom_.uv[std::size_t(dom_.boundary[std::size_t((i + 1) % nb)])];
+      const Vec2d& p = dom_.uv[std::size_t(dom_.boundary[std::size_t(i)])];
+      const Vec2d& q = dom_.uv[std::size_t(dom_.boundary[std::size_t((i + 1) % nb)])];
       const double rx = b[0] - a[0], ry = b[1] - a[1], sx = q[0] - p[0], sy = q[1] - p[1];
       const double den = rx * sy - ry * sx;
       if (den == 0.0) continue;
@@ -550,7 +561,8 @@ class Splitter {
         // The edge Z1 Z2 is on the crossing curve when the triangle across it lies on the other side; the +
         // triangle links it (A on the left of Z1 -> Z2).
         const int e = edgeOf((k + 1) % 3);
-        const int other = edge_tris_[std::size_t(e)][0] == int(t) ? edge_tris_[std::size_t(e)][1] : edge_tris_[std::size_t(e)][0];
+        const int other =
+            edge_tris_[std::size_t(e)][0] == int(t) ? edge_tris_[std::size_t(e)][1] : edge_tris_[std::size_t(e)][0];
         int third = -1;
         for (int v : m_.triangles[std::size_t(other)])
           if (v != Z1 && v != Z2) third = v;
@@ -573,13 +585,19 @@ class Splitter {
           const int x = crossingNode(edgeOf((k + 1) % 3));
           addPiece(src, N(z, sA), V(A), N(x, sA));
           addPiece(src, N(z, sB), N(x, sB), V(B));
-          if (sB > 0) link(z, x); else link(x, z);
+          if (sB > 0)
+            link(z, x);
+          else
+            link(x, z);
         } else {
           const int p = frontPoint(m_.vertices[std::size_t(Z)], proj_[std::size_t(Z)].uv, xab);
           addPiece(src, N(z, sA), V(A), N(p, 0));
           addPiece(src, V(A), V(B), N(p, 0));
           addPiece(src, V(B), N(z, sB), N(p, 0));
-          if (sB > 0) link(z, p); else link(p, z);
+          if (sB > 0)
+            link(z, p);
+          else
+            link(p, z);
         }
         continue;
       }
@@ -602,7 +620,10 @@ class Splitter {
         addPiece(src, V(L), N(xA, sL), N(xB, sL));
         const Corner quad[4] = {N(xA, sO), V(A), V(B), N(xB, sO)};
         addQuad(src, quad);
-        if (sL > 0) link(xA, xB); else link(xB, xA);
+        if (sL > 0)
+          link(xA, xB);
+        else
+          link(xB, xA);
         continue;
       }
       // The strip's outline passes through this triangle: the crossing curve ends at a cut-front point inside.
@@ -615,13 +636,19 @@ class Splitter {
         addPiece(src, N(x, sO), V(A), N(p, 0));
         addPiece(src, V(A), V(B), N(p, 0));
         addPiece(src, V(B), V(L), N(p, 0));
-        if (sL > 0) link(x, p); else link(p, x);
+        if (sL > 0)
+          link(x, p);
+        else
+          link(p, x);
       } else {
         addPiece(src, V(L), V(A), N(p, 0));
         addPiece(src, V(A), V(B), N(p, 0));
         addPiece(src, V(B), N(x, sO), N(p, 0));
         addPiece(src, N(x, sL), V(L), N(p, 0));
-        if (sL < 0) link(x, p); else link(p, x);
+        if (sL < 0)
+          link(x, p);
+        else
+          link(p, x);
       }
     }
   }
@@ -644,7 +671,8 @@ class Splitter {
     }
     std::sort(corners.begin(), corners.end());
     for (const auto& c : corners)
-      if (c.first > 0.25 * h_ && len - c.first > 0.25 * h_) pts.push_back(dom_.uv[std::size_t(dom_.boundary[std::size_t(c.second)])]);
+      if (c.first > 0.25 * h_ && len - c.first > 0.25 * h_)
+        pts.push_back(dom_.uv[std::size_t(dom_.boundary[std::size_t(c.second)])]);
     pts.push_back(to);
     for (std::size_t i = 0; i + 1 < pts.size(); ++i) {
       if (i > 0) addFront(pts[i], loop);
@@ -673,15 +701,18 @@ class Splitter {
     for (std::size_t t = 0; t < m_.triangles.size(); ++t)
       if (touched_[t])
         for (int k = 0; k < 3; ++k) {
-          len += norm(m_.vertices[std::size_t(m_.triangles[t][k])] - m_.vertices[std::size_t(m_.triangles[t][(k + 1) % 3])]);
+          len += norm(m_.vertices[std::size_t(m_.triangles[t][k])] -
+                      m_.vertices[std::size_t(m_.triangles[t][(k + 1) % 3])]);
           ++count;
         }
     h_ = opt_.wall_spacing_factor * len / std::max(1, count);
     for (std::size_t i = 0; i < nodes_.size(); ++i) {
       const bool has_next = next_.count(int(i)) > 0, has_prev = prev_.count(int(i)) > 0;
       const bool on_curve = nodes_[i].kind == NodeKind::Crossing || nodes_[i].kind == NodeKind::OnVertex;
-      if (on_curve && !(has_next && has_prev)) throw CutInconsistent("the crossing curve is open at a mesh edge or vertex");
-      if (nodes_[i].kind == NodeKind::Pierce && has_next == has_prev) throw CutInconsistent("a cut-front point is not a chain end");
+      if (on_curve && !(has_next && has_prev))
+        throw CutInconsistent("the crossing curve is open at a mesh edge or vertex");
+      if (nodes_[i].kind == NodeKind::Pierce && has_next == has_prev)
+        throw CutInconsistent("a cut-front point is not a chain end");
     }
     const double per = dom_.perimeter();
     // Next cut-front point counter-clockwise along the outline after the chain end `self`. Where the front
@@ -834,7 +865,8 @@ class Splitter {
         // in the strip's tangent plane: sees the material on both sides of the slit tip.
         Vec2d outward;
         const Vec2d q = outlinePoint(dom_, n.s, &outward);
-        const Vec3d probe = liftFromDomain(s_, dom_, {q[0] + 10.0 * probe_eps_ * outward[0], q[1] + 10.0 * probe_eps_ * outward[1]});
+        const Vec3d probe =
+            liftFromDomain(s_, dom_, {q[0] + 10.0 * probe_eps_ * outward[0], q[1] + 10.0 * probe_eps_ * outward[1]});
         n.v_plus = n.v_minus = addVertex(out, n.x, 0, probe);
         ++(n.kind == NodeKind::Pierce ? out.pierce_points : out.front_points);
       }
@@ -874,7 +906,8 @@ class Splitter {
         const std::array<int, 3> tri{cornerVertex(pc.c[0]), cornerVertex(pc.c[1]), cornerVertex(pc.c[2])};
         mesh.triangles.push_back(tri);
         out.source_triangle.push_back(int(t));
-        const Vec3d &a = mesh.vertices[std::size_t(tri[0])], &b = mesh.vertices[std::size_t(tri[1])], &c = mesh.vertices[std::size_t(tri[2])];
+        const Vec3d &a = mesh.vertices[std::size_t(tri[0])], &b = mesh.vertices[std::size_t(tri[1])],
+                    &c = mesh.vertices[std::size_t(tri[2])];
         out.min_split_angle_deg = std::min(out.min_split_angle_deg, triangleMinAngleDeg(a, b, c));
         out.min_split_area_m2 = std::min(out.min_split_area_m2, triangleArea(a, b, c));
       }
@@ -901,7 +934,8 @@ class Splitter {
         out.source_triangle.push_back(-1);
         out.wall.push_back(1);
       }
-      const Vec3d &a = mesh.vertices[std::size_t(minus[0])], &b = mesh.vertices[std::size_t(minus[1])], &c = mesh.vertices[std::size_t(minus[2])];
+      const Vec3d &a = mesh.vertices[std::size_t(minus[0])], &b = mesh.vertices[std::size_t(minus[1])],
+                  &c = mesh.vertices[std::size_t(minus[2])];
       out.min_wall_angle_deg = std::min(out.min_wall_angle_deg, triangleMinAngleDeg(a, b, c));
       out.min_wall_area_m2 = std::min(out.min_wall_area_m2, triangleArea(a, b, c));
     }
@@ -911,11 +945,13 @@ class Splitter {
   static void checkSplitMesh(SurfaceSplit& out) {
     const MeshReport rep = analyzeMesh(out.mesh);
     if (!rep.closed() || rep.inconsistent_edges != 0 || rep.degenerate_triangles != 0)
-      throw CutInconsistent("the split surface is not closed and oriented (boundary " + std::to_string(rep.boundary_edges) +
-                            ", non-manifold " + std::to_string(rep.non_manifold_edges) + ", inconsistent " +
-                            std::to_string(rep.inconsistent_edges) + ", degenerate " + std::to_string(rep.degenerate_triangles) + ")");
+      throw CutInconsistent(
+          "the split surface is not closed and oriented (boundary " + std::to_string(rep.boundary_edges) +
+          ", non-manifold " + std::to_string(rep.non_manifold_edges) + ", inconsistent " +
+          std::to_string(rep.inconsistent_edges) + ", degenerate " + std::to_string(rep.degenerate_triangles) + ")");
     const int bad_vertices = nonManifoldVertexCount(out.mesh);
-    if (bad_vertices != 0) throw CutInconsistent(std::to_string(bad_vertices) + " non-manifold vertices after the split");
+    if (bad_vertices != 0)
+      throw CutInconsistent(std::to_string(bad_vertices) + " non-manifold vertices after the split");
     out.components = rep.components;
   }
 
@@ -926,7 +962,8 @@ class Splitter {
     const std::size_t nv = mesh.vertices.size(), n_in = m_.vertices.size();
     std::vector<std::vector<int>> adj(nv);
     for (const auto& t : mesh.triangles)
-      for (int k = 0; k < 3; ++k) adj[std::size_t(t[k])].push_back(t[(k + 1) % 3]), adj[std::size_t(t[(k + 1) % 3])].push_back(t[k]);
+      for (int k = 0; k < 3; ++k)
+        adj[std::size_t(t[k])].push_back(t[(k + 1) % 3]), adj[std::size_t(t[(k + 1) % 3])].push_back(t[k]);
     std::vector<int> queue;
     std::vector<char> seen(nv, 0);
     for (std::size_t v = 0; v < nv; ++v)
@@ -942,7 +979,8 @@ class Splitter {
     }
     for (std::size_t v = 0; v < n_in; ++v)
       if (!seen[v])
-        out.vertex_side[v] = std::int8_t(!far_[v] ? side_[v] : (projectOntoSweep(s_, dom_, query_, m_.vertices[v]).offset >= 0.0 ? 1 : -1));
+        out.vertex_side[v] = std::int8_t(
+            !far_[v] ? side_[v] : (projectOntoSweep(s_, dom_, query_, m_.vertices[v]).offset >= 0.0 ? 1 : -1));
   }
 
   struct Piece {
@@ -959,11 +997,11 @@ class Splitter {
   std::vector<std::array<int, 2>> edges_;
   std::vector<int> tri_edge_;
   std::vector<std::array<int, 2>> edge_tris_;
-  std::vector<int> side_;                // +1 / -1, 0 = snapped onto the cut
-  std::vector<SweepProjection> proj_;    // per input vertex (not for far ones)
-  std::vector<char> far_;                // farther than two edges from the strip's bounding box
+  std::vector<int> side_;              // +1 / -1, 0 = snapped onto the cut
+  std::vector<SweepProjection> proj_;  // per input vertex (not for far ones)
+  std::vector<char> far_;              // farther than two edges from the strip's bounding box
   std::vector<std::vector<int>> adj_;
-  std::vector<int> vertex_node_;         // node of a snapped vertex, -1
+  std::vector<int> vertex_node_;  // node of a snapped vertex, -1
   std::vector<EdgeCrossing> edge_x_;
   std::vector<Node> nodes_;
   std::vector<int> pierces_;
@@ -1004,7 +1042,8 @@ SurfaceSplit splitSurfaceBySweep(const TriangleMesh& mesh, const SweptSurface& s
       reason = e.what();
     }
   }
-  throw CutSplitFailed("the split stayed inconsistent after " + std::to_string(opt.max_attempts) + " perturbed attempts: " + reason);
+  throw CutSplitFailed("the split stayed inconsistent after " + std::to_string(opt.max_attempts) +
+                       " perturbed attempts: " + reason);
 }
 
 }  // namespace inc

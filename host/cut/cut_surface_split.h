@@ -7,8 +7,8 @@
 #include <string>
 
 #include "host/cut/cut_swept_surface.h"
-#include "model/input_error.h"
 #include "host/io/mesh.h"
+#include "model/input_error.h"
 
 namespace inc {
 
@@ -43,13 +43,13 @@ struct SurfaceSplitOptions {
 // closed mesh whose two walls meet along the cut front.
 struct SurfaceSplit {
   TriangleMesh mesh;
-  std::vector<std::int8_t> vertex_side;        // +1 / -1: side of the swept surface (its normal: motion x blade);
-                                               // 0: on the cut front, shared by both walls
-  std::vector<Vec3d> binding_probe;            // per vertex: where a skin binding looks from (a new vertex: just
-                                               // off the swept surface on its side; the front: just ahead of it)
-  std::vector<std::int32_t> source_triangle;   // per triangle: the input triangle it is part of, -1 for a wall
-  std::vector<std::uint8_t> wall;              // per triangle: 1 = cut wall (both sides)
-  bool split = false;  // false: the blade crosses no triangle (the mesh is returned unchanged)
+  std::vector<std::int8_t> vertex_side;       // +1 / -1: side of the swept surface (its normal: motion x blade);
+                                              // 0: on the cut front, shared by both walls
+  std::vector<Vec3d> binding_probe;           // per vertex: where a skin binding looks from (a new vertex: just
+                                              // off the swept surface on its side; the front: just ahead of it)
+  std::vector<std::int32_t> source_triangle;  // per triangle: the input triangle it is part of, -1 for a wall
+  std::vector<std::uint8_t> wall;             // per triangle: 1 = cut wall (both sides)
+  bool split = false;                         // false: the blade crosses no triangle (the mesh is returned unchanged)
   std::string failure;  // applySurfaceCut only: why the surface was left unsplit (CutSplitFailed), else empty
   int crossings = 0, front_points = 0, pierce_points = 0, contour_loops = 0, wall_triangles = 0, components = 0;
   int attempts = 0, chord_splits = 0;

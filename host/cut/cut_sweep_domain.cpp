@@ -51,7 +51,8 @@ void domainBarycentric(const SweepDomain& d, const std::array<int, 3>& t, const 
 
 SweepDomain unfoldSweptSurface(const SweptSurface& s) {
   const int nv = int(s.vertices.size());
-  if (nv < 4 || nv % 2 != 0) bad("needs at least two blade poses (base, tip per pose), got " + std::to_string(nv) + " vertices");
+  if (nv < 4 || nv % 2 != 0)
+    bad("needs at least two blade poses (base, tip per pose), got " + std::to_string(nv) + " vertices");
   if (s.triangles.empty()) bad("empty: the blade did not move");
   for (int i = 0; i < nv; ++i)
     if (!isFinite(s.vertices[i])) bad("vertex " + std::to_string(i) + " is not finite");
@@ -73,7 +74,8 @@ SweepDomain unfoldSweptSurface(const SweptSurface& s) {
   for (int k = 0; 2 * k + 3 < nv; ++k) {
     // (2k, 2k+2, 2k+1) and (2k+1, 2k+2, 2k+3) counter-clockwise, their edge lengths kept.
     d.uv[2 * k + 2] = placeLeft(d.uv[2 * k + 1], d.uv[2 * k], dist(2 * k + 1, 2 * k + 2), dist(2 * k, 2 * k + 2));
-    d.uv[2 * k + 3] = placeLeft(d.uv[2 * k + 1], d.uv[2 * k + 2], dist(2 * k + 1, 2 * k + 3), dist(2 * k + 2, 2 * k + 3));
+    d.uv[2 * k + 3] =
+        placeLeft(d.uv[2 * k + 1], d.uv[2 * k + 2], dist(2 * k + 1, 2 * k + 3), dist(2 * k + 2, 2 * k + 3));
   }
   // Outline: base rail forward, last blade, tip rail backward, first blade; repeated points (a blade end that
   // did not move) dropped.
@@ -121,7 +123,8 @@ SweepDomain unfoldSweptSurface(const SweptSurface& s) {
   return d;
 }
 
-SweepProjection projectOntoSweep(const SweptSurface& s, const SweepDomain& d, const SweptSurfaceQuery& query, const Vec3d& p) {
+SweepProjection projectOntoSweep(const SweptSurface& s, const SweepDomain& d, const SweptSurfaceQuery& query,
+                                 const Vec3d& p) {
   SweepProjection r;
   r.triangle = query.closestTriangle(p, r.closest);
   const auto& t = s.triangles[std::size_t(r.triangle)];

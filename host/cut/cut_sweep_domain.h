@@ -16,11 +16,11 @@ using Vec2d = std::array<double, 2>;
 // along an arc) and a per-triangle isometry otherwise. Coordinates in metres. The cut walls are triangulated
 // here (section 5.5 of the paper: constrained Delaunay "on the sweep surface").
 struct SweepDomain {
-  std::vector<Vec2d> uv;                 // per swept vertex
-  std::vector<int> boundary;             // swept vertex ids of the strip's outline, counter-clockwise
-  std::vector<double> boundary_s;        // arc length at each boundary vertex (size boundary.size() + 1)
-  double diameter = 0.0;                 // of the domain's bounding box (m)
-  Vec3d box_lo, box_hi;                  // bounding box of the swept surface (m)
+  std::vector<Vec2d> uv;           // per swept vertex
+  std::vector<int> boundary;       // swept vertex ids of the strip's outline, counter-clockwise
+  std::vector<double> boundary_s;  // arc length at each boundary vertex (size boundary.size() + 1)
+  double diameter = 0.0;           // of the domain's bounding box (m)
+  Vec3d box_lo, box_hi;            // bounding box of the swept surface (m)
   double perimeter() const { return boundary_s.back(); }
 };
 

@@ -115,7 +115,8 @@ bool SweptSurfaceQuery::segmentCrosses(const Vec3d& p, const Vec3d& q) const {
     if (shi.x < lo.x || slo.x > hi.x || shi.y < lo.y || slo.y > hi.y || shi.z < lo.z || slo.z > hi.z) continue;
     for (std::size_t i = b * kBlock; i < std::min(nt, (b + 1) * kBlock); ++i) {
       const auto& t = s_.triangles[i];
-      if (crossesTriangle(p, q, s_.vertices[t[0]], s_.vertices[t[1]], s_.vertices[t[2]], lo_[i], hi_[i], n_[i])) return true;
+      if (crossesTriangle(p, q, s_.vertices[t[0]], s_.vertices[t[1]], s_.vertices[t[2]], lo_[i], hi_[i], n_[i]))
+        return true;
     }
   }
   return false;

@@ -67,13 +67,17 @@ class WallCdt {
     const int nn = int(in_.uv.size());
     std::vector<std::pair<Point, NodeId>> pts;
     pts.reserve(in_.uv.size() + interior.size());
-    for (int i = 0; i < nn; ++i) pts.push_back({Point(in_.uv[std::size_t(i)][0], in_.uv[std::size_t(i)][1]), NodeId{i}});
-    for (std::size_t i = 0; i < interior.size(); ++i) pts.push_back({Point(interior[i][0], interior[i][1]), NodeId{nn + int(i)}});
+    for (int i = 0; i < nn; ++i)
+      pts.push_back({Point(in_.uv[std::size_t(i)][0], in_.uv[std::size_t(i)][1]), NodeId{i}});
+    for (std::size_t i = 0; i < interior.size(); ++i)
+      pts.push_back({Point(interior[i][0], interior[i][1]), NodeId{nn + int(i)}});
     cdt_.insert(pts.begin(), pts.end());
     if (cdt_.number_of_vertices() != pts.size()) throw CutInconsistent("two cut-wall points coincide");
     handles_.assign(pts.size(), Cdt::Vertex_handle());
-    for (auto v = cdt_.finite_vertices_begin(); v != cdt_.finite_vertices_end(); ++v) handles_[std::size_t(v->info().id)] = v;
-    for (const auto& e : directed_) cdt_.insert_constraint(handles_[std::size_t(e.first)], handles_[std::size_t(e.second)]);
+    for (auto v = cdt_.finite_vertices_begin(); v != cdt_.finite_vertices_end(); ++v)
+      handles_[std::size_t(v->info().id)] = v;
+    for (const auto& e : directed_)
+      cdt_.insert_constraint(handles_[std::size_t(e.first)], handles_[std::size_t(e.second)]);
     if (cdt_.number_of_vertices() != pts.size()) throw CutInconsistent("cut loops intersect each other");
     for (const auto& e : directed_) {
       Cdt::Face_handle f;

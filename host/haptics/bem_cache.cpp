@@ -9,8 +9,8 @@
 #include <filesystem>
 #include <sstream>
 
-#include "model/input_error.h"
 #include "base/format_number.h"
+#include "model/input_error.h"
 
 namespace inc {
 
@@ -117,8 +117,8 @@ BemCacheRead readBemCache(const std::string& path, const BemCacheKey& key, Organ
   const Eigen::Index n = Eigen::Index(3 * E);
   if (h.local_radius_m == key.local_radius_m && h.local_spacing_m == key.local_spacing_m) {
     OrganContactTable t;
-    if (readMatrix(f, t.stiffness, 9, Eigen::Index(E)) && readMatrix(f, t.surface, n, n) && tableHash(t) == h.table_hash &&
-        t.stiffness.allFinite() && t.surface.allFinite()) {
+    if (readMatrix(f, t.stiffness, 9, Eigen::Index(E)) && readMatrix(f, t.surface, n, n) &&
+        tableHash(t) == h.table_hash && t.stiffness.allFinite() && t.surface.allFinite()) {
       table = std::move(t);
       out.table = true;
       return out;

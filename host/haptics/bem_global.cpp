@@ -27,8 +27,13 @@ const TriRule& triRule() {
     TriRule t{};
     const double a1 = 0.059715871789770, b1 = 0.470142064105115, w1 = 0.132394152788506;
     const double a2 = 0.797426985353087, b2 = 0.101286507323456, w2 = 0.125939180544827;
-    const double pts[7][3] = {{1.0 / 3, 1.0 / 3, 1.0 / 3}, {a1, b1, b1}, {b1, a1, b1}, {b1, b1, a1},
-                              {a2, b2, b2}, {b2, a2, b2}, {b2, b2, a2}};
+    const double pts[7][3] = {{1.0 / 3, 1.0 / 3, 1.0 / 3},
+                              {a1, b1, b1},
+                              {b1, a1, b1},
+                              {b1, b1, a1},
+                              {a2, b2, b2},
+                              {b2, a2, b2},
+                              {b2, b2, a2}};
     const double ws[7] = {0.225, w1, w1, w1, w2, w2, w2};
     for (int i = 0; i < 7; ++i) {
       for (int k = 0; k < 3; ++k) t.b[i][k] = pts[i][k];
@@ -102,14 +107,15 @@ int subdivisionLevel(double dist, double size) {
 }  // namespace
 
 TriangleMesh icosphereMesh(double radius_m, int level) {
-  if (!(radius_m > 0.0) || level < 0 || level > 6) throw InputError("<icosphere>", "level", "radius > 0, level in [0, 6]");
+  if (!(radius_m > 0.0) || level < 0 || level > 6)
+    throw InputError("<icosphere>", "level", "radius > 0, level in [0, 6]");
   const double t = (1.0 + std::sqrt(5.0)) / 2.0;
   TriangleMesh m;
-  m.vertices = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-  m.triangles = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+  m.vertices = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+  m.triangles = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
                  {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
-                 {3, 8, 9},  {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+                 {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
   for (auto& v : m.vertices) v = v * (1.0 / norm(v));
   for (int l = 0; l < level; ++l) {
     std::map<std::pair<int, int>, int> mid;
@@ -142,14 +148,16 @@ TriangleMesh icosphereMesh(double radius_m, int level) {
 }
 
 TriangleMesh uvSphereMesh(double radius_m, int bands, int segments) {
-  if (!(radius_m > 0.0) || bands < 2 || segments < 3) throw InputError("<uv sphere>", "bands", "bands >= 2, segments >= 3");
+  if (!(radius_m > 0.0) || bands < 2 || segments < 3)
+    throw InputError("<uv sphere>", "bands", "bands >= 2, segments >= 3");
   TriangleMesh m;
   m.vertices.push_back({0, 0, radius_m});
   for (int b = 1; b < bands; ++b) {
     const double th = M_PI * b / bands;
     for (int s = 0; s < segments; ++s) {
       const double ph = 2.0 * M_PI * s / segments;
-      m.vertices.push_back({radius_m * std::sin(th) * std::cos(ph), radius_m * std::sin(th) * std::sin(ph), radius_m * std::cos(th)});
+      m.vertices.push_back(
+          {radius_m * std::sin(th) * std::cos(ph), radius_m * std::sin(th) * std::sin(ph), radius_m * std::cos(th)});
     }
   }
   m.vertices.push_back({0, 0, -radius_m});
@@ -273,8 +281,10 @@ Eigen::VectorXd BemModel::rhs(const Eigen::VectorXd& known, const std::vector<Be
   for (int j = 0; j < elementCount(); ++j) {
     const Eigen::Vector3d v = known.segment<3>(3 * j);
     if (v.isZero(0.0)) continue;
-    if (bc[j] == BemBc::kTraction) f += G_.middleCols(3 * j, 3) * v;
-    else f -= H_.middleCols(3 * j, 3) * v;
+    if (bc[j] == BemBc::kTraction)
+      f += G_.middleCols(3 * j, 3) * v;
+    else
+      f -= H_.middleCols(3 * j, 3) * v;
   }
   return f;
 }
@@ -322,7 +332,8 @@ void BemModel::factorBase(const std::vector<BemBc>& base, const Progress& progre
 void BemModel::setBaseInverse(const std::vector<BemBc>& base, Eigen::MatrixXd a_inv) {
   if (int(base.size()) != elementCount()) throw InputError("<bem model>", "base", "need one condition per element");
   if (a_inv.rows() != H_.rows() || a_inv.cols() != H_.cols())
-    throw InputError("<bem model>", "inverse", "must be " + std::to_string(H_.rows()) + " x " + std::to_string(H_.cols()));
+    throw InputError("<bem model>", "inverse",
+                     "must be " + std::to_string(H_.rows()) + " x " + std::to_string(H_.cols()));
   if (!a_inv.allFinite()) throw InputError("<bem model>", "base", "system is singular (no displacement support?)");
   base_ = base;
   a_inv_ = std::move(a_inv);

@@ -7,9 +7,9 @@
 
 #include <Eigen/Dense>
 
+#include "host/compiled/bem_organ_mesh.h"  // BemBc: an element's boundary condition
 #include "host/io/mesh.h"
 #include "model/material.h"
-#include "host/compiled/bem_organ_mesh.h"  // BemBc: an element's boundary condition
 
 namespace inc {
 
@@ -17,7 +17,6 @@ namespace inc {
 // triangles); latitude-longitude sphere with `bands` x `segments` (2 * segments * (bands - 1)).
 TriangleMesh icosphereMesh(double radius_m, int level);
 TriangleMesh uvSphereMesh(double radius_m, int bands, int segments);
-
 
 // Linear elastostatics on a closed, outward-oriented triangle mesh: piecewise-constant u and t per
 // element, collocation at centroids (Brebbia): c u_i + sum_j H^_ij u_j = sum_j G_ij t_j, where
@@ -38,7 +37,8 @@ class BemModel {
   // Quadrature of element j (points, weights in m^2 summing to its area): the degree-5 7-point rule on
   // 4^L sub-triangles, L = 0..3 growing as `near_point` gets closer (the rule of the assembly), for
   // integrands that vary like 1 / distance^n from near_point.
-  void elementQuadrature(int j, const Vec3d& near_point, std::vector<Vec3d>& points, std::vector<double>& weights) const;
+  void elementQuadrature(int j, const Vec3d& near_point, std::vector<Vec3d>& points,
+                         std::vector<double>& weights) const;
   const Eigen::MatrixXd& H() const { return H_; }
   const Eigen::MatrixXd& G() const { return G_; }
   double assemblySeconds() const { return assembly_s_; }
@@ -85,9 +85,9 @@ class BemModel {
   Eigen::MatrixXd H_, G_;
   std::vector<BemBc> base_;
   Eigen::MatrixXd a_inv_;
-  std::vector<int> contact_;        // element indices switched to displacement
-  std::vector<int> changed_cols_;   // 3 per contact element
-  Eigen::MatrixXd z_;               // A_base^-1 D
+  std::vector<int> contact_;       // element indices switched to displacement
+  std::vector<int> changed_cols_;  // 3 per contact element
+  Eigen::MatrixXd z_;              // A_base^-1 D
   Eigen::PartialPivLU<Eigen::MatrixXd> c_lu_;
   double assembly_s_ = 0.0, factor_s_ = 0.0;
 };

@@ -3,8 +3,8 @@
 
 #include <cmath>
 
-#include "model/input_error.h"
 #include "host/compiled/material_checks.h"
+#include "model/input_error.h"
 
 namespace inc {
 

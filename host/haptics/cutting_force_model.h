@@ -7,7 +7,6 @@
 
 namespace inc {
 
-
 struct CutForceOutput {
   CutMachine machine;
   ForceSplit<double> split;  // of the applied force (eq. 15)

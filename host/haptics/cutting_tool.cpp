@@ -12,7 +12,8 @@ CuttingTool::CuttingTool(Elastic elastic, const CutThresholds<double>& threshold
     : elastic_(std::move(elastic)), cut_(thresholds), surface_(surface_point_m), normal_(unit_normal) {
   if (!elastic_) throw InputError("<cutting tool>", "elastic", "no elastic force model");
   if (!isFinite(surface_point_m)) throw InputError("<cutting tool>", "surface_point_m", "must be finite");
-  if (!(std::fabs(norm(unit_normal) - 1.0) <= 1e-6)) throw InputError("<cutting tool>", "normal", "must be a unit vector");
+  if (!(std::fabs(norm(unit_normal) - 1.0) <= 1e-6))
+    throw InputError("<cutting tool>", "normal", "must be a unit vector");
 }
 
 ForceResult CuttingTool::tick(const ForceRequest& q) {
@@ -35,8 +36,8 @@ ForceResult CuttingTool::tick(const ForceRequest& q) {
   }
   // The force the tool applies to the tissue (eq. 15): minus the elastic reaction, and while cutting minus
   // the friction it overcomes.
-  const Vec3d friction = was_cutting ? cuttingFriction(velocity, normal_, depth, cut_.thresholds().friction_per_depth_n_per_m)
-                                     : Vec3d();
+  const Vec3d friction =
+      was_cutting ? cuttingFriction(velocity, normal_, depth, cut_.thresholds().friction_per_depth_n_per_m) : Vec3d();
   const CutForceOutput o = cut_.tick((r.force_n + friction) * -1.0, normal_, velocity, depth);
   r.force_n += o.friction_n;  // friction on the hand only while (still) cutting
   if (o.machine.start_cut || o.machine.stop_cut) {

@@ -14,7 +14,7 @@ struct CutEvent {
   bool start = false;  // true: cutting began; false: cutting ended
   std::uint64_t tick = 0;
   double t_s = 0.0;
-  Vec3d position_m;    // blade tip when the decision was taken
+  Vec3d position_m;                              // blade tip when the decision was taken
   double orientation[4] = {1.0, 0.0, 0.0, 0.0};  // the device's orientation then (w, x, y, z)
 };
 
@@ -26,8 +26,8 @@ struct TipContact {
 };
 
 // Composes an elastic force model (the local model's force on the hand for a tip displacement from the
-// tissue point under the blade, e.g. a TipStiffness or a GlobalOrganModel contact) with the cutting model (eqs. 15-16) on
-// the tissue surface plane through `surface_point_m` with outward `unit_normal`. Each tick:
+// tissue point under the blade, e.g. a TipStiffness or a GlobalOrganModel contact) with the cutting model (eqs. 15-16)
+// on the tissue surface plane through `surface_point_m` with outward `unit_normal`. Each tick:
 // - depth = how far the tip is below the plane; no depth, no contact: zero force, state idle.
 // - the anchor (the tissue point the elastic model measures the tip from) is set where the tip enters;
 //   while pressing or stopped it stays (the tissue sticks to the blade); while cutting it follows the tip

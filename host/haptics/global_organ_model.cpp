@@ -8,9 +8,9 @@
 #include <cstdio>
 #include <limits>
 
+#include "base/progress.h"
 #include "host/haptics/hybrid_model.h"
 #include "model/input_error.h"
-#include "base/progress.h"
 
 namespace inc {
 
@@ -69,9 +69,9 @@ GlobalOrganModel::GlobalOrganModel(GlobalOrganSetup setup, int hands) : mesh_(st
     throw InputError("<global organ model>", "supports", "need one condition per element");
   if (hands < 1) throw InputError("<global organ model>", "hands", "needs at least one tool");
   for (const auto& t : mesh_.triangles)
-    centroids_.push_back((mesh_.vertices[std::size_t(t[0])] + mesh_.vertices[std::size_t(t[1])] +
-                          mesh_.vertices[std::size_t(t[2])]) *
-                         (1.0 / 3.0));
+    centroids_.push_back(
+        (mesh_.vertices[std::size_t(t[0])] + mesh_.vertices[std::size_t(t[1])] + mesh_.vertices[std::size_t(t[2])]) *
+        (1.0 / 3.0));
   build(setup);
   for (int k = 0; k < hands; ++k) channels_.push_back(std::make_unique<TripleBuffer<OrganContact>>());
   u_ = Eigen::VectorXd::Zero(3 * E);
@@ -79,12 +79,13 @@ GlobalOrganModel::GlobalOrganModel(GlobalOrganSetup setup, int hands) : mesh_(st
 
 void GlobalOrganModel::build(const GlobalOrganSetup& s) {
   const auto t0 = std::chrono::steady_clock::now();
-  const BemCacheKey key =
-      bemCacheKey(mesh_, s.supports, s.material, s.local.radius_m, s.local.inner_spacing_m);
+  const BemCacheKey key = bemCacheKey(mesh_, s.supports, s.material, s.local.radius_m, s.local.inner_spacing_m);
   Eigen::MatrixXd a_inv;
   BemCacheRead cached;
-  if (!s.cache_path.empty()) cached = readBemCache(s.cache_path, key, table_, a_inv);
-  else cached.note = "no cache file";
+  if (!s.cache_path.empty())
+    cached = readBemCache(s.cache_path, key, table_, a_inv);
+  else
+    cached.note = "no cache file";
   if (cached.table) {
     precompute_.source = "loaded from the cache";
     precompute_.seconds = secondsSince(t0);
@@ -97,8 +98,10 @@ void GlobalOrganModel::build(const GlobalOrganSetup& s) {
   BemModel bem(mesh_, s.material, bar.phase(0.0, cached.inverse ? table_from : 0.15, "assembling H, G"));
   precompute_.assembly_s = secondsSince(t);
   t = std::chrono::steady_clock::now();
-  if (cached.inverse) bem.setBaseInverse(s.supports, std::move(a_inv));
-  else bem.factorBase(s.supports, bar.phase(0.15, table_from, "inverting A"));
+  if (cached.inverse)
+    bem.setBaseInverse(s.supports, std::move(a_inv));
+  else
+    bem.factorBase(s.supports, bar.phase(0.15, table_from, "inverting A"));
   precompute_.inverse_s = secondsSince(t);
   t = std::chrono::steady_clock::now();
   table_ = contactTable(bem, s.supports, s.local, s.material, bar.phase(table_from, 1.0, "contact table"));
@@ -165,12 +168,14 @@ void GlobalOrganModel::step() {
     const OrganContact& c = ch->front();
     if (!c.in_contact) continue;
     ++contacts_;
-    u_ += table_.surface.middleCols(3 * c.element, 3) * Eigen::Vector3d(c.organ_force_n.x, c.organ_force_n.y, c.organ_force_n.z);
+    u_ += table_.surface.middleCols(3 * c.element, 3) *
+          Eigen::Vector3d(c.organ_force_n.x, c.organ_force_n.y, c.organ_force_n.z);
   }
   // The half-space field is singular at a contact element: it follows its tool instead.
   for (auto& ch : channels_) {
     const OrganContact& c = ch->front();
-    if (c.in_contact) u_.segment<3>(3 * c.element) << c.tip_displacement_m.x, c.tip_displacement_m.y, c.tip_displacement_m.z;
+    if (c.in_contact)
+      u_.segment<3>(3 * c.element) << c.tip_displacement_m.x, c.tip_displacement_m.y, c.tip_displacement_m.z;
   }
   max_u_ = 0.0;
   for (int j = 0; j < elementCount(); ++j) max_u_ = std::max(max_u_, u_.segment<3>(3 * j).norm());

@@ -19,28 +19,28 @@
 namespace inc {
 
 struct GlobalOrganSetup {
-  TriangleMesh mesh;              // metres, checked (loadGlobalOrganMesh)
-  std::vector<BemBc> supports;    // one per element (organSupports): held elements carry displacement zero
+  TriangleMesh mesh;            // metres, checked (loadGlobalOrganMesh)
+  std::vector<BemBc> supports;  // one per element (organSupports): held elements carry displacement zero
   Material material;
-  HemisphereCloudSpec local;      // the tip's MFS cloud (haptics.local_*)
-  std::string cache_path;         // "": no cache
-  bool quiet = false;             // no progress bar
+  HemisphereCloudSpec local;  // the tip's MFS cloud (haptics.local_*)
+  std::string cache_path;     // "": no cache
+  bool quiet = false;         // no progress bar
   std::string label = "haptics: BEM precompute";
 };
 
 // How the precompute went.
 struct GlobalOrganPrecompute {
-  std::string source;   // "loaded from the cache", "built", "table rebuilt from the cached inverse"
-  std::string note;     // why the cache was not used (and a cache that could not be written); "" when loaded
+  std::string source;  // "loaded from the cache", "built", "table rebuilt from the cached inverse"
+  std::string note;    // why the cache was not used (and a cache that could not be written); "" when loaded
   double seconds = 0.0, assembly_s = 0.0, inverse_s = 0.0, table_s = 0.0;
 };
 
 // What hand k's haptic thread publishes each tick for the global step (one triple buffer per hand).
 struct OrganContact {
   bool in_contact = false;
-  int element = -1;            // the element nearest the tool's anchor
-  Vec3d tip_displacement_m;    // tip minus anchor, world
-  Vec3d organ_force_n;         // the force the tool applies to the organ, world
+  int element = -1;          // the element nearest the tool's anchor
+  Vec3d tip_displacement_m;  // tip minus anchor, world
+  Vec3d organ_force_n;       // the force the tool applies to the organ, world
 };
 
 // The precompute (docs/haptics.md, "Global model in the runner"): the BEM model is assembled and its base inverse

@@ -36,7 +36,8 @@ const HapticStatus& RealtimeHapticCutSession::newestStatus() {
 }
 
 CutFeed RealtimeHapticCutSession::applyDecisions(SimulationModel& sim) {
-  if (!sim.toolSupport().cut) throw InputError("<real-time haptic cut session>", "model", sim.name() + " cannot be cut by a tool");
+  if (!sim.toolSupport().cut)
+    throw InputError("<real-time haptic cut session>", "model", sim.name() + " cannot be cut by a tool");
   if (last_sim_ != &sim) cut_open_ = false;  // a rebuilt model has no open stroke
   last_sim_ = &sim;
   CutFeed feed;
@@ -44,8 +45,9 @@ CutFeed RealtimeHapticCutSession::applyDecisions(SimulationModel& sim) {
   while (tool_.events().pop(e)) {
     ++feed.events;
     ++decisions_;
-    const ToolResult r = sim.applyTool(bladeToolEvent(e.start ? ToolPhase::Press : ToolPhase::Release, e.position_m,
-                                                      e.orientation, config_.blade_axis_device, config_.blade_length_m));
+    const ToolResult r =
+        sim.applyTool(bladeToolEvent(e.start ? ToolPhase::Press : ToolPhase::Release, e.position_m, e.orientation,
+                                     config_.blade_axis_device, config_.blade_length_m));
     if (!r.supported) messages_.push_back(r.message);
     if (r.cut_applied) ++cuts_applied_;
     feed.cut_applied = feed.cut_applied || r.cut_applied;

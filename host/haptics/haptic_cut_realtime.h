@@ -21,8 +21,8 @@ struct RealtimeCutConfig {
 
 // What applyDecisions() handed to the cutting pipeline.
 struct CutFeed {
-  int events = 0;           // start/stop decisions applied
-  bool cut_applied = false; // a stop decision's Release applied a cut
+  int events = 0;            // start/stop decisions applied
+  bool cut_applied = false;  // a stop decision's Release applied a cut
 };
 
 // The threaded counterpart of HapticCutSession (which stays for replays and tests): start() runs the loop on its

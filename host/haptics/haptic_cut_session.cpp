@@ -46,13 +46,14 @@ HapticCutSession::HapticCutSession(SimulationModel& sim, HapticDevice& device, C
     : sim_(sim), tool_(tool), config_(config) {
   const char* f = "<haptic cut session>";
   if (!sim_.toolSupport().cut) throw InputError(f, "model", sim_.name() + " cannot be cut by a tool");
-  if (!(config_.frame_dt_s > 0.0) || !std::isfinite(config_.frame_dt_s)) throw InputError(f, "frame_dt_s", "must be > 0");
+  if (!(config_.frame_dt_s > 0.0) || !std::isfinite(config_.frame_dt_s))
+    throw InputError(f, "frame_dt_s", "must be > 0");
   if (!(config_.blade_length_m > 0.0) || !std::isfinite(config_.blade_length_m))
     throw InputError(f, "blade_length_m", "must be > 0");
   if (!(norm(config_.blade_axis_device) > 0.0)) throw InputError(f, "blade_axis_device", "must be non-zero");
   config_.blade_axis_device = config_.blade_axis_device * (1.0 / norm(config_.blade_axis_device));
-  loop_ = std::make_unique<HapticLoop>(device, [this](const ForceRequest& q) { return tool_.tick(q); }, config_.loop,
-                                       &clock_);
+  loop_ = std::make_unique<HapticLoop>(
+      device, [this](const ForceRequest& q) { return tool_.tick(q); }, config_.loop, &clock_);
   ticks_per_frame_ = std::max(1, int(std::lround(config_.frame_dt_s / loop_->period_s())));
 }
 
@@ -79,8 +80,8 @@ void HapticCutSession::runFrames(int frames) {
     CutEvent e;
     while (tool_.events().pop(e)) {
       ++fr.cut_events;
-      const ToolResult r = sim_.applyTool(bladeEvent(e.start ? ToolPhase::Press : ToolPhase::Release, e.position_m,
-                                                      e.orientation));
+      const ToolResult r =
+          sim_.applyTool(bladeEvent(e.start ? ToolPhase::Press : ToolPhase::Release, e.position_m, e.orientation));
       if (!r.supported) messages_.push_back(r.message);
       fr.cut_applied = fr.cut_applied || r.cut_applied;
       cut_open_ = e.start;

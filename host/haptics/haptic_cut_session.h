@@ -13,19 +13,19 @@
 namespace inc {
 
 struct HapticCutSessionConfig {
-  double frame_dt_s = 0.02;        // simulation frame; ticks per frame = round(frame_dt_s * loop.rate_hz)
-  double blade_length_m = 0.05;    // the blade: a segment of this length centred on the device's tip
+  double frame_dt_s = 0.02;          // simulation frame; ticks per frame = round(frame_dt_s * loop.rate_hz)
+  double blade_length_m = 0.05;      // the blade: a segment of this length centred on the device's tip
   Vec3d blade_axis_device{0, 0, 1};  // its direction in the device frame (turned by the sample's orientation)
   HapticLoopConfig loop;
 };
 
 // What the topology of the simulated organ is after a frame: what a replay must reproduce exactly.
 struct TopologySummary {
-  std::size_t particles = 0;          // spheres of a metaball organ
-  std::size_t links = 0;              // the model's "links" counter (sphere links), 0 when it has none
+  std::size_t particles = 0;  // spheres of a metaball organ
+  std::size_t links = 0;      // the model's "links" counter (sphere links), 0 when it has none
   std::size_t surface_triangles = 0;
   int cuts_applied = 0;
-  std::uint64_t position_hash = 0;    // FNV-1a of the bytes of every particle and surface vertex position
+  std::uint64_t position_hash = 0;  // FNV-1a of the bytes of every particle and surface vertex position
   bool operator==(const TopologySummary& o) const {
     return particles == o.particles && links == o.links && surface_triangles == o.surface_triangles &&
            cuts_applied == o.cuts_applied && position_hash == o.position_hash;
@@ -43,7 +43,7 @@ struct SessionFrame {
   std::uint64_t ticks_done = 0;  // haptic ticks run before this frame advanced
   int cut_events = 0;            // start/stop decisions handed to the cutting pipeline in this frame
   bool cut_applied = false;
-  TopologySummary topology;      // after the frame
+  TopologySummary topology;  // after the frame
 };
 
 // Deterministic interleaving (tests, replays, offline regression runs of interactive behaviour): each

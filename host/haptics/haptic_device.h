@@ -24,7 +24,6 @@ class HapticDevice {
   virtual std::string name() const = 0;
 };
 
-
 // Plays a trajectory. Mode kByTime linearly interpolates position (and normalised-lerps orientation)
 // at the tick's time, holding the end points outside the range: for authored paths. Mode kByTick
 // returns sample[tick] exactly (holding the last one): for bit-exact replay of a recorded session,
@@ -34,7 +33,10 @@ class ScriptedDevice : public HapticDevice {
   enum class Mode { kByTime, kByTick };
   ScriptedDevice(Trajectory trajectory, Mode mode, double max_force_n = 3.3);
   DeviceSample read(std::uint64_t tick, double t_s) override;
-  void writeForce(const Vec3d& force_n) override { last_force_n_ = force_n; ++forces_written_; }
+  void writeForce(const Vec3d& force_n) override {
+    last_force_n_ = force_n;
+    ++forces_written_;
+  }
   double maxForce_n() const override { return max_force_n_; }
   std::string name() const override { return "scripted"; }
   const Vec3d& lastForce_n() const { return last_force_n_; }

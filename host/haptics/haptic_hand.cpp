@@ -12,7 +12,8 @@ HapticHand::HapticHand(std::shared_ptr<HapticDevice> device, HapticHandConfig co
   if (!device_) throw InputError("<haptic hand>", "device", "no device");
   if (!config_.elastic) throw InputError("<haptic hand>", "elastic", "no elastic force model");
   if (config_.scalpel) {
-    cut_tool_ = std::make_unique<CuttingTool>(config_.elastic, config_.cut, config_.plane.point_m, config_.plane.normal);
+    cut_tool_ =
+        std::make_unique<CuttingTool>(config_.elastic, config_.cut, config_.plane.point_m, config_.plane.normal);
     RealtimeCutConfig rc;
     rc.blade_length_m = config_.blade_length_m;
     rc.blade_axis_device = config_.blade_axis_device;
@@ -40,8 +41,10 @@ void HapticHand::start() {
 }
 
 void HapticHand::stop() {
-  if (cut_session_) cut_session_->stop();
-  else if (probe_loop_) probe_loop_->stop();
+  if (cut_session_)
+    cut_session_->stop();
+  else if (probe_loop_)
+    probe_loop_->stop();
 }
 
 void HapticHand::beforeFrame(SimulationModel& model) {
@@ -69,14 +72,14 @@ void HapticHand::afterFrame(FrameReport& report) {
 std::string HapticHand::summary() const {
   const PeriodStats s = loop().stats();
   char buf[512];
-  std::snprintf(buf, sizeof buf,
-                "haptic loop %s%.0f Hz, device %s, tool %s, %s: %llu ticks, period p50 %.3f ms, p99 %.3f ms, max %.3f "
-                "ms, missed %llu, skipped %llu, compute p99 %.1f us",
-                config_.name.empty() ? "" : (config_.name + " ").c_str(), 1.0 / loop().period_s(),
-                device_->name().c_str(), cut_session_ ? "scalpel" : "probe",
-                loop().scheduling().realtime ? "SCHED_FIFO" : "normal scheduling", static_cast<unsigned long long>(s.ticks),
-                1e3 * s.p50_s, 1e3 * s.p99_s, 1e3 * s.max_s, static_cast<unsigned long long>(s.missed),
-                static_cast<unsigned long long>(s.skipped), 1e6 * s.compute_p99_s);
+  std::snprintf(
+      buf, sizeof buf,
+      "haptic loop %s%.0f Hz, device %s, tool %s, %s: %llu ticks, period p50 %.3f ms, p99 %.3f ms, max %.3f "
+      "ms, missed %llu, skipped %llu, compute p99 %.1f us",
+      config_.name.empty() ? "" : (config_.name + " ").c_str(), 1.0 / loop().period_s(), device_->name().c_str(),
+      cut_session_ ? "scalpel" : "probe", loop().scheduling().realtime ? "SCHED_FIFO" : "normal scheduling",
+      static_cast<unsigned long long>(s.ticks), 1e3 * s.p50_s, 1e3 * s.p99_s, 1e3 * s.max_s,
+      static_cast<unsigned long long>(s.missed), static_cast<unsigned long long>(s.skipped), 1e6 * s.compute_p99_s);
   std::string out = buf;
   if (cut_session_)
     out += ", cut decisions " + std::to_string(cut_session_->decisions()) + ", cuts applied " +

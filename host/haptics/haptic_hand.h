@@ -20,13 +20,13 @@ struct TissuePlane {
 };
 
 struct HapticHandConfig {
-  std::string name;                // "" for the single device of a scene, else its haptics.devices[i].name
+  std::string name;                       // "" for the single device of a scene, else its haptics.devices[i].name
   std::string counter_prefix = "haptic";  // model counters <prefix>_hz, <prefix>_p99_ms, ...
-  bool scalpel = false;            // a CuttingTool whose decisions cut the model; false: a ProbeTool
+  bool scalpel = false;                   // a CuttingTool whose decisions cut the model; false: a ProbeTool
   TissuePlane plane;
-  CuttingTool::Elastic elastic;    // the tissue's elastic reaction (tipElastic, or a global model's contact)
-  CutThresholds<double> cut;       // scalpel: eqs. 15-16 thresholds (material.cutting)
-  double blade_length_m = 0.05;    // scalpel
+  CuttingTool::Elastic elastic;      // the tissue's elastic reaction (tipElastic, or a global model's contact)
+  CutThresholds<double> cut;         // scalpel: eqs. 15-16 thresholds (material.cutting)
+  double blade_length_m = 0.05;      // scalpel
   Vec3d blade_axis_device{0, 0, 1};  // scalpel
   HapticLoopConfig loop;
 };

@@ -15,12 +15,12 @@ namespace inc {
 
 // The loop's rate and periods over its newest ticks, for the model counters haptic_hz, haptic_p50_ms, ...
 struct HapticWindow {
-  double rate_hz = 0.0;       // ticks per second over the window (1 / mean period)
-  double p50_ms = 0.0;        // median of the window's periods
-  double p99_ms = 0.0;        // 99th percentile of the window's periods
-  double max_ms = 0.0;        // longest period of the window
-  std::size_t periods = 0;    // periods in the window
-  std::uint64_t ticks = 0;    // ticks seen so far
+  double rate_hz = 0.0;     // ticks per second over the window (1 / mean period)
+  double p50_ms = 0.0;      // median of the window's periods
+  double p99_ms = 0.0;      // 99th percentile of the window's periods
+  double max_ms = 0.0;      // longest period of the window
+  std::size_t periods = 0;  // periods in the window
+  std::uint64_t ticks = 0;  // ticks seen so far
 };
 
 // Lock-free on the haptic side: stamp() pushes the tick time into an SPSC ring (never blocks; when the ring is

@@ -99,7 +99,8 @@ void HapticLoop::tick() {
   const ForceResult res = model_(req);
   // Safety chain: stall fade, clamp to the device maximum, rate limit from the last output.
   Vec3d f = res.force_n;
-  if (res.data_time_s >= 0.0) f = f * stallFadeGain(wake - res.data_time_s, config_.stall_after_s, config_.stall_fade_s);
+  if (res.data_time_s >= 0.0)
+    f = f * stallFadeGain(wake - res.data_time_s, config_.stall_after_s, config_.stall_fade_s);
   f = clampForce(f, device_.maxForce_n());
   f = rateLimitForce(last_force_n_, f, config_.max_force_rate_n_per_s, period_s_);
   device_.writeForce(f);
@@ -152,8 +153,10 @@ HapticScheduling HapticLoop::setUpThreadScheduling() {
     CPU_ZERO(&set);
     CPU_SET(config_.cpu, &set);
     const int e = pthread_setaffinity_np(pthread_self(), sizeof(set), &set);
-    if (e == 0) out.cpu = config_.cpu;
-    else out.message += "CPU " + std::to_string(config_.cpu) + " pinning refused (" + std::strerror(e) + "); ";
+    if (e == 0)
+      out.cpu = config_.cpu;
+    else
+      out.message += "CPU " + std::to_string(config_.cpu) + " pinning refused (" + std::strerror(e) + "); ";
   }
   if (config_.realtime) {
     sched_param p{};

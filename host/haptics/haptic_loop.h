@@ -42,7 +42,9 @@ class SteadyClock : public HapticClock {
 class FakeClock : public HapticClock {
  public:
   double now_s() override { return t_s_; }
-  void sleepUntil(double t_s) override { if (t_s > t_s_) t_s_ = t_s; }
+  void sleepUntil(double t_s) override {
+    if (t_s > t_s_) t_s_ = t_s;
+  }
   void advance(double dt_s) { t_s_ += dt_s; }
 
  private:
@@ -50,31 +52,31 @@ class FakeClock : public HapticClock {
 };
 
 struct HapticLoopConfig {
-  double rate_hz = 1000.0;              // loop rate; period = 1 / rate_hz
+  double rate_hz = 1000.0;                 // loop rate; period = 1 / rate_hz
   double max_force_rate_n_per_s = 1000.0;  // rate limiter: at 1 kHz, 1 N per tick at most
-  double stall_after_s = 1.0 / 30.0;    // simulation data older than this starts the fade
-  double stall_fade_s = 0.1;            // ... reaching zero force this much later
-  double late_tolerance = 0.1;          // a period > (1 + tol) * nominal counts as a missed deadline
-  std::size_t record_capacity = 600000; // ticks recorded (preallocated and pre-touched: no allocation or page
-                                        // fault in the loop)
-  double spin_margin_s = 2.0e-4;        // SteadyClock spin margin under normal (time-shared) scheduling
+  double stall_after_s = 1.0 / 30.0;       // simulation data older than this starts the fade
+  double stall_fade_s = 0.1;               // ... reaching zero force this much later
+  double late_tolerance = 0.1;             // a period > (1 + tol) * nominal counts as a missed deadline
+  std::size_t record_capacity = 600000;    // ticks recorded (preallocated and pre-touched: no allocation or page
+                                           // fault in the loop)
+  double spin_margin_s = 2.0e-4;           // SteadyClock spin margin under normal (time-shared) scheduling
   // Scheduling of the loop's own thread (start()): SCHED_FIFO at realtime_priority when the process may
   // (root / CAP_SYS_NICE / an rtprio limit), else the default policy with a message in scheduling().
   // Under SCHED_FIFO the thread preempts every normal thread the moment its sleep ends, so the spin margin
   // can be short; the thread still sleeps most of each period (it never starves the others).
   bool realtime = true;
-  int realtime_priority = 80;           // 1..99
+  int realtime_priority = 80;  // 1..99
   double realtime_spin_margin_s = 5.0e-5;
-  int cpu = -1;                         // >= 0: pin the loop thread to this CPU
+  int cpu = -1;  // >= 0: pin the loop thread to this CPU
 };
 
 // How the loop's thread is scheduled (filled by start()).
 struct HapticScheduling {
-  bool realtime = false;   // SCHED_FIFO granted
-  int priority = 0;        // its priority (0 under SCHED_OTHER)
-  int cpu = -1;            // pinned CPU, -1: none
+  bool realtime = false;  // SCHED_FIFO granted
+  int priority = 0;       // its priority (0 under SCHED_OTHER)
+  int cpu = -1;           // pinned CPU, -1: none
   double spin_margin_s = 0.0;
-  std::string message;     // what was asked, what was granted and why not (e.g. "SCHED_FIFO refused: ...")
+  std::string message;  // what was asked, what was granted and why not (e.g. "SCHED_FIFO refused: ...")
 };
 
 // What the force model is given each tick. dt_s is the nominal period (not the measured one) so that
@@ -98,8 +100,8 @@ struct TickRecord {
   double period_s = 0.0;   // t_s minus the previous tick's t_s (0 for the first)
   double compute_s = 0.0;  // device read + model + safety + device write
   DeviceSample sample;
-  Vec3d model_force_n;     // what the model asked for
-  Vec3d force_n;           // what was sent after fade, clamp and rate limit
+  Vec3d model_force_n;  // what the model asked for
+  Vec3d force_n;        // what was sent after fade, clamp and rate limit
 };
 
 struct PeriodStats {

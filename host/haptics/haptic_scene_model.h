@@ -16,7 +16,8 @@ namespace inc {
 // destroyed.
 class HapticSceneModel final : public SimulationModel {
  public:
-  HapticSceneModel(std::unique_ptr<SimulationModel> model, const CompiledScene& scene, SceneHapticsOptions options = {});
+  HapticSceneModel(std::unique_ptr<SimulationModel> model, const CompiledScene& scene,
+                   SceneHapticsOptions options = {});
   ~HapticSceneModel() override;
 
   SceneHaptics& haptics() { return *haptics_; }

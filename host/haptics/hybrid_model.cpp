@@ -25,10 +25,9 @@ double secondsSince(std::chrono::steady_clock::time_point t0) {
 
 }  // namespace
 
-HybridHapticModel::HybridHapticModel(BemModel& global, const HemisphereCloudSpec& local_spec,
-                                     const Material& material)
+HybridHapticModel::HybridHapticModel(BemModel& global, const HemisphereCloudSpec& local_spec, const Material& material)
     : global_(global), local_(mfsTipModel(local_spec, material)) {  // K_bb factorised once: the cloud moves with
-                                                                   // the contact, its stiffness does not
+                                                                    // the contact, its stiffness does not
   setUp();
 }
 
@@ -49,7 +48,8 @@ void HybridHapticModel::setUp() {
   for (int d : local_->coupledDofs()) {
     const Vec3d x = local_->cloud().nodes[d / 3];
     // The half-space field is singular at the contact point: the interface must keep away from it.
-    if (norm(x) < 0.25 * radius) throw InputError(f, "roles", "coupled DOFs must lie on the outer shell, away from the tool");
+    if (norm(x) < 0.25 * radius)
+      throw InputError(f, "roles", "coupled DOFs must lie on the outer shell, away from the tool");
     coupled_x_.push_back(x);
     coupled_dir_.push_back(d % 3);
   }
@@ -103,9 +103,10 @@ void HybridHapticModel::touch(int element) {
         boussinesqCerrutiStresses(xl, G, nu, sk, 1e-4, kGuardRel);
         for (int k = 0; k < 3; ++k) {
           const Mat3d& s = sk[k];
-          avg[k] += Vec3d{s(0, 0) * nl.x + s(0, 1) * nl.y + s(0, 2) * nl.z, s(1, 0) * nl.x + s(1, 1) * nl.y + s(1, 2) * nl.z,
-                          s(2, 0) * nl.x + s(2, 1) * nl.y + s(2, 2) * nl.z} *
-                    wts[q];
+          avg[k] +=
+              Vec3d{s(0, 0) * nl.x + s(0, 1) * nl.y + s(0, 2) * nl.z, s(1, 0) * nl.x + s(1, 1) * nl.y + s(1, 2) * nl.z,
+                    s(2, 0) * nl.x + s(2, 1) * nl.y + s(2, 2) * nl.z} *
+              wts[q];
         }
       } else {
         const Mat3d b = boussinesqCerrutiDisplacement(xl, G, nu, kGuardRel);
@@ -122,8 +123,10 @@ void HybridHapticModel::touch(int element) {
   const Eigen::MatrixXd y = global_.solve(known);  // the three load cases at once (one pass over the matrices)
   for (int k = 0; k < 3; ++k) {
     for (int j = 0; j < E; ++j) {
-      if (bc[j] == BemBc::kTraction) surface_r_.block<3, 1>(3 * j, k) = y.block<3, 1>(3 * j, k);
-      else surface_r_.block<3, 1>(3 * j, k) = known.block<3, 1>(3 * j, k);
+      if (bc[j] == BemBc::kTraction)
+        surface_r_.block<3, 1>(3 * j, k) = y.block<3, 1>(3 * j, k);
+      else
+        surface_r_.block<3, 1>(3 * j, k) = known.block<3, 1>(3 * j, k);
     }
     const Vec3d ur = toLocal(Vec3d{y(3 * element, k), y(3 * element + 1, k), y(3 * element + 2, k)});
     r_.col(k) << ur.x, ur.y, ur.z;
@@ -221,7 +224,7 @@ void HybridHapticModel::globalStep(const Vec3d& tip_displacement_world, double t
   if (touching_) {
     const Vec3d dl = toLocal(tip_displacement_world);
     const Eigen::Vector3d F = tool_op_ * Eigen::Vector3d(dl.x, dl.y, dl.z);  // on the organ, local frame
-    u_c_ = c_ * F;                             // the local field's boundary (freeDisplacement for display)
+    u_c_ = c_ * F;                               // the local field's boundary (freeDisplacement for display)
     surface_u_ = (surface_b_ + surface_r_) * F;  // the organ's surface, world frame
     surface_u_.segment<3>(3 * contact_element_) << tip_displacement_world.x, tip_displacement_world.y,
         tip_displacement_world.z;  // the contact element follows the tool (the half-space field is singular there)

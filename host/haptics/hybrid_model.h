@@ -19,10 +19,10 @@ namespace inc {
 // What the simulation side publishes for the haptic thread (one triple-buffer slot, always written whole).
 struct HybridCoupling {
   bool touching = false;
-  Vec3d contact_point;                                 // world, m
-  Vec3d frame[3];                                      // local x, y, z (= outward normal) axes in world
+  Vec3d contact_point;                                      // world, m
+  Vec3d frame[3];                                           // local x, y, z (= outward normal) axes in world
   Eigen::Matrix3d tip_stiffness = Eigen::Matrix3d::Zero();  // N/m, local frame: F = K d (tip tools only)
-  double time_s = -1.0;        // loop time of the newest global step (stall fade); < 0: none yet
+  double time_s = -1.0;  // loop time of the newest global step (stall fade); < 0: none yet
   std::uint64_t global_step = 0;
 };
 
@@ -104,17 +104,17 @@ class HybridHapticModel {
   Vec3d toWorld(const Vec3d& l) const { return frame_[0] * l.x + frame_[1] * l.y + frame_[2] * l.z; }
   BemModel& global_;
   std::shared_ptr<const MfsLocalModel> local_;
-  Eigen::MatrixXd p_;              // 3 x n_a: direction of each prescribed DOF
-  std::vector<Vec3d> coupled_x_;   // local position of each coupled DOF's node
-  std::vector<int> coupled_dir_;   // and its direction (0, 1, 2)
+  Eigen::MatrixXd p_;             // 3 x n_a: direction of each prescribed DOF
+  std::vector<Vec3d> coupled_x_;  // local position of each coupled DOF's node
+  std::vector<int> coupled_dir_;  // and its direction (0, 1, 2)
   bool tip_tool_ = false;
   // Producer-side state (the thread that calls touch / globalStep).
   bool touching_ = false;
   int contact_element_ = -1;
   Vec3d contact_point_, frame_[3];
-  Eigen::MatrixXd c_;              // n_c x 3
+  Eigen::MatrixXd c_;  // n_c x 3
   Eigen::Matrix3d r_ = Eigen::Matrix3d::Zero();
-  Eigen::MatrixXd tool_op_;        // 3 x n_a: (I - P S_ac C)^-1 P S_aa
+  Eigen::MatrixXd tool_op_;                // 3 x n_a: (I - P S_ac C)^-1 P S_aa
   Eigen::MatrixXd surface_b_, surface_r_;  // 3E x 3 (world, per unit local force): singular and regular parts
   Eigen::VectorXd u_c_, surface_u_;
   HybridCoupling published_;

@@ -33,7 +33,11 @@ std::vector<double> gradedCoordinates(double h, int inner, double extent, double
 }
 
 void gaussLegendre(int n, std::vector<double>& x, std::vector<double>& w) {  // on [0, 1]
-  if (n == 1) { x = {0.5}; w = {1.0}; return; }
+  if (n == 1) {
+    x = {0.5};
+    w = {1.0};
+    return;
+  }
   if (n == 2) {
     const double d = 0.5 / std::sqrt(3.0);
     x = {0.5 - d, 0.5 + d};
@@ -48,13 +52,15 @@ void gaussLegendre(int n, std::vector<double>& x, std::vector<double>& w) {  // 
 
 HemisphereCloud hemisphereCloud(const HemisphereCloudSpec& s) {
   const char* f = "<mfs cloud>";
-  if (!(s.inner_spacing_m > 0.0) || !std::isfinite(s.inner_spacing_m)) throw InputError(f, "inner_spacing_m", "must be > 0");
+  if (!(s.inner_spacing_m > 0.0) || !std::isfinite(s.inner_spacing_m))
+    throw InputError(f, "inner_spacing_m", "must be > 0");
   if (s.inner_shells < 1) throw InputError(f, "inner_shells", "must be >= 1");
   if (!(s.radius_m >= s.inner_spacing_m) || !std::isfinite(s.radius_m))
     throw InputError(f, "radius_m", "must be at least the inner spacing");
   if (!(s.growth >= 1.0) || s.growth > 3.0) throw InputError(f, "growth", "must be in [1, 3]");
   if (s.gauss < 1 || s.gauss > 3) throw InputError(f, "gauss", "must be 1, 2 or 3");
-  if (!(s.support_factor >= 1.2) || s.support_factor > 5.0) throw InputError(f, "support_factor", "must be in [1.2, 5]");
+  if (!(s.support_factor >= 1.2) || s.support_factor > 5.0)
+    throw InputError(f, "support_factor", "must be in [1.2, 5]");
 
   HemisphereCloud out;
   out.shell_r_m = gradedCoordinates(s.inner_spacing_m, s.inner_shells, s.radius_m, s.growth);
@@ -107,7 +113,8 @@ HemisphereCloud hemisphereCloud(const HemisphereCloudSpec& s) {
               const double rho = r * std::sin(psi);
               cl.quad_points.push_back({rho * std::cos(phi), rho * std::sin(phi), -r * std::cos(psi)});
               // volume element r^2 sin(psi) dr dpsi dphi
-              cl.quad_weights_m3.push_back(gw[a] * gw[b] * gw[c] * g * (p1 - p0) * (2.0 * M_PI / n) * r * r * std::sin(psi));
+              cl.quad_weights_m3.push_back(gw[a] * gw[b] * gw[c] * g * (p1 - p0) * (2.0 * M_PI / n) * r * r *
+                                           std::sin(psi));
             }
     }
   }
@@ -265,8 +272,10 @@ void MfsLocalModel::setRoles(const std::vector<DofRole>& roles, bool coupled_mov
   // Extract K_bb (sparse) and K_b{a,c}, K_a{a,b,c} (dense: few rows/columns).
   const auto& K = impl_->K;
   std::vector<Eigen::Triplet<double>> tbb;
-  Eigen::MatrixXd k_ba = Eigen::MatrixXd::Zero(b_.size(), a_.size()), k_bc = Eigen::MatrixXd::Zero(b_.size(), c_.size());
-  Eigen::MatrixXd k_aa = Eigen::MatrixXd::Zero(a_.size(), a_.size()), k_ac = Eigen::MatrixXd::Zero(a_.size(), c_.size());
+  Eigen::MatrixXd k_ba = Eigen::MatrixXd::Zero(b_.size(), a_.size()),
+                  k_bc = Eigen::MatrixXd::Zero(b_.size(), c_.size());
+  Eigen::MatrixXd k_aa = Eigen::MatrixXd::Zero(a_.size(), a_.size()),
+                  k_ac = Eigen::MatrixXd::Zero(a_.size(), c_.size());
   Eigen::MatrixXd k_ab = Eigen::MatrixXd::Zero(a_.size(), b_.size());
   for (int col = 0; col < K.outerSize(); ++col)
     for (Eigen::SparseMatrix<double>::InnerIterator it(K, col); it; ++it) {
@@ -274,13 +283,19 @@ void MfsLocalModel::setRoles(const std::vector<DofRole>& roles, bool coupled_mov
       const int lr = local[r], lc = local[c];
       const DofRole rr = roles[r], rc = roles[c];
       if (rr == DofRole::kFree) {
-        if (rc == DofRole::kFree) tbb.emplace_back(lr, lc, it.value());
-        else if (rc == DofRole::kPrescribed) k_ba(lr, lc) = it.value();
-        else k_bc(lr, lc) = it.value();
+        if (rc == DofRole::kFree)
+          tbb.emplace_back(lr, lc, it.value());
+        else if (rc == DofRole::kPrescribed)
+          k_ba(lr, lc) = it.value();
+        else
+          k_bc(lr, lc) = it.value();
       } else if (rr == DofRole::kPrescribed) {
-        if (rc == DofRole::kFree) k_ab(lr, lc) = it.value();
-        else if (rc == DofRole::kPrescribed) k_aa(lr, lc) = it.value();
-        else k_ac(lr, lc) = it.value();
+        if (rc == DofRole::kFree)
+          k_ab(lr, lc) = it.value();
+        else if (rc == DofRole::kPrescribed)
+          k_aa(lr, lc) = it.value();
+        else
+          k_ac(lr, lc) = it.value();
       }
     }
   Eigen::SparseMatrix<double> kbb(b_.size(), b_.size());

@@ -14,10 +14,10 @@ namespace inc {
 
 // Nodes (each the centre of a sphere of radius support_m) and the quadrature of the covered volume.
 struct MfsCloud {
-  std::vector<Vec3d> nodes;         // metres
-  std::vector<double> support_m;    // sphere radius of each node
+  std::vector<Vec3d> nodes;            // metres
+  std::vector<double> support_m;       // sphere radius of each node
   std::vector<std::uint8_t> singular;  // 1: eq. 5 singular weight (tool-tip / contact nodes)
-  std::vector<Vec3d> quad_points;   // metres
+  std::vector<Vec3d> quad_points;      // metres
   std::vector<double> quad_weights_m3;
 };
 
@@ -37,7 +37,7 @@ struct HemisphereCloudSpec {
 };
 struct HemisphereCloud {
   MfsCloud cloud;
-  std::vector<double> shell_r_m;          // shell radii (shell 0: the tip node)
+  std::vector<double> shell_r_m;  // shell radii (shell 0: the tip node)
   std::vector<int> node_shell;
   std::vector<std::uint8_t> node_surface;  // 1: on the surface z = 0
 };

@@ -35,8 +35,8 @@ MfsPunchResult mfsFlatPunch(const MfsPunchSpec& p, const Material& material) {
   MfsPunchResult r;
   for (int i = 0; i < n; ++i) {
     if (cc.node_surface[i] && cc.node_shell[i] <= p.contact_shells) {
-      cc.cloud.singular[i] = 1;                       // eq. 5: the approximation interpolates the punch face
-      roles[3 * i + 2] = DofRole::kPrescribed;        // frictionless: only u_z prescribed
+      cc.cloud.singular[i] = 1;                 // eq. 5: the approximation interpolates the punch face
+      roles[3 * i + 2] = DofRole::kPrescribed;  // frictionless: only u_z prescribed
       ++r.contact_nodes;
     }
     if (cc.node_shell[i] == last_shell)

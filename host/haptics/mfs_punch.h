@@ -15,22 +15,22 @@ double flatPunchForce(double radius_m, double youngs_modulus_pa, double poisson_
 // of a half-ball of radius domain_over_radius * a is held. More contact shells = more nodes everywhere (the
 // shells beyond grow by `growth`): the node-count knob of the haptic local model.
 struct MfsPunchSpec {
-  double radius_m = 5e-3;           // a
-  int contact_shells = 2;           // >= 1
-  double domain_over_radius = 12.0; // half-ball radius / a, >= 2
+  double radius_m = 5e-3;            // a
+  int contact_shells = 2;            // >= 1
+  double domain_over_radius = 12.0;  // half-ball radius / a, >= 2
   double growth = 1.5;
-  double indentation_m = 0.0;       // 0: 1e-3 a (linear elasticity: the ratio does not depend on it)
-  int ticks = 2000;                 // haptic ticks timed (>= 16)
+  double indentation_m = 0.0;  // 0: 1e-3 a (linear elasticity: the ratio does not depend on it)
+  int ticks = 2000;            // haptic ticks timed (>= 16)
 };
 
 struct MfsPunchResult {
   int nodes = 0;
   int contact_nodes = 0;
-  double force_n = 0.0;     // the reaction the tool feels, N
-  double analytic_n = 0.0;  // flatPunchForce
-  double setup_s = 0.0;     // assembly + condensation (eq. 6), paid once per contact configuration
-  double tick_ms = 0.0;     // median wall time of one haptic tick (reactionForce), ms
-  double tick_cpu_ms = 0.0; // the same in CPU time of the process, ms
+  double force_n = 0.0;      // the reaction the tool feels, N
+  double analytic_n = 0.0;   // flatPunchForce
+  double setup_s = 0.0;      // assembly + condensation (eq. 6), paid once per contact configuration
+  double tick_ms = 0.0;      // median wall time of one haptic tick (reactionForce), ms
+  double tick_cpu_ms = 0.0;  // the same in CPU time of the process, ms
 };
 
 // Builds the cloud and the model, condenses, times `ticks` haptic ticks. Throws InputError for a bad spec.

@@ -17,8 +17,8 @@ void throwOnHdError(const std::string& what) {
   if (HD_DEVICE_ERROR(e)) {
     const HDstring text = hdGetErrorString(e.errorCode);
     throw InputError("openhaptics", "device",
-                     what + " failed: " + (text ? text : "unknown HD error") + " (HD error " + std::to_string(e.errorCode) +
-                         ", internal " + std::to_string(e.internalErrorCode) + ")");
+                     what + " failed: " + (text ? text : "unknown HD error") + " (HD error " +
+                         std::to_string(e.errorCode) + ", internal " + std::to_string(e.internalErrorCode) + ")");
   }
 }
 
@@ -61,8 +61,10 @@ void quaternionOf(const double r[3][3], double q[4]) {
 
 }  // namespace
 
-OpenHapticsDevice::OpenHapticsDevice(const std::string& config_name, const OpenHapticsMapping& mapping) : map_(mapping) {
-  if (!(map_.scale > 0.0) || !std::isfinite(map_.scale)) throw InputError("openhaptics", "workspace_scale", "must be > 0");
+OpenHapticsDevice::OpenHapticsDevice(const std::string& config_name, const OpenHapticsMapping& mapping)
+    : map_(mapping) {
+  if (!(map_.scale > 0.0) || !std::isfinite(map_.scale))
+    throw InputError("openhaptics", "workspace_scale", "must be > 0");
   DeviceSample origin;
   origin.position_m = map_.offset_m;
   pose_.reset(origin);
@@ -74,7 +76,8 @@ OpenHapticsDevice::OpenHapticsDevice(const std::string& config_name, const OpenH
     HDdouble max_force = 0.0;
     hdGetDoublev(HD_NOMINAL_MAX_FORCE, &max_force);
     throwOnHdError("hdGetDoublev(HD_NOMINAL_MAX_FORCE)");
-    if (!(max_force > 0.0)) throw InputError("openhaptics", "device", "the device reports no force output (HD_NOMINAL_MAX_FORCE <= 0)");
+    if (!(max_force > 0.0))
+      throw InputError("openhaptics", "device", "the device reports no force output (HD_NOMINAL_MAX_FORCE <= 0)");
     max_force_n_ = max_force;
     hdEnable(HD_FORCE_OUTPUT);
     throwOnHdError("hdEnable(HD_FORCE_OUTPUT)");

@@ -8,7 +8,8 @@
 namespace inc {
 
 PointerDevice::PointerDevice(double max_force_n) : max_force_n_(max_force_n) {
-  if (!(max_force_n > 0.0) || !std::isfinite(max_force_n)) throw InputError("<pointer device>", "max_force_n", "must be > 0");
+  if (!(max_force_n > 0.0) || !std::isfinite(max_force_n))
+    throw InputError("<pointer device>", "max_force_n", "must be > 0");
 }
 
 void PointerDevice::setPose(const Vec3d& position_m, const double q[4], std::uint32_t buttons) {

@@ -7,10 +7,10 @@
 #include <filesystem>
 #include <limits>
 
+#include "base/format_number.h"
 #include "host/compiled/bem_organ_mesh.h"
 #include "host/haptics/udp_device.h"
 #include "model/input_error.h"
-#include "base/format_number.h"
 #if INCISION_HAVE_OPENHAPTICS
 #include "host/haptics/openhaptics_device.h"
 #endif
@@ -26,9 +26,13 @@ TissuePlane sceneTissuePlane(const CompiledScene& scene, const SimulationModel& 
   }
   TriangleMesh surface;
   std::vector<Vec3d> points;
-  if (model.currentSurface(surface) && !surface.vertices.empty()) points = surface.vertices;
-  else model.currentPositions(points);
-  if (points.empty()) throw InputError(scene.file, "haptics.surface_point_m", "the model has no points to find its surface from; give the tissue plane");
+  if (model.currentSurface(surface) && !surface.vertices.empty())
+    points = surface.vertices;
+  else
+    model.currentPositions(points);
+  if (points.empty())
+    throw InputError(scene.file, "haptics.surface_point_m",
+                     "the model has no points to find its surface from; give the tissue plane");
   double best = -std::numeric_limits<double>::infinity();
   for (const Vec3d& x : points)
     if (dot(x, p.normal) > best) {
@@ -116,7 +120,8 @@ long scalpelHand(const CompiledScene& scene, const SimulationModel& model) {
 // The scene's BEM organ (global_model "bem"): mesh, supports, the local model's cloud; errors name
 // haptics.global_mesh. The tissue plane's point must lie near the organ: a wrong global_mesh_scale or a mesh of
 // another organ would otherwise couple every contact to a far-away element.
-std::unique_ptr<GlobalOrganModel> sceneGlobalModel(const CompiledScene& scene, const TissuePlane& plane, int hands, bool quiet) {
+std::unique_ptr<GlobalOrganModel> sceneGlobalModel(const CompiledScene& scene, const TissuePlane& plane, int hands,
+                                                   bool quiet) {
   const HapticsSpec& h = scene.haptics;
   const std::string key = "haptics.global_mesh";
   GlobalOrganSetup setup;
@@ -163,7 +168,8 @@ SceneHaptics::SceneHaptics(const CompiledScene& scene, const SimulationModel& mo
   // Every device is built before any loop exists: a device that cannot be opened starts nothing.
   std::vector<std::shared_ptr<HapticDevice>> devices;
   for (std::size_t k = 0; k < h.devices.size(); ++k)
-    devices.push_back(k == 0 && options.device ? options.device : std::shared_ptr<HapticDevice>(makeSceneHapticDevice(scene, k)));
+    devices.push_back(k == 0 && options.device ? options.device
+                                               : std::shared_ptr<HapticDevice>(makeSceneHapticDevice(scene, k)));
   for (std::size_t k = 0; k < h.devices.size(); ++k) {
     const HapticDeviceSpec& d = h.devices[k];
     HapticHandConfig c;

@@ -5,10 +5,10 @@
 #include <string>
 #include <vector>
 
+#include "host/compiled/compiled_scene.h"
 #include "host/haptics/global_organ_model.h"
 #include "host/haptics/haptic_hand.h"
 #include "host/haptics/tip_contact.h"
-#include "host/compiled/compiled_scene.h"
 #include "host/sim/simulation_model.h"
 
 namespace inc {
@@ -34,11 +34,12 @@ struct SceneHapticsOptions {
 // Built for the model the haptic tools touch. Each device is a HapticHand on its own thread at its own rate; its
 // tip's elastic reaction is the MFS local model (haptics.local_*, the scene's material) condensed to a 3 x 3 tip
 // stiffness: with its outer shell held (global_model "none"), or coupled to the BEM organ (global_model "bem": a
-// GlobalOrganModel built here, its precompute cached; it steps once per frame in afterFrame). On a model that can be cut one hand may hold the scalpel (tool "scalpel", or "auto" for the first
-// device): its CuttingTool (material.cutting, eqs. 15-16) decides where cuts start and stop and the model is cut
-// between frames; every other hand holds a probe (contact force only). The loops' stall fade starts when the
-// simulation's data is two frames old (the simulation thread late by more than a frame). Nothing runs until
-// start(); the simulation thread calls beforeFrame / afterFrame around each advance() of the model.
+// GlobalOrganModel built here, its precompute cached; it steps once per frame in afterFrame). On a model that can be
+// cut one hand may hold the scalpel (tool "scalpel", or "auto" for the first device): its CuttingTool
+// (material.cutting, eqs. 15-16) decides where cuts start and stop and the model is cut between frames; every other
+// hand holds a probe (contact force only). The loops' stall fade starts when the simulation's data is two frames old
+// (the simulation thread late by more than a frame). Nothing runs until start(); the simulation thread calls
+// beforeFrame / afterFrame around each advance() of the model.
 class SceneHaptics {
  public:
   SceneHaptics(const CompiledScene& scene, const SimulationModel& model, SceneHapticsOptions options = {});

@@ -16,9 +16,7 @@ ScriptedDevice::ScriptedDevice(Trajectory trajectory, Mode mode, double max_forc
     throw InputError("<scripted device>", "max_force_n", "must be finite and > 0");
 }
 
-double ScriptedDevice::duration_s() const {
-  return trajectory_.samples.back().t_s - trajectory_.samples.front().t_s;
-}
+double ScriptedDevice::duration_s() const { return trajectory_.samples.back().t_s - trajectory_.samples.front().t_s; }
 
 DeviceSample ScriptedDevice::read(std::uint64_t tick, double t_s) {
   const auto& s = trajectory_.samples;

@@ -47,7 +47,8 @@ ProbeTool::ProbeTool(CuttingTool::Elastic elastic, const Vec3d& surface_point_m,
     : elastic_(std::move(elastic)), surface_(surface_point_m), normal_(unit_normal) {
   if (!elastic_) throw InputError("<probe tool>", "elastic", "no elastic force model");
   if (!isFinite(surface_point_m)) throw InputError("<probe tool>", "surface_point_m", "must be finite");
-  if (!(std::fabs(norm(unit_normal) - 1.0) <= 1e-6)) throw InputError("<probe tool>", "normal", "must be a unit vector");
+  if (!(std::fabs(norm(unit_normal) - 1.0) <= 1e-6))
+    throw InputError("<probe tool>", "normal", "must be a unit vector");
 }
 
 ForceResult ProbeTool::tick(const ForceRequest& q) {

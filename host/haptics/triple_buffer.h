@@ -45,8 +45,8 @@ class TripleBuffer {
  private:
   static constexpr std::uint8_t kIndex = 3, kFresh = 4;
   T slots_[3]{};
-  std::uint8_t back_ = 0;               // writer-owned
-  std::uint8_t front_ = 1;              // reader-owned
+  std::uint8_t back_ = 0;                // writer-owned
+  std::uint8_t front_ = 1;               // reader-owned
   std::atomic<std::uint8_t> middle_{2};  // shared: index | fresh bit
   std::atomic<std::uint64_t> version_{0};
 };

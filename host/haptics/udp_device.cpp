@@ -19,8 +19,13 @@ constexpr std::uint32_t kPoseMagic = 0x50434E49u, kForceMagic = 0x46434E49u;
 constexpr std::uint16_t kVersion = 1;
 
 // Explicit little-endian byte order, independent of the host.
-void putU16(unsigned char* p, std::uint16_t v) { p[0] = v & 0xff; p[1] = (v >> 8) & 0xff; }
-void putU32(unsigned char* p, std::uint32_t v) { for (int i = 0; i < 4; ++i) p[i] = (v >> (8 * i)) & 0xff; }
+void putU16(unsigned char* p, std::uint16_t v) {
+  p[0] = v & 0xff;
+  p[1] = (v >> 8) & 0xff;
+}
+void putU32(unsigned char* p, std::uint32_t v) {
+  for (int i = 0; i < 4; ++i) p[i] = (v >> (8 * i)) & 0xff;
+}
 void putF64(unsigned char* p, double d) {
   std::uint64_t v;
   std::memcpy(&v, &d, 8);
@@ -79,7 +84,8 @@ void encodeUdpForce(std::uint16_t device, std::uint32_t sequence, const Vec3d& f
   for (int k = 0; k < 3; ++k) putF64(out + 16 + 8 * k, f[k]);
 }
 
-bool decodeUdpForce(const unsigned char* d, std::size_t size, std::uint16_t& device, std::uint32_t& sequence, Vec3d& f) {
+bool decodeUdpForce(const unsigned char* d, std::size_t size, std::uint16_t& device, std::uint32_t& sequence,
+                    Vec3d& f) {
   if (size != kUdpForceBytes || getU32(d) != kForceMagic || getU16(d + 4) != kVersion) return false;
   device = getU16(d + 6);
   sequence = getU32(d + 8);

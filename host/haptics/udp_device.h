@@ -24,7 +24,8 @@ struct UdpPose {
 constexpr std::size_t kUdpPoseBytes = 80, kUdpForceBytes = 40;
 void encodeUdpPose(const UdpPose& pose, unsigned char out[kUdpPoseBytes]);
 bool decodeUdpPose(const unsigned char* data, std::size_t size, UdpPose& pose);  // false: malformed
-void encodeUdpForce(std::uint16_t device, std::uint32_t sequence, const Vec3d& force_n, unsigned char out[kUdpForceBytes]);
+void encodeUdpForce(std::uint16_t device, std::uint32_t sequence, const Vec3d& force_n,
+                    unsigned char out[kUdpForceBytes]);
 bool decodeUdpForce(const unsigned char* data, std::size_t size, std::uint16_t& device, std::uint32_t& sequence,
                     Vec3d& force_n);
 

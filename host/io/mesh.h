@@ -10,7 +10,7 @@
 namespace inc {
 
 struct TriangleMesh {
-  std::vector<Vec3d> vertices;               // metres (scene units)
+  std::vector<Vec3d> vertices;                // metres (scene units)
   std::vector<std::array<int, 3>> triangles;  // counter-clockwise seen from outside when closed
 };
 

@@ -7,10 +7,10 @@
 #include <string>
 #include <vector>
 
-#include "host/io/edge_order.h"
-#include "model/input_error.h"
-#include "host/io/mesh.h"
 #include "base/format_number.h"
+#include "host/io/edge_order.h"
+#include "host/io/mesh.h"
+#include "model/input_error.h"
 
 namespace inc {
 
@@ -121,8 +121,7 @@ Vec3d bboxCenter(const TriangleMesh& mesh) {
 std::string edgeText(const TriangleMesh& mesh, const Example& e) {
   const Vec3d m = 0.5 * (mesh.vertices[e.a] + mesh.vertices[e.b]);
   return "e.g. the edge between vertices " + std::to_string(e.a) + " and " + std::to_string(e.b) + " near (" +
-         formatNumber(m.x) + ", " + formatNumber(m.y) + ", " + formatNumber(m.z) +
-         ")";
+         formatNumber(m.x) + ", " + formatNumber(m.y) + ", " + formatNumber(m.z) + ")";
 }
 
 }  // namespace
@@ -179,15 +178,17 @@ std::string requireClosedMesh(TriangleMesh& mesh, const std::string& file, const
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
     for (int v : mesh.triangles[t]) {
       if (v < 0 || v >= n)
-        throw InputError(file, key, "triangle " + std::to_string(t) + " has vertex index " + std::to_string(v) +
-                                        " out of range (the mesh has " + std::to_string(n) + " vertices)");
+        throw InputError(file, key,
+                         "triangle " + std::to_string(t) + " has vertex index " + std::to_string(v) +
+                             " out of range (the mesh has " + std::to_string(n) + " vertices)");
     }
   }
   const EdgeFacts f = classifyEdges(mesh);
   std::string problems;
   auto add = [&problems](const std::string& s) { problems += (problems.empty() ? "" : "; ") + s; };
   if (f.boundary > 0) {
-    add("the mesh is open: " + std::to_string(f.boundary) + " boundary edges (holes), " + edgeText(mesh, f.boundary_ex));
+    add("the mesh is open: " + std::to_string(f.boundary) + " boundary edges (holes), " +
+        edgeText(mesh, f.boundary_ex));
   }
   if (f.non_manifold > 0) {
     add(std::to_string(f.non_manifold) + " non-manifold edges shared by more than two triangles, " +
@@ -197,7 +198,8 @@ std::string requireClosedMesh(TriangleMesh& mesh, const std::string& file, const
     add("inconsistently oriented: " + std::to_string(f.inconsistent) +
         " edges walked the same way by both of their triangles, " + edgeText(mesh, f.inconsistent_ex));
   }
-  if (!problems.empty()) throw InputError(file, key, "a closed, manifold, consistently oriented surface is needed: " + problems);
+  if (!problems.empty())
+    throw InputError(file, key, "a closed, manifold, consistently oriented surface is needed: " + problems);
 
   // Per component: a closed, consistently oriented shell has a signed volume whose sign says its orientation.
   int count = 0;
@@ -231,8 +233,8 @@ std::string requireClosedMesh(TriangleMesh& mesh, const std::string& file, const
     bool cavity = false;
     for (int p = 0; p < count && !cavity; ++p) {
       if (p == c || vol[p] <= 0) continue;
-      cavity = lo[p].x < lo[c].x && lo[p].y < lo[c].y && lo[p].z < lo[c].z && hi[c].x < hi[p].x &&
-               hi[c].y < hi[p].y && hi[c].z < hi[p].z;
+      cavity = lo[p].x < lo[c].x && lo[p].y < lo[c].y && lo[p].z < lo[c].z && hi[c].x < hi[p].x && hi[c].y < hi[p].y &&
+               hi[c].z < hi[p].z;
     }
     if (!cavity) {
       flip[c] = true;
@@ -252,8 +254,7 @@ std::string requireClosedMesh(TriangleMesh& mesh, const std::string& file, const
     for (int c = 0; c < count; ++c) after += flip[c] ? -vol[c] : vol[c];
     note = "the mesh was oriented inward: flipped " + std::to_string(flipped_triangles) + " triangles in " +
            std::to_string(flipped_components) + " of " + std::to_string(count) +
-           " components to face outward (signed volume " + formatNumber(before) + " -> " +
-           formatNumber(after) + ")";
+           " components to face outward (signed volume " + formatNumber(before) + " -> " + formatNumber(after) + ")";
     if (!(after > 0)) throw InputError(file, key, "the mesh encloses no positive volume even after reorienting it");
   } else if (!(before > 0)) {
     throw InputError(file, key, "the mesh encloses no positive volume (signed volume " + formatNumber(before) + ")");

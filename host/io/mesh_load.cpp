@@ -12,9 +12,9 @@
 #include <sstream>
 #include <system_error>
 
-#include "model/input_error.h"
 #include "host/io/mesh.h"
 #include "host/io/mesh_formats.h"
+#include "model/input_error.h"
 
 namespace inc {
 namespace mesh_formats {
@@ -117,9 +117,9 @@ TriangleMesh loadMesh(const std::string& path) {
     for (int c = 0; c < 3; ++c) {
       const int v = mesh.triangles[t][c];
       if (v < 0 || v >= n) {
-        throw InputError(path, "triangle " + std::to_string(t),
-                         "vertex index " + std::to_string(v) + " out of range (the mesh has " + std::to_string(n) +
-                             " vertices)");
+        throw InputError(
+            path, "triangle " + std::to_string(t),
+            "vertex index " + std::to_string(v) + " out of range (the mesh has " + std::to_string(n) + " vertices)");
       }
     }
   }

@@ -4,8 +4,8 @@
 #include <string>
 #include <vector>
 
-#include "model/input_error.h"
 #include "host/io/mesh_formats.h"
+#include "model/input_error.h"
 
 namespace inc {
 namespace mesh_formats {
@@ -57,8 +57,7 @@ TriangleMesh readObj(const std::string& text, const std::string& file) {
       ++face_no;
       const FaceOrigin o{face_no, line_no};
       if (tok.size() < 4) {
-        throw InputError(file, faceName(o),
-                         "a face needs at least 3 vertices, got " + std::to_string(tok.size() - 1));
+        throw InputError(file, faceName(o), "a face needs at least 3 vertices, got " + std::to_string(tok.size() - 1));
       }
       raw.clear();
       for (std::size_t k = 1; k < tok.size(); ++k) {

@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "model/input_error.h"
 #include "host/io/mesh_formats.h"
+#include "model/input_error.h"
 
 namespace inc {
 namespace mesh_formats {
@@ -20,23 +20,36 @@ enum class PlyType { I8, U8, I16, U16, I32, U32, F32, F64 };
 enum class PlyFormat { Ascii, BinaryLittle, BinaryBig };
 
 bool plyTypeFromName(std::string_view s, PlyType& t) {
-  if (s == "char" || s == "int8") t = PlyType::I8;
-  else if (s == "uchar" || s == "uint8") t = PlyType::U8;
-  else if (s == "short" || s == "int16") t = PlyType::I16;
-  else if (s == "ushort" || s == "uint16") t = PlyType::U16;
-  else if (s == "int" || s == "int32") t = PlyType::I32;
-  else if (s == "uint" || s == "uint32") t = PlyType::U32;
-  else if (s == "float" || s == "float32") t = PlyType::F32;
-  else if (s == "double" || s == "float64") t = PlyType::F64;
-  else return false;
+  if (s == "char" || s == "int8")
+    t = PlyType::I8;
+  else if (s == "uchar" || s == "uint8")
+    t = PlyType::U8;
+  else if (s == "short" || s == "int16")
+    t = PlyType::I16;
+  else if (s == "ushort" || s == "uint16")
+    t = PlyType::U16;
+  else if (s == "int" || s == "int32")
+    t = PlyType::I32;
+  else if (s == "uint" || s == "uint32")
+    t = PlyType::U32;
+  else if (s == "float" || s == "float32")
+    t = PlyType::F32;
+  else if (s == "double" || s == "float64")
+    t = PlyType::F64;
+  else
+    return false;
   return true;
 }
 
 std::size_t plySize(PlyType t) {
   switch (t) {
-    case PlyType::I8: case PlyType::U8: return 1;
-    case PlyType::I16: case PlyType::U16: return 2;
-    case PlyType::I32: case PlyType::U32: case PlyType::F32: return 4;
+    case PlyType::I8:
+    case PlyType::U8: return 1;
+    case PlyType::I16:
+    case PlyType::U16: return 2;
+    case PlyType::I32:
+    case PlyType::U32:
+    case PlyType::F32: return 4;
     case PlyType::F64: return 8;
   }
   return 8;
@@ -153,11 +166,16 @@ Header parseHeader(const std::string& bytes, const std::string& file) {
     if (tok[0] == "comment" || tok[0] == "obj_info") continue;
     if (tok[0] == "end_header") break;
     if (tok[0] == "format") {
-      if (tok.size() != 3) throw InputError(file, where, "expected 'format <ascii|binary_little_endian|binary_big_endian> 1.0'");
-      if (tok[1] == "ascii") h.format = PlyFormat::Ascii;
-      else if (tok[1] == "binary_little_endian") h.format = PlyFormat::BinaryLittle;
-      else if (tok[1] == "binary_big_endian") h.format = PlyFormat::BinaryBig;
-      else throw InputError(file, where, "unknown PLY format '" + std::string(tok[1]) + "'");
+      if (tok.size() != 3)
+        throw InputError(file, where, "expected 'format <ascii|binary_little_endian|binary_big_endian> 1.0'");
+      if (tok[1] == "ascii")
+        h.format = PlyFormat::Ascii;
+      else if (tok[1] == "binary_little_endian")
+        h.format = PlyFormat::BinaryLittle;
+      else if (tok[1] == "binary_big_endian")
+        h.format = PlyFormat::BinaryBig;
+      else
+        throw InputError(file, where, "unknown PLY format '" + std::string(tok[1]) + "'");
       have_format = true;
     } else if (tok[0] == "element") {
       long long count = 0;
@@ -172,9 +190,9 @@ Header parseHeader(const std::string& bytes, const std::string& file) {
       PlyProperty p;
       if (tok.size() == 5 && tok[1] == "list") {
         p.is_list = true;
-        if (!plyTypeFromName(tok[2], p.count_type) || !plyIntegral(p.count_type) ||
-            !plyTypeFromName(tok[3], p.type)) {
-          throw InputError(file, where, "bad list property types '" + std::string(tok[2]) + " " + std::string(tok[3]) + "'");
+        if (!plyTypeFromName(tok[2], p.count_type) || !plyIntegral(p.count_type) || !plyTypeFromName(tok[3], p.type)) {
+          throw InputError(file, where,
+                           "bad list property types '" + std::string(tok[2]) + " " + std::string(tok[3]) + "'");
         }
         p.name = std::string(tok[4]);
       } else if (tok.size() == 3) {
@@ -182,7 +200,8 @@ Header parseHeader(const std::string& bytes, const std::string& file) {
           throw InputError(file, where, "unknown property type '" + std::string(tok[1]) + "'");
         p.name = std::string(tok[2]);
       } else {
-        throw InputError(file, where, "expected 'property <type> <name>' or 'property list <count type> <type> <name>'");
+        throw InputError(file, where,
+                         "expected 'property <type> <name>' or 'property list <count type> <type> <name>'");
       }
       h.elements.back().props.push_back(p);
     } else {
@@ -275,8 +294,7 @@ void readListProperty(PlyBody& body, const PlyProperty& p, PlyFormat format, boo
       polygon.push_back(static_cast<int>(v));
     }
   }
-  if (indices && len < 3)
-    throw InputError(file, where, "a face needs at least 3 vertices, got " + std::to_string(len));
+  if (indices && len < 3) throw InputError(file, where, "a face needs at least 3 vertices, got " + std::to_string(len));
 }
 
 // Reads every property of one element instance: the coordinates go to xyz, the face's indices to polygon.
@@ -298,7 +316,8 @@ void readInstance(PlyBody& body, const PlyElement& e, const ElementRole& role, P
 }
 
 // Face indices refer to vertices that exist; `tri_face` names each triangle's face in the file.
-void requireIndicesInRange(const TriangleMesh& mesh, const std::vector<std::size_t>& tri_face, const std::string& file) {
+void requireIndicesInRange(const TriangleMesh& mesh, const std::vector<std::size_t>& tri_face,
+                           const std::string& file) {
   const int n = static_cast<int>(mesh.vertices.size());
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
     for (int c = 0; c < 3; ++c) {

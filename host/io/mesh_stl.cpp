@@ -7,8 +7,8 @@
 #include <unordered_map>
 #include <vector>
 
-#include "model/input_error.h"
 #include "host/io/mesh_formats.h"
+#include "model/input_error.h"
 
 namespace inc {
 namespace mesh_formats {
@@ -134,7 +134,8 @@ TriangleMesh readAsciiStl(const std::string& text, const std::string& file) {
     } else if (tok[0] == "solid" || tok[0] == "endsolid" || tok[0] == "outer" || tok[0] == "endloop") {
       // Structure only; several solids in one file are read as one mesh.
     } else {
-      throw InputError(file, "line " + std::to_string(line_no), "unexpected '" + std::string(tok[0].substr(0, 40)) + "' in an ascii STL");
+      throw InputError(file, "line " + std::to_string(line_no),
+                       "unexpected '" + std::string(tok[0].substr(0, 40)) + "' in an ascii STL");
     }
   }
   if (in_facet) throw InputError(file, where, "unexpected end of file inside a facet (truncated?)");
@@ -155,8 +156,9 @@ TriangleMesh readStl(const std::string& bytes, const std::string& file) {
   if (bytes.size() >= 84 && 84ull + 50ull * readU32(bytes, 80) == bytes.size()) return readBinaryStl(bytes, file);
   if (startsWithSolid(bytes)) return readAsciiStl(bytes, file);
   if (bytes.size() < 84) {
-    throw InputError(file, "header", "too short for a binary STL (" + std::to_string(bytes.size()) +
-                                         " bytes) and not an ascii STL (no 'solid' at the start)");
+    throw InputError(file, "header",
+                     "too short for a binary STL (" + std::to_string(bytes.size()) +
+                         " bytes) and not an ascii STL (no 'solid' at the start)");
   }
   return readBinaryStl(bytes, file);  // trailing bytes after the declared triangles are ignored
 }

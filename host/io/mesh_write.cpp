@@ -4,9 +4,9 @@
 #include <cstring>
 #include <locale>
 
-#include "model/input_error.h"
 #include "host/io/mesh.h"
 #include "host/io/mesh_formats.h"
+#include "model/input_error.h"
 
 namespace inc {
 namespace mesh_formats {

@@ -36,8 +36,8 @@ void checkFields(const std::vector<PointField<T>>& fields, std::size_t n) {
   for (const PointField<T>& f : fields) {
     if (f.values == nullptr || f.values->size() != n) {
       throw std::invalid_argument("point field '" + f.name + "' has " +
-                                  std::to_string(f.values ? f.values->size() : 0) + " values for " +
-                                  std::to_string(n) + " points");
+                                  std::to_string(f.values ? f.values->size() : 0) + " values for " + std::to_string(n) +
+                                  " points");
     }
   }
 }
@@ -144,9 +144,13 @@ void writeMeshVtk(const std::string& path, const TriangleMesh& mesh, const std::
   f.close();
 }
 
-template void writePointsPly<float>(const std::string&, const std::vector<Vec3f>&, const std::vector<PointField<float>>&, bool);
-template void writePointsPly<double>(const std::string&, const std::vector<Vec3d>&, const std::vector<PointField<double>>&, bool);
-template void writePointsVtk<float>(const std::string&, const std::vector<Vec3f>&, const std::vector<PointField<float>>&);
-template void writePointsVtk<double>(const std::string&, const std::vector<Vec3d>&, const std::vector<PointField<double>>&);
+template void writePointsPly<float>(const std::string&, const std::vector<Vec3f>&,
+                                    const std::vector<PointField<float>>&, bool);
+template void writePointsPly<double>(const std::string&, const std::vector<Vec3d>&,
+                                     const std::vector<PointField<double>>&, bool);
+template void writePointsVtk<float>(const std::string&, const std::vector<Vec3f>&,
+                                    const std::vector<PointField<float>>&);
+template void writePointsVtk<double>(const std::string&, const std::vector<Vec3d>&,
+                                     const std::vector<PointField<double>>&);
 
 }  // namespace inc

@@ -29,6 +29,7 @@ void writePointsVtk(const std::string& path, const std::vector<Vec3<T>>& positio
                     const std::vector<PointField<T>>& fields = {});
 
 // Legacy VTK (version 3.0, ascii) POLYDATA: POINTS and triangle POLYGONS, POINT_DATA scalars per field.
-void writeMeshVtk(const std::string& path, const TriangleMesh& mesh, const std::vector<PointField<double>>& fields = {});
+void writeMeshVtk(const std::string& path, const TriangleMesh& mesh,
+                  const std::vector<PointField<double>>& fields = {});
 
 }  // namespace inc

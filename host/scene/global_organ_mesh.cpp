@@ -16,7 +16,8 @@ void readGlobalModelKeys(const scene_json::ObjectReader& r, const std::string& b
       if (r.has(k)) r.fail(k, "is used only with global_model \"bem\"");
     return;
   }
-  if (!r.has("global_mesh")) r.fail("global_mesh", "is required with global_model \"bem\" (the organ's closed surface mesh)");
+  if (!r.has("global_mesh"))
+    r.fail("global_mesh", "is required with global_model \"bem\" (the organ's closed surface mesh)");
   const std::string rel = r.string("global_mesh", "");
   if (rel.empty()) r.fail("global_mesh", "must name a mesh file");
   h.global_mesh = scene_json::resolvePath(rel, base_dir);
@@ -28,8 +29,9 @@ void readGlobalModelKeys(const scene_json::ObjectReader& r, const std::string& b
   }
   const std::vector<BemBc> bc = organSupports(mesh, fixed);
   if (std::find(bc.begin(), bc.end(), BemBc::kDisplacement) == bc.end())
-    r.fail("global_mesh", h.global_mesh + ": no element centroid lies in a fixed region: the BEM global model needs the "
-                          "organ held somewhere (a `fixed` box around part of its surface)");
+    r.fail("global_mesh", h.global_mesh +
+                              ": no element centroid lies in a fixed region: the BEM global model needs the "
+                              "organ held somewhere (a `fixed` box around part of its surface)");
   if (r.has("global_cache")) {
     const std::string c = r.string("global_cache", "");
     if (c.empty()) r.fail("global_cache", "must name a file (the precompute is always cached)");

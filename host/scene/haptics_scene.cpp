@@ -4,8 +4,8 @@
 #include <algorithm>
 #include <cctype>
 
-#include "host/scene/global_organ_mesh.h"
 #include "host/io/trajectory.h"
+#include "host/scene/global_organ_mesh.h"
 #include "host/scene/scene_fields.h"
 #include "host/scene/scene_keys.h"
 #include "model/input_error.h"
@@ -29,7 +29,9 @@ const std::vector<std::string>& sharedKeys() {
   static const std::vector<std::string> k = sceneKeysUnder("haptics");
   return k;
 }
-bool contains(const std::vector<std::string>& v, const std::string& s) { return std::find(v.begin(), v.end(), s) != v.end(); }
+bool contains(const std::vector<std::string>& v, const std::string& s) {
+  return std::find(v.begin(), v.end(), s) != v.end();
+}
 
 std::string got(double v) { return " (got " + formatNumber(v) + ")"; }
 
@@ -49,8 +51,9 @@ HapticDeviceSpec readDevice(const ObjectReader& r, const std::string& base_dir, 
   if (r.has("name") && !validName(d.name))
     r.fail("name", "must be 1 to 32 letters, digits, '_' or '-' (it names the device's output files)");
   if (d.device == "openhaptics" && !openHapticsBuilt())
-    r.fail("device", "the OpenHaptics driver is not built (CMake did not find the SDK: HD/hd.h and libHD; see "
-                     "docs/haptics.md); use \"udp\" with an external driver");
+    r.fail("device",
+           "the OpenHaptics driver is not built (CMake did not find the SDK: HD/hd.h and libHD; see "
+           "docs/haptics.md); use \"udp\" with an external driver");
   if (r.has("trajectory")) {
     const std::string rel = r.string("trajectory", "");
     if (rel.empty()) r.fail("trajectory", "must name a trajectory file");
@@ -84,8 +87,9 @@ void checkDevices(const HapticsSpec& h, const ObjectReader& r, const ModelsSpec&
       if (d.device == "udp" && e.device == "udp" && d.udp_port == e.udp_port)
         fail("udp_port", std::to_string(d.udp_port) + " is already the port of " + other + " (one socket per device)");
       if (d.device == "openhaptics" && e.device == "openhaptics")
-        fail("device", "a second OpenHaptics device (" + other + " is one): the HD scheduler is process-wide and "
-                       "two devices on it are not written (docs/haptics.md)");
+        fail("device", "a second OpenHaptics device (" + other +
+                           " is one): the HD scheduler is process-wide and "
+                           "two devices on it are not written (docs/haptics.md)");
     }
   }
 }
@@ -111,11 +115,12 @@ HapticsSpec readHapticsSpec(const ObjectReader& top, const std::string& base_dir
   if (const nlohmann::json* list = r.array("devices")) {
     for (const std::string& k : deviceKeys())
       if (r.has(k))
-        r.fail(k, "belongs in each entry of haptics.devices when the list is given (the single-device form has it "
-                  "here)");
+        r.fail(k,
+               "belongs in each entry of haptics.devices when the list is given (the single-device form has it "
+               "here)");
     if (list->empty() || list->size() > kMaxDevices)
-      r.fail("devices", "must list 1 to " + std::to_string(kMaxDevices) + " devices (got " +
-                            std::to_string(list->size()) + ")");
+      r.fail("devices",
+             "must list 1 to " + std::to_string(kMaxDevices) + " devices (got " + std::to_string(list->size()) + ")");
     h.devices.clear();
     h.devices_listed = true;
     for (std::size_t i = 0; i < list->size(); ++i) {
@@ -138,8 +143,10 @@ HapticsSpec readHapticsSpec(const ObjectReader& top, const std::string& base_dir
     r.fail("local_spacing_m", "must be at most half of local_radius_m (" + formatNumber(h.local_radius_m) +
                                   " m): the local model needs at least two shells" + got(h.local_spacing_m));
   if (h.local_radius_m / h.local_spacing_m > 64.0)
-    r.fail("local_spacing_m", "is too fine for local_radius_m (more than 64 shells: the local model would have "
-                              "tens of thousands of nodes)" + got(h.local_spacing_m));
+    r.fail("local_spacing_m",
+           "is too fine for local_radius_m (more than 64 shells: the local model would have "
+           "tens of thousands of nodes)" +
+               got(h.local_spacing_m));
   readGlobalModelKeys(r, base_dir, fixed, h);  // host/scene/global_organ_mesh.h
   return h;
 }

@@ -14,20 +14,20 @@ namespace inc {
 
 // What `incision run` writes (`output`): an application setting, not part of the compiled scene.
 struct OutputSpec {
-  int every_frames = 0;         // 0: final state only; N: also every N frames
+  int every_frames = 0;  // 0: final state only; N: also every N frames
   bool particles_ply = true;
   bool mesh_obj = true;
-  bool vtk = false;             // legacy VTK point/mesh files for ParaView
+  bool vtk = false;  // legacy VTK point/mesh files for ParaView
   bool metrics_csv = true;
 };
 
 struct Scene {
-  std::string file;        // where it came from ("<embedded:name>" for built-in scenes)
+  std::string file;  // where it came from ("<embedded:name>" for built-in scenes)
   std::string name;
   std::string description;
-  double duration = 1.0;   // s, default run length when neither --steps nor --seconds is given
+  double duration = 1.0;  // s, default run length when neither --steps nor --seconds is given
   GeometrySpec geometry;
-  Material material;                   // material.{youngs_modulus_pa, poisson_ratio, density_kg_m3, damping_per_s}
+  Material material;                     // material.{youngs_modulus_pa, poisson_ratio, density_kg_m3, damping_per_s}
   CutThresholds<double> cut_thresholds;  // material.cutting: the haptic cutting force model (eqs. 15-16): F_p, F_s,
                                          // F_d (N), friction (N/m); a haptic setting, so not part of Material
   ModelsSpec models;

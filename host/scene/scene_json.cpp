@@ -231,7 +231,6 @@ json parseChecked(const std::string& text, const std::string& file) {
   return json::parse(text);  // cannot fail: the SAX pass accepted the same text
 }
 
-
 std::string describeValue(const json& v) {
   std::string text = v.dump();
   if (text.size() > 40) text = text.substr(0, 37) + "...";
@@ -270,8 +269,8 @@ double numberAt(const json& v, const std::string& file, const std::string& path)
     std::string w = lower(v.get<std::string>());
     if (!w.empty() && (w[0] == '-' || w[0] == '+')) w = w.substr(1);
     if (w.rfind("nan", 0) == 0 || w.rfind("inf", 0) == 0) {
-      throw InputError(file, path, "expected a finite number, got " + describeValue(v) +
-                                       ": NaN and infinity are not allowed");
+      throw InputError(file, path,
+                       "expected a finite number, got " + describeValue(v) + ": NaN and infinity are not allowed");
     }
   }
   if (!v.is_number()) throw InputError(file, path, "expected a number, got " + describeValue(v));
@@ -293,8 +292,9 @@ Vec3d vec3At(const json& v, const std::string& file, const std::string& path) {
 ObjectReader::ObjectReader(const json& obj, std::string file, std::string path)
     : obj_(&obj), file_(std::move(file)), path_(std::move(path)) {
   if (!obj.is_object()) {
-    throw InputError(file_, path_, std::string(path_.empty() ? "the scene must be a JSON object" : "expected an object") +
-                                       ", got " + describeValue(obj));
+    throw InputError(file_, path_,
+                     std::string(path_.empty() ? "the scene must be a JSON object" : "expected an object") + ", got " +
+                         describeValue(obj));
   }
 }
 
@@ -327,8 +327,8 @@ long long ObjectReader::integer(const std::string& key, long long fallback) cons
   if (!has(key)) return fallback;
   const json& v = obj_->at(key);
   if (v.is_number_integer()) {
-    if (v.is_number_unsigned() && v.get<unsigned long long>() >
-                                      static_cast<unsigned long long>(std::numeric_limits<long long>::max()))
+    if (v.is_number_unsigned() &&
+        v.get<unsigned long long>() > static_cast<unsigned long long>(std::numeric_limits<long long>::max()))
       fail(key, "integer " + v.dump() + " is too large");
     return v.get<long long>();
   }

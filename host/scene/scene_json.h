@@ -59,7 +59,8 @@ class ObjectReader {
   bool boolean(const std::string& key, bool fallback) const;
   std::string string(const std::string& key, const std::string& fallback) const;
   // One of `choices` (did-you-mean on a near miss).
-  std::string choice(const std::string& key, const std::string& fallback, const std::vector<std::string>& choices) const;
+  std::string choice(const std::string& key, const std::string& fallback,
+                     const std::vector<std::string>& choices) const;
   Vec3d vec3(const std::string& key, const Vec3d& fallback) const;
   // The object at `key`; throws when absent ("is required") or not an object.
   ObjectReader object(const std::string& key) const;

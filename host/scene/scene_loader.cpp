@@ -11,15 +11,15 @@
 #include <sstream>
 #include <system_error>
 
+#include "host/compiled/material_checks.h"
+#include "host/io/mesh.h"
 #include "host/scene/cutting_scene.h"
 #include "host/scene/haptics_scene.h"
-#include "host/compiled/material_checks.h"
 #include "host/scene/scene_fields.h"
+#include "host/scene/scene_json.h"
 #include "host/scene/scene_keys.h"
 #include "model/input_error.h"
-#include "host/io/mesh.h"
 #include "model/pbd_model.h"
-#include "host/scene/scene_json.h"
 
 namespace inc {
 
@@ -91,8 +91,9 @@ GeometrySpec readGeometry(const ObjectReader& top, const std::string& base_dir) 
   }
   const double estimate = volume / (s.spacing * s.spacing * s.spacing);
   if (estimate > kMaxEstimatedParticles) {
-    g.fail("spacing_m", "would sample about " + formatNumber(std::round(estimate)) + " particles, more than the limit of " +
-                            formatNumber(kMaxEstimatedParticles) + "; use a larger spacing");
+    g.fail("spacing_m", "would sample about " + formatNumber(std::round(estimate)) +
+                            " particles, more than the limit of " + formatNumber(kMaxEstimatedParticles) +
+                            "; use a larger spacing");
   }
   return s;
 }
@@ -103,7 +104,7 @@ void readMaterial(const ObjectReader& top, Material& m, CutThresholds<double>& c
   const ObjectReader r = top.object("material");
   r.allowOnly(sceneKeysUnder("material"));
   readSceneKeys(r, "material", m);
-  validateMaterial(m, r.file(), r.path());  // host/compiled/material_checks.h
+  validateMaterial(m, r.file(), r.path());                                 // host/compiled/material_checks.h
   if (r.has("cutting")) cutting = readCutThresholds(r.object("cutting"));  // host/scene/cutting_scene.h
 }
 
@@ -203,8 +204,9 @@ std::vector<ColliderSpec> readColliders(const ObjectReader& top, const ModelsSpe
   }
   // The tearing sheet has no contacts: a collider there would be passed through.
   if (!out.empty() && models.tearing)
-    top.fail("colliders", "act on the PBD metaball organ, the MLS body and a cut's nodal points; models.tearing's "
-                          "sheet would pass through them");
+    top.fail("colliders",
+             "act on the PBD metaball organ, the MLS body and a cut's nodal points; models.tearing's "
+             "sheet would pass through them");
   return out;
 }
 
@@ -303,7 +305,7 @@ std::string compactScalarArrays(const std::string& text) {
       std::string line = text.substr(pos, eol == std::string::npos ? std::string::npos : eol - pos);
       const std::size_t first = line.find_first_not_of(' ');
       line = first == std::string::npos ? "" : line.substr(first);
-      if (line == "]" || line == "]," ) {
+      if (line == "]" || line == "],") {
         close = pos + first;
         break;
       }

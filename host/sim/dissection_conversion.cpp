@@ -9,9 +9,9 @@
 #include <limits>
 #include <mutex>
 
-#include "model/device_capture_lock.h"
-#include "host/sim/dissection_simulation_impl.h"
 #include "base/elapsed_ms.h"
+#include "host/sim/dissection_simulation_impl.h"
+#include "model/device_capture_lock.h"
 #include "physics/pbd_rotation.h"
 
 namespace inc::dissection {
@@ -52,7 +52,8 @@ StrokePbdPlan<T> planStrokePbd(const ActiveStroke& a, const std::vector<SphereRo
 // runs on workers beside this frame and the conversion is applied at the next frame's start with the state of then
 // (applyConversion); with 0, now.
 template <typename T>
-void DissectionSimulation<T>::launchConversion(std::unique_ptr<PendingConversion<T>> pc, std::vector<std::int32_t> hit) {
+void DissectionSimulation<T>::launchConversion(std::unique_ptr<PendingConversion<T>> pc,
+                                               std::vector<std::int32_t> hit) {
   NodalRegion& region = *active_->region;
   const SweptSurface& swept = active_->swept;  // nothing extends it before the conversion is applied
   PendingConversion<T>* p = pc.get();
@@ -67,7 +68,8 @@ void DissectionSimulation<T>::launchConversion(std::unique_ptr<PendingConversion
   const auto mlsHalf = [p, &region, &swept, delayed, preload, hit] {
     const auto t0 = std::chrono::steady_clock::now();
     NodalRest from = delayed ? region.restCopy() : region.takeRest();
-    p->mls = p->cut ? region.prepareConversion(std::move(from), hit, swept) : region.prepareStrip(std::move(from), p->fresh);
+    p->mls =
+        p->cut ? region.prepareConversion(std::move(from), hit, swept) : region.prepareStrip(std::move(from), p->fresh);
     if (preload) region.preload(p->mls);
     p->mls_prepare_ms = msSince(t0);
   };
@@ -205,18 +207,18 @@ void DissectionSimulation<T>::installStrokePbd(StrokePbdPlan<T>& p) {
 }
 
 // This file's functions for the two precisions makeDissectionSimulation builds.
-#define INC_DISSECTION_CONVERSION(T)                                                                               \
+#define INC_DISSECTION_CONVERSION(T)                                                                                   \
   template StrokePbdPlan<T> planStrokePbd<T>(const ActiveStroke&, const std::vector<SphereRole>&, MetaballPbdOptions); \
-  template void DissectionSimulation<T>::launchConversion(std::unique_ptr<PendingConversion<T>>,                  \
-                                                          std::vector<std::int32_t>);                             \
-  template void DissectionSimulation<T>::applyConversion();                                                       \
-  template void DissectionSimulation<T>::transferConversion(PendingConversion<T>&, NodalRegion&,                  \
-                                                            const std::vector<ConvertedSphereState>&);            \
-  template void DissectionSimulation<T>::addConversionTimes(const NodalRegion&);                                 \
-  template NodalRegionSettings DissectionSimulation<T>::regionSettings() const;                                   \
-  template ConvertedSphereState DissectionSimulation<T>::sphereState(std::int32_t) const;                         \
-  template bool DissectionSimulation<T>::directFrameFits(const PbdStepParams<T>&) const;                          \
-  template void DissectionSimulation<T>::preloadStrokePbd(StrokePbdPlan<T>&);                                     \
+  template void DissectionSimulation<T>::launchConversion(std::unique_ptr<PendingConversion<T>>,                       \
+                                                          std::vector<std::int32_t>);                                  \
+  template void DissectionSimulation<T>::applyConversion();                                                            \
+  template void DissectionSimulation<T>::transferConversion(PendingConversion<T>&, NodalRegion&,                       \
+                                                            const std::vector<ConvertedSphereState>&);                 \
+  template void DissectionSimulation<T>::addConversionTimes(const NodalRegion&);                                       \
+  template NodalRegionSettings DissectionSimulation<T>::regionSettings() const;                                        \
+  template ConvertedSphereState DissectionSimulation<T>::sphereState(std::int32_t) const;                              \
+  template bool DissectionSimulation<T>::directFrameFits(const PbdStepParams<T>&) const;                               \
+  template void DissectionSimulation<T>::preloadStrokePbd(StrokePbdPlan<T>&);                                          \
   template void DissectionSimulation<T>::installStrokePbd(StrokePbdPlan<T>&);
 INC_DISSECTION_CONVERSION(float)
 INC_DISSECTION_CONVERSION(double)

@@ -4,11 +4,11 @@
 #include <cstdint>
 #include <vector>
 
+#include "host/assembly/metaball_model.h"
+#include "host/assembly/pbd_builders.h"
 #include "host/cut/cut_nodal_region.h"
 #include "host/cut/cut_swept_surface.h"
 #include "host/sim/dissection_stroke.h"
-#include "host/assembly/metaball_model.h"
-#include "host/assembly/pbd_builders.h"
 #include "model/pbd_model.h"
 
 namespace inc::dissection {

@@ -4,8 +4,8 @@
 #include <chrono>
 #include <cmath>
 
-#include "host/sim/dissection_simulation_impl.h"
 #include "base/elapsed_ms.h"
+#include "host/sim/dissection_simulation_impl.h"
 #include "physics/pbd_block.h"
 
 namespace inc::dissection {
@@ -88,12 +88,15 @@ bool DissectionSimulation<T>::advancePoints(int e, int K, double dt, FrameOutcom
   NodalRegion& region = *a.region;
   if (bladeContact()) {
     const double b0 = double(e) / K, b1 = double(e + 1) / K;
-    region.setBlade(lerpBlade(frame_blade_.from, frame_blade_.to, b0), lerpBlade(frame_blade_.from, frame_blade_.to, b1),
-                    scene_.cutting.blade_radius_m, scene_.cutting.blade_friction);
+    region.setBlade(lerpBlade(frame_blade_.from, frame_blade_.to, b0),
+                    lerpBlade(frame_blade_.from, frame_blade_.to, b1), scene_.cutting.blade_radius_m,
+                    scene_.cutting.blade_friction);
   } else {
     region.setBlade({}, {}, 0.0);
   }
-  const auto pbdPosition = [&](std::int32_t b) { return Vec3d(state_.positions[std::size_t(a.base_to_pbd[std::size_t(b)])]); };
+  const auto pbdPosition = [&](std::int32_t b) {
+    return Vec3d(state_.positions[std::size_t(a.base_to_pbd[std::size_t(b)])]);
+  };
   const auto cm = std::chrono::steady_clock::now();
   const MlsFrameStats ms = region.advance(dt, scene_.cutting.mls_substeps_per_exchange, pbdPosition);
   timers_.mls_ms += msSince(cm);
@@ -167,12 +170,12 @@ bool DissectionSimulation<T>::advanceSpheres(int e, int K, const PbdStepParams<T
 
 // This file's members for the two precisions makeDissectionSimulation builds.
 #define INC_DISSECTION_COUPLED_FRAME(T)                                                                             \
-  template void DissectionSimulation<T>::coupledFrame(double, const PbdFrameInput<T>&, FrameOutcome&);             \
-  template PbdStepParams<T> DissectionSimulation<T>::exchangeParams(double) const;                                 \
-  template DissectionSimulation<T>::InterfaceAnchors DissectionSimulation<T>::interfaceAnchors() const;            \
-  template bool DissectionSimulation<T>::advancePoints(int, int, double, FrameOutcome&);                           \
-  template PbdFrameInput<T> DissectionSimulation<T>::exchangeInput(int, int, const PbdFrameInput<T>&,              \
-                                                                   InterfaceAnchors&);                             \
+  template void DissectionSimulation<T>::coupledFrame(double, const PbdFrameInput<T>&, FrameOutcome&);              \
+  template PbdStepParams<T> DissectionSimulation<T>::exchangeParams(double) const;                                  \
+  template DissectionSimulation<T>::InterfaceAnchors DissectionSimulation<T>::interfaceAnchors() const;             \
+  template bool DissectionSimulation<T>::advancePoints(int, int, double, FrameOutcome&);                            \
+  template PbdFrameInput<T> DissectionSimulation<T>::exchangeInput(int, int, const PbdFrameInput<T>&,               \
+                                                                   InterfaceAnchors&);                              \
   template bool DissectionSimulation<T>::advanceSpheres(int, int, const PbdStepParams<T>&, const PbdFrameInput<T>&, \
                                                         FrameOutcome&);
 INC_DISSECTION_COUPLED_FRAME(float)

@@ -6,16 +6,16 @@
 #include <cstdint>
 #include <vector>
 
-#include "host/cut/cut_swept_surface.h"
 #include "host/assembly/metaball_model.h"
+#include "host/cut/cut_swept_surface.h"
 #include "host/sim/simulation_model.h"
 
 namespace inc {
 
 // Swept surfaces live in the rest configuration (the cut pipeline works there). They are shown where the tissue
 // is now by translation skinning, as the organ's surface: v = v0 + sum_j w_j (x_j - c_j) over the k = 4 spheres
-// nearest in signed distance (host/assembly/skin_binding.h). A swept surface binds to the spheres on both sides (it lies
-// between the walls). The binding is rebuilt only when the surfaces or the spheres change. (The nodal points need
+// nearest in signed distance (host/assembly/skin_binding.h). A swept surface binds to the spheres on both sides (it
+// lies between the walls). The binding is rebuilt only when the surfaces or the spheres change. (The nodal points need
 // no binding: while a stroke is in the tissue they are simulated, and the model reports where they are.)
 class CutLayerBinding {
  public:

@@ -11,9 +11,9 @@ void DissectionSimulation<T>::reportStages(FrameReport& rep, const FrameOutcome&
   rep.stages = out.pbd.stages;
   rep.stages.push_back({"cut_sweep", timers_.sweep_ms});
   rep.stages.push_back({"cut_convert", timers_.convert_ms});
-  rep.stages.push_back({"cut_convert_pbd", timers_.convert_pbd_ms});  // a share of cut_convert
+  rep.stages.push_back({"cut_convert_pbd", timers_.convert_pbd_ms});          // a share of cut_convert
   rep.stages.push_back({"cut_convert_prepare", timers_.convert_prepare_ms});  // on workers; delayed: off the frame
-  rep.stages.push_back({"cut_convert_mls", timers_.convert_mls_ms});  // a share of cut_convert
+  rep.stages.push_back({"cut_convert_mls", timers_.convert_mls_ms});          // a share of cut_convert
   // The conversion's parts: sampling, then beside the PBD rebuild the supports and the MLS rebuild (model, setup).
   rep.stages.push_back({"cut_convert_sample", timers_.convert_sample_ms});
   rep.stages.push_back({"cut_convert_supports", timers_.convert_supports_ms});
@@ -21,10 +21,10 @@ void DissectionSimulation<T>::reportStages(FrameReport& rep, const FrameOutcome&
   rep.stages.push_back({"cut_convert_mls_setup", timers_.convert_mls_setup_ms});
   rep.stages.push_back({"cut_convert_mls_build", timers_.convert_mls_build_ms});  // of _mls_model
   rep.stages.push_back({"cut_convert_pbd_build", timers_.convert_pbd_build_ms});  // of cut_convert_pbd
-  rep.stages.push_back({"cut_convert_wait", timers_.convert_wait_ms});  // the MLS half outlasting the PBD half
-  rep.stages.push_back({"cut_convert_apply", timers_.convert_apply_ms});  // of cut_convert: a delayed one applied
+  rep.stages.push_back({"cut_convert_wait", timers_.convert_wait_ms});          // the MLS half outlasting the PBD half
+  rep.stages.push_back({"cut_convert_apply", timers_.convert_apply_ms});        // of cut_convert: a delayed one applied
   rep.stages.push_back({"cut_convert_apply_region", timers_.apply_region_ms});  // preloaded: the points' state transfer
-  rep.stages.push_back({"cut_convert_apply_pbd", timers_.apply_pbd_ms});        // preloaded: the spheres' state transfer
+  rep.stages.push_back({"cut_convert_apply_pbd", timers_.apply_pbd_ms});  // preloaded: the spheres' state transfer
   rep.stages.push_back({"mls_integrate", mls.ms_integrate});
   rep.stages.push_back({"mls_coupling", mls.ms_coupling});
   rep.stages.push_back({"mls_stress", mls.ms_stress});
@@ -35,8 +35,9 @@ void DissectionSimulation<T>::reportStages(FrameReport& rep, const FrameOutcome&
   rep.stages.push_back({"coupling_exchange", timers_.exchange_ms});
   rep.stages.push_back({"cut_repack", timers_.repack_ms});
   rep.stages.push_back({"cut_apply", timers_.apply_ms});
-  rep.stages.push_back({"cut_apply_wait", timers_.apply_wait_ms});  // of cut_apply: the stroke end's worker (or computing it)
-  rep.stages.push_back({"cut_open_wait", timers_.open_wait_ms});    // of cut_apply: a surface opening's, likewise
+  rep.stages.push_back(
+      {"cut_apply_wait", timers_.apply_wait_ms});  // of cut_apply: the stroke end's worker (or computing it)
+  rep.stages.push_back({"cut_open_wait", timers_.open_wait_ms});  // of cut_apply: a surface opening's, likewise
 }
 
 // The first half to go non-finite: the spheres ("pbd"), else the points ("mls_" and their stage).
@@ -151,7 +152,8 @@ void DissectionSimulation<T>::reportWork(FrameReport& rep) const {
   rep.counters["surface_opened"] = opening_.shown() ? 1.0 : 0.0;  // a stroke's partial opening is shown
   rep.counters["surface_open_pending"] = opening_.inMaking() ? 1.0 : 0.0;
   rep.counters["surface_open_ms"] = opening_.lastWorkerMs();  // the last applied opening's worker time
-  rep.counters["surface_open_here"] = double(opening_.computedHere());  // openings computed on the frame's thread so far
+  rep.counters["surface_open_here"] =
+      double(opening_.computedHere());  // openings computed on the frame's thread so far
   rep.counters["stroke_end_worker_ms"] = last_end_.worker_ms;
   rep.counters["stroke_end_here"] = last_end_here_ ? 1.0 : 0.0;  // the last end: its worker given up on
   rep.counters["stroke_end_repack_ms"] = last_end_.repack_ms;
@@ -161,13 +163,13 @@ void DissectionSimulation<T>::reportWork(FrameReport& rep) const {
 }
 
 // This file's members for the two precisions makeDissectionSimulation builds.
-#define INC_DISSECTION_REPORT(T)                                                                                  \
-  template void DissectionSimulation<T>::reportStages(FrameReport&, const FrameOutcome&) const;                 \
-  template void DissectionSimulation<T>::reportFailure(FrameReport&, const FrameOutcome&) const;                \
-  template void DissectionSimulation<T>::report(FrameReport&, const MlsFrameStats&, int) const;                 \
-  template void DissectionSimulation<T>::reportEnergies(FrameReport&) const;                                    \
-  template void DissectionSimulation<T>::reportStroke(FrameReport&, const MlsFrameStats&, int) const;           \
-  template void DissectionSimulation<T>::reportCuts(FrameReport&) const;                                        \
+#define INC_DISSECTION_REPORT(T)                                                                      \
+  template void DissectionSimulation<T>::reportStages(FrameReport&, const FrameOutcome&) const;       \
+  template void DissectionSimulation<T>::reportFailure(FrameReport&, const FrameOutcome&) const;      \
+  template void DissectionSimulation<T>::report(FrameReport&, const MlsFrameStats&, int) const;       \
+  template void DissectionSimulation<T>::reportEnergies(FrameReport&) const;                          \
+  template void DissectionSimulation<T>::reportStroke(FrameReport&, const MlsFrameStats&, int) const; \
+  template void DissectionSimulation<T>::reportCuts(FrameReport&) const;                              \
   template void DissectionSimulation<T>::reportWork(FrameReport&) const;
 INC_DISSECTION_REPORT(float)
 INC_DISSECTION_REPORT(double)

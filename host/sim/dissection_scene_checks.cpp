@@ -17,8 +17,9 @@ void checkCuttingRanges(const CompiledScene& s) {
   const CuttingSpec& c = s.cutting;
   const auto range = [&](int v, int lo, int hi, const char* key) {
     if (v < lo || v > hi)
-      throw InputError(s.file, std::string("cutting.") + key,
-                       "must lie in [" + std::to_string(lo) + ", " + std::to_string(hi) + "] (got " + std::to_string(v) + ")");
+      throw InputError(
+          s.file, std::string("cutting.") + key,
+          "must lie in [" + std::to_string(lo) + ", " + std::to_string(hi) + "] (got " + std::to_string(v) + ")");
   };
   range(c.samples_per_diameter, 2, 12, "samples_per_diameter");
   range(c.exchanges_per_frame, 1, 64, "exchanges_per_frame");
@@ -53,10 +54,10 @@ void checkDissectionScene(const CompiledScene& scene) {
 void checkStrokesApart(const std::string& f, const std::vector<ScriptedStroke>& strokes) {
   for (std::size_t k = 1; k < strokes.size(); ++k)
     if (strokes[k].start < strokes[k - 1].end)
-      throw InputError(f, "tools", "scalpel \"" + strokes[k].tool.name + "\" starts at t = " +
-                                       std::to_string(strokes[k].start) + " s, before scalpel \"" +
-                                       strokes[k - 1].tool.name + "\" leaves the tissue at t = " +
-                                       std::to_string(strokes[k - 1].end) + " s: strokes must not overlap");
+      throw InputError(f, "tools",
+                       "scalpel \"" + strokes[k].tool.name + "\" starts at t = " + std::to_string(strokes[k].start) +
+                           " s, before scalpel \"" + strokes[k - 1].tool.name + "\" leaves the tissue at t = " +
+                           std::to_string(strokes[k - 1].end) + " s: strokes must not overlap");
 }
 
 void checkFixedMlsSubsteps(const CompiledScene& scene, const MetaballModel& spheres, const MlsMaterial& material) {
@@ -69,11 +70,12 @@ void checkFixedMlsSubsteps(const CompiledScene& scene, const MetaballModel& sphe
   const double stable = mlsStableTimeStep(c.mu, c.lambda, c.k_volume, scene.material.density_kg_m3, spacing);
   const double dt = scene.solver.frame_dt / scene.cutting.exchanges_per_frame / fixed;
   if (dt > stable)
-    throw InputError(scene.file, "cutting.mls_substeps_per_exchange",
-                     std::to_string(fixed) + " substeps give dt = " + std::to_string(dt) +
-                         " s, above the nodal points' stable step " + std::to_string(stable) + " s (needs at least " +
-                         std::to_string(int(std::ceil(scene.solver.frame_dt / scene.cutting.exchanges_per_frame / stable))) +
-                         "); use more, or 0 to choose automatically");
+    throw InputError(
+        scene.file, "cutting.mls_substeps_per_exchange",
+        std::to_string(fixed) + " substeps give dt = " + std::to_string(dt) +
+            " s, above the nodal points' stable step " + std::to_string(stable) + " s (needs at least " +
+            std::to_string(int(std::ceil(scene.solver.frame_dt / scene.cutting.exchanges_per_frame / stable))) +
+            "); use more, or 0 to choose automatically");
 }
 
 }  // namespace inc::dissection

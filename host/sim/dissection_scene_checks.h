@@ -4,10 +4,10 @@
 #include <string>
 #include <vector>
 
-#include "host/sim/dissection_stroke.h"
 #include "host/assembly/metaball_model.h"
-#include "model/mls_model.h"
 #include "host/compiled/compiled_scene.h"
+#include "host/sim/dissection_stroke.h"
+#include "model/mls_model.h"
 
 namespace inc::dissection {
 

@@ -9,18 +9,18 @@
 #include <cstdlib>
 #include <mutex>
 
-#include "model/device_capture_lock.h"
+#include "base/elapsed_ms.h"
+#include "host/assembly/organ_shapes.h"
+#include "host/assembly/scene_surface.h"
+#include "host/compiled/scene_colliders.h"
 #include "host/sim/dissection_scene_checks.h"
 #include "host/sim/dissection_simulation_impl.h"
-#include "base/elapsed_ms.h"
-#include "model/input_error.h"
 #include "host/sim/metaball_simulation.h"
 #include "host/sim/mls_simulation.h"
-#include "host/assembly/organ_shapes.h"
 #include "host/sim/pbd_organ_settings.h"
 #include "host/sim/pbd_render_layers.h"
-#include "host/compiled/scene_colliders.h"
-#include "host/assembly/scene_surface.h"
+#include "model/device_capture_lock.h"
+#include "model/input_error.h"
 
 namespace inc::dissection {
 
@@ -59,7 +59,8 @@ void DissectionSimulation<T>::readTools() {
     }
   }
   // With models.haptics the blade may come only from a haptic device (applyTool), without a scripted one.
-  if (strokes_.empty() && !scene_.models.haptics) throw InputError(f, "tools", "cutting needs a tool of kind \"scalpel\"");
+  if (strokes_.empty() && !scene_.models.haptics)
+    throw InputError(f, "tools", "cutting needs a tool of kind \"scalpel\"");
   std::stable_sort(strokes_.begin(), strokes_.end(),
                    [](const ScriptedStroke& a, const ScriptedStroke& b) { return a.start < b.start; });
   checkStrokesApart(f, strokes_);
@@ -411,8 +412,10 @@ template class DissectionSimulation<double>;
 
 namespace inc {
 
-std::unique_ptr<SimulationModel> makeDissectionSimulation(const CompiledScene& scene, BackendKind backend, Precision precision) {
-  if (precision == Precision::Float64) return std::make_unique<dissection::DissectionSimulation<double>>(scene, backend);
+std::unique_ptr<SimulationModel> makeDissectionSimulation(const CompiledScene& scene, BackendKind backend,
+                                                          Precision precision) {
+  if (precision == Precision::Float64)
+    return std::make_unique<dissection::DissectionSimulation<double>>(scene, backend);
   return std::make_unique<dissection::DissectionSimulation<float>>(scene, backend);
 }
 

@@ -3,11 +3,11 @@
 
 #include <memory>
 
-#include "model/backend.h"
-#include "host/io/mesh.h"
-#include "host/compiled/compiled_scene.h"
 #include "host/assembly/scene_surface.h"
+#include "host/compiled/compiled_scene.h"
+#include "host/io/mesh.h"
 #include "host/sim/simulation_model.h"
+#include "model/backend.h"
 
 namespace inc {
 
@@ -51,6 +51,7 @@ namespace inc {
 // strokes (Press begins, Drag extends, Release ends the stroke) cut by the same pipeline. renderLayers(): spheres,
 // fixed and grasped spheres, the swept surfaces (applied cuts and the stroke in progress) and, while a stroke is in
 // the tissue, the nodal points where they are now.
-std::unique_ptr<SimulationModel> makeDissectionSimulation(const CompiledScene& scene, BackendKind backend, Precision precision);
+std::unique_ptr<SimulationModel> makeDissectionSimulation(const CompiledScene& scene, BackendKind backend,
+                                                          Precision precision);
 
 }  // namespace inc

@@ -7,11 +7,14 @@
 #include <vector>
 
 #include "base/background_task.h"
-#include "model/backend.h"
+#include "host/assembly/metaball_pack_bvh.h"
+#include "host/assembly/pbd_builders.h"
+#include "host/compiled/compiled_scene.h"
 #include "host/cut/cut_nodal_region.h"
 #include "host/cut/cut_repack.h"
 #include "host/cut/cut_surface_state.h"
 #include "host/cut/cut_swept_surface.h"
+#include "host/io/mesh.h"
 #include "host/sim/dissection_conversion.h"
 #include "host/sim/dissection_render_layers.h"
 #include "host/sim/dissection_skin.h"
@@ -20,12 +23,9 @@
 #include "host/sim/dissection_surface_opening.h"
 #include "host/sim/grasper.h"
 #include "host/sim/interactive_tool.h"
-#include "host/io/mesh.h"
-#include "host/assembly/metaball_pack_bvh.h"
-#include "host/assembly/pbd_builders.h"
-#include "model/pbd_model.h"
-#include "host/compiled/compiled_scene.h"
 #include "host/sim/simulation_model.h"
+#include "model/backend.h"
+#include "model/pbd_model.h"
 
 namespace inc::dissection {
 
@@ -58,17 +58,17 @@ class DissectionSimulation final : public SimulationModel {
  private:
   struct Timers {
     double sweep_ms = 0, convert_ms = 0, exchange_ms = 0, repack_ms = 0, apply_ms = 0;
-    double convert_pbd_ms = 0;  // of convert_ms: the PBD model rebuilt without the converted spheres
+    double convert_pbd_ms = 0;      // of convert_ms: the PBD model rebuilt without the converted spheres
     double convert_prepare_ms = 0;  // the conversions' rest-configuration work (off the frame when delayed)
     double open_wait_ms = 0;        // of apply_ms: waiting for the surface opening's worker
-    double convert_mls_ms = 0;  // of convert_ms: the MLS solver rebuilt on the points
+    double convert_mls_ms = 0;      // of convert_ms: the MLS solver rebuilt on the points
     double convert_sample_ms = 0, convert_supports_ms = 0, convert_mls_model_ms = 0, convert_mls_setup_ms = 0;
     double convert_mls_build_ms = 0;
-    double convert_pbd_build_ms = 0;  // of convert_pbd_ms: the host build (buildMetaballPbdModel)
-    double convert_wait_ms = 0;       // of convert_ms: waiting for the MLS half after the PBD half
+    double convert_pbd_build_ms = 0;               // of convert_pbd_ms: the host build (buildMetaballPbdModel)
+    double convert_wait_ms = 0;                    // of convert_ms: waiting for the MLS half after the PBD half
     double apply_region_ms = 0, apply_pbd_ms = 0;  // of convert_ms, preloaded: the two state transfers in turn
-    double convert_apply_ms = 0;  // of convert_ms: a delayed conversion applied at the frame's start
-    double mls_ms = 0;  // wall time of the MLS advances (launches, the GPU's work, the reductions' downloads)
+    double convert_apply_ms = 0;                   // of convert_ms: a delayed conversion applied at the frame's start
+    double mls_ms = 0;         // wall time of the MLS advances (launches, the GPU's work, the reductions' downloads)
     double apply_wait_ms = 0;  // of apply_ms: waiting for the stroke end's worker
   };
   // What a frame's simulation returns to its report.
@@ -183,8 +183,8 @@ class DissectionSimulation final : public SimulationModel {
   NodalRegionSettings region_;
   double reference_mass_ = 0.0, reference_radius_ = 0.0;  // kg, m: the organ's mean sphere before any cut
   std::shared_ptr<const pack::SurfaceDistance> tissue_;   // the organ's rest surface (inside test)
-  MetaballModel spheres_;  // the spheres of the PBD model (during a stroke: the base minus the cut ones)
-  TriangleMesh rest_surface_;  // the surface after every cut so far (rest configuration) = surface_.mesh
+  MetaballModel spheres_;       // the spheres of the PBD model (during a stroke: the base minus the cut ones)
+  TriangleMesh rest_surface_;   // the surface after every cut so far (rest configuration) = surface_.mesh
   TriangleMesh collider_mesh_;  // the scene's colliders drawn around the organ (RenderLayers::colliders)
   // The split surface with its wall flags and binding probes; replaced, never changed in place (workers read it).
   std::shared_ptr<const CutSurfaceState> surface_;
@@ -201,8 +201,8 @@ class DissectionSimulation final : public SimulationModel {
   std::unique_ptr<PendingConversion<T>> converting_;
   SurfaceOpening opening_;  // a surface opening in the making and the one shown (openSurface)
   int saved_frames_left_ = -1;
-  std::string last_split_failure_;  // why the last applied cut left the surface unsplit (empty: it did not)
-  EndTimes last_end_;  // the worker's times of the last applied stroke end
+  std::string last_split_failure_;          // why the last applied cut left the surface unsplit (empty: it did not)
+  EndTimes last_end_;                       // the worker's times of the last applied stroke end
   std::vector<SweptSurface> earlier_cuts_;  // every stroke finished so far (rest configuration)
   std::size_t last_points_ = 0, last_added_ = 0;
   RepackResult last_repack_;

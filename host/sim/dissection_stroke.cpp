@@ -4,8 +4,8 @@
 #include <algorithm>
 #include <chrono>
 
-#include "host/sim/dissection_simulation_impl.h"
 #include "base/elapsed_ms.h"
+#include "host/sim/dissection_simulation_impl.h"
 
 namespace inc::dissection {
 
@@ -149,7 +149,10 @@ template <typename T>
 std::vector<std::int32_t> DissectionSimulation<T>::spheresEntered(const SweptSurface& strip) const {
   const ActiveStroke& a = *active_;
   std::vector<std::int32_t> hit = findCutSpheres(strip, a.base.rest_centers, a.base.rest_radii);
-  if (a.region) hit.erase(std::remove_if(hit.begin(), hit.end(), [&](std::int32_t b) { return a.region->role(b) == SphereRole::Cut; }), hit.end());
+  if (a.region)
+    hit.erase(
+        std::remove_if(hit.begin(), hit.end(), [&](std::int32_t b) { return a.region->role(b) == SphereRole::Cut; }),
+        hit.end());
   return hit;
 }
 
@@ -168,13 +171,13 @@ std::vector<const SweptSurface*> DissectionSimulation<T>::earlierCuts() const {
   return out;
 }
 
-#define INC_DISSECTION_STROKE(T)                                                                                  \
-  template void DissectionSimulation<T>::scriptedStrokes(double, double);                                        \
-  template void DissectionSimulation<T>::mouseStroke(const ToolEvent&, const std::vector<Vec3d>&, ToolResult&);  \
-  template void DissectionSimulation<T>::beginStroke(const BladePose&, int);                                     \
-  template void DissectionSimulation<T>::extendStroke(const BladePose&);                                         \
-  template std::vector<std::int32_t> DissectionSimulation<T>::spheresEntered(const SweptSurface&) const;         \
-  template void DissectionSimulation<T>::completeStroke();                                                       \
+#define INC_DISSECTION_STROKE(T)                                                                                \
+  template void DissectionSimulation<T>::scriptedStrokes(double, double);                                       \
+  template void DissectionSimulation<T>::mouseStroke(const ToolEvent&, const std::vector<Vec3d>&, ToolResult&); \
+  template void DissectionSimulation<T>::beginStroke(const BladePose&, int);                                    \
+  template void DissectionSimulation<T>::extendStroke(const BladePose&);                                        \
+  template std::vector<std::int32_t> DissectionSimulation<T>::spheresEntered(const SweptSurface&) const;        \
+  template void DissectionSimulation<T>::completeStroke();                                                      \
   template std::vector<const SweptSurface*> DissectionSimulation<T>::earlierCuts() const;
 INC_DISSECTION_STROKE(float)
 INC_DISSECTION_STROKE(double)

@@ -6,10 +6,10 @@
 #include <memory>
 #include <vector>
 
-#include "host/cut/cut_nodal_region.h"
-#include "host/cut/cut_swept_surface.h"
 #include "host/assembly/metaball_model.h"
 #include "host/compiled/model_specs.h"
+#include "host/cut/cut_nodal_region.h"
+#include "host/cut/cut_swept_surface.h"
 
 namespace inc::dissection {
 
@@ -27,10 +27,10 @@ struct ActiveStroke {
   SweptSurface swept;
   std::unique_ptr<NodalRegion> region;
   std::vector<std::int32_t> base_to_pbd, pbd_to_base;
-  std::vector<double> base_cell_volume;  // the base PBD model's rest cell volumes (empty: volume preservation off)
+  std::vector<double> base_cell_volume;    // the base PBD model's rest cell volumes (empty: volume preservation off)
   std::vector<double> base_contact_inset;  // the base PBD model's contact insets (empty: the scene has no colliders)
-  int scripted = -1;  // index into the scripted strokes, -1: the mouse's
-  std::size_t opened_triangles = 0;  // swept triangles the last surface opening was started with
+  int scripted = -1;                       // index into the scripted strokes, -1: the mouse's
+  std::size_t opened_triangles = 0;        // swept triangles the last surface opening was started with
 };
 
 // The scalpel's blade at time t: the segment of tool.length centred on the path position along the path direction.

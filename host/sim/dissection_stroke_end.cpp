@@ -6,8 +6,8 @@
 #include <chrono>
 #include <map>
 
-#include "host/sim/dissection_simulation_impl.h"
 #include "base/elapsed_ms.h"
+#include "host/sim/dissection_simulation_impl.h"
 
 namespace inc::dissection {
 
@@ -35,7 +35,8 @@ StrokeEndOutcome<T> StrokeEndWorkers<T>::collect(PendingStrokeEnd<T>& e, double 
   }
   out.computed_here = here;
   if (here) {  // the worker's copy of the result is left to it (it finishes in the background)
-    out.result = computeStrokeEnd(e.input, beside, [&](const MetaballModel& m) { out.pbd = buildMetaballPbdModel<T>(m, opt); });
+    out.result =
+        computeStrokeEnd(e.input, beside, [&](const MetaballModel& m) { out.pbd = buildMetaballPbdModel<T>(m, opt); });
     return out;
   }
   worker_.wait();  // rethrows what the worker threw
@@ -183,13 +184,13 @@ void DissectionSimulation<T>::recordCut(ActiveStroke& a, StrokeEndResult& r) {
 }
 
 // This file's members for the two precisions makeDissectionSimulation builds.
-#define INC_DISSECTION_STROKE_END(T)                                                                              \
-  template void DissectionSimulation<T>::endStroke();                                                            \
-  template StrokeEndInput DissectionSimulation<T>::strokeEndInput(const ActiveStroke&) const;                    \
-  template void DissectionSimulation<T>::applyStrokeEnd();                                                       \
-  template void DissectionSimulation<T>::installRepackedSpheres(ActiveStroke&, const StrokeEndInput&,            \
-                                                                StrokeEndResult&, PbdModel<T>&);                 \
-  template void DissectionSimulation<T>::installCutSurface(StrokeEndResult&);                                    \
+#define INC_DISSECTION_STROKE_END(T)                                                                  \
+  template void DissectionSimulation<T>::endStroke();                                                 \
+  template StrokeEndInput DissectionSimulation<T>::strokeEndInput(const ActiveStroke&) const;         \
+  template void DissectionSimulation<T>::applyStrokeEnd();                                            \
+  template void DissectionSimulation<T>::installRepackedSpheres(ActiveStroke&, const StrokeEndInput&, \
+                                                                StrokeEndResult&, PbdModel<T>&);      \
+  template void DissectionSimulation<T>::installCutSurface(StrokeEndResult&);                         \
   template void DissectionSimulation<T>::recordCut(ActiveStroke&, StrokeEndResult&);
 INC_DISSECTION_STROKE_END(float)
 INC_DISSECTION_STROKE_END(double)

@@ -4,8 +4,8 @@
 #include <memory>
 
 #include "base/background_task.h"
-#include "host/cut/cut_stroke_end.h"
 #include "host/assembly/pbd_builders.h"
+#include "host/cut/cut_stroke_end.h"
 #include "model/pbd_model.h"
 
 namespace inc::dissection {

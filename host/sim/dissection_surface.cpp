@@ -2,8 +2,8 @@
 // The skin carries it on the spheres and, during a stroke, on the points of the cut spheres.
 #include <algorithm>
 
-#include "host/sim/dissection_simulation_impl.h"
 #include "host/assembly/skin_binding.h"
+#include "host/sim/dissection_simulation_impl.h"
 
 namespace inc::dissection {
 
@@ -77,11 +77,11 @@ void DissectionSimulation<T>::openSurface(double t0) {
 }
 
 // This file's members for the two precisions makeDissectionSimulation builds.
-#define INC_DISSECTION_SURFACE(T)                                                                                 \
-  template void DissectionSimulation<T>::bindSurface();                                                          \
-  template Vec3d DissectionSimulation<T>::skinSphereDisplacement(std::int32_t, const Vec3d&) const;              \
-  template bool DissectionSimulation<T>::currentSurface(TriangleMesh&) const;                                    \
-  template void DissectionSimulation<T>::cutWallTriangles(std::vector<std::uint8_t>&) const;                     \
+#define INC_DISSECTION_SURFACE(T)                                                                   \
+  template void DissectionSimulation<T>::bindSurface();                                             \
+  template Vec3d DissectionSimulation<T>::skinSphereDisplacement(std::int32_t, const Vec3d&) const; \
+  template bool DissectionSimulation<T>::currentSurface(TriangleMesh&) const;                       \
+  template void DissectionSimulation<T>::cutWallTriangles(std::vector<std::uint8_t>&) const;        \
   template void DissectionSimulation<T>::openSurface(double);
 INC_DISSECTION_SURFACE(float)
 INC_DISSECTION_SURFACE(double)

@@ -6,9 +6,9 @@
 #include <exception>
 #include <utility>
 
+#include "base/elapsed_ms.h"
 #include "host/cut/cut_stroke_end.h"
 #include "host/sim/dissection_stroke.h"
-#include "base/elapsed_ms.h"
 
 namespace inc::dissection {
 

@@ -7,12 +7,12 @@
 #include <vector>
 
 #include "base/background_task.h"
-#include "host/cut/cut_surface_state.h"
-#include "host/cut/cut_swept_surface.h"
-#include "host/sim/dissection_skin.h"
-#include "host/io/mesh.h"
 #include "host/assembly/metaball_model.h"
 #include "host/assembly/skin_binding.h"
+#include "host/cut/cut_surface_state.h"
+#include "host/cut/cut_swept_surface.h"
+#include "host/io/mesh.h"
+#include "host/sim/dissection_skin.h"
 
 namespace inc::dissection {
 
@@ -29,12 +29,12 @@ struct OpenedSurface {
 struct OpeningJob {
   double launched_at = 0;  // s: the start of the frame it was started in
   int frames_left = 0;
-  bool on_worker = false;  // started on the worker (else computed when due)
-  std::vector<SweptSurface> cuts;  // the earlier cuts, then the stroke's sweep so far
-  MetaballModel spheres;           // the stroke's base
+  bool on_worker = false;                          // started on the worker (else computed when due)
+  std::vector<SweptSurface> cuts;                  // the earlier cuts, then the stroke's sweep so far
+  MetaballModel spheres;                           // the stroke's base
   std::shared_ptr<const CutSurfaceState> surface;  // the surface before the stroke
   std::string file;
-  CutSurfaceState state;           // a copy of it, then split
+  CutSurfaceState state;  // a copy of it, then split
   bool split = false;
   SkinBinding skin;
   double worker_ms = 0;
@@ -66,7 +66,7 @@ class SurfaceOpening {
 
   bool inMaking() const { return bool(job_); }
   const OpenedSurface* shown() const { return shown_.get(); }
-  long computedHere() const { return computed_here_; }  // openings computed on the frame's thread so far
+  long computedHere() const { return computed_here_; }     // openings computed on the frame's thread so far
   double lastWorkerMs() const { return last_worker_ms_; }  // the last applied opening's worker time
 
   // The frames left of the opening in the making with the guard's checkpoint (-1: none in the making). An opening

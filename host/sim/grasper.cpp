@@ -40,7 +40,8 @@ pbd::CapsuleCollider<double> toolCapsule(const ToolSpec& tool, const ToolPose& p
   return c;
 }
 
-Grasper::Grasper(const ToolSpec& tool, double reach_m, double compliance) : tool_(tool), reach_(reach_m), compliance_(compliance) {
+Grasper::Grasper(const ToolSpec& tool, double reach_m, double compliance)
+    : tool_(tool), reach_(reach_m), compliance_(compliance) {
   const std::string f = "tool " + tool.name;
   if (tool.path.empty()) throw InputError(f, "path", "needs at least one keyframe");
   if (!(reach_m > 0) || !std::isfinite(reach_m)) throw InputError(f, "radius", "grasp reach must be > 0");

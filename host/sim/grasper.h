@@ -1,19 +1,20 @@
-// Scripted tools for the PBD organ: tool poses along a keyframed path, probe capsules, and the grasper that attaches the spheres it closes on.
+// Scripted tools for the PBD organ: tool poses along a keyframed path, probe capsules, and the grasper that attaches
+// the spheres it closes on.
 #pragma once
 
 #include <cstdint>
 #include <vector>
 
-#include "model/pbd_model.h"
 #include "host/compiled/model_specs.h"
+#include "model/pbd_model.h"
 #include "physics/pbd_collision.h"
 #include "physics/vec3.h"
 
 namespace inc {
 
 struct ToolPose {
-  Vec3d position;              // m, tool tip
-  Vec3d direction{0, 0, -1};   // unit, where the tool points
+  Vec3d position;             // m, tool tip
+  Vec3d direction{0, 0, -1};  // unit, where the tool points
 };
 
 // Piecewise-linear pose along tool.path at time t (s), held at the first/last keyframe outside the path's

@@ -14,8 +14,8 @@ namespace {
 constexpr double kGraspCompliance = 1.0e-6;  // m/N, as the scripted grasper (host/sim/metaball_simulation.cpp)
 }
 
-ToolResult PbdMouseGrasp::apply(const ToolEvent& e, const std::vector<Vec3d>& centres,
-                                const std::vector<double>& radii, const std::vector<std::uint8_t>& movable) {
+ToolResult PbdMouseGrasp::apply(const ToolEvent& e, const std::vector<Vec3d>& centres, const std::vector<double>& radii,
+                                const std::vector<std::uint8_t>& movable) {
   ToolResult r;
   r.supported = true;
   if (!isFinite(e.tip)) throw InputError("tool", "tip", "must be finite");
@@ -37,17 +37,13 @@ ToolResult PbdMouseGrasp::apply(const ToolEvent& e, const std::vector<Vec3d>& ce
     case ToolPhase::Drag:
       if (holding()) to_ = e.tip;
       break;
-    case ToolPhase::Release:
-      release();
-      break;
+    case ToolPhase::Release: release(); break;
   }
   r.grasped = held();
   return r;
 }
 
-void PbdMouseGrasp::release() {
-  grasper_.reset();
-}
+void PbdMouseGrasp::release() { grasper_.reset(); }
 
 BladePose bladeFromToolEvent(const ToolEvent& e) {
   if (!isFinite(e.tip) || !isFinite(e.axis)) throw InputError("tool", "blade", "tip and axis must be finite");
@@ -76,6 +72,5 @@ Vec3d restPointFromCurrent(const Vec3d& p, const std::vector<Vec3d>& current, co
   }
   return p - u * (1.0 / wsum);
 }
-
 
 }  // namespace inc

@@ -7,11 +7,11 @@
 #include <optional>
 #include <vector>
 
+#include "host/assembly/metaball_model.h"
 #include "host/cut/cut_swept_surface.h"
 #include "host/sim/grasper.h"
-#include "host/assembly/metaball_model.h"
-#include "model/pbd_model.h"
 #include "host/sim/simulation_model.h"
+#include "model/pbd_model.h"
 #include "physics/vec3.h"
 
 namespace inc {
@@ -51,7 +51,6 @@ BladePose bladeFromToolEvent(const ToolEvent& e);
 // For a tool on or near a body this is the material point under it (exact for a translated body).
 Vec3d restPointFromCurrent(const Vec3d& p, const std::vector<Vec3d>& current, const std::vector<Vec3d>& rest,
                            int k = 4);
-
 
 }  // namespace inc
 

@@ -1,7 +1,8 @@
-// PBD metaball organ as a SimulationModel: sphere fill (lattice or packer), constraint model, skinned surface, tools, frame reports.
+// PBD metaball organ as a SimulationModel: sphere fill (lattice or packer), constraint model, skinned surface, tools,
+// frame reports.
 #include "host/sim/metaball_simulation.h"
-#include "host/backends/solver_factory.h"
 #include "host/assembly/metaball_pack_bvh.h"
+#include "host/backends/solver_factory.h"
 #include "host/compiled/material_checks.h"
 #include "host/compiled/scene_colliders.h"
 
@@ -9,19 +10,19 @@
 #include <cmath>
 #include <unordered_map>
 
-#include "host/sim/grasper.h"
-#include "host/sim/interactive_tool.h"
-#include "model/input_error.h"
-#include "host/io/mesh.h"
-#include "host/assembly/metaball_packing.h"
 #include "cpu_fallback/skinning_cpu.h"
-#include "host/assembly/scene_surface.h"
-#include "host/assembly/skin_binding.h"
+#include "host/assembly/metaball_packing.h"
 #include "host/assembly/particle_sampling.h"
 #include "host/assembly/pbd_builders.h"
-#include "model/pbd_model.h"
+#include "host/assembly/scene_surface.h"
+#include "host/assembly/skin_binding.h"
+#include "host/io/mesh.h"
+#include "host/sim/grasper.h"
+#include "host/sim/interactive_tool.h"
 #include "host/sim/pbd_organ_settings.h"
 #include "host/sim/pbd_render_layers.h"
+#include "model/input_error.h"
+#include "model/pbd_model.h"
 #include "physics/pbd_rotation.h"
 
 namespace inc {
@@ -251,7 +252,8 @@ class MetaballSimulation final : public SimulationModel {
     PbdFrameInput<T> mouse;
     mouse.attach_ids.assign(all.attach_ids.begin() + std::ptrdiff_t(scripted), all.attach_ids.end());
     mouse.attach_to.assign(all.attach_to.begin() + std::ptrdiff_t(scripted), all.attach_to.end());
-    mouse.attach_compliance.assign(all.attach_compliance.begin() + std::ptrdiff_t(scripted), all.attach_compliance.end());
+    mouse.attach_compliance.assign(all.attach_compliance.begin() + std::ptrdiff_t(scripted),
+                                   all.attach_compliance.end());
     appendAttachmentLayers(mouse, state_, params_.xpbd, mouse_.tip(), out);
   }
   MemoryReport memory() const override {
@@ -285,7 +287,8 @@ class MetaballSimulation final : public SimulationModel {
         if (!(a > 0)) continue;
         const std::int32_t s0 = b.offsets[c], s1 = b.offsets[c + 1];
         if (b.kind == PbdConstraintKind::Distance) {
-          const double cv = norm(Vec3d(state_.positions[b.ids[s0]]) - Vec3d(state_.positions[b.ids[s0 + 1]])) - double(b.rest[c]);
+          const double cv =
+              norm(Vec3d(state_.positions[b.ids[s0]]) - Vec3d(state_.positions[b.ids[s0 + 1]])) - double(b.rest[c]);
           el += 0.5 * cv * cv / a;
         } else if (b.kind == PbdConstraintKind::Laplacian) {
           Vec3d mean;
@@ -329,7 +332,8 @@ class MetaballSimulation final : public SimulationModel {
 MetaballModel buildSceneMetaballs(const CompiledScene& scene) {
   const GeometrySpec& g = scene.geometry;
   const std::string& f = scene.file;
-  if (!(std::isfinite(g.spacing) && g.spacing > 0)) throw InputError(f, "geometry.spacing_m", "must be a positive number");
+  if (!(std::isfinite(g.spacing) && g.spacing > 0))
+    throw InputError(f, "geometry.spacing_m", "must be a positive number");
   validateMaterial(scene.material, f);
   if (scene.pbd.target_spheres > 0) {
     // The packer (paper, section 4): overlapping spheres fitted to the closed surface, masses from power cells.
@@ -359,7 +363,8 @@ MetaballModel buildSceneMetaballs(const CompiledScene& scene) {
   return mb;
 }
 
-std::unique_ptr<SimulationModel> makeMetaballSimulation(const CompiledScene& scene, BackendKind backend, Precision precision) {
+std::unique_ptr<SimulationModel> makeMetaballSimulation(const CompiledScene& scene, BackendKind backend,
+                                                        Precision precision) {
   if (precision == Precision::Float64) return std::make_unique<MetaballSimulation<double>>(scene, backend);
   return std::make_unique<MetaballSimulation<float>>(scene, backend);
 }

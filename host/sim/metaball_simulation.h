@@ -1,18 +1,19 @@
-// The metaball organ driven by PBD/XPBD as a SimulationModel built from a scene: sphere set, constraints, fixed regions, scripted tools.
+// The metaball organ driven by PBD/XPBD as a SimulationModel built from a scene: sphere set, constraints, fixed
+// regions, scripted tools.
 #pragma once
 
 #include <memory>
 
-#include "model/backend.h"
 #include "host/assembly/metaball_model.h"
 #include "host/compiled/compiled_scene.h"
 #include "host/sim/simulation_model.h"
+#include "model/backend.h"
 
 namespace inc {
 
 // The sphere set of the scene's organ. With pbd.target_spheres > 0: the sphere packer (packOrgan) fitted to
-// the scene's closed surface (sceneSurfaceMesh), masses from power cells. Otherwise: a cubic lattice fill of the primitive (box,
-// beam, sphere, ellipsoid; a closed mesh by winding number) at geometry.spacing, one sphere per lattice
+// the scene's closed surface (sceneSurfaceMesh), masses from power cells. Otherwise: a cubic lattice fill of the
+// primitive (box, beam, sphere, ellipsoid; a closed mesh by winding number) at geometry.spacing, one sphere per lattice
 // cell centre inside the body, radius 0.75 * spacing (face and edge neighbours overlap, corner ones do not),
 // mass density * spacing^3 (so the total mass is the density times the sampled cell volume); spheres are
 // linked when they overlap (|c_i - c_j| < r_i + r_j). Throws InputError(scene.file, key, reason).
@@ -28,6 +29,7 @@ MetaballModel buildSceneMetaballs(const CompiledScene& scene);
 // events when profiling, else one "frame" stage), kinetic, elastic (stretch + Laplacian compliance energy
 // sum C^2 / 2 alpha), gravity potential energy, max displacement; counters: residual_max_m,
 // residual_rms_m, colors, iterations, substeps, grasped, volume_active, max_radius_ratio.
-std::unique_ptr<SimulationModel> makeMetaballSimulation(const CompiledScene& scene, BackendKind backend, Precision precision);
+std::unique_ptr<SimulationModel> makeMetaballSimulation(const CompiledScene& scene, BackendKind backend,
+                                                        Precision precision);
 
 }  // namespace inc

@@ -7,10 +7,10 @@
 #include <cmath>
 #include <string>
 
-#include "model/input_error.h"
-#include "host/io/mesh.h"
-#include "model/mls_solver.h"
 #include "host/assembly/particle_sampling.h"
+#include "host/io/mesh.h"
+#include "model/input_error.h"
+#include "model/mls_solver.h"
 
 namespace inc {
 
@@ -61,7 +61,8 @@ class MlsSimulation final : public SimulationModel {
       const std::string key = "tools[" + std::to_string(k) + "]";
       if (tool.kind != "grasper") continue;  // probes (contact) and scalpels (cutting) belong to other models
       if (tool.path.empty()) throw InputError(scene.file, key + ".path", "a grasper needs at least one keyframe");
-      if (!(std::isfinite(tool.radius) && tool.radius > 0)) throw InputError(scene.file, key + ".radius_m", "must be > 0");
+      if (!(std::isfinite(tool.radius) && tool.radius > 0))
+        throw InputError(scene.file, key + ".radius_m", "must be > 0");
       for (std::size_t p = 1; p < tool.path.size(); ++p)
         if (!(tool.path[p].t >= tool.path[p - 1].t))
           throw InputError(scene.file, key + ".path", "keyframes must be sorted by t_s");
@@ -100,7 +101,8 @@ class MlsSimulation final : public SimulationModel {
     FrameReport r;
     r.substeps = st.substeps;
     r.dt = st.dt;
-    r.stages = {{"integrate", st.ms_integrate}, {"stress", st.ms_stress}, {"forces", st.ms_forces}, {"reduce", st.ms_reduce}};
+    r.stages = {
+        {"integrate", st.ms_integrate}, {"stress", st.ms_stress}, {"forces", st.ms_forces}, {"reduce", st.ms_reduce}};
     r.kinetic_energy = st.totals.kinetic_energy;
     r.elastic_energy = st.totals.elastic_energy;
     r.potential_energy = st.totals.potential_energy;
@@ -109,7 +111,7 @@ class MlsSimulation final : public SimulationModel {
     r.failure_stage = st.totals.bad_stage;
     r.failure_particle = st.totals.first_bad;
     const MlsModelStats& m = solver_->modelStats();
-    r.counters["stable_dt_s"] = solver_->stableTimeStep();          // rest state, safety 1
+    r.counters["stable_dt_s"] = solver_->stableTimeStep();                 // rest state, safety 1
     r.counters["current_stable_dt_s"] = solver_->currentStableTimeStep();  // at the frame's end deformation
     r.counters["stiffening"] = st.totals.stiffening;
     r.counters["regularised_particles"] = double(m.regularised);
@@ -258,7 +260,8 @@ MlsBuildInput mlsBuildInputFromScene(const CompiledScene& scene) {
     for (auto& v : mesh.vertices) v = v * g.mesh_scale;
     in.rest_positions = sampleMesh(mesh, LatticeSpec{g.spacing, g.jitter, g.seed});
     if (in.rest_positions.empty())
-      throw InputError(scene.file, "geometry.spacing_m", "the mesh sampled to no particle (spacing larger than the body?)");
+      throw InputError(scene.file, "geometry.spacing_m",
+                       "the mesh sampled to no particle (spacing larger than the body?)");
   } else {
     in.rest_positions = sampleGeometry(g, scene.file);
   }
@@ -274,7 +277,8 @@ MlsBuildInput mlsBuildInputFromScene(const CompiledScene& scene) {
   return in;
 }
 
-std::unique_ptr<SimulationModel> makeMlsSimulation(const CompiledScene& scene, BackendKind resolved, Precision precision) {
+std::unique_ptr<SimulationModel> makeMlsSimulation(const CompiledScene& scene, BackendKind resolved,
+                                                   Precision precision) {
   if (resolved == BackendKind::Auto)
     throw InputError(scene.file, "solver.backend", "makeMlsSimulation needs a resolved backend (cpu or cuda)");
   if (scene.solver.substeps < 0) throw InputError(scene.file, "solver.substeps", "must be >= 0");

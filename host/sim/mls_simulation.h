@@ -3,10 +3,10 @@
 
 #include <memory>
 
-#include "model/backend.h"
-#include "model/mls_model.h"
 #include "host/compiled/compiled_scene.h"
 #include "host/sim/simulation_model.h"
+#include "model/backend.h"
+#include "model/mls_model.h"
 
 namespace inc {
 
@@ -25,11 +25,12 @@ MlsBuildInput mlsBuildInputFromScene(const CompiledScene& scene);
 // "integrate" | "stress" | "forces", lowest bad particle) instead of throwing.
 // FrameReport: stages integrate / stress / forces / reduce (ms, summed over substeps), kinetic, elastic
 // (strain + volume penalty) and gravity potential energy, max displacement; counters: stable_dt_s (rest),
-// current_stable_dt_s and stiffening (at the frame's end deformation, used to plan the next frame), regularised / few_neighbours / coplanar / collinear / ill_conditioned / isolated particles,
-// min / mean neighbours, max_condition, grasped_particles.
-// Tools: a "grasper" holds the particles within radius_m of its first keyframe (InputError if none) and
-// carries them along its piecewise-linear path (prescribed displacement = tool position(t) - first position,
+// current_stable_dt_s and stiffening (at the frame's end deformation, used to plan the next frame), regularised /
+// few_neighbours / coplanar / collinear / ill_conditioned / isolated particles, min / mean neighbours, max_condition,
+// grasped_particles. Tools: a "grasper" holds the particles within radius_m of its first keyframe (InputError if none)
+// and carries them along its piecewise-linear path (prescribed displacement = tool position(t) - first position,
 // reached at the end of each frame); "probe" and "scalpel" tools are left to the contact and cutting models.
-std::unique_ptr<SimulationModel> makeMlsSimulation(const CompiledScene& scene, BackendKind resolved, Precision precision);
+std::unique_ptr<SimulationModel> makeMlsSimulation(const CompiledScene& scene, BackendKind resolved,
+                                                   Precision precision);
 
 }  // namespace inc

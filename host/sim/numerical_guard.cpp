@@ -34,8 +34,8 @@ GuardVerdict NumericalGuard::check(const FrameReport& r) {
   const double reference = have_reference_ ? reference_ : floor_;
   if (excess > bound_ * reference) {
     std::ostringstream s;
-    s << "energy blow-up: kinetic + elastic = " << excess << " J exceeds " << bound_ << " x reference "
-      << reference << " J";
+    s << "energy blow-up: kinetic + elastic = " << excess << " J exceeds " << bound_ << " x reference " << reference
+      << " J";
     v.ok = false;
     v.stage = "energy";
     v.reason = s.str();

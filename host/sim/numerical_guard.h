@@ -9,8 +9,8 @@ namespace inc {
 
 struct GuardVerdict {
   bool ok = true;
-  std::string stage;          // where it went wrong ("forces", "energy", ...)
-  std::int64_t particle = -1; // which particle, when known
+  std::string stage;           // where it went wrong ("forces", "energy", ...)
+  std::int64_t particle = -1;  // which particle, when known
   std::string reason;
 };
 

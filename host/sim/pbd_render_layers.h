@@ -4,8 +4,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "model/pbd_model.h"
 #include "host/sim/simulation_model.h"
+#include "model/pbd_model.h"
 
 namespace inc {
 

@@ -7,24 +7,23 @@
 #include <string>
 #include <vector>
 
+#include "host/io/mesh.h"
 #include "model/backend.h"
 #include "model/stage_timing.h"
-#include "host/io/mesh.h"
 #include "physics/vec3.h"
 
 namespace inc {
 
-
 // What one frame did; the runner writes it as a row of metrics.csv and checks it.
 struct FrameReport {
   int substeps = 0;
-  double dt = 0.0;                   // s, substep actually used
+  double dt = 0.0;  // s, substep actually used
   std::vector<StageTime> stages;
-  double kinetic_energy = 0.0;       // J
-  double elastic_energy = 0.0;       // J (strain or constraint energy)
-  double potential_energy = 0.0;     // J, gravity, relative to rest
-  double max_displacement = 0.0;     // m, from rest
-  bool finite = true;                // false: a NaN/Inf appeared; failure_* say where
+  double kinetic_energy = 0.0;    // J
+  double elastic_energy = 0.0;    // J (strain or constraint energy)
+  double potential_energy = 0.0;  // J, gravity, relative to rest
+  double max_displacement = 0.0;  // m, from rest
+  bool finite = true;             // false: a NaN/Inf appeared; failure_* say where
   std::string failure_stage;
   std::int64_t failure_particle = -1;
   std::map<std::string, double> counters;  // model-specific ("degenerate_neighbourhoods", "broken_bonds", ...)
@@ -52,13 +51,13 @@ struct ToolEvent {
   ToolPhase phase = ToolPhase::Press;
   Vec3d tip;
   Vec3d axis{0, 0, -1};
-  double radius_m = 0.005;        // grasp reach around the tip
-  double blade_length_m = 0.05;   // cut
+  double radius_m = 0.005;       // grasp reach around the tip
+  double blade_length_m = 0.05;  // cut
 };
 
 struct ToolResult {
-  bool supported = false;  // false: this model cannot do this (message says why); nothing changed
-  int grasped = 0;         // particles / spheres held after the event
+  bool supported = false;    // false: this model cannot do this (message says why); nothing changed
+  int grasped = 0;           // particles / spheres held after the event
   bool cut_applied = false;  // a Release ended a stroke that swept a surface: its cut is applied (now, or
                              // cutting.stroke_end_frames frames later)
   std::string message;
@@ -77,18 +76,17 @@ struct ForceArrow {
   ForceArrowKind kind = ForceArrowKind::Particle;
 };
 struct RenderLayers {
-  std::vector<Vec3d> sphere_centres;     // metaball spheres (m) ...
-  std::vector<double> sphere_radii;      // ... and their radii (m), one per centre
-  std::vector<Vec3d> nodal_points;       // MLS nodal points (m)
-  std::vector<std::int32_t> fixed_ids;   // particles a fixed region holds (Dirichlet) ...
-  std::vector<Vec3d> fixed_points;       // ... and where they are (m)
-  std::vector<std::int32_t> held_ids;    // particles a tool holds now (grasped, prescribed) ...
-  std::vector<Vec3d> held_points;        // ... and where they are (m)
-  TriangleMesh swept_surface;            // the scalpel's swept cut surface(s) (m)
-  TriangleMesh colliders;                // the scene's static colliders (host/compiled/scene_colliders.h colliderMesh) (m)
+  std::vector<Vec3d> sphere_centres;    // metaball spheres (m) ...
+  std::vector<double> sphere_radii;     // ... and their radii (m), one per centre
+  std::vector<Vec3d> nodal_points;      // MLS nodal points (m)
+  std::vector<std::int32_t> fixed_ids;  // particles a fixed region holds (Dirichlet) ...
+  std::vector<Vec3d> fixed_points;      // ... and where they are (m)
+  std::vector<std::int32_t> held_ids;   // particles a tool holds now (grasped, prescribed) ...
+  std::vector<Vec3d> held_points;       // ... and where they are (m)
+  TriangleMesh swept_surface;           // the scalpel's swept cut surface(s) (m)
+  TriangleMesh colliders;  // the scene's static colliders (host/compiled/scene_colliders.h colliderMesh) (m)
   std::vector<ForceArrow> forces;
 };
-
 
 class SimulationModel {
  public:

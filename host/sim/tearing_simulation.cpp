@@ -1,11 +1,12 @@
-// Tearing sheet SimulationModel: scene -> sheet, frame loop with grasper pull and scalpel removal, energies and counters.
+// Tearing sheet SimulationModel: scene -> sheet, frame loop with grasper pull and scalpel removal, energies and
+// counters.
 #include "host/sim/tearing_simulation.h"
 
 #include <algorithm>
 #include <cmath>
 
-#include "model/input_error.h"
 #include "host/tear/tearing_driver.h"
+#include "model/input_error.h"
 
 namespace inc {
 
@@ -112,19 +113,23 @@ TearingSceneSetup tearingSetupFromScene(const CompiledScene& scene) {
   for (const auto& fr : scene.fixed) fixTearParticles(s.sheet, fr.min, fr.max);
   s.tear.criterion = parseTearCriterion(ts.criterion, f, "tearing.criterion");
   s.tear.seed = ts.seed;
-  s.tear.break_strain = ts.break_strain;  // default 0.2: the traditional criterion at the default stress, k 0.2 = 2 tau_f
+  s.tear.break_strain =
+      ts.break_strain;  // default 0.2: the traditional criterion at the default stress, k 0.2 = 2 tau_f
   s.tear.random_range = ts.random_range;
   s.model.stretch_compliance = scene.pbd.stretch_compliance;
   s.model.bending_compliance = 10.0;
   s.damping_per_s = scene.material.damping_per_s;
   s.iterations = scene.pbd.iterations;
-  if (scene.pbd.chebyshev_rho > 0)  // the tearing solve patches its model on the device, which the acceleration does not support
-    throw InputError(f, "pbd.chebyshev_rho", "not supported by the tearing model (its solve is patched as it tears): use 0");
+  if (scene.pbd.chebyshev_rho >
+      0)  // the tearing solve patches its model on the device, which the acceleration does not support
+    throw InputError(f, "pbd.chebyshev_rho",
+                     "not supported by the tearing model (its solve is patched as it tears): use 0");
   s.xpbd = scene.pbd.xpbd;
   s.solver = scene.pbd.solver;
   for (std::size_t t = 0; t < scene.tools.size(); ++t)
     if (scene.tools[t].kind != "grasper" && scene.tools[t].kind != "scalpel")
-      throw InputError(f, "tools[" + std::to_string(t) + "].kind", "the tearing model supports grasper and scalpel tools");
+      throw InputError(f, "tools[" + std::to_string(t) + "].kind",
+                       "the tearing model supports grasper and scalpel tools");
   return s;
 }
 
@@ -134,7 +139,8 @@ template <typename T>
 class TearingSimulation final : public SimulationModel {
  public:
   TearingSimulation(const CompiledScene& scene, TearingSceneSetup setup, BackendKind backend)
-      : scene_(scene), driver_(convert(setup.sheet), convertParams(setup.tear), setup.model, stepParams(scene, setup), backend) {
+      : scene_(scene),
+        driver_(convert(setup.sheet), convertParams(setup.tear), setup.model, stepParams(scene, setup), backend) {
     grabTools();
     checkpoint_ = driver_.sheet();
   }
@@ -177,7 +183,8 @@ class TearingSimulation final : public SimulationModel {
     }
     if (driver_.stepParams().xpbd && setupCompliance_ > 0)
       for (std::size_t e = 0; e < s.edge_a.size(); ++e) {
-        const double c = double(norm(s.x[s.edge_a[e]] - s.x[s.edge_b[e]]) - norm(s.rest[s.edge_a[e]] - s.rest[s.edge_b[e]]));
+        const double c =
+            double(norm(s.x[s.edge_a[e]] - s.x[s.edge_b[e]]) - norm(s.rest[s.edge_a[e]] - s.rest[s.edge_b[e]]));
         r.elastic_energy += 0.5 * c * c / setupCompliance_;
       }
     r.counters["splits"] = st.splits;
@@ -313,7 +320,8 @@ class TearingSimulation final : public SimulationModel {
       const auto mark = markBlade(scene_.tools[t], time);
       if (std::find(mark.begin(), mark.end(), std::uint8_t(1)) == mark.end()) continue;
       std::vector<std::int32_t> remap;
-      removed += driver_.removeParticles(mark, false, &remap);  // the blade deletes what it touches; tearing acts around it
+      removed +=
+          driver_.removeParticles(mark, false, &remap);  // the blade deletes what it touches; tearing acts around it
       for (Grab& g : grabs_) {  // grabbed particles follow the renumbering; removed ones are let go
         std::vector<std::int32_t> ids;
         std::vector<Vec3<T>> start;
@@ -338,8 +346,10 @@ class TearingSimulation final : public SimulationModel {
 
 }  // namespace
 
-std::unique_ptr<SimulationModel> makeTearingSimulation(const CompiledScene& scene, BackendKind backend, Precision precision) {
-  if (!scene.models.tearing) throw InputError(scene.file, "models.tearing", "is false: the scene does not ask for tearing");
+std::unique_ptr<SimulationModel> makeTearingSimulation(const CompiledScene& scene, BackendKind backend,
+                                                       Precision precision) {
+  if (!scene.models.tearing)
+    throw InputError(scene.file, "models.tearing", "is false: the scene does not ask for tearing");
   TearingSceneSetup setup = tearingSetupFromScene(scene);
   const double compliance = setup.model.stretch_compliance;
   if (precision == Precision::Float64) {

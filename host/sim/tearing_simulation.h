@@ -1,11 +1,12 @@
-// The tearing sheet as a SimulationModel built from a scene (skin geometry, material, PBD settings, grasper and scalpel tools).
+// The tearing sheet as a SimulationModel built from a scene (skin geometry, material, PBD settings, grasper and scalpel
+// tools).
 #pragma once
 
 #include <memory>
 
-#include "model/backend.h"
 #include "host/compiled/compiled_scene.h"
 #include "host/sim/simulation_model.h"
+#include "model/backend.h"
 #include "model/tearing_sheet.h"
 
 namespace inc {
@@ -16,10 +17,10 @@ namespace inc {
 //  geometry mesh -> the mesh's own triangles (scaled by mesh_scale) as the skin;
 //  tearing: criterion, k_pa (0: material.youngs_modulus_pa), tau_f_pa (0: 0.1 k), break_strain,
 //  random_range, seed (the debris), regions (k and tau_f per box); material: area density density *
-//  spacing; damping_per_s the PBD damping; pbd: iterations, xpbd, solver, stretch_compliance; fixed boxes hold particles; tools: "grasper" grabs the particles within
-//  radius_m of its blade (position .. position + direction * length_m) at t = 0 and moves them along its
-//  path; "scalpel" removes the tissue within radius_m of its blade every frame between its first and last
-//  keyframe (the criterion tears around it).
+//  spacing; damping_per_s the PBD damping; pbd: iterations, xpbd, solver, stretch_compliance; fixed boxes hold
+//  particles; tools: "grasper" grabs the particles within radius_m of its blade (position .. position + direction *
+//  length_m) at t = 0 and moves them along its path; "scalpel" removes the tissue within radius_m of its blade every
+//  frame between its first and last keyframe (the criterion tears around it).
 struct TearingSceneSetup {
   TearSheet<double> sheet;
   TearParams<double> tear;
@@ -34,6 +35,7 @@ TearingSceneSetup tearingSetupFromScene(const CompiledScene& scene);
 // The tearing sheet of `scene` on a resolved backend (Cpu or Cuda) in `precision`. Throws InputError.
 // FrameReport stages: solve, tear, rebuild (ms); counters: splits, yielding, deferred, removed, particles,
 // triangles.
-std::unique_ptr<SimulationModel> makeTearingSimulation(const CompiledScene& scene, BackendKind backend, Precision precision);
+std::unique_ptr<SimulationModel> makeTearingSimulation(const CompiledScene& scene, BackendKind backend,
+                                                       Precision precision);
 
 }  // namespace inc

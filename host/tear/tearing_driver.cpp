@@ -104,8 +104,10 @@ TearFrameStats TearingDriver<T>::advanceResident(const std::vector<std::int32_t>
 }
 
 template <typename T>
-TearFrameStats TearingDriver<T>::advance(const std::vector<std::int32_t>& grasp_ids, const std::vector<Vec3<T>>& grasp_to) {
-  if (grasp_ids.size() != grasp_to.size()) throw InputError("tearing", "grasp", "ids and targets must have equal sizes");
+TearFrameStats TearingDriver<T>::advance(const std::vector<std::int32_t>& grasp_ids,
+                                         const std::vector<Vec3<T>>& grasp_to) {
+  if (grasp_ids.size() != grasp_to.size())
+    throw InputError("tearing", "grasp", "ids and targets must have equal sizes");
   if (resident_) return advanceResident(grasp_ids, grasp_to);
   TearFrameStats st;
   PbdFrameInput<T> in;

@@ -1,4 +1,5 @@
-// Drives a tearable sheet frame by frame: PBD/XPBD solve, grasper pull, tearing step, model rebuild on topology change, removal tools.
+// Drives a tearable sheet frame by frame: PBD/XPBD solve, grasper pull, tearing step, model rebuild on topology change,
+// removal tools.
 #pragma once
 
 #include <cstdint>
@@ -66,8 +67,8 @@ class TearingDriver {
   std::unique_ptr<TearStepBackend<T>> tear_backend_;
   PbdState<T> state_;
   bool resident_ = false;
-  mutable bool host_stale_ = false;   // positions/velocities on the host are older than the device's
-  mutable bool topo_stale_ = false;   // and the topology too (a resident step made splits)
+  mutable bool host_stale_ = false;  // positions/velocities on the host are older than the device's
+  mutable bool topo_stale_ = false;  // and the topology too (a resident step made splits)
   int summary_every_ = 1;
   void syncHost() const;
   TearFrameStats advanceResident(const std::vector<std::int32_t>& grasp_ids, const std::vector<Vec3<T>>& grasp_to);

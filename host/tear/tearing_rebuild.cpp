@@ -1,4 +1,5 @@
-// Rebuild of a torn sheet's adjacency and PBD constraints on the CPU by the device's algorithms (per-particle fans; radix sorts): their reference.
+// Rebuild of a torn sheet's adjacency and PBD constraints on the CPU by the device's algorithms (per-particle fans;
+// radix sorts): their reference.
 #include "host/tear/tearing_rebuild.h"
 
 #include <algorithm>
@@ -99,8 +100,8 @@ TearSortedRebuild<T> rebuildTearSorted(const TearSheet<T>& s, const TearModelOpt
       tear::writeEdgeConstraints<T>(skey.data(), sopp.data(), std::int64_t(h),
                                     tear::runLength(skey.data(), std::int64_t(h), std::int64_t(nh)), bits, e_idx[h],
                                     b_idx[h], s.rest.data(), T(opt.stretch_compliance), T(opt.bending_compliance),
-                                    r.edge_a.data(), r.edge_b.data(), d.ids.data(), d.rest.data(),
-                                    d.compliance.data(), b.ids.data(), b.rest.data(), b.compliance.data());
+                                    r.edge_a.data(), r.edge_b.data(), d.ids.data(), d.rest.data(), d.compliance.data(),
+                                    b.ids.data(), b.rest.data(), b.compliance.data());
   // 3: particle -> partners, ascending (owner, partner) keys.
   std::vector<std::uint64_t> pk(2 * ne);
   for (std::size_t e = 0; e < ne; ++e) {
@@ -142,7 +143,8 @@ TearSortedRebuild<T> rebuildTearFans(const TearSheet<T>& s, const TearModelOptio
   fan.pt_tris = r.pt_tris.data();
   // 2: counts and their exclusive scan.
   std::vector<tear::FanCounts> off(n + 1);
-  for (std::size_t p = 0; p < n; ++p) off[p + 1] = tear::AddFanCounts()(off[p], tear::fanCounts(fan, std::int32_t(p), fan_cache));
+  for (std::size_t p = 0; p < n; ++p)
+    off[p + 1] = tear::AddFanCounts()(off[p], tear::fanCounts(fan, std::int32_t(p), fan_cache));
   const tear::FanCounts total = off[n];
   const std::size_t ne = std::size_t(total.upper), nb = std::size_t(total.bend_upper);
   if (std::size_t(total.partners) != 2 * ne)
@@ -200,8 +202,8 @@ TearSortedRebuild<T> rebuildTearFans(const TearSheet<T>& s, const TearModelOptio
     for (std::size_t c = 0; c < blk->offsets.size(); ++c) blk->offsets[c] = std::int32_t(arity * c);
     blk->jacobi_scale.resize(blk->ids.size());
     for (std::size_t c = 0; c < blk->rest.size(); ++c) {
-      const T sc = tear::jacobiScaleOf(blk->ids.data(), arity, std::int64_t(c), blk->particle_offsets.data(),
-                                       inv_mass.data());
+      const T sc =
+          tear::jacobiScaleOf(blk->ids.data(), arity, std::int64_t(c), blk->particle_offsets.data(), inv_mass.data());
       for (int k = 0; k < arity; ++k) blk->jacobi_scale[std::size_t(arity) * c + std::size_t(k)] = sc;
     }
     blk->coloring = ConstraintColoring{};

@@ -1,4 +1,5 @@
-// Rebuild of a torn sheet's adjacency and PBD constraints by the device algorithms (per-particle fans; the older radix-sort path), run on the CPU as their reference.
+// Rebuild of a torn sheet's adjacency and PBD constraints by the device algorithms (per-particle fans; the older
+// radix-sort path), run on the CPU as their reference.
 #pragma once
 
 #include <cstdint>
@@ -10,9 +11,9 @@
 
 namespace inc {
 
-// What the device rebuild (kernels/tearing_cuda.cu, either algorithm) derives from the triangles after a tearing step. Equal,
-// array for array, to TearSheet::rebuildTopology() followed by buildTearPbdModel(coloring = false): the
-// blocks' ids, offsets, rest values, particle -> slot CSR and Jacobi scales (colouring left empty).
+// What the device rebuild (kernels/tearing_cuda.cu, either algorithm) derives from the triangles after a tearing step.
+// Equal, array for array, to TearSheet::rebuildTopology() followed by buildTearPbdModel(coloring = false): the blocks'
+// ids, offsets, rest values, particle -> slot CSR and Jacobi scales (colouring left empty).
 template <typename T>
 struct TearSortedRebuild {
   std::vector<std::int32_t> pt_offsets, pt_tris, edge_a, edge_b, pe_offsets, pe_partner;

@@ -70,16 +70,16 @@ TEST(BenchSuite, QuickCpuRunProducesMergedCsvTableAndPlots) {
     ++checked;
   }
   EXPECT_GT(checked, 10);
-  for (const char* s : {"neighbor_search,cpu,float32", "neighbor_search,cpu,float64", "mls_step,cpu,float32",
-                        "mls_step,cpu,float64", "pbd_iteration_jacobi,cpu,float32", "pbd_iteration_jacobi,cpu,float64",
-                        "pbd_iteration_gauss_seidel,cpu,float32", "pbd_iteration_gauss_seidel,cpu,float64",
-                        "skinning,cpu,float32", "skinning,cpu,float64", "frame_default_scene,cpu,float32",
-                        "frame_default_scene,cpu,float64"})
+  for (const char* s :
+       {"neighbor_search,cpu,float32", "neighbor_search,cpu,float64", "mls_step,cpu,float32", "mls_step,cpu,float64",
+        "pbd_iteration_jacobi,cpu,float32", "pbd_iteration_jacobi,cpu,float64",
+        "pbd_iteration_gauss_seidel,cpu,float32", "pbd_iteration_gauss_seidel,cpu,float64", "skinning,cpu,float32",
+        "skinning,cpu,float64", "frame_default_scene,cpu,float32", "frame_default_scene,cpu,float64"})
     EXPECT_NE(all.find(s), std::string::npos) << "missing rows " << s << "\n" << all;
   EXPECT_TRUE(fs::exists(out / "suite.md"));
   if (std::system("/usr/bin/python3 -c 'import matplotlib' > /dev/null 2>&1") == 0) {
-    for (const char* p : {"neighbor_search.png", "mls_step.png", "pbd_iteration_jacobi.png", "pbd_iteration_gauss_seidel.png",
-                          "skinning.png", "frame_default_scene.png"}) {
+    for (const char* p : {"neighbor_search.png", "mls_step.png", "pbd_iteration_jacobi.png",
+                          "pbd_iteration_gauss_seidel.png", "skinning.png", "frame_default_scene.png"}) {
       EXPECT_TRUE(fs::exists(out / p)) << p;
     }
   }

@@ -7,9 +7,9 @@
 #include <limits>
 #include <string>
 
-#include "model/input_error.h"
-#include "host/sim/numerical_guard.h"
 #include "host/app/runner.h"
+#include "host/sim/numerical_guard.h"
+#include "model/input_error.h"
 #include "tests/support/temp_dir.h"
 
 using namespace inc;

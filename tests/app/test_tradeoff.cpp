@@ -1,4 +1,5 @@
-// Tests of the speed/accuracy sweep: analytic references (cantilever, hanging bar, punch), the Pareto front, quick sweeps.
+// Tests of the speed/accuracy sweep: analytic references (cantilever, hanging bar, punch), the Pareto front, quick
+// sweeps.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -6,13 +7,13 @@
 #include <cstdio>
 #include <map>
 
-#include "host/scene/scene_compile.h"
-#include "host/scene/embedded_scenes.h"
-#include "host/haptics/mfs_punch.h"
-#include "model/input_error.h"
 #include "host/app/runner.h"
-#include "host/scene/scene_loader.h"
 #include "host/app/tradeoff.h"
+#include "host/haptics/mfs_punch.h"
+#include "host/scene/embedded_scenes.h"
+#include "host/scene/scene_compile.h"
+#include "host/scene/scene_loader.h"
+#include "model/input_error.h"
 #include "tests/support/repo_paths.h"
 
 using namespace inc;
@@ -54,8 +55,8 @@ TEST(Tradeoff, ParetoFrontKeepsOnlyUndominatedSettingsWithinTheBudget) {
     x.finite = finite;
     return x;
   };
-  std::vector<TradeoffRow> rows = {r(0.5, 0.4), r(0.8, 0.5), r(0.9, 0.1), r(3.0, 0.01), r(0.2, 0.0, false),
-                                   r(12.0, 0.001), r(20.0, 0.0), r(0.1, 0.05)};
+  std::vector<TradeoffRow> rows = {r(0.5, 0.4),        r(0.8, 0.5),    r(0.9, 0.1),  r(3.0, 0.01),
+                                   r(0.2, 0.0, false), r(12.0, 0.001), r(20.0, 0.0), r(0.1, 0.05)};
   rows.back().held = false;  // a body that fell: the setting changed the problem
   EXPECT_EQ(paretoFront(rows, 1.0), (std::vector<std::size_t>{0, 2}));  // 0.8/0.5 dominated; NaN, not-held excluded
   EXPECT_EQ(paretoFront(rows, 16.0), (std::vector<std::size_t>{0, 2, 3, 5}));

@@ -3,10 +3,10 @@
 
 #include <cmath>
 
-#include "host/scene/scene_compile.h"
-#include "model/input_error.h"
-#include "host/sim/metaball_simulation.h"
 #include "host/assembly/scene_surface.h"
+#include "host/scene/scene_compile.h"
+#include "host/sim/metaball_simulation.h"
+#include "model/input_error.h"
 
 using namespace inc;
 
@@ -68,7 +68,7 @@ TEST(MetaballSurface, SkinFollowsTheSpheresAndStaysClosed) {
   EXPECT_TRUE(r.closed());
   EXPECT_EQ(r.inconsistent_edges, 0);
   const double moved = maxVertexDistance(skin, sceneSurfaceMesh(compileScene(s)));
-  EXPECT_GT(moved, 1e-4);                          // it sags visibly (> 0.1 mm)
+  EXPECT_GT(moved, 1e-4);  // it sags visibly (> 0.1 mm)
   EXPECT_LT(moved, 1.2 * rep.max_displacement + 1e-9);
 }
 

@@ -3,9 +3,9 @@
 
 #include <cmath>
 
-#include "model/input_error.h"
 #include "host/assembly/metaball_pack_checks.h"
 #include "host/assembly/organ_shapes.h"
+#include "model/input_error.h"
 
 namespace inc {
 namespace {

@@ -1,4 +1,5 @@
-// Tests for packOrgan: containment, coverage, protrusion, links and masses, determinism, cache, real organs, bad meshes.
+// Tests for packOrgan: containment, coverage, protrusion, links and masses, determinism, cache, real organs, bad
+// meshes.
 #include <gtest/gtest.h>
 #include <omp.h>
 
@@ -11,10 +12,10 @@
 #include <string>
 #include <vector>
 
-#include "model/input_error.h"
 #include "host/assembly/metaball_pack_bvh.h"
 #include "host/assembly/metaball_packing.h"
 #include "host/assembly/organ_shapes.h"
+#include "model/input_error.h"
 #include "tests/support/repo_paths.h"
 #include "tests/support/temp_dir.h"
 
@@ -48,7 +49,8 @@ double analyticCoverage(const MetaballModel& m, const Vec3d& lo, const Vec3d& hi
   Lcg rng;
   int in = 0, cov = 0;
   while (in < points) {
-    const Vec3d p{lo.x + (hi.x - lo.x) * rng.next(), lo.y + (hi.y - lo.y) * rng.next(), lo.z + (hi.z - lo.z) * rng.next()};
+    const Vec3d p{lo.x + (hi.x - lo.x) * rng.next(), lo.y + (hi.y - lo.y) * rng.next(),
+                  lo.z + (hi.z - lo.z) * rng.next()};
     if (!inside(p)) continue;
     ++in;
     cov += inUnion(m, p);
@@ -114,8 +116,8 @@ TEST(Packing, SphereCoveredContainedAndNearTargetCount) {
   EXPECT_GE(p.report.spheres, 60) << "the radius cap should bring the count near the target";
   EXPECT_GE(p.report.coverage, 0.95);
   // Independent estimate on the analytic ball, shrunk by the polyhedral sagitta (2e-4 m here).
-  const double cov = analyticCoverage(p.model, Vec3d{-R, -R, -R}, Vec3d{R, R, R},
-                                      [&](const Vec3d& x) { return norm(x) < R - 5e-4; });
+  const double cov =
+      analyticCoverage(p.model, Vec3d{-R, -R, -R}, Vec3d{R, R, R}, [&](const Vec3d& x) { return norm(x) < R - 5e-4; });
   EXPECT_GE(cov, 0.95);
   // Surface deviation is reported and bounded (2% of the diagonal; the protrusion bound is 1%).
   const double diag = diagonal(mesh);
@@ -146,10 +148,11 @@ TEST(Packing, TorusCoveredAndConnectedAroundTheHole) {
   checkPackInvariants(mesh, p, o);
   EXPECT_GE(p.report.coverage, 0.95);
   // Analytic torus shrunk by the polygon sagitta of the coarse tessellation.
-  const double cov = analyticCoverage(p.model, Vec3d{-Rm - r, -Rm - r, -r}, Vec3d{Rm + r, Rm + r, r}, [&](const Vec3d& x) {
-    const double q = std::sqrt(x.x * x.x + x.y * x.y) - Rm;
-    return q * q + x.z * x.z < (0.95 * r) * (0.95 * r);
-  });
+  const double cov =
+      analyticCoverage(p.model, Vec3d{-Rm - r, -Rm - r, -r}, Vec3d{Rm + r, Rm + r, r}, [&](const Vec3d& x) {
+        const double q = std::sqrt(x.x * x.x + x.y * x.y) - Rm;
+        return q * q + x.z * x.z < (0.95 * r) * (0.95 * r);
+      });
   EXPECT_GE(cov, 0.95);
   // Nothing may fill the hole: the axis of the torus lies outside every sphere.
   for (double z : {-0.01, 0.0, 0.01}) EXPECT_FALSE(inUnion(p.model, Vec3d{0.0, 0.0, z}));

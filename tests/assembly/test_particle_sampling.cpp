@@ -3,8 +3,8 @@
 
 #include <cmath>
 
-#include "model/input_error.h"
 #include "host/assembly/particle_sampling.h"
+#include "model/input_error.h"
 
 using namespace inc;
 
@@ -13,7 +13,8 @@ namespace {
 // Closed, outward-oriented axis-aligned box mesh (12 triangles).
 TriangleMesh boxMesh(const Vec3d& lo, const Vec3d& hi) {
   TriangleMesh m;
-  for (int k = 0; k < 8; ++k) m.vertices.push_back(Vec3d(k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z));
+  for (int k = 0; k < 8; ++k)
+    m.vertices.push_back(Vec3d(k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z));
   m.triangles = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
                  {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
   return m;
@@ -73,8 +74,10 @@ TEST(ParticleSampling, EllipsoidSamplesLieInsideAndFillItsVolume) {
 TEST(ParticleSampling, MeshSamplingMatchesTheBoxAndTheOctahedronVolume) {
   // A closed box mesh sampled on its own lattice gives exactly the cell centres of the box.
   const double s = 0.01;
-  const std::vector<Vec3d> fromMesh = sampleMesh(boxMesh(Vec3d(0, 0, 0), Vec3d(0.06, 0.04, 0.03)), LatticeSpec{s, 0.0, 1});
-  const std::vector<Vec3d> fromBox = sampleBox(Vec3d(0.03, 0.02, 0.015), Vec3d(0.06, 0.04, 0.03), LatticeSpec{s, 0.0, 1});
+  const std::vector<Vec3d> fromMesh =
+      sampleMesh(boxMesh(Vec3d(0, 0, 0), Vec3d(0.06, 0.04, 0.03)), LatticeSpec{s, 0.0, 1});
+  const std::vector<Vec3d> fromBox =
+      sampleBox(Vec3d(0.03, 0.02, 0.015), Vec3d(0.06, 0.04, 0.03), LatticeSpec{s, 0.0, 1});
   ASSERT_EQ(fromMesh.size(), fromBox.size());
   for (std::size_t i = 0; i < fromMesh.size(); ++i) EXPECT_LT(norm(fromMesh[i] - fromBox[i]), 1e-12);
   // Octahedron: count * s^3 approaches its volume; winding number 1 inside, 0 outside.

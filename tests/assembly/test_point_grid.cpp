@@ -1,4 +1,5 @@
-// PointGrid (host/assembly/point_grid.h) against brute force: nearest member and any-within-r, queries inside and outside the grid's box, a grown cell.
+// PointGrid (host/assembly/point_grid.h) against brute force: nearest member and any-within-r, queries inside and
+// outside the grid's box, a grown cell.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -4,8 +4,8 @@
 #include <limits>
 
 #include "cpu_fallback/neighbor_bruteforce.h"
-#include "model/input_error.h"
 #include "host/backends/neighbor_search.h"
+#include "model/input_error.h"
 #include "tests/support/neighbor_clouds.h"
 
 using namespace inc;

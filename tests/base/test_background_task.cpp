@@ -1,4 +1,5 @@
-// BackgroundTask (base/background_task.h): tasks run on another thread, one after another; wait() returns after the task and rethrows what it threw.
+// BackgroundTask (base/background_task.h): tasks run on another thread, one after another; wait() returns after the
+// task and rethrows what it threw.
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -16,13 +17,19 @@ TEST(BackgroundTask, RunsEachTaskOnItsWorkerAndRethrowsItsError) {
   const std::thread::id caller = std::this_thread::get_id();
   std::thread::id first, second;
   int sum = 0;
-  worker.start([&] { first = std::this_thread::get_id(); sum += 1; });
+  worker.start([&] {
+    first = std::this_thread::get_id();
+    sum += 1;
+  });
   worker.wait();
-  worker.start([&] { second = std::this_thread::get_id(); sum += 2; });
+  worker.start([&] {
+    second = std::this_thread::get_id();
+    sum += 2;
+  });
   worker.wait();
-  EXPECT_EQ(sum, 3);             // both ran, and wait() saw their writes
-  EXPECT_NE(first, caller);      // not on the caller's thread
-  EXPECT_EQ(first, second);      // one long-lived worker
+  EXPECT_EQ(sum, 3);         // both ran, and wait() saw their writes
+  EXPECT_NE(first, caller);  // not on the caller's thread
+  EXPECT_EQ(first, second);  // one long-lived worker
   worker.start([] { throw std::runtime_error("from the worker"); });
   EXPECT_THROW(worker.wait(), std::runtime_error);
   worker.start([&] { sum += 4; });  // still usable after an error

@@ -1,4 +1,5 @@
-// The CPU's MLS stress points in SIMD lanes (cpu_fallback/mls_stress_lanes.h) against the scalar mlsStressAt: the same bits for any gradient.
+// The CPU's MLS stress points in SIMD lanes (cpu_fallback/mls_stress_lanes.h) against the scalar mlsStressAt: the same
+// bits for any gradient.
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -81,7 +82,8 @@ TEST(MlsStressLanes, FourParticlesInLanesGiveTheScalarBits) {
           for (int r = 0; r < 3; ++r)
             for (int c = 0; c < 3; ++c)
               ASSERT_TRUE(sameBits(m_lane[k].m[r][c], m_scalar[k].m[r][c]))
-                  << "particle " << k << " M(" << r << "," << c << ") " << m_lane[k].m[r][c] << " vs " << m_scalar[k].m[r][c];
+                  << "particle " << k << " M(" << r << "," << c << ") " << m_lane[k].m[r][c] << " vs "
+                  << m_scalar[k].m[r][c];
           ASSERT_TRUE(sameBits(e_lane[k], e_scalar[k])) << "particle " << k << " energy";
           ASSERT_TRUE(sameBits(k_lane[k], k_scalar[k])) << "particle " << k << " stiffening";
           ++compared;

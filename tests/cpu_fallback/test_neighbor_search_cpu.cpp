@@ -24,7 +24,8 @@ TYPED_TEST_SUITE(NeighborSearchCpu, Precisions);
 
 // Self-query of the grid (both storage orders, cell size = radius) against brute force: exact equality.
 template <typename T>
-void expectSelfMatchesBruteForce(const std::vector<Vec3<T>>& pts, const std::vector<T>& radii, const std::string& what) {
+void expectSelfMatchesBruteForce(const std::vector<Vec3<T>>& pts, const std::vector<T>& radii,
+                                 const std::string& what) {
   for (T r : radii)
     for (bool morton : {false, true}) {
       cpu::GridNeighborSearch<T> s(pts, r, morton);

@@ -1,4 +1,5 @@
-// The CPU's rotation extraction in SIMD lanes (cpu_fallback/pbd_rotation_lanes.h) against the scalar pbd::extractRotations: the same bits for any matrix (whole frames: PbdSolver.CpuLoopsMatchSharedScalarCodeBitForBit).
+// The CPU's rotation extraction in SIMD lanes (cpu_fallback/pbd_rotation_lanes.h) against the scalar
+// pbd::extractRotations: the same bits for any matrix (whole frames: PbdSolver.CpuLoopsMatchSharedScalarCodeBitForBit).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -43,7 +44,7 @@ std::vector<Mat3<T>> testMatrices(std::mt19937& rng) {
   Mat3<T> flip = Mat3<T>::identity();
   flip.m[0][0] = T(-1);
   for (int i = 0; i < 50; ++i) out.push_back(randomRot() * flip);  // reflections
-  for (int i = 0; i < 50; ++i) {                                     // rank 2, rank 1, near singular
+  for (int i = 0; i < 50; ++i) {                                   // rank 2, rank 1, near singular
     Mat3<T> a = randomMat();
     for (int c = 0; c < 3; ++c) a.m[2][c] = i % 3 == 0 ? T(0) : a.m[0][c] * T(0.5) + a.m[1][c] * T(2);
     if (i % 2 == 0)
@@ -51,11 +52,11 @@ std::vector<Mat3<T>> testMatrices(std::mt19937& rng) {
     if (i % 5 == 0) a.m[2][2] += T(1e-7);
     out.push_back(a);
   }
-  out.push_back(Mat3<T>());                  // zero
-  out.push_back(Mat3<T>::identity());        // a rotation: converged at once from the identity
-  out.push_back(randomRot());                // a rotation from elsewhere
-  out.push_back(randomMat() * T(1e-30));     // tiny
-  out.push_back(randomMat() * T(1e30));      // huge
+  out.push_back(Mat3<T>());               // zero
+  out.push_back(Mat3<T>::identity());     // a rotation: converged at once from the identity
+  out.push_back(randomRot());             // a rotation from elsewhere
+  out.push_back(randomMat() * T(1e-30));  // tiny
+  out.push_back(randomMat() * T(1e30));   // huge
   Mat3<T> bad = randomMat();
   bad.m[1][2] = std::numeric_limits<T>::quiet_NaN();
   out.push_back(bad);
@@ -99,8 +100,8 @@ void expectLanesMatchScalar() {
         for (int k = 0; k < count; ++k) {
           ASSERT_TRUE(sameBits(want[k], got[k]))
               << "batch of " << count << ", lane " << k << ", " << iterations << " iterations, matrix " << first
-              << ": scalar (" << want[k].w << ", " << want[k].x << ", " << want[k].y << ", " << want[k].z
-              << ") lanes (" << got[k].w << ", " << got[k].x << ", " << got[k].y << ", " << got[k].z << ")";
+              << ": scalar (" << want[k].w << ", " << want[k].x << ", " << want[k].y << ", " << want[k].z << ") lanes ("
+              << got[k].w << ", " << got[k].x << ", " << got[k].y << ", " << got[k].z << ")";
           steps_changed += sameBits(q0[k], want[k]) ? 0 : 1;
         }
         ++batches;

@@ -3,8 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <vector>
 
 #include "host/scene/scene_compile.h"
@@ -49,13 +49,13 @@ TEST(MlsBladeContact, CoveredPointsLandOnTheCapsuleAndKeepTheirTangentialVelocit
   EXPECT_NEAR(x.x, 0.008, 1e-15);
   EXPECT_NEAR(x.y, 0.006, 1e-15);
   EXPECT_NEAR(x.z, 0.3, 1e-15);
-  EXPECT_NEAR(dot(v, n), 0.0, 1e-14);                     // into the blade: removed (it was -0.5)
-  EXPECT_NEAR(v.x * 0.6 - v.y * 0.8, -1.0, 1e-14);        // tangential: kept
+  EXPECT_NEAR(dot(v, n), 0.0, 1e-14);               // into the blade: removed (it was -0.5)
+  EXPECT_NEAR(v.x * 0.6 - v.y * 0.8, -1.0, 1e-14);  // tangential: kept
   EXPECT_NEAR(v.z, 0.2, 1e-14);
-  Vec3d u_axis(-0.001, -0.002, 0.0), v_axis(0, 0, 0);     // exactly on the axis
+  Vec3d u_axis(-0.001, -0.002, 0.0), v_axis(0, 0, 0);  // exactly on the axis
   mlsBladeContactAt(c, rest, u_axis, v_axis, 1);
   EXPECT_NEAR(segmentDistance(rest + u_axis, c.a0, c.b0), 0.01, 1e-15);
-  Vec3d u_out(0.02, 0.0, 0.0), v_out(-3.0, 1.0, 0.0);     // 21 mm away: untouched
+  Vec3d u_out(0.02, 0.0, 0.0), v_out(-3.0, 1.0, 0.0);  // 21 mm away: untouched
   mlsBladeContactAt(c, rest, u_out, v_out, 3);
   EXPECT_EQ(u_out.x, 0.02);
   EXPECT_EQ(v_out.x, -3.0);
@@ -72,7 +72,7 @@ TEST(MlsBladeContact, CoveredPointsLandOnTheCapsuleAndKeepTheirTangentialVelocit
 TEST(MlsBladeContact, FrictionTakesAtMostMuTimesTheNormalChange) {
   MlsBladeContact<double> c = staticBladeAlongZ();
   const Vec3d rest(0.001, 0.002, 0.3), u0(0.003, 0.001, 0.0);  // x = (0.004, 0.003, 0.3): normal n = (0.8, 0.6, 0)
-  const Vec3d v0(-1.0, 0.5, 0.0);  // -0.5 n + 1.0 t with t = (-0.6, 0.8, 0)
+  const Vec3d v0(-1.0, 0.5, 0.0);                              // -0.5 n + 1.0 t with t = (-0.6, 0.8, 0)
   Vec3d u = u0, v = v0, u_free = u0, v_free = v0;
   c.friction = 0.4;
   mlsBladeContactAt(c, rest, u, v, 2);
@@ -135,7 +135,8 @@ double closestPointToBlade(SimulationModel& sim, double t) {
   sim.renderLayers(layers);
   const double x = -0.05 + 0.1 * (t - 0.05) / 0.2;
   double d = 1e9;
-  for (const Vec3d& p : layers.nodal_points) d = std::min(d, segmentDistance(p, Vec3d(x, 0.002, -0.04), Vec3d(x, 0.002, 0.04)));
+  for (const Vec3d& p : layers.nodal_points)
+    d = std::min(d, segmentDistance(p, Vec3d(x, 0.002, -0.04), Vec3d(x, 0.002, 0.04)));
   return layers.nodal_points.empty() ? 1e9 : d;
 }
 
@@ -224,8 +225,9 @@ TEST(CutBladeContact, FrictionDragsTheCutTissueAlongTheBlade) {
     }
   }
   ASSERT_GT(at_side, 20);
-  std::printf("[blade friction] mu 1 against 0 after 12 frames: mean %.1f mm, within 2 mm of the blade %.1f mm (max %.1f)\n",
-              mean * 1e3, side / at_side * 1e3, side_max * 1e3);
+  std::printf(
+      "[blade friction] mu 1 against 0 after 12 frames: mean %.1f mm, within 2 mm of the blade %.1f mm (max %.1f)\n",
+      mean * 1e3, side / at_side * 1e3, side_max * 1e3);
   EXPECT_GT(mean, 0.002);
   EXPECT_GT(side / at_side, mean);
   EXPECT_LT(side_max, 0.05);  // dragged, not flung: within the blade's 5 cm of travel over the frames

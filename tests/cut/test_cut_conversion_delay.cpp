@@ -6,9 +6,9 @@
 #include <cmath>
 #include <vector>
 
+#include "host/io/mesh.h"
 #include "host/scene/scene_compile.h"
 #include "host/sim/dissection_simulation.h"
-#include "host/io/mesh.h"
 #include "tests/support/cut_block_scene.h"
 
 namespace inc {
@@ -103,7 +103,8 @@ TEST(CutConversionDelay, NewPointsTakeTheStateOfTheApplyingFrame) {
   for (int f = 1; f < frames; ++f) {
     if (counter(late, f, "coupling_springs") == 0) continue;
     ASSERT_EQ(counter(late, f, "nodal_points"), counter(now, f - 1, "nodal_points")) << f;
-    const double e_now = counter(now, f - 1, "coupling_spring_energy_j"), e_late = counter(late, f, "coupling_spring_energy_j");
+    const double e_now = counter(now, f - 1, "coupling_spring_energy_j"),
+                 e_late = counter(late, f, "coupling_spring_energy_j");
     EXPECT_GT(e_now, 1e-5) << f;
     EXPECT_LT(e_late, 1.25 * e_now) << f;
     ++compared;

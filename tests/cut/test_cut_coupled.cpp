@@ -6,9 +6,9 @@
 #include <cmath>
 
 #include "host/scene/scene_compile.h"
+#include "host/scene/scene_loader.h"
 #include "host/sim/dissection_simulation.h"
 #include "model/input_error.h"
-#include "host/scene/scene_loader.h"
 #include "tests/support/cut_block_scene.h"
 
 namespace inc {
@@ -139,8 +139,8 @@ TEST(CutCoupled, PulledFlapReachesStaticEquilibrium) {
 TEST(CutCoupled, SuccessiveStrokesInOneRun) {
   Scene s = blockScene(0.15);
   s.tools[0].path = {{0.05, Vec3d(-0.05, 0.002, 0.0), Vec3d(0, 0, 1)}, {0.15, Vec3d(0.05, 0.002, 0.0), Vec3d(0, 0, 1)}};
-  s.tools.push_back(scalpel("second", {{0.25, Vec3d(0.0013, -0.04, 0.0), Vec3d(0, 0, 1)},
-                                       {0.35, Vec3d(0.0013, 0.04, 0.0), Vec3d(0, 0, 1)}}));
+  s.tools.push_back(scalpel(
+      "second", {{0.25, Vec3d(0.0013, -0.04, 0.0), Vec3d(0, 0, 1)}, {0.35, Vec3d(0.0013, 0.04, 0.0), Vec3d(0, 0, 1)}}));
   auto sim = makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
   FrameReport rep;
   double points_between = -1;
@@ -171,11 +171,12 @@ TEST(CutCoupled, SuccessiveStrokesInOneRun) {
 TEST(CutCoupled, BadCuttingSettingsAreInputErrorsNamingTheKey) {
   const std::string base = R"({"geometry": {"kind": "box", "size_m": [0.06, 0.04, 0.03], "spacing_m": 0.01},
     "models": {"pbd_metaballs": true, "cutting": true}, "cutting": {)";
-  for (const char* bad : {R"("exchanges_per_frame": 0)", R"("samples_per_diameter": 1)", R"("pbd_substeps_per_exchange": 65)",
-                          R"("repack_spacing_factor": -1)", R"("repack_boundary_offset": 1.0)", R"("stroke_end_frames": 121)",
-                          R"("stroke_end_frames": -1)", R"("blade_radius_m": -0.001)", R"("conversion_delay_frames": 2)", R"("open_surface_frames": 121)", R"("blade_friction": -0.1)", R"("blade_friction": 2.5)",
-                          R"("conversion_delay_frames": -1)",
-                          R"("blade_radius_m": 0.2)", R"("unknown_key": 1)"}) {
+  for (const char* bad :
+       {R"("exchanges_per_frame": 0)", R"("samples_per_diameter": 1)", R"("pbd_substeps_per_exchange": 65)",
+        R"("repack_spacing_factor": -1)", R"("repack_boundary_offset": 1.0)", R"("stroke_end_frames": 121)",
+        R"("stroke_end_frames": -1)", R"("blade_radius_m": -0.001)", R"("conversion_delay_frames": 2)",
+        R"("open_surface_frames": 121)", R"("blade_friction": -0.1)", R"("blade_friction": 2.5)",
+        R"("conversion_delay_frames": -1)", R"("blade_radius_m": 0.2)", R"("unknown_key": 1)"}) {
     try {
       parseScene(base + bad + "}}", "<test>", ".");
       FAIL() << bad;
@@ -184,9 +185,11 @@ TEST(CutCoupled, BadCuttingSettingsAreInputErrorsNamingTheKey) {
       EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
     }
   }
-  const Scene good = parseScene(base + R"("exchanges_per_frame": 3, "repack_sphere_budget": 2, "stroke_end_frames": 4, "blade_radius_m": 0.001,
-                                "conversion_delay_frames": 1, "open_surface_frames": 5, "blade_friction": 0.25})" + "}",
-                                "<test>", ".");
+  const Scene good = parseScene(
+      base + R"("exchanges_per_frame": 3, "repack_sphere_budget": 2, "stroke_end_frames": 4, "blade_radius_m": 0.001,
+                                "conversion_delay_frames": 1, "open_surface_frames": 5, "blade_friction": 0.25})" +
+          "}",
+      "<test>", ".");
   EXPECT_EQ(good.cutting.exchanges_per_frame, 3);
   EXPECT_EQ(good.cutting.repack_sphere_budget, 2.0);
   EXPECT_EQ(good.cutting.stroke_end_frames, 4);

@@ -1,12 +1,13 @@
-// Coupling math (eqs. 11-13, physics/cut_coupling.h) and the MLS solver's coupling groups: gradients, an analytic oscillator.
+// Coupling math (eqs. 11-13, physics/cut_coupling.h) and the MLS solver's coupling groups: gradients, an analytic
+// oscillator.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <memory>
 #include <vector>
 
-#include "model/input_error.h"
 #include "host/backends/solver_factory.h"
+#include "model/input_error.h"
 #include "model/mls_solver.h"
 #include "physics/cut_coupling.h"
 #include "tests/support/mls_test_scenes.h"
@@ -61,10 +62,12 @@ struct RotatingGroup {
   pbd::Quat<double> rot;
   explicit RotatingGroup(int count = 12) : n(count), offsets{0, count} {
     for (int i = 0; i < n; ++i) {
-      rest.push_back(centre + Vec3d(0.003 + 0.002 * hashSigned(i), 0.003 * hashSigned(30 + i), 0.0025 * hashSigned(60 + i)));
+      rest.push_back(centre +
+                     Vec3d(0.003 + 0.002 * hashSigned(i), 0.003 * hashSigned(30 + i), 0.0025 * hashSigned(60 + i)));
       members.push_back(i);
     }
-    anchors = {centre + Vec3d(0.012, 0.0, 0.0), centre + Vec3d(0.0, -0.011, 0.002), centre + Vec3d(-0.004, 0.003, 0.01)};
+    anchors = {centre + Vec3d(0.012, 0.0, 0.0), centre + Vec3d(0.0, -0.011, 0.002),
+               centre + Vec3d(-0.004, 0.003, 0.01)};
     MlsCouplingGroups g;
     g.members = members;
     g.member_offsets = offsets;
@@ -170,7 +173,8 @@ TEST(CouplingMath, RotatingGroupFollowsAnyRigidMotionExactly) {
     const Mat3d r = mls_test::rotation(Vec3d(0.3, -1.0, 0.5), angle);
     const Vec3d ua = grp.displacement(rigidDisplacements(grp.rest, r, t));
     EXPECT_LT(norm(grp.centre + ua - (r * grp.centre + t)), 1e-12) << "angle " << angle;
-    const Vec3d old = couplingSphereDisplacement(rigidDisplacements(grp.rest, r, t).data(), grp.members.data(), 0, grp.n);
+    const Vec3d old =
+        couplingSphereDisplacement(rigidDisplacements(grp.rest, r, t).data(), grp.members.data(), 0, grp.n);
     EXPECT_GT(norm(grp.centre + old - (r * grp.centre + t)), 1e-4) << "the plain mean is off by (R - I)(Xbar - C)";
   }
 }
@@ -269,8 +273,8 @@ TEST(MlsCouplingGroups, GroupOnASpringOscillatesAtSqrtKOverM) {
   const double omega = std::sqrt(1.0 / mass);
   // The stable step combines the elastic and the spring limit 2 / omega (exactly, as documented).
   const double dt_spring = 2.0 / omega;
-  EXPECT_NEAR(solver->stableTimeStep(), 1.0 / std::sqrt(1.0 / (dt_elastic * dt_elastic) + 1.0 / (dt_spring * dt_spring)),
-              1e-12 * dt_elastic);
+  EXPECT_NEAR(solver->stableTimeStep(),
+              1.0 / std::sqrt(1.0 / (dt_elastic * dt_elastic) + 1.0 / (dt_spring * dt_spring)), 1e-12 * dt_elastic);
   solver->setDisplacements(std::vector<Vec3d>(n, Vec3d(0.001, 0, 0)));
   const double dt = 0.5 * solver->stableTimeStep();
   const double period = 2.0 * 3.141592653589793 / omega;

@@ -6,9 +6,9 @@
 #include <utility>
 
 #include "host/scene/scene_compile.h"
+#include "host/scene/scene_loader.h"
 #include "host/sim/dissection_simulation.h"
 #include "model/input_error.h"
-#include "host/scene/scene_loader.h"
 #include "tests/support/cut_block_scene.h"
 #include "tests/support/repo_paths.h"
 

@@ -3,10 +3,10 @@
 
 #include <cmath>
 
-#include "tests/support/cut_fixtures.h"
+#include "host/assembly/organ_shapes.h"
 #include "host/cut/cut_mesh.h"
 #include "model/input_error.h"
-#include "host/assembly/organ_shapes.h"
+#include "tests/support/cut_fixtures.h"
 
 namespace inc {
 namespace {
@@ -55,7 +55,8 @@ TEST(CutMesh, SweptSurfacePlaneDrivesTheSplit) {
   EXPECT_NEAR(analyzeMesh(r.positive).signed_volume, half_volume, 1e-9 * half_volume);
   // A curved sweep is not planar: refused rather than cut wrongly.
   std::vector<BladePose> poses;
-  for (int k = 0; k < 5; ++k) poses.push_back({Vec3d(0.02 * k, -0.1, 0.01 * k * k), Vec3d(0.02 * k, 0.1, 0.01 * k * k)});
+  for (int k = 0; k < 5; ++k)
+    poses.push_back({Vec3d(0.02 * k, -0.1, 0.01 * k * k), Vec3d(0.02 * k, 0.1, 0.01 * k * k)});
   EXPECT_FALSE(planeOfSweptSurface(sweepSurface(poses), p, n, 1e-4));
 }
 

@@ -4,9 +4,9 @@
 #include <cmath>
 
 #include "cpu_fallback/neighbor_bruteforce.h"
-#include "tests/support/cut_fixtures.h"
 #include "host/cut/cut_nodal_points.h"
 #include "model/input_error.h"
+#include "tests/support/cut_fixtures.h"
 
 namespace inc {
 namespace {
@@ -47,10 +47,12 @@ TEST(CutNodal, NoMlsNeighbourAcrossTheCut) {
   const NeighborLists vis = visibleNodalNeighbours(r.points, h, s, &removed);
   EXPECT_GT(removed, 0u);
   // Reference: every pair within h on the same side (the cut spans the block, so "crosses" == "other side").
-  const NeighborLists all = cpu::bruteForceNeighbors(r.points.positions, r.points.positions, std::vector<double>{h}, true);
+  const NeighborLists all =
+      cpu::bruteForceNeighbors(r.points.positions, r.points.positions, std::vector<double>{h}, true);
   std::size_t same_side = 0;
   for (std::size_t q = 0; q < all.queryCount(); ++q)
-    for (auto k = all.offsets[q]; k < all.offsets[q + 1]; ++k) same_side += r.points.side[q] == r.points.side[all.indices[k]];
+    for (auto k = all.offsets[q]; k < all.offsets[q + 1]; ++k)
+      same_side += r.points.side[q] == r.points.side[all.indices[k]];
   EXPECT_EQ(vis.indices.size(), same_side);
   EXPECT_EQ(removed, all.indices.size() - same_side);
   for (std::size_t q = 0; q < vis.queryCount(); ++q)

@@ -53,7 +53,8 @@ TEST(CutRegion, ConversionConservesMassAndMarksTheInterface) {
   NodalRegion region(m, settings(), {});
   const auto cut = findCutSpheres(s, m.rest_centers, m.rest_radii);
   ASSERT_FALSE(cut.empty());
-  region.convert(cut, [&](std::int32_t b) { return atRest(m, b); }, s);
+  region.convert(
+      cut, [&](std::int32_t b) { return atRest(m, b); }, s);
   double pbd = 0.0;
   std::set<std::int32_t> expected_interface;
   for (auto b : cut)
@@ -75,7 +76,9 @@ TEST(CutRegion, ConversionConservesMassAndMarksTheInterface) {
   for (std::size_t i = 0; i < x.size(); ++i) {
     const std::int32_t b = region.pointSphere()[i];
     EXPECT_LT(norm(x[i] - m.rest_centers[std::size_t(b)]), m.rest_radii[std::size_t(b)]) << i;
-    EXPECT_TRUE(seen.insert({std::llround(x[i].x * 1e7), std::llround(x[i].y * 1e7), std::llround(x[i].z * 1e7)}).second) << i;
+    EXPECT_TRUE(
+        seen.insert({std::llround(x[i].x * 1e7), std::llround(x[i].y * 1e7), std::llround(x[i].z * 1e7)}).second)
+        << i;
     sampled.insert(b);
   }
   EXPECT_EQ(sampled.size(), cut.size() + expected_interface.size());
@@ -89,7 +92,8 @@ TEST(CutRegion, SupportsNeverCrossTheCutAndMomentMatricesAreRecomputed) {
   const MetaballModel m = cuttest::latticeBlock(8, 4, 4);
   SweptSurface s = stroke(-0.01);
   NodalRegion region(m, settings(), {});
-  region.convert(findCutSpheres(s, m.rest_centers, m.rest_radii), [&](std::int32_t b) { return atRest(m, b); }, s);
+  region.convert(
+      findCutSpheres(s, m.rest_centers, m.rest_radii), [&](std::int32_t b) { return atRest(m, b); }, s);
   const auto& x = region.restPoints();
   const NeighborLists& l = region.supports();
   const double h = 2.0 * region.pointSpacing();
@@ -119,7 +123,8 @@ TEST(CutRegion, SupportsNeverCrossTheCutAndMomentMatricesAreRecomputed) {
   };
   // Points whose list changed: A_i^-1 equals the one of the filtered list; most differ from the uncut one by
   // more than 1 % for at least a third of them (a pair dropped near h has almost no weight).
-  const auto checkRecomputed = [&](const NeighborLists& lists, const NeighborLists& before, int& affected, int& changed) {
+  const auto checkRecomputed = [&](const NeighborLists& lists, const NeighborLists& before, int& affected,
+                                   int& changed) {
     const auto& model = cpuSolver(region).model();
     for (std::size_t i = 0; i < x.size(); ++i) {
       if (lists.count(i) == before.count(i)) continue;
@@ -155,14 +160,15 @@ TEST(CutRegion, RigidMotionMakesNoStrainAndNoMotion) {
     const Mat3d R = rotated ? mls_test::rotation(Vec3d(0.3, -1.0, 0.5), 0.7) : Mat3d::identity();
     const Vec3d t(0.02, -0.01, 0.03);
     NodalRegion region(m, settings(), {});
-    region.convert(findCutSpheres(s, m.rest_centers, m.rest_radii),
-                   [&](std::int32_t b) {
-                     ConvertedSphereState st;
-                     st.position = R * m.rest_centers[std::size_t(b)] + t;
-                     st.rotation = R;
-                     return st;
-                   },
-                   s);
+    region.convert(
+        findCutSpheres(s, m.rest_centers, m.rest_radii),
+        [&](std::int32_t b) {
+          ConvertedSphereState st;
+          st.position = R * m.rest_centers[std::size_t(b)] + t;
+          st.rotation = R;
+          return st;
+        },
+        s);
     EXPECT_LT(region.lastReduction().elastic_energy, 1e-20);
     std::vector<std::int32_t> ids;
     std::vector<Vec3d> pos;
@@ -188,7 +194,7 @@ TEST(CutRegion, RigidMotionMakesNoStrainAndNoMotion) {
       EXPECT_LT(norm(pos[k] - expected), 1e-12) << "interface sphere " << ids[k] << (rotates ? " (rotating)" : "");
     }
     std::printf("%s: %d of %zu interface spheres rotate\n", rotated ? "rotated" : "translated", rotating, ids.size());
-    EXPECT_GE(4 * rotating, 3 * int(ids.size()));  // most interface spheres hold a volume of points
+    EXPECT_GE(4 * rotating, 3 * int(ids.size()));          // most interface spheres hold a volume of points
     if (rotated && rotating != int(ids.size())) continue;  // a non-rotating group's springs would pull
     std::vector<Vec3d> u0;
     region.solver()->displacements(u0);

@@ -2,9 +2,9 @@
 // successive cuts with a bounded sphere count and a covered tissue.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <algorithm>
 #include <numeric>
 
 #include "host/cut/cut_nodal_points.h"
@@ -93,9 +93,10 @@ TEST(CutRepack, SlabGroupsAreClassifiedDownSampledAndCovered) {
       if ((r.centres[a].z > 0) == (r.centres[b].z > 0)) {
         EXPECT_GT(norm(r.centres[a] - r.centres[b]), r.spacing_min);
       }
-  std::printf("[repack slab] %zu points: %zu boundary, %zu medial, %zu middle; d = %.4f m; packed %zu, kept %zu "
-              "(cut spheres %zu)\n",
-              np, r.boundary, r.medial, r.middle, r.spacing_max, r.packed, r.centres.size(), cr.cut.size());
+  std::printf(
+      "[repack slab] %zu points: %zu boundary, %zu medial, %zu middle; d = %.4f m; packed %zu, kept %zu "
+      "(cut spheres %zu)\n",
+      np, r.boundary, r.medial, r.middle, r.spacing_max, r.packed, r.centres.size(), cr.cut.size());
 }
 
 // A point beyond the support of every other point (isolated) is merged into the nearest sphere it sees; with a
@@ -199,7 +200,9 @@ TEST(CutRepack, TwentyCutsKeepTheSphereCountBoundedAndTheTissueCovered) {
     const SweptSurface& s = cuts.back();
     CutOptions opt;
     for (int e = 0; e < k; ++e) opt.earlier_cuts.push_back(&cuts[std::size_t(e)]);
-    opt.inside = [&](const Vec3d& x) { return std::fabs(x.x) < half.x && std::fabs(x.y) < half.y && std::fabs(x.z) < half.z; };
+    opt.inside = [&](const Vec3d& x) {
+      return std::fabs(x.x) < half.x && std::fabs(x.y) < half.y && std::fabs(x.z) < half.z;
+    };
     SphereCutResult r = cutSpheres(m, s, opt);
     const std::vector<SweptSurface> earlier(cuts.begin(), cuts.end() - 1);
     RepackOptions ro;
@@ -213,9 +216,10 @@ TEST(CutRepack, TwentyCutsKeepTheSphereCountBoundedAndTheTissueCovered) {
     if (k == 0 || k == 9 || k == 19) {
       double cover = 0, prot = 0;
       coverage(m, cuts, half, cover, prot);
-      std::printf("[twenty cuts] after cut %d: %zu spheres (%zu cut, +%zu), coverage %.4f (uncut %.4f), "
-                  "out of the block by %.2f mm (uncut %.2f mm)\n",
-                  k + 1, m.size(), removed, added, cover, cover0, prot * 1e3, prot0 * 1e3);
+      std::printf(
+          "[twenty cuts] after cut %d: %zu spheres (%zu cut, +%zu), coverage %.4f (uncut %.4f), "
+          "out of the block by %.2f mm (uncut %.2f mm)\n",
+          k + 1, m.size(), removed, added, cover, cover0, prot * 1e3, prot0 * 1e3);
       // Measured (this machine, 2026-11-25): 0.9515, 0.9401, 0.8862 against the uncut 0.9440; out of the block by
       // 8.1, 8.1, 9.4 mm (1.5 x the cap keeps it bounded; the uncut lattice: 2.5 mm).
       EXPECT_GE(cover, (k < 10 ? 0.95 : 0.9) * cover0) << "cut " << k;

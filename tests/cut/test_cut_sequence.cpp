@@ -3,9 +3,9 @@
 
 #include <cmath>
 
+#include "host/assembly/organ_shapes.h"
 #include "host/cut/cut_mesh.h"
 #include "host/cut/cut_nodal_points.h"
-#include "host/assembly/organ_shapes.h"
 #include "tests/support/cut_fixtures.h"
 
 namespace inc {
@@ -95,9 +95,10 @@ TEST(CutSequence, TwentyCutsKeepMassBoundTheSphereCountAndCloseEveryPiece) {
       crossing += segmentCrossesSweptSurface(cuts[k], m.rest_centers[e[0]], m.rest_centers[e[1]]);
   EXPECT_EQ(crossing, 0u);
   EXPECT_GT(pieces.size(), 20u);
-  std::printf("[cut sequence] spheres %zu -> %zu, surface pieces %zu, min triangle area %.3e m^2, degenerate "
-              "triangles (height < 1e-10 longest edge) summed over cuts %d, forced ears %d\n",
-              n0, m.size(), pieces.size(), min_area, degenerate, forced);
+  std::printf(
+      "[cut sequence] spheres %zu -> %zu, surface pieces %zu, min triangle area %.3e m^2, degenerate "
+      "triangles (height < 1e-10 longest edge) summed over cuts %d, forced ears %d\n",
+      n0, m.size(), pieces.size(), min_area, degenerate, forced);
   // Known limit (docs/cutting.md): after ~10 tilted cuts the pieces are thin slabs and a few sliver triangles
   // appear; they stay a tiny fraction of the surface.
   EXPECT_LT(degenerate, 20);

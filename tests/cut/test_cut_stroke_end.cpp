@@ -6,16 +6,16 @@
 #include <cmath>
 #include <vector>
 
-#include "host/scene/scene_compile.h"
-#include "host/cut/cut_stroke_end.h"
-#include "host/sim/dissection_simulation.h"
 #include "host/assembly/organ_shapes.h"
+#include "host/cut/cut_stroke_end.h"
+#include "host/io/mesh.h"
+#include "host/scene/scene_compile.h"
+#include "host/sim/dissection_simulation.h"
+#include "model/input_error.h"
 #include "tests/support/cut_block_scene.h"
-#include "tests/support/held_idle_workers.h"
 #include "tests/support/cut_fixtures.h"
 #include "tests/support/cut_surface_fixtures.h"
-#include "model/input_error.h"
-#include "host/io/mesh.h"
+#include "tests/support/held_idle_workers.h"
 
 namespace inc {
 namespace {
@@ -99,13 +99,14 @@ TEST(CutStrokeEnd, DeferredEndIsTheSameCutWithThePointsSimulatedMeanwhile) {
   EXPECT_EQ(now.last_surface.triangles, late.last_surface.triangles);
   // The applying frame moves the surface no more than the frames before it did.
   const std::size_t before = late.surfaces[std::size_t(fe + delay - 1)].size();  // vertices keep their index
-  const auto kick = [&](int f) {  // largest |x(f) - 2 x(f-1) + x(f-2)| over the vertices: the frame's change of velocity
-    double m = 0;
-    for (std::size_t v = 0; v < before; ++v)
-      m = std::max(m, norm(late.surfaces[std::size_t(f)][v] - late.surfaces[std::size_t(f - 1)][v] * 2.0 +
-                           late.surfaces[std::size_t(f - 2)][v]));
-    return m;
-  };
+  const auto kick =
+      [&](int f) {  // largest |x(f) - 2 x(f-1) + x(f-2)| over the vertices: the frame's change of velocity
+        double m = 0;
+        for (std::size_t v = 0; v < before; ++v)
+          m = std::max(m, norm(late.surfaces[std::size_t(f)][v] - late.surfaces[std::size_t(f - 1)][v] * 2.0 +
+                               late.surfaces[std::size_t(f - 2)][v]));
+        return m;
+      };
   double typical = 0;
   for (int f = fe + 2; f < fe + delay; ++f) typical = std::max(typical, kick(f));
   const double jump = kick(fe + delay);

@@ -39,14 +39,16 @@ SweptSurface lastStrip(const SweptSurface& s, std::size_t triangles_before) {
 }
 
 // Same offsets, same indices (so the same order) and the same count of dropped entries.
-void expectSameLists(const NeighborLists& got, std::size_t got_removed, const NeighborLists& want, std::size_t want_removed,
-                     const std::string& where) {
+void expectSameLists(const NeighborLists& got, std::size_t got_removed, const NeighborLists& want,
+                     std::size_t want_removed, const std::string& where) {
   ASSERT_EQ(got.offsets, want.offsets) << where;
   ASSERT_EQ(got.indices, want.indices) << where;
   EXPECT_EQ(got_removed, want_removed) << where;
 }
 
-bool sameLists(const NeighborLists& a, const NeighborLists& b) { return a.offsets == b.offsets && a.indices == b.indices; }
+bool sameLists(const NeighborLists& a, const NeighborLists& b) {
+  return a.offsets == b.offsets && a.indices == b.indices;
+}
 
 // The dissection's sequence on a 10 x 6 x 4 block with an earlier cut: a curved stroke in 30 frames, each either
 // converting the spheres its new strip enters (convert with the whole stroke) or cutting the supports by the new
@@ -112,10 +114,10 @@ TEST(CutStrokeSupports, RandomCloudInBatchesEqualsVisibleSupports) {
   std::uniform_real_distribution<double> u(-0.03, 0.03);
   std::vector<Vec3d> all(2400);
   for (auto& p : all) p = Vec3d(u(rng), u(rng), u(rng));
-  const SweptSurface e1 = sweepSurface({{Vec3d(-0.04, 0.004, -0.04), Vec3d(-0.04, 0.004, 0.04)},
-                                        {Vec3d(0.01, 0.004, -0.04), Vec3d(0.01, 0.004, 0.04)}});
-  const SweptSurface e2 = sweepSurface({{Vec3d(0.007, -0.04, -0.04), Vec3d(0.007, -0.04, 0.04)},
-                                        {Vec3d(0.007, 0.04, -0.04), Vec3d(0.007, 0.04, 0.04)}});
+  const SweptSurface e1 = sweepSurface(
+      {{Vec3d(-0.04, 0.004, -0.04), Vec3d(-0.04, 0.004, 0.04)}, {Vec3d(0.01, 0.004, -0.04), Vec3d(0.01, 0.004, 0.04)}});
+  const SweptSurface e2 = sweepSurface(
+      {{Vec3d(0.007, -0.04, -0.04), Vec3d(0.007, -0.04, 0.04)}, {Vec3d(0.007, 0.04, -0.04), Vec3d(0.007, 0.04, 0.04)}});
   const double h = 0.006;
   StrokeSupports sup(h, {&e1, &e2});
   // A tilted blade along a wavy path in x.

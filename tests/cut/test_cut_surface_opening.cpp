@@ -7,9 +7,9 @@
 #include <cmath>
 #include <vector>
 
+#include "host/io/mesh.h"
 #include "host/scene/scene_compile.h"
 #include "host/sim/dissection_simulation.h"
-#include "host/io/mesh.h"
 #include "tests/support/cut_block_scene.h"
 #include "tests/support/held_idle_workers.h"
 
@@ -122,7 +122,8 @@ TEST(CutSurfaceOpening, EachSideOfTheSlitFollowsItsOwnTissue) {
     // A wall's two faces share their rest positions; the face's outward normal says its side: +y faces belong to
     // the piece below the blade's plane (held), -y faces to the one above (free).
     const auto& tri = last.surface.triangles[t];
-    const Vec3d a = r.vertices[std::size_t(tri[0])], b = r.vertices[std::size_t(tri[1])], c = r.vertices[std::size_t(tri[2])];
+    const Vec3d a = r.vertices[std::size_t(tri[0])], b = r.vertices[std::size_t(tri[1])],
+                c = r.vertices[std::size_t(tri[2])];
     const Vec3d n = cross(b - a, c - a);
     if (std::abs(n.y) < 0.5 * norm(n)) continue;  // not on the blade's plane
     for (int k = 0; k < 3; ++k) {
@@ -167,8 +168,8 @@ TEST(CutSurfaceOpening, StarvedWorkerIsReplacedByTheDueFrame) {
     for (std::size_t v = 0; v < surface.vertices.size(); ++v)
       ASSERT_EQ(norm(surface.vertices[v] - plain[std::size_t(f)].surface.vertices[v]), 0.0) << f << " " << v;
   }
-  EXPECT_GE(here, 3.0);          // every opening of the stroke was computed on the frame's thread
-  EXPECT_EQ(held.held(), 1);     // the one started on the worker waited at the gate throughout
+  EXPECT_GE(here, 3.0);       // every opening of the stroke was computed on the frame's thread
+  EXPECT_EQ(held.held(), 1);  // the one started on the worker waited at the gate throughout
 }
 
 }  // namespace

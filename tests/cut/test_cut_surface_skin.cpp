@@ -3,10 +3,10 @@
 
 #include <cmath>
 
-#include "host/scene/scene_compile.h"
-#include "host/cut/cut_surface_state.h"
-#include "host/sim/dissection_simulation.h"
 #include "host/assembly/organ_shapes.h"
+#include "host/cut/cut_surface_state.h"
+#include "host/scene/scene_compile.h"
+#include "host/sim/dissection_simulation.h"
 #include "tests/support/cut_block_scene.h"
 #include "tests/support/cut_fixtures.h"
 #include "tests/support/cut_surface_fixtures.h"
@@ -38,7 +38,8 @@ TEST(CutSurfaceSkin, NoSkinWeightCrossesAPartialThenACurvedCut) {
         ++weights;
         const Vec3d& centre = spheres.rest_centers[std::size_t(b.sphere[std::size_t(v * b.k + j)])];
         for (const auto& cut : so_far)
-          EXPECT_FALSE(segmentCrossesSweptSurface(cut, state.probe[std::size_t(v)], centre)) << "vertex " << v << " cut " << c;
+          EXPECT_FALSE(segmentCrossesSweptSurface(cut, state.probe[std::size_t(v)], centre))
+              << "vertex " << v << " cut " << c;
       }
     EXPECT_GT(weights, std::size_t(b.vertexCount()));
   }
@@ -72,7 +73,8 @@ Scene arcCutScene(double end_angle) {
   const int n = int(std::lround((a0 - end_angle) / 0.1));
   for (int k = 0; k <= n; ++k) {
     const double a = a0 + (end_angle - a0) * k / n;
-    t.path.push_back({0.05 + 0.1 * k / n, Vec3d(0.065 * std::cos(a), -0.06 + 0.065 * std::sin(a), 0.0), Vec3d(0, 0, 1)});
+    t.path.push_back(
+        {0.05 + 0.1 * k / n, Vec3d(0.065 * std::cos(a), -0.06 + 0.065 * std::sin(a), 0.0), Vec3d(0, 0, 1)});
   }
   s.tools = {t};
   return s;
@@ -80,7 +82,8 @@ Scene arcCutScene(double end_angle) {
 
 TEST(CutSurfaceSkin, CurvedAndPartialScriptedCutsSplitTheSimulatedSurface) {
   for (const bool through : {true, false}) {
-    auto sim = makeDissectionSimulation(compileScene(arcCutScene(through ? kPi / 2 - 0.7 : kPi / 2)), BackendKind::Cpu, Precision::Float64);
+    auto sim = makeDissectionSimulation(compileScene(arcCutScene(through ? kPi / 2 - 0.7 : kPi / 2)), BackendKind::Cpu,
+                                        Precision::Float64);
     FrameReport rep;
     for (int f = 0; f < 14; ++f) {
       rep = sim->advance(1.0 / 60.0);

@@ -6,10 +6,10 @@
 #include <cstdlib>
 #include <fstream>
 
+#include "host/assembly/organ_shapes.h"
 #include "host/cut/cut_mesh.h"
 #include "host/cut/cut_surface_split.h"
 #include "model/input_error.h"
-#include "host/assembly/organ_shapes.h"
 #include "tests/support/cut_surface_fixtures.h"
 #include "tests/support/repo_paths.h"
 
@@ -24,11 +24,12 @@ using cuttest::straightBladeSweep;
 constexpr double kPi = 3.14159265358979323846;
 
 void printQuality(const char* what, const SurfaceSplit& r) {
-  std::printf("[cut surface] %s: %d crossings, %d loops, %d front + %d pierce points, %d wall triangles (spacing %.3g m), "
-              "components %d, attempts %d; wall min angle %.1f deg, min area %.3e m^2; split pieces min angle %.1f deg, "
-              "min area %.3e m^2\n",
-              what, r.crossings, r.contour_loops, r.front_points, r.pierce_points, r.wall_triangles, r.wall_spacing_m,
-              r.components, r.attempts, r.min_wall_angle_deg, r.min_wall_area_m2, r.min_split_angle_deg, r.min_split_area_m2);
+  std::printf(
+      "[cut surface] %s: %d crossings, %d loops, %d front + %d pierce points, %d wall triangles (spacing %.3g m), "
+      "components %d, attempts %d; wall min angle %.1f deg, min area %.3e m^2; split pieces min angle %.1f deg, "
+      "min area %.3e m^2\n",
+      what, r.crossings, r.contour_loops, r.front_points, r.pierce_points, r.wall_triangles, r.wall_spacing_m,
+      r.components, r.attempts, r.min_wall_angle_deg, r.min_wall_area_m2, r.min_split_angle_deg, r.min_split_area_m2);
 }
 
 TEST(CutSurfaceSplit, ArcThroughABoxGivesTwoClosedPiecesWithTheAnalyticVolumes) {
@@ -98,7 +99,8 @@ TEST(CutSurfaceSplit, PlanarCutThroughABoxGivesTheAnalyticVolumesLikeThePlanarSp
   const Vec3d half(0.05, 0.03, 0.02);
   const TriangleMesh box = makeBoxMesh(half, 6);
   const double x0 = 0.0137;
-  const SurfaceSplit r = splitSurfaceBySweep(box, straightBladeSweep(Vec3d(x0, -0.1, -0.1), Vec3d(x0, -0.1, 0.1), Vec3d(0, 0.2, 0)));
+  const SurfaceSplit r =
+      splitSurfaceBySweep(box, straightBladeSweep(Vec3d(x0, -0.1, -0.1), Vec3d(x0, -0.1, 0.1), Vec3d(0, 0.2, 0)));
   printQuality("box / plane", r);
   ASSERT_TRUE(r.split);
   EXPECT_EQ(r.components, 2);
@@ -124,7 +126,9 @@ double ballInsideCylinder(double rs, double cx, double cy, double R) {
     const double a = std::sqrt(a2), w = std::sqrt(w2);
     const double lo = std::max(-a, cy - w), hi = std::min(a, cy + w);
     if (hi <= lo) return 0.0;
-    const auto G = [&](double y) { return y * std::sqrt(std::max(0.0, a2 - y * y)) + a2 * std::asin(std::clamp(y / a, -1.0, 1.0)); };
+    const auto G = [&](double y) {
+      return y * std::sqrt(std::max(0.0, a2 - y * y)) + a2 * std::asin(std::clamp(y / a, -1.0, 1.0));
+    };
     return G(hi) - G(lo);
   };
   const int n = 200000;
@@ -163,7 +167,7 @@ TEST(CutSurfaceSplit, ArcThroughASphereMatchesTheAnalyticSplit) {
   // polyline of the 48-step arc differs from the circle by R^2 (2.4 / 48)^2 / 12 per unit angle (~2e-4 of the
   // ball): tolerance 2 x mesh_error.
   EXPECT_NEAR(frac, frac_exact, 2.0 * mesh_error);
-  EXPECT_GT(r.min_wall_angle_deg, 8.0);  // measured 14.0 deg
+  EXPECT_GT(r.min_wall_angle_deg, 8.0);   // measured 14.0 deg
   EXPECT_GT(r.min_split_angle_deg, 5.0);  // measured 8.2 deg
 }
 
@@ -172,7 +176,8 @@ TEST(CutSurfaceSplit, PartialCutLeavesOneClosedMeshWithASlitWhoseWallsMeetAtTheF
   const TriangleMesh box = makeBoxMesh(Vec3d(X, Y, Z), 8);
   const double box_volume = 8 * X * Y * Z;
   // A vertical blade longer than the box enters through x = -X and stops at x = 0.0123, inside.
-  const SweptSurface s = straightBladeSweep(Vec3d(-0.1, 0.0011, -0.05), Vec3d(-0.1, 0.0011, 0.05), Vec3d(0.1123, 0, 0), 6);
+  const SweptSurface s =
+      straightBladeSweep(Vec3d(-0.1, 0.0011, -0.05), Vec3d(-0.1, 0.0011, 0.05), Vec3d(0.1123, 0, 0), 6);
   const SurfaceSplit r = splitSurfaceBySweep(box, s);
   printQuality("box / partial straight", r);
   ASSERT_TRUE(r.split);
@@ -194,7 +199,8 @@ TEST(CutSurfaceSplit, PartialCutLeavesOneClosedMeshWithASlitWhoseWallsMeetAtTheF
       if (!r.wall[t]) continue;
       const auto& tri = r.mesh.triangles[t];
       if (tri[0] != int(v) && tri[1] != int(v) && tri[2] != int(v)) continue;
-      for (int c : tri) plus = plus || r.vertex_side[std::size_t(c)] > 0, minus = minus || r.vertex_side[std::size_t(c)] < 0;
+      for (int c : tri)
+        plus = plus || r.vertex_side[std::size_t(c)] > 0, minus = minus || r.vertex_side[std::size_t(c)] < 0;
     }
     EXPECT_TRUE(plus && minus) << "front vertex " << v;
   }
@@ -224,14 +230,18 @@ TEST(CutSurfaceSplit, CurvedPartialCutsOfASphereStayOneClosedMesh) {
 TEST(CutSurfaceSplit, ABladeThatMissesOrOnlyTouchesLeavesTheMeshUnchanged) {
   const TriangleMesh box = makeBoxMesh(Vec3d(0.05, 0.03, 0.02), 6);
   for (const SweptSurface& s :
-       {straightBladeSweep(Vec3d(-0.1, 0.2, -0.05), Vec3d(-0.1, 0.2, 0.05), Vec3d(0.2, 0, 0)),  // misses
-        // lies on the top face z = 0.02 (the blade along +y, moving along +x): touches, cuts nothing
+       {straightBladeSweep(
+            Vec3d(-0.1, 0.2, -0.05), Vec3d(-0.1, 0.2, 0.05),
+            Vec3d(0.2, 0,
+                  0)),  // misses
+                        // lies on the top face z = 0.02 (the blade along +y, moving along +x): touches, cuts nothing
         straightBladeSweep(Vec3d(-0.1, -0.1, 0.02), Vec3d(-0.1, 0.1, 0.02), Vec3d(0.2, 0, 0)),
         // its plane x + y + z = 0.1 touches the box only at the corner (0.05, 0.03, 0.02)
-        straightBladeSweep(Vec3d(0.05, 0.03, 0.02) + Vec3d(1, -1, 0) * 0.1, Vec3d(0.05, 0.03, 0.02) - Vec3d(1, -1, 0) * 0.1,
-                           Vec3d(0.1, 0.1, -0.2), 4)}) {
+        straightBladeSweep(Vec3d(0.05, 0.03, 0.02) + Vec3d(1, -1, 0) * 0.1,
+                           Vec3d(0.05, 0.03, 0.02) - Vec3d(1, -1, 0) * 0.1, Vec3d(0.1, 0.1, -0.2), 4)}) {
     const SurfaceSplit r = splitSurfaceBySweep(box, s);
-    EXPECT_FALSE(r.split) << "sweep starting at " << s.vertices[0].x << " " << s.vertices[0].y << " " << s.vertices[0].z;
+    EXPECT_FALSE(r.split) << "sweep starting at " << s.vertices[0].x << " " << s.vertices[0].y << " "
+                          << s.vertices[0].z;
     EXPECT_EQ(r.mesh.triangles, box.triangles);
     ASSERT_EQ(r.mesh.vertices.size(), box.vertices.size());
     for (std::size_t i = 0; i < box.vertices.size(); ++i) EXPECT_EQ(norm(r.mesh.vertices[i] - box.vertices[i]), 0.0);
@@ -250,9 +260,11 @@ TEST(CutSurfaceSplit, BladeThroughVerticesAndAlongEdgesLeavesNoSlivers) {
   };
   const Case cases[] = {
       // the plane x = 0 through a ring of vertices (the blade along z, moving along y)
-      {"through vertices", straightBladeSweep(Vec3d(0, -0.1, -0.1), Vec3d(0, -0.1, 0.1), Vec3d(0, 0.2, 0)), 4 * half.y * half.z, 2 * half.x / n},
+      {"through vertices", straightBladeSweep(Vec3d(0, -0.1, -0.1), Vec3d(0, -0.1, 0.1), Vec3d(0, 0.2, 0)),
+       4 * half.y * half.z, 2 * half.x / n},
       // the plane y = 0 containing edges of the top, bottom and end faces
-      {"along edges", straightBladeSweep(Vec3d(-0.1, 0, -0.1), Vec3d(-0.1, 0, 0.1), Vec3d(0.2, 0, 0)), 4 * half.x * half.z, 2 * half.y / n},
+      {"along edges", straightBladeSweep(Vec3d(-0.1, 0, -0.1), Vec3d(-0.1, 0, 0.1), Vec3d(0.2, 0, 0)),
+       4 * half.x * half.z, 2 * half.y / n},
   };
   for (const Case& c : cases) {
     const SurfaceSplit r = splitSurfaceBySweep(box, c.s);
@@ -282,7 +294,8 @@ TEST(CutSurfaceSplit, TwentySuccessiveCutsMixingPlanarAndCurvedStayClosedAndMani
     if (k % 2 == 0) {  // planar slice along x, tilted differently each time, through the whole block
       const double x = -0.0451 + 0.0047 * k;
       const Vec3d blade = Vec3d(0.1 * std::sin(1.3 * k), 0.15 * std::cos(0.7 * k), 1.0) * 0.1;
-      s = straightBladeSweep(Vec3d(x, -0.1, 0) - blade, Vec3d(x, -0.1, 0) + blade, Vec3d(0.02 * std::sin(k), 0.2, 0), 3);
+      s = straightBladeSweep(Vec3d(x, -0.1, 0) - blade, Vec3d(x, -0.1, 0) + blade, Vec3d(0.02 * std::sin(k), 0.2, 0),
+                             3);
     } else {  // an arc of radius 7 to 11 cm bulging into the block from y = -0.04, alternately right through
               // and stopping inside (a slit)
       const double R = 0.07 + 0.002 * k, top = -0.04 + 0.012 + 0.003 * k, cy = top - R;
@@ -308,14 +321,16 @@ TEST(CutSurfaceSplit, TwentySuccessiveCutsMixingPlanarAndCurvedStayClosedAndMani
     min_wall_area = std::min(min_wall_area, r.min_wall_area_m2);
     min_split_angle = std::min(min_split_angle, r.min_split_angle_deg);
     min_split_area = std::min(min_split_area, r.min_split_area_m2);
-    std::printf("[cut surface] sequence cut %d: %zu triangles, %d components, %d loops, %d pierce, attempts %d, wall min "
-                "angle %.1f deg\n",
-                k, r.mesh.triangles.size(), rep.components, r.contour_loops, r.pierce_points, r.attempts, r.min_wall_angle_deg);
+    std::printf(
+        "[cut surface] sequence cut %d: %zu triangles, %d components, %d loops, %d pierce, attempts %d, wall min "
+        "angle %.1f deg\n",
+        k, r.mesh.triangles.size(), rep.components, r.contour_loops, r.pierce_points, r.attempts, r.min_wall_angle_deg);
     mesh = r.mesh;
   }
-  std::printf("[cut surface] 20 cuts: min wall angle %.1f deg, min wall area %.3e m^2, min split-piece angle %.2f deg, "
-              "min split-piece area %.3e m^2\n",
-              min_wall_angle, min_wall_area, min_split_angle, min_split_area);
+  std::printf(
+      "[cut surface] 20 cuts: min wall angle %.1f deg, min wall area %.3e m^2, min split-piece angle %.2f deg, "
+      "min split-piece area %.3e m^2\n",
+      min_wall_angle, min_wall_area, min_split_angle, min_split_area);
   EXPECT_GT(components, 10);
   // Twenty cuts 5 mm apart through a mesh of 17 mm edges leave thin pieces of earlier cuts: short crossing
   // segments and crossing curves that meet the front at grazing angles bound the wall's angles there (measured
@@ -384,7 +399,8 @@ TEST(CutSurfaceSplit, Deterministic) {
   const SurfaceSplit a = splitSurfaceBySweep(sphere, s), b = splitSurfaceBySweep(sphere, s);
   ASSERT_EQ(a.mesh.triangles, b.mesh.triangles);
   ASSERT_EQ(a.mesh.vertices.size(), b.mesh.vertices.size());
-  for (std::size_t i = 0; i < a.mesh.vertices.size(); ++i) ASSERT_EQ(norm(a.mesh.vertices[i] - b.mesh.vertices[i]), 0.0);
+  for (std::size_t i = 0; i < a.mesh.vertices.size(); ++i)
+    ASSERT_EQ(norm(a.mesh.vertices[i] - b.mesh.vertices[i]), 0.0);
   EXPECT_EQ(a.vertex_side, b.vertex_side);
 }
 

@@ -7,15 +7,15 @@
 #include <cmath>
 #include <string>
 
-#include "host/scene/scene_compile.h"
-#include "host/backends/solver_factory.h"
 #include "cpu_fallback/neighbor_bruteforce.h"
+#include "host/backends/solver_factory.h"
 #include "host/cut/cut_nodal_points.h"
-#include "host/sim/dissection_simulation.h"
-#include "model/mls_solver.h"
+#include "host/scene/scene_compile.h"
 #include "host/scene/scene_loader.h"
+#include "host/sim/dissection_simulation.h"
 #include "kernels/cut_cuda.h"
 #include "kernels/device_info.h"
+#include "model/mls_solver.h"
 #include "tests/support/cut_block_scene.h"
 #include "tests/support/cut_fixtures.h"
 #include "tests/support/mls_test_scenes.h"
@@ -54,8 +54,8 @@ TEST(CutGpu, CrossingPairMaskEqualsCpu) {
   const MetaballModel m = cuttest::latticeBlock(16, 10, 8);
   const SweptSurface s = curvedCut();
   const SphereCutResult r = cutSpheres(m, s);
-  const NeighborLists all =
-      cpu::bruteForceNeighbors(r.points.positions, r.points.positions, std::vector<double>{2.5 * r.points.spacing}, true);
+  const NeighborLists all = cpu::bruteForceNeighbors(r.points.positions, r.points.positions,
+                                                     std::vector<double>{2.5 * r.points.spacing}, true);
   const auto mask = cuda::crossingPairMaskCuda(s.vertices, s.triangles, r.points.positions, all.offsets, all.indices);
   ASSERT_EQ(mask.size(), all.indices.size());
   std::size_t crossing = 0;
@@ -102,7 +102,8 @@ CornerGroups cornerGroups(const std::vector<Vec3d>& rest) {
 
 std::vector<Vec3d> hashedDisplacement(std::size_t n) {
   std::vector<Vec3d> u0(n);
-  for (std::size_t i = 0; i < n; ++i) u0[i] = Vec3d(mls_test::hashSigned(i), mls_test::hashSigned(i + 7), mls_test::hashSigned(i + 13)) * 2e-4;
+  for (std::size_t i = 0; i < n; ++i)
+    u0[i] = Vec3d(mls_test::hashSigned(i), mls_test::hashSigned(i + 7), mls_test::hashSigned(i + 13)) * 2e-4;
   return u0;
 }
 
@@ -278,16 +279,17 @@ void expectSameDissectionOnBothBackends(const std::string& solver, double blade_
   for (int f = 0; f < 24; ++f) {
     const FrameReport a = cpu->advance(1.0 / 60.0), b = gpu->advance(1.0 / 60.0);
     ASSERT_TRUE(a.finite && b.finite) << f;
-    for (const char* key : {"spheres", "nodal_points", "interface_spheres", "coupling_springs", "sphere_components",
-                            "cuts_applied", "spheres_added_last_cut", "repack_boundary_points", "repack_medial_points",
-                            "supports_cut"})
+    for (const char* key :
+         {"spheres", "nodal_points", "interface_spheres", "coupling_springs", "sphere_components", "cuts_applied",
+          "spheres_added_last_cut", "repack_boundary_points", "repack_medial_points", "supports_cut"})
       ASSERT_EQ(a.counters.at(key), b.counters.at(key)) << key << " frame " << f;
     points_max = std::max(points_max, a.counters.at("nodal_points"));
     std::vector<Vec3d> xa, xb;
     cpu->currentPositions(xa);
     gpu->currentPositions(xb);
     ASSERT_EQ(xa.size(), xb.size());
-    for (std::size_t i = 0; i < xa.size(); ++i) ASSERT_LT(norm(xa[i] - xb[i]), 1e-6) << "frame " << f << " sphere " << i;
+    for (std::size_t i = 0; i < xa.size(); ++i)
+      ASSERT_LT(norm(xa[i] - xb[i]), 1e-6) << "frame " << f << " sphere " << i;
     RenderLayers la, lb;
     cpu->renderLayers(la);
     gpu->renderLayers(lb);

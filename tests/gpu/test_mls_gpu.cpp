@@ -6,11 +6,11 @@
 #include <cmath>
 #include <limits>
 
+#include "host/backends/solver_factory.h"
 #include "host/scene/scene_compile.h"
 #include "host/sim/mls_simulation.h"
-#include "host/backends/solver_factory.h"
-#include "model/mls_solver.h"
 #include "kernels/device_info.h"
+#include "model/mls_solver.h"
 #include "tests/support/mls_test_scenes.h"
 
 using namespace inc;
@@ -27,7 +27,8 @@ MlsBuildInput parityInput() {
   in.material.damping_per_s = 2.0;
   in.gravity = Vec3d(0, 0, -9.81);
   in.kinds.resize(in.rest_positions.size());
-  for (std::size_t i = 0; i < in.kinds.size(); ++i) in.kinds[i] = in.rest_positions[i].x < -0.025 ? kMlsFixed : kMlsFree;
+  for (std::size_t i = 0; i < in.kinds.size(); ++i)
+    in.kinds[i] = in.rest_positions[i].x < -0.025 ? kMlsFixed : kMlsFree;
   return in;
 }
 

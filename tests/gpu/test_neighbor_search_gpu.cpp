@@ -9,11 +9,11 @@
 
 #include "cpu_fallback/neighbor_bruteforce.h"
 #include "cpu_fallback/neighbor_search_cpu.h"
-#include "model/input_error.h"
 #include "host/backends/neighbor_search.h"
 #include "kernels/device_buffer.h"
 #include "kernels/device_info.h"
 #include "kernels/neighbor_search_cuda.h"
+#include "model/input_error.h"
 #include "tests/support/neighbor_clouds.h"
 
 using namespace inc;
@@ -21,9 +21,9 @@ using namespace inc::testing_neighbors;
 
 namespace {
 
-#define SKIP_WITHOUT_GPU()                                                          \
-  do {                                                                              \
-    if (cuda::queryDevices().device_count == 0) GTEST_SKIP() << "no CUDA device";   \
+#define SKIP_WITHOUT_GPU()                                                        \
+  do {                                                                            \
+    if (cuda::queryDevices().device_count == 0) GTEST_SKIP() << "no CUDA device"; \
   } while (0)
 
 template <typename T>

@@ -6,11 +6,11 @@
 #include <cmath>
 #include <functional>
 
-#include "host/scene/scene_compile.h"
-#include "tests/support/pbd_fixtures.h"
 #include "cpu_fallback/pbd_solver_cpu.h"
+#include "host/scene/scene_compile.h"
 #include "kernels/device_info.h"
 #include "kernels/pbd_solver_cuda.h"
+#include "tests/support/pbd_fixtures.h"
 
 using namespace inc;
 
@@ -18,9 +18,9 @@ namespace {
 
 bool haveDevice() { return cuda::queryDevices().device_count > 0; }
 
-// A clamped lattice beam over a ground plane (met at varied contact insets, friction 0.5), pressed by a moving capsule tool
-// (friction 0.8, sliding along its axis), its free end grasped by a
-// compliant attachment that lifts it; volume preservation near the tool on.
+// A clamped lattice beam over a ground plane (met at varied contact insets, friction 0.5), pressed by a moving capsule
+// tool (friction 0.8, sliding along its axis), its free end grasped by a compliant attachment that lifts it; volume
+// preservation near the tool on.
 template <typename T>
 PbdModel<T> parityModel() {
   PbdModel<T> m = test::makeLatticeBeam<T>(0.06, 0.02, 0.02, 0.01, 2.0e4, true, 32);
@@ -100,8 +100,10 @@ void runParity(PbdSolverKind solver, double pos_tol_m, double radius_tol_m, int 
     dr = std::max(dr, double(std::fabs(a.radii[i] - b.radii[i])));
     disp = std::max(disp, double(norm(a.positions[i] - m.rest_positions[i])));
   }
-  std::printf("solver %d, %zu-byte floats: max |x_cpu - x_gpu| %.3e m, max |r diff| %.3e m, max displacement %.3e m, "
-              "volume-active %d/%d\n", int(solver), sizeof(T), dx, dr, disp, sc.volume_active, sg.volume_active);
+  std::printf(
+      "solver %d, %zu-byte floats: max |x_cpu - x_gpu| %.3e m, max |r diff| %.3e m, max displacement %.3e m, "
+      "volume-active %d/%d\n",
+      int(solver), sizeof(T), dx, dr, disp, sc.volume_active, sg.volume_active);
   EXPECT_GT(disp, 1e-3);  // the scene does deform
   EXPECT_LT(dx, pos_tol_m);
   EXPECT_LT(dr, radius_tol_m);
@@ -174,8 +176,8 @@ TEST(PbdGpu, GridFrameMatchesCpuAfter100Frames) {
     }
 }
 
-// Chebyshev-accelerated Jacobi on per-block launches (the grid frame: GridFrameMatchesCpuAfter100Frames): the positions are
-// blended in the contact kernel (with attachments) or in the last gather's (without), the multipliers in the same
+// Chebyshev-accelerated Jacobi on per-block launches (the grid frame: GridFrameMatchesCpuAfter100Frames): the positions
+// are blended in the contact kernel (with attachments) or in the last gather's (without), the multipliers in the same
 // launch. The same tolerances as plain Jacobi.
 TEST(PbdGpu, ChebyshevJacobiMatchesCpuAfter100Frames) {
   if (!haveDevice()) {
@@ -360,8 +362,8 @@ TEST(PbdGpu, SkippedWithoutCuda) { GTEST_SKIP() << "built without CUDA"; }
 #endif
 
 #if INCISION_HAVE_CUDA
-#include "host/sim/metaball_simulation.h"
 #include "host/scene/scene_loader.h"
+#include "host/sim/metaball_simulation.h"
 #include "tests/support/repo_paths.h"
 
 // The shipped grasp scene on the CUDA backend: 100 frames, finite, grasped, and within 1 mm of the CPU run

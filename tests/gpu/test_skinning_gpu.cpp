@@ -146,7 +146,8 @@ TEST(SkinningGpu, EstimatedRotationsMatchCpu) {
   cpu::skinSurfaceCpu(arr.view(), centres.data(), cpu_r.data(), cpu_x.data());
   // Float rounding (FMA contraction differs between nvcc and g++) is amplified by the polar iteration in nearly
   // flat neighbourhoods; a wrong kernel gives O(1) differences.
-  for (int i = 0; i < n; ++i) EXPECT_LE(frobeniusNorm(Mat3d(gpu_r[std::size_t(i)]) - Mat3d(cpu_r[std::size_t(i)])), 5e-4) << i;
+  for (int i = 0; i < n; ++i)
+    EXPECT_LE(frobeniusNorm(Mat3d(gpu_r[std::size_t(i)]) - Mat3d(cpu_r[std::size_t(i)])), 5e-4) << i;
   for (std::size_t v = 0; v < cpu_x.size(); ++v) EXPECT_LE(norm(Vec3d(gpu_x[v]) - Vec3d(cpu_x[v])), 1e-4 * 0.2) << v;
 }
 

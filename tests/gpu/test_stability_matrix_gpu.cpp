@@ -12,10 +12,10 @@ namespace {
 bool noDevice() { return cuda::queryDevices().device_count == 0; }
 }  // namespace
 
-#define INC_GPU_CASE(name, call)                        \
-  TEST(StabilityMatrixGpu, name) {                      \
-    if (noDevice()) GTEST_SKIP() << "no CUDA device";   \
-    call;                                               \
+#define INC_GPU_CASE(name, call)                      \
+  TEST(StabilityMatrixGpu, name) {                    \
+    if (noDevice()) GTEST_SKIP() << "no CUDA device"; \
+    call;                                             \
   }
 
 INC_GPU_CASE(MlsExtremeMaterials, materialsCase(BackendKind::Cuda, true))

@@ -7,9 +7,9 @@
 
 #include "cpu_fallback/tearing_cpu.h"
 #include "host/tear/tearing_driver.h"
-#include "model/tearing_sheet.h"
 #include "kernels/device_info.h"
 #include "kernels/tearing_cuda.h"
+#include "model/tearing_sheet.h"
 
 using namespace inc;
 

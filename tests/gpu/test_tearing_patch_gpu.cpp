@@ -8,17 +8,17 @@
 #include <random>
 #include <tuple>
 
-#include "host/scene/scene_compile.h"
 #include "cpu_fallback/tearing_cpu.h"
 #include "host/backends/solver_factory.h"
-#include "host/tear/tearing_driver.h"
-#include "model/tearing_sheet.h"
+#include "host/scene/scene_compile.h"
 #include "host/sim/tearing_simulation.h"
+#include "host/tear/tearing_driver.h"
 #include "kernels/cuda_check.h"
 #include "kernels/device_info.h"
 #include "kernels/pbd_device_cuda.h"
 #include "kernels/pbd_solver_cuda.h"
 #include "kernels/tearing_cuda.h"
+#include "model/tearing_sheet.h"
 
 using namespace inc;
 
@@ -118,7 +118,8 @@ TEST(PbdPatchGpu, AppendAndCommitEqualHostModel) {
     patch->setBlockFromHost(k, mb.blocks[std::size_t(k)].ids, mb.blocks[std::size_t(k)].rest,
                             mb.blocks[std::size_t(k)].compliance);
   EXPECT_EQ(patch->downloadInverseMasses(), mb.inv_mass);  // IEEE division on both sides
-  for (int k = 0; k < 2; ++k) expectBlockEqual(patch->downloadBlock(k), mb.blocks[std::size_t(k)], 0.0, "patched block");
+  for (int k = 0; k < 2; ++k)
+    expectBlockEqual(patch->downloadBlock(k), mb.blocks[std::size_t(k)], 0.0, "patched block");
 
   PbdState<double> s0;
   s0.positions = b.x;
@@ -203,7 +204,7 @@ TEST(PbdPatchGpu, GrowsBeyondCapacityAndRefusesBadInput) {
   EXPECT_EQ(patch->downloadBlock(0).ids, ma.blocks[0].ids);
   const int beyond = int(patch->deviceParticles().capacity) + 1;
   EXPECT_THROW(patch->appendParticles(beyond, nullptr), InputError);  // beyond capacity: refused before any launch
-  EXPECT_THROW(patch->setBlockFromHost(0, {0, 1, 2}, {0.01f}, {0.0f}), InputError);  // wrong arity
+  EXPECT_THROW(patch->setBlockFromHost(0, {0, 1, 2}, {0.01f}, {0.0f}), InputError);    // wrong arity
   EXPECT_THROW(patch->setBlockFromHost(0, {0, 100000}, {0.01f}, {0.0f}), InputError);  // index out of range
   EXPECT_THROW(patch->commitBlock(0, 1 << 30), InputError);  // beyond the reserved constraints
   EXPECT_THROW(patch->setSummaryEvery(0), InputError);
@@ -432,7 +433,8 @@ TEST(TearingPatchGpu, SimulationModelOnCudaTearsAndRestoresCheckpoints) {
   g.kind = "grasper";
   g.radius = 0.004;
   g.length = 0.1;
-  g.path = {ToolKeyframe{0.0, Vec3d(0.2, 0.0, 0), Vec3d(0, 1, 0)}, ToolKeyframe{0.25, Vec3d(0.28, 0.0, 0), Vec3d(0, 1, 0)}};
+  g.path = {ToolKeyframe{0.0, Vec3d(0.2, 0.0, 0), Vec3d(0, 1, 0)},
+            ToolKeyframe{0.25, Vec3d(0.28, 0.0, 0), Vec3d(0, 1, 0)}};
   s.tools.push_back(g);
   auto m = makeTearingSimulation(compileScene(s), BackendKind::Cuda, Precision::Float32);
   EXPECT_EQ(m->backend(), BackendKind::Cuda);
@@ -458,7 +460,8 @@ TEST(TearingPatchGpu, SimulationModelOnCudaTearsAndRestoresCheckpoints) {
   EXPECT_EQ(m->particleCount(), n1);
   m->currentPositions(x2);
   ASSERT_EQ(x1.size(), x2.size());
-  for (std::size_t i = 0; i < x1.size(); ++i) ASSERT_EQ(norm(x1[i] - x2[i]), 0.0) << "restored positions, particle " << i;
+  for (std::size_t i = 0; i < x1.size(); ++i)
+    ASSERT_EQ(norm(x1[i] - x2[i]), 0.0) << "restored positions, particle " << i;
   EXPECT_TRUE(m->advance(1.0 / 60.0).finite);
 }
 

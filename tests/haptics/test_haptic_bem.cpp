@@ -15,7 +15,8 @@ TEST(HapticBem, SphereUnderUniformPressure) {
   BemModel m(icosphereMesh(R, 2), {E, nu});  // 320 elements
   const int n = m.elementCount();
   Eigen::VectorXd t(3 * n);
-  for (int j = 0; j < n; ++j) t.segment<3>(3 * j) << -p * m.normals()[j].x, -p * m.normals()[j].y, -p * m.normals()[j].z;
+  for (int j = 0; j < n; ++j)
+    t.segment<3>(3 * j) << -p * m.normals()[j].x, -p * m.normals()[j].y, -p * m.normals()[j].z;
   const Eigen::VectorXd u = m.solveTractionProblem(t);
   // Exact for any shape under uniform pressure: u = -p (1 - 2 nu) / E x, so u_r = -p R (1 - 2 nu) / E.
   double worst = 0.0, mean = 0.0;

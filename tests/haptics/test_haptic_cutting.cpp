@@ -14,9 +14,9 @@ TEST(HapticCutting, DecompositionIsOrthogonalAndComplete) {
   const Vec3d f{0.3, -1.2, 2.5};
   const ForceSplit<double> s = decomposeForce(f, n);
   const Vec3d sum = s.normal + s.tangential;
-  EXPECT_NEAR(norm(sum - f), 0.0, 1e-15);                  // eq. 15
-  EXPECT_NEAR(dot(s.tangential, n), 0.0, 1e-15);           // f_t in the tangent plane
-  EXPECT_NEAR(norm(cross(s.normal, n)), 0.0, 1e-15);       // f_n along n
+  EXPECT_NEAR(norm(sum - f), 0.0, 1e-15);             // eq. 15
+  EXPECT_NEAR(dot(s.tangential, n), 0.0, 1e-15);      // f_t in the tangent plane
+  EXPECT_NEAR(norm(cross(s.normal, n)), 0.0, 1e-15);  // f_n along n
   EXPECT_NEAR(dot(s.normal, n), (0.3 - 2.4 + 5.0) / 3.0, 1e-15);
 }
 
@@ -24,11 +24,15 @@ TEST(HapticCutting, StateMachineFollowsScriptedProfile) {
   CutThresholds<double> th;  // F_p = 1, F_s = 0.6, F_d = 0.3
   CuttingForceModel model(th);
   const Vec3d n{0, 0, 1}, v{0.01, 0, 0};
-  struct Step { double fn, ft, depth; CutState want; bool start, stop; };
+  struct Step {
+    double fn, ft, depth;
+    CutState want;
+    bool start, stop;
+  };
   // Press (not through), press through, drag below F_s, above F_s (cut), inside the hysteresis band
   // (keeps cutting), below F_d (stop), inside the band (stays stopped), above F_s (restart), lift off.
   const std::vector<Step> profile = {
-      {0.0, 0.0, 0.0, CutState::kIdle, false, false},     {0.5, 0.0, 1e-3, CutState::kPressing, false, false},
+      {0.0, 0.0, 0.0, CutState::kIdle, false, false},      {0.5, 0.0, 1e-3, CutState::kPressing, false, false},
       {0.5, 0.9, 1e-3, CutState::kPressing, false, false}, {1.2, 0.0, 2e-3, CutState::kPressing, false, false},
       {1.2, 0.5, 2e-3, CutState::kPressing, false, false}, {1.2, 0.7, 2e-3, CutState::kCutting, true, false},
       {1.2, 0.45, 2e-3, CutState::kCutting, false, false}, {1.2, 0.31, 2e-3, CutState::kCutting, false, false},
@@ -61,7 +65,7 @@ TEST(HapticCutting, FrictionOpposesMotionProportionalToDepth) {
     EXPECT_NEAR(f.y, k * depth * 0.8, 1e-12);
     EXPECT_NEAR(f.z, 0.0, 1e-15);
   }
-  EXPECT_EQ(norm(cuttingFriction(Vec3d{0, 0, 0.1}, n, 1e-3, k)), 0.0);  // no tangential motion
+  EXPECT_EQ(norm(cuttingFriction(Vec3d{0, 0, 0.1}, n, 1e-3, k)), 0.0);   // no tangential motion
   EXPECT_EQ(norm(cuttingFriction(Vec3d{0.1, 0, 0}, n, -1e-3, k)), 0.0);  // out of tissue
 }
 

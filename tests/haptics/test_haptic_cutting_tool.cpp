@@ -25,17 +25,18 @@ TEST(HapticCuttingTool, PressDragHaltDrivesEventsAndFriction) {
     s.position_m = {x, 0.0, z};
     tr.samples.push_back(s);
   };
-  add(0.0, 0.0, 0.001);     // above
-  add(0.1, 0.0, -0.003);    // pressed 3 mm: |f_n| = 1.5 N > F_p, the blade enters
-  add(0.2, 0.004, -0.003);  // dragged: the elastic drag 200 x passes F_s = 0.6 N at x = 3 mm -> cut
-  add(0.3, 0.008, -0.003);  // cutting on
-  add(0.35, 0.008, -0.003); // halted: no friction left, |f_t| = 0 < F_d -> stop, in the tissue
-  add(0.45, 0.008, 0.001);  // lifted
+  add(0.0, 0.0, 0.001);      // above
+  add(0.1, 0.0, -0.003);     // pressed 3 mm: |f_n| = 1.5 N > F_p, the blade enters
+  add(0.2, 0.004, -0.003);   // dragged: the elastic drag 200 x passes F_s = 0.6 N at x = 3 mm -> cut
+  add(0.3, 0.008, -0.003);   // cutting on
+  add(0.35, 0.008, -0.003);  // halted: no friction left, |f_t| = 0 < F_d -> stop, in the tissue
+  add(0.45, 0.008, 0.001);   // lifted
   ScriptedDevice dev(tr, ScriptedDevice::Mode::kByTime, 10.0);
   FakeClock clock;
   HapticLoopConfig cfg;
   cfg.max_force_rate_n_per_s = 1e6;
-  HapticLoop loop(dev, [&](const ForceRequest& q) { return tool.tick(q); }, cfg, &clock);
+  HapticLoop loop(
+      dev, [&](const ForceRequest& q) { return tool.tick(q); }, cfg, &clock);
   loop.runTicks(260);
   EXPECT_EQ(tool.state(), CutState::kCutting);
   // Mid-drag (t = 0.25 s): the anchor follows the blade (no elastic drag), friction k * depth = 200 * 0.003
@@ -73,12 +74,13 @@ TEST(HapticCuttingTool, ShallowBladeStopsWhenFrictionFallsBelowDynamicThreshold)
     tr.samples.push_back(s);
   };
   add(0.0, 0.0, -0.003);
-  add(0.1, 0.005, -0.003);  // cut starts at x = 3 mm
+  add(0.1, 0.005, -0.003);    // cut starts at x = 3 mm
   add(0.26, 0.021, -0.0014);  // rising while cutting: depth passes 1.5 mm at t = 0.25, x = 20 mm; then held
                               // (the drag from the new anchor, 200 N/m x 1 mm, stays below F_s)
   ScriptedDevice dev(tr, ScriptedDevice::Mode::kByTime, 10.0);
   FakeClock clock;
-  HapticLoop loop(dev, [&](const ForceRequest& q) { return tool.tick(q); }, HapticLoopConfig{}, &clock);
+  HapticLoop loop(
+      dev, [&](const ForceRequest& q) { return tool.tick(q); }, HapticLoopConfig{}, &clock);
   loop.runTicks(300);
   CutEvent e;
   ASSERT_TRUE(tool.events().pop(e));

@@ -69,7 +69,8 @@ TEST(HapticGlobal, CachedInverseGivesTheSameAnswerAsAFreshOne) {
   const GlobalOrganSetup other = organSetup(cache, 3e3, 2e-3);
   OrganContactTable unused;
   Eigen::MatrixXd a_inv;
-  const BemCacheRead r = readBemCache(cache, bemCacheKey(other.mesh, other.supports, other.material, 8e-3, 2e-3), unused, a_inv);
+  const BemCacheRead r =
+      readBemCache(cache, bemCacheKey(other.mesh, other.supports, other.material, 8e-3, 2e-3), unused, a_inv);
   EXPECT_FALSE(r.table);
   ASSERT_TRUE(r.inverse) << r.note;
   EXPECT_NE(r.note.find("another local model"), std::string::npos) << r.note;

@@ -93,10 +93,11 @@ TEST(HapticHybrid, IndentersMatchSneddonAndHertzOnCoarseAndFineGlobalMeshes) {
     sphere[level - 1] = -model.toolForceLocal(us)[2] / hertz;
     const double punch_held = -model.localOnlyForceLocal(up)[2] / sneddon;
     const double sphere_held = -model.localOnlyForceLocal(us)[2] / hertz;
-    std::printf("%d elements: punch F/F_Sneddon %.4f (held at 12 a: %.4f), sphere F/F_Hertz %.4f (held: %.4f), "
-                "staggered factor %.3f\n",
-                organ.bem.elementCount(), punch[level - 1], punch_held, sphere[level - 1], sphere_held,
-                model.staggeredIterationFactor());
+    std::printf(
+        "%d elements: punch F/F_Sneddon %.4f (held at 12 a: %.4f), sphere F/F_Hertz %.4f (held: %.4f), "
+        "staggered factor %.3f\n",
+        organ.bem.elementCount(), punch[level - 1], punch_held, sphere[level - 1], sphere_held,
+        model.staggeredIterationFactor());
     // Holding the boundary at 12 a removes the compliance beyond it (about 2 / (12 pi) = 5 % for the punch).
     EXPECT_LT(punch[level - 1], punch_held);
     EXPECT_LT(sphere[level - 1], sphere_held);
@@ -124,10 +125,11 @@ TEST(HapticHybrid, TipForceOnASmallOrganIsMeshIndependent) {
     const ForceResult r = model.localTick(d);
     push[level - 1] = dot(r.force_n, n);
     local[level - 1] = dot(model.localOnlyForce(d), n);
-    std::printf("tip on R = 5 cm, %d elements: hybrid %.5f N, local-only %.5f N (ratio %.3f), regular part "
-                "R_zz %.3g m/N, touch %.1f ms\n",
-                organ.bem.elementCount(), push[level - 1], local[level - 1], push[level - 1] / local[level - 1],
-                model.regularCompliance()(2, 2), 1e3 * model.lastTouchSeconds());
+    std::printf(
+        "tip on R = 5 cm, %d elements: hybrid %.5f N, local-only %.5f N (ratio %.3f), regular part "
+        "R_zz %.3g m/N, touch %.1f ms\n",
+        organ.bem.elementCount(), push[level - 1], local[level - 1], push[level - 1] / local[level - 1],
+        model.regularCompliance()(2, 2), 1e3 * model.lastTouchSeconds());
     EXPECT_GT(push[level - 1], 0.0);  // the tissue pushes the tool back out
     EXPECT_LT(push[level - 1], local[level - 1]);
     EXPECT_GT(push[level - 1], 0.5 * local[level - 1]);
@@ -161,10 +163,9 @@ TEST(HapticHybrid, MultiRateLoopsRunSideBySide) {
   global.stop();
   haptic.stop();
   const PeriodStats s = haptic.stats();
-  std::printf("haptic %llu ticks p50 %.3f ms p99 %.3f ms max %.3f ms; global steps %llu\n",
-              (unsigned long long)s.ticks, 1e3 * s.p50_s, 1e3 * s.p99_s, 1e3 * s.max_s,
-              (unsigned long long)model.globalSteps());
-  EXPECT_GT(s.ticks, 100u);               // loose: the test machine is shared
+  std::printf("haptic %llu ticks p50 %.3f ms p99 %.3f ms max %.3f ms; global steps %llu\n", (unsigned long long)s.ticks,
+              1e3 * s.p50_s, 1e3 * s.p99_s, 1e3 * s.max_s, (unsigned long long)model.globalSteps());
+  EXPECT_GT(s.ticks, 100u);  // loose: the test machine is shared
   EXPECT_GE(model.globalSteps(), 4u);
   for (const TickRecord& r : haptic.records()) ASSERT_TRUE(isFinite(r.force_n));
   EXPECT_GT(dot(haptic.records().back().force_n, n), 0.0);  // pushing back once pressed in
@@ -184,15 +185,16 @@ TEST(HapticHybrid, StalledGlobalModelFadesTheForce) {
   ScriptedDevice dev(tr, ScriptedDevice::Mode::kByTime, 5.0);
   FakeClock clock;
   HapticLoopConfig cfg;  // stall after 1/30 s, fade over 0.1 s
-  HapticLoop loop(dev, [&](const ForceRequest& q) { return model.localTick(q.sample.position_m - rest); }, cfg, &clock);
+  HapticLoop loop(
+      dev, [&](const ForceRequest& q) { return model.localTick(q.sample.position_m - rest); }, cfg, &clock);
   model.globalStep(s.position_m - rest, 0.0);  // one global step at t = 0, then the simulation stalls
   loop.runTicks(200);
   const auto& rec = loop.records();
   const double f0 = dot(rec[20].force_n, n);
   EXPECT_GT(f0, 0.0);
-  EXPECT_NEAR(dot(rec[20].model_force_n, n), f0, 1e-12);                 // fresh data: no fade
+  EXPECT_NEAR(dot(rec[20].model_force_n, n), f0, 1e-12);                                     // fresh data: no fade
   EXPECT_NEAR(dot(rec[83].force_n, n), f0 * (1.0 - (0.083 - 1.0 / 30.0) / 0.1), 1e-9 * f0);  // fading
-  EXPECT_EQ(norm(rec[150].force_n), 0.0);                                 // released, not frozen
+  EXPECT_EQ(norm(rec[150].force_n), 0.0);                                                    // released, not frozen
 }
 
 TEST(HapticHybrid, ReleaseAndBadContactsAreHandled) {

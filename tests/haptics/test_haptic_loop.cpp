@@ -82,7 +82,7 @@ TEST(HapticLoop, SafetyClampRateLimitAndStallFade) {
   loop.runTicks(10);
   const auto& rec = loop.records();
   for (int i = 0; i < 4; ++i) EXPECT_NEAR(rec[i].force_n.x, 0.5 * (i + 1), 1e-12) << i;  // ramp
-  for (int i = 4; i < 10; ++i) EXPECT_NEAR(rec[i].force_n.x, 2.0, 1e-12) << i;  // clamped to device max
+  for (int i = 4; i < 10; ++i) EXPECT_NEAR(rec[i].force_n.x, 2.0, 1e-12) << i;           // clamped to device max
   // The simulation stalled at t = 0: at t = 25 ms the gain is 1 - (25 - 20) / 10 = 0.5 -> 1.5 N; it
   // leaves the 2 N clamp at 24 ms (gain 0.6 -> 1.8 N) and falls 0.3 N per tick, within the rate limit.
   loop.runTicks(16);  // ticks 10..25
@@ -100,14 +100,18 @@ TEST(HapticLoop, BadConfigIsInputError) {
   ScriptedDevice dev(linePath(1.0, 2), ScriptedDevice::Mode::kByTime);
   HapticLoopConfig cfg;
   cfg.rate_hz = -5;
-  EXPECT_THROW(HapticLoop(dev, [](const ForceRequest&) { return ForceResult{}; }, cfg), InputError);
+  EXPECT_THROW(HapticLoop(
+                   dev, [](const ForceRequest&) { return ForceResult{}; }, cfg),
+               InputError);
   Trajectory bad = linePath(1.0, 3);
   bad.samples[2].t_s = bad.samples[1].t_s;
   EXPECT_THROW(ScriptedDevice(bad, ScriptedDevice::Mode::kByTime), InputError);
 }
 
 TEST(HapticLoop, TripleBufferDeliversNewestCompleteValue) {
-  struct Big { std::uint64_t a[16]; };
+  struct Big {
+    std::uint64_t a[16];
+  };
   TripleBuffer<Big> tb;
   std::atomic<bool> done{false};
   std::uint64_t torn = 0, last = 0, regress = 0;
@@ -192,7 +196,8 @@ TEST(HapticLoop, ThreadReportsItsScheduling) {
   }
   HapticLoopConfig cfg;
   cfg.realtime = false;
-  HapticLoop loop(dev, [](const ForceRequest&) { return ForceResult{}; }, cfg);
+  HapticLoop loop(
+      dev, [](const ForceRequest&) { return ForceResult{}; }, cfg);
   loop.start();
   const HapticScheduling s = loop.scheduling();
   loop.stop();
@@ -200,7 +205,9 @@ TEST(HapticLoop, ThreadReportsItsScheduling) {
   EXPECT_EQ(s.message, "normal scheduling (realtime off)");
   cfg.realtime = true;
   cfg.realtime_priority = 100;
-  EXPECT_THROW(HapticLoop(dev, [](const ForceRequest&) { return ForceResult{}; }, cfg), InputError);
+  EXPECT_THROW(HapticLoop(
+                   dev, [](const ForceRequest&) { return ForceResult{}; }, cfg),
+               InputError);
 }
 
 // The fallback itself: a thread without CAP_SYS_NICE (capabilities are per thread and inherited by the

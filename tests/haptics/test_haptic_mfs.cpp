@@ -40,9 +40,9 @@ TEST(HapticMfs, ShapeFunctionsReproduceLinearFields) {
       for (int a = 0; a < 3; ++a)
         for (int b = 0; b < 3; ++b) g1(a, b) += sv.grad_h[q][a] * xj[b];
     }
-    EXPECT_NEAR(s0, 1.0, 1e-10);                       // partition of unity
-    EXPECT_NEAR(norm(s1 - x) / 1e-3, 0.0, 1e-10);      // linear consistency (relative to 1 mm)
-    EXPECT_NEAR(norm(g0) * 1e-3, 0.0, 1e-10);          // gradient of a constant
+    EXPECT_NEAR(s0, 1.0, 1e-10);                   // partition of unity
+    EXPECT_NEAR(norm(s1 - x) / 1e-3, 0.0, 1e-10);  // linear consistency (relative to 1 mm)
+    EXPECT_NEAR(norm(g0) * 1e-3, 0.0, 1e-10);      // gradient of a constant
     for (int a = 0; a < 3; ++a)
       for (int b = 0; b < 3; ++b) EXPECT_NEAR(g1(a, b), a == b ? 1.0 : 0.0, 1e-10);
     ++checked;
@@ -71,7 +71,7 @@ TEST(HapticMfs, StiffnessAnnihilatesRigidMotions) {
   for (int i = 0; i < N; ++i) {
     const Vec3d x = cc.cloud.nodes[i];
     t.segment<3>(3 * i) << 1e-3, 2e-3, -1e-3;
-    r.segment<3>(3 * i) << -x.y * 0.1, x.x * 0.1, 0.0;   // small rotation about z
+    r.segment<3>(3 * i) << -x.y * 0.1, x.x * 0.1, 0.0;  // small rotation about z
     s.segment<3>(3 * i) << 0.0, 0.0, x.z * 0.1;         // uniaxial strain 0.1: energy E_eff * eps^2 * V
   }
   const double es = m.energyNorm(s);

@@ -4,11 +4,11 @@
 #include <chrono>
 #include <thread>
 
-#include "host/scene/scene_compile.h"
 #include "host/haptics/haptic_cut_realtime.h"
 #include "host/haptics/tip_contact.h"
-#include "model/input_error.h"
+#include "host/scene/scene_compile.h"
 #include "host/sim/metaball_simulation.h"
+#include "model/input_error.h"
 #include "tests/support/haptic_replay_fixture.h"
 
 namespace inc {
@@ -48,8 +48,7 @@ TEST(HapticRealtime, ThreadedCuttingSessionCutsTheBlockInTwo) {
   const Scene scene = blockScene();
   auto sim = makeDissectionSimulation(compileScene(scene), BackendKind::Cpu, Precision::Float32);
   const TipStiffness tip = mfsTipStiffness(scene.material, 0.008, 0.002, Vec3d{0, 0, 1});
-  CuttingTool tool(tipElastic(tip), scene.cut_thresholds,
-                   Vec3d{0, 0, 0.015}, Vec3d{0, 0, 1});
+  CuttingTool tool(tipElastic(tip), scene.cut_thresholds, Vec3d{0, 0, 0.015}, Vec3d{0, 0, 1});
   ScriptedDevice device(throughStroke(), ScriptedDevice::Mode::kByTime, 3.3);
   RealtimeCutConfig cfg;
   cfg.blade_length_m = 0.08;  // vertical blade through the whole block height
@@ -85,7 +84,8 @@ TEST(HapticRealtime, ThreadedCuttingSessionCutsTheBlockInTwo) {
   EXPECT_GT(session.loop().records().size(), 100u);
   EXPECT_EQ(tool.droppedEvents(), 0u);
   std::printf("threaded session: %d frames, %zu ticks, spheres %zu -> %zu, %s\n", frames,
-              session.loop().records().size(), spheres0, sim->particleCount(), session.loop().scheduling().message.c_str());
+              session.loop().records().size(), spheres0, sim->particleCount(),
+              session.loop().scheduling().message.c_str());
 }
 
 // A model without a cutting pipeline cannot take the decisions.

@@ -39,7 +39,7 @@ TEST(HapticReplay, RecordedCuttingSessionReplaysForcesAndTopologyBitExactly) {
   }
   EXPECT_EQ(events, 2);  // one start, one stop
   EXPECT_EQ(applied, 1);
-  const TopologySummary& first = rec.frames.front().topology, &last = rec.frames.back().topology;
+  const TopologySummary &first = rec.frames.front().topology, &last = rec.frames.back().topology;
   EXPECT_EQ(last.cuts_applied, 1);
   EXPECT_NE(last.particles, first.particles);
   EXPECT_NE(last.links, first.links);
@@ -47,10 +47,11 @@ TEST(HapticReplay, RecordedCuttingSessionReplaysForcesAndTopologyBitExactly) {
   double fmax = 0.0;
   for (const TickRecord& t : rec.ticks) fmax = std::max(fmax, norm(t.force_n));
   EXPECT_GT(fmax, 0.02);  // the blade pressed past F_p
-  std::printf("recorded: %zu ticks, %zu frames, spheres %zu -> %zu, links %zu -> %zu, surface triangles %zu -> %zu, "
-              "max force %.4f N, cut decisions in frames%s\n",
-              rec.ticks.size(), rec.frames.size(), first.particles, last.particles, first.links, last.links,
-              first.surface_triangles, last.surface_triangles, fmax, event_frames.c_str());
+  std::printf(
+      "recorded: %zu ticks, %zu frames, spheres %zu -> %zu, links %zu -> %zu, surface triangles %zu -> %zu, "
+      "max force %.4f N, cut decisions in frames%s\n",
+      rec.ticks.size(), rec.frames.size(), first.particles, last.particles, first.links, last.links,
+      first.surface_triangles, last.surface_triangles, fmax, event_frames.c_str());
 
   // Record to a file (hex floats), read it back, replay by tick on a fresh model.
   const auto path = scratchDir() / "stroke.traj";
@@ -75,7 +76,8 @@ TEST(HapticReplay, RecordedCuttingSessionReplaysForcesAndTopologyBitExactly) {
   ScriptedDevice other(shifted, ScriptedDevice::Mode::kByTick, 3.3);
   const SessionRun alt = runSession(other, frames);
   bool forces_differ = false;
-  for (std::size_t i = 0; i < rec.ticks.size(); ++i) forces_differ |= !sameBits(alt.ticks[i].force_n, rec.ticks[i].force_n);
+  for (std::size_t i = 0; i < rec.ticks.size(); ++i)
+    forces_differ |= !sameBits(alt.ticks[i].force_n, rec.ticks[i].force_n);
   EXPECT_TRUE(forces_differ);
   EXPECT_FALSE(alt.frames.back().topology == rec.frames.back().topology);
   std::filesystem::remove_all(path.parent_path());

@@ -10,15 +10,15 @@
 #include <string>
 #include <vector>
 
+#include "host/app/runner.h"
 #include "host/haptics/bem_global.h"
-#include "host/scene/global_organ_mesh.h"
 #include "host/haptics/haptic_loop.h"
 #include "host/haptics/hybrid_model.h"
 #include "host/haptics/tip_contact.h"
-#include "model/input_error.h"
 #include "host/io/mesh.h"
-#include "host/app/runner.h"
+#include "host/scene/global_organ_mesh.h"
 #include "host/scene/scene_loader.h"
+#include "model/input_error.h"
 #include "tests/support/repo_paths.h"
 
 namespace inc {
@@ -226,7 +226,8 @@ LastTick lastTick(const fs::path& out, const std::string& name) {
 
 // Two hands on the slab (top at z = 0.01 m): "left" presses 2 mm at (0.005, 0.005) with a 1 kHz loop, "right"
 // 1 mm at (0.015, 0.015) with a 500 Hz loop.
-Scene twoHandScene(const fs::path& dir, const std::string& left, const std::string& right, const std::string& playback) {
+Scene twoHandScene(const fs::path& dir, const std::string& left, const std::string& right,
+                   const std::string& playback) {
   Scene s = slabScene("");
   s.haptics.devices_listed = true;
   s.haptics.devices.assign(2, HapticDeviceSpec{});
@@ -296,7 +297,7 @@ TEST(HapticRunner, TwoScriptedDevicesRunTwoLoopsWithTheirOwnContacts) {
 TEST(HapticRunner, TwoDeviceRecordingReplaysBitExactly) {
   const fs::path dir = scratch("replay");
   std::ofstream(dir / "left.traj") << "0.0 0.005 0.005 0.012 1 0 0 0 0\n0.08 0.006 0.005 0.0085 1 0 0 0 1\n"
-                                     "0.16 0.009 0.006 0.008 1 0 0 0 1\n";
+                                      "0.16 0.009 0.006 0.008 1 0 0 0 1\n";
   std::ofstream(dir / "right.traj") << "0.0 0.015 0.015 0.012 1 0 0 0 0\n0.1 0.014 0.016 0.0093 1 0 0 0 1\n";
   RunOptions opt;
   opt.frames = 10;

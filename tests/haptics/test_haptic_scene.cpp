@@ -11,10 +11,10 @@
 
 #include "host/haptics/bem_global.h"
 #include "host/haptics/cutting_force_model.h"
-#include "host/scene/haptics_scene.h"
-#include "model/input_error.h"
 #include "host/io/mesh.h"
+#include "host/scene/haptics_scene.h"
 #include "host/scene/scene_loader.h"
+#include "model/input_error.h"
 
 namespace inc {
 namespace {
@@ -22,7 +22,8 @@ namespace {
 const char* kFile = "scenes/cut_thresholds.json";
 
 nlohmann::json sceneWithCutting(const nlohmann::json& cutting) {
-  nlohmann::json j = nlohmann::json::parse(R"({"geometry": {"kind": "box"}, "models": {"mls": true, "haptics": true}})");
+  nlohmann::json j =
+      nlohmann::json::parse(R"({"geometry": {"kind": "box"}, "models": {"mls": true, "haptics": true}})");
   j["material"]["cutting"] = cutting;
   return j;
 }
@@ -72,8 +73,8 @@ TEST(HapticScene, CutThresholdsDefaultAndRoundTrip) {
   EXPECT_EQ(d.cut_thresholds.dynamic_n, def.dynamic_n);
   EXPECT_EQ(d.cut_thresholds.friction_per_depth_n_per_m, def.friction_per_depth_n_per_m);
   // Partial object: the others keep their defaults. Written and read back exactly (1/3 N has no short form).
-  const Scene s = parseScene(sceneWithCutting({{"static_friction_n", 1.0 / 3.0}, {"press_threshold_n", 0.0}}).dump(),
-                             kFile, ".");
+  const Scene s =
+      parseScene(sceneWithCutting({{"static_friction_n", 1.0 / 3.0}, {"press_threshold_n", 0.0}}).dump(), kFile, ".");
   EXPECT_EQ(s.cut_thresholds.static_n, 1.0 / 3.0);
   EXPECT_EQ(s.cut_thresholds.press_n, 0.0);
   EXPECT_EQ(s.cut_thresholds.dynamic_n, def.dynamic_n);
@@ -107,7 +108,8 @@ TEST(HapticScene, BadCutThresholdsNameFileAndKey) {
 }
 
 nlohmann::json sceneWithHaptics(const nlohmann::json& haptics) {
-  nlohmann::json j = nlohmann::json::parse(R"({"geometry": {"kind": "box"}, "models": {"mls": true, "haptics": true}})");
+  nlohmann::json j =
+      nlohmann::json::parse(R"({"geometry": {"kind": "box"}, "models": {"mls": true, "haptics": true}})");
   j["haptics"] = haptics;
   return j;
 }
@@ -224,12 +226,12 @@ TEST(HapticScene, DevicesListIsReadAndRoundTrips) {
   std::ofstream(dir / "right.traj") << "0 0.01 0 0.02 1 0 0 0 0\n";
   const std::string scene_file = (dir / "scene.json").string();
   const Scene s = parseScene(
-      sceneWithHaptics({{"devices",
-                         {{{"name", "left"}, {"trajectory", "left.traj"}, {"rate_hz", 1000}, {"tool", "probe"}},
-                          {{"trajectory", "right.traj"}, {"playback", "tick"}, {"rate_hz", 500}, {"cpu", 1},
-                           {"max_force_n", 2.0}}}},
-                        {"local_radius_m", 0.01},
-                        {"record_trajectory", true}})
+      sceneWithHaptics(
+          {{"devices",
+            {{{"name", "left"}, {"trajectory", "left.traj"}, {"rate_hz", 1000}, {"tool", "probe"}},
+             {{"trajectory", "right.traj"}, {"playback", "tick"}, {"rate_hz", 500}, {"cpu", 1}, {"max_force_n", 2.0}}}},
+           {"local_radius_m", 0.01},
+           {"record_trajectory", true}})
           .dump(),
       scene_file, dir.string());
   const HapticsSpec& h = s.haptics;
@@ -266,7 +268,9 @@ TEST(HapticScene, DevicesListIsReadAndRoundTrips) {
 // checks between devices (names, UDP ports, one scalpel) name the later device.
 TEST(HapticScene, BadDevicesNameTheDevicesKeyPath) {
   const std::string k = "haptics.devices";
-  auto two = [](const nlohmann::json& a, const nlohmann::json& b) { return sceneWithHaptics({{"devices", {a, b}}}).dump(); };
+  auto two = [](const nlohmann::json& a, const nlohmann::json& b) {
+    return sceneWithHaptics({{"devices", {a, b}}}).dump();
+  };
   const nlohmann::json ok = {{"device", "udp"}, {"udp_port", 47001}};
   expectRefused(two(ok, {{"device", "scripted"}, {"trajectory", "no_such_stroke.traj"}}), k + "[1].trajectory",
                 "cannot open trajectory file");

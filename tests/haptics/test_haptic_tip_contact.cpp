@@ -69,7 +69,7 @@ TEST(HapticTipContact, ProbeAnchorsWhereTheTipEntersTheTissuePlane) {
   const Vec3d f3 = probe.tick(at({0.003, 0, 0.008})).force_n;  // slid 2 mm along +x: pulled back along -x
   EXPECT_LT(f3.x, 0.0);
   EXPECT_EQ(norm(probe.tick(at({0.003, 0, 0.012})).force_n), 0.0);  // out
-  const Vec3d f4 = probe.tick(at({0.003, 0, 0.009})).force_n;        // in again, here
+  const Vec3d f4 = probe.tick(at({0.003, 0, 0.009})).force_n;       // in again, here
   EXPECT_NEAR(f4.z, f1.z, 1e-12 * kzz);
   EXPECT_NEAR(f4.x, f1.x, 1e-12 * kzz);
 }

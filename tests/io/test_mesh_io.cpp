@@ -1,6 +1,7 @@
 // Tests for mesh loading (OBJ, PLY, STL), analyzeMesh facts and requireClosedMesh, on small files made here.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -8,11 +9,10 @@
 #include <fstream>
 #include <functional>
 #include <string>
-#include <unistd.h>
 #include <vector>
 
-#include "model/input_error.h"
 #include "host/io/mesh.h"
+#include "model/input_error.h"
 #include "tests/support/repo_paths.h"
 
 using namespace inc;
@@ -25,8 +25,7 @@ class MeshIo : public ::testing::Test {
  protected:
   void SetUp() override {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           ("incision_mesh_" + std::to_string(::getpid()) + "_" + info->name());
+    dir_ = fs::temp_directory_path() / ("incision_mesh_" + std::to_string(::getpid()) + "_" + info->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
@@ -40,8 +39,7 @@ class MeshIo : public ::testing::Test {
 };
 
 // Unit cube [0,1]^3 with outward quads, counter-clockwise seen from outside.
-const char* kCubeVerts =
-    "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n";
+const char* kCubeVerts = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n";
 const int kCubeQuads[6][4] = {{1, 4, 3, 2}, {5, 6, 7, 8}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 4, 8, 7}, {4, 1, 5, 8}};
 
 std::string cubeObj(bool skip_top = false) {
@@ -57,7 +55,8 @@ std::string cubeObj(bool skip_top = false) {
 
 TriangleMesh cubeMesh() {
   TriangleMesh m;
-  for (int i = 0; i < 8; ++i) m.vertices.push_back(Vec3d(i == 1 || i == 2 || i == 5 || i == 6, i == 2 || i == 3 || i == 6 || i == 7, i >= 4));
+  for (int i = 0; i < 8; ++i)
+    m.vertices.push_back(Vec3d(i == 1 || i == 2 || i == 5 || i == 6, i == 2 || i == 3 || i == 6 || i == 7, i >= 4));
   for (const auto& q : kCubeQuads) {
     m.triangles.push_back({q[0] - 1, q[1] - 1, q[2] - 1});
     m.triangles.push_back({q[0] - 1, q[2] - 1, q[3] - 1});
@@ -83,7 +82,9 @@ void appendLe(std::string& s, const void* p, std::size_t n) {
   for (std::size_t i = 0; i < n; ++i) s.push_back(static_cast<char>((u >> (8 * i)) & 0xff));
 }
 template <typename T>
-void le(std::string& s, T v) { appendLe(s, &v, sizeof v); }
+void le(std::string& s, T v) {
+  appendLe(s, &v, sizeof v);
+}
 template <typename T>
 void be(std::string& s, T v) {
   std::string tmp;
@@ -248,7 +249,7 @@ TEST_F(MeshIo, ObjReadsSlashFormsNegativeIndicesCommentsAndCrlf) {
   s += "f 1/1/1 4/1/1 3/1/1 2/1/1\n";
   s += "f 5//1 6//1 7//1 8//1   # trailing comment\n";
   s += "f 1/1 2/1 6/1 5/1\n";
-  s += "f -7 -6 -2 -3\n";                 // 2 3 7 6
+  s += "f -7 -6 -2 -3\n";                  // 2 3 7 6
   s += "f -6/1/1 -5/1/1 -1/1/1 -2/1/1\n";  // 3 4 8 7
   s += "f 4 1 5 8\r\n";
   const TriangleMesh m = loadMesh(write("forms.obj", s));
@@ -304,10 +305,11 @@ TEST_F(MeshIo, WriteObjRoundTripsExactly) {
 // PLY
 
 TEST_F(MeshIo, PlyAsciiWithQuadsExtraPropertiesAndElements) {
-  std::string s = "ply\nformat ascii 1.0\ncomment made by a test\nelement vertex 8\nproperty float x\n"
-                  "property float y\nproperty float z\nproperty uchar red\nelement face 6\n"
-                  "property list uchar int vertex_indices\nproperty int flags\nelement edge 1\nproperty int vertex1\n"
-                  "property int vertex2\nend_header\n";
+  std::string s =
+      "ply\nformat ascii 1.0\ncomment made by a test\nelement vertex 8\nproperty float x\n"
+      "property float y\nproperty float z\nproperty uchar red\nelement face 6\n"
+      "property list uchar int vertex_indices\nproperty int flags\nelement edge 1\nproperty int vertex1\n"
+      "property int vertex2\nend_header\n";
   const char* v[8] = {"0 0 0", "1 0 0", "1 1 0", "0 1 0", "0 0 1", "1 0 1", "1 1 1", "0 1 1"};
   for (const char* p : v) s += std::string(p) + " 255\n";
   for (const auto& q : kCubeQuads)
@@ -329,8 +331,10 @@ std::string binaryPlyCube(bool big_endian, bool doubles, int vertex_count_overri
        " z\nelement face 12\nproperty list uchar uint vertex_indices\nend_header\n";
   for (const Vec3d& p : c.vertices) {
     for (int k = 0; k < 3; ++k) {
-      if (doubles) big_endian ? be<double>(s, p[k]) : le<double>(s, p[k]);
-      else big_endian ? be<float>(s, static_cast<float>(p[k])) : le<float>(s, static_cast<float>(p[k]));
+      if (doubles)
+        big_endian ? be<double>(s, p[k]) : le<double>(s, p[k]);
+      else
+        big_endian ? be<float>(s, static_cast<float>(p[k])) : le<float>(s, static_cast<float>(p[k]));
     }
   }
   for (const auto& tri : c.triangles) {
@@ -360,8 +364,9 @@ TEST_F(MeshIo, PlyErrorsNameTheElement) {
   le<double>(q, std::nan(""));
   nan.replace(body + 4 * 8, 8, q);  // vertex 1, y
   expectError([&] { loadMesh(write("nan.ply", nan)); }, "vertex 1", "not finite");
-  std::string s = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-                  "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 9\n";
+  std::string s =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 9\n";
   expectError([&] { loadMesh(write("range.ply", s)); }, "face 0", "vertex index 9 is out of range");
   expectError([&] { loadMesh(write("hdr.ply", "ply\nformat ascii 1.0\nelement vertex 3\n")); }, "header",
               "no 'end_header'");
@@ -369,8 +374,9 @@ TEST_F(MeshIo, PlyErrorsNameTheElement) {
   std::string word = s;
   word.replace(word.find("1 0 0\n"), 6, "1 z 0\n");
   expectError([&] { loadMesh(write("word.ply", word)); }, "vertex 1", "'z' is not a valid y value");
-  std::string points = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
-                       "property float z\nend_header\n0 0 0\n";
+  std::string points =
+      "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+      "property float z\nend_header\n0 0 0\n";
   expectError([&] { loadMesh(write("points.ply", points)); }, "header", "no face element");
 }
 
@@ -383,7 +389,8 @@ std::string asciiStl(const TriangleMesh& m) {
     s += "  facet normal 0 0 0\n    outer loop\n";
     for (int v : t) {
       char buf[128];
-      std::snprintf(buf, sizeof buf, "      vertex %.17g %.17g %.17g\n", m.vertices[v].x, m.vertices[v].y, m.vertices[v].z);
+      std::snprintf(buf, sizeof buf, "      vertex %.17g %.17g %.17g\n", m.vertices[v].x, m.vertices[v].y,
+                    m.vertices[v].z);
       s += buf;
     }
     s += "    endloop\n  endfacet\n";
@@ -413,7 +420,8 @@ TEST_F(MeshIo, StlErrorsNameTheFacet) {
   trunc.resize(trunc.size() - 30);
   expectError([&] { loadMesh(write("trunc.stl", trunc)); }, "header", "declares 12 triangles");
   expectError([&] { loadMesh(write("short.stl", "abc")); }, "header", "too short for a binary STL");
-  std::string two = "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nendloop\nendfacet\nendsolid x\n";
+  std::string two =
+      "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nendloop\nendfacet\nendsolid x\n";
   expectError([&] { loadMesh(write("two.stl", two)); }, "facet 0 (line 7)", "needs 3 vertices, got 2");
   std::string nan = asciiStl(cubeMesh());
   nan.replace(nan.find("vertex 1 1 0"), 12, "vertex 1 nan 0");
@@ -431,11 +439,12 @@ void checkOrgan(const char* name) {
   if (!fs::exists(path)) GTEST_SKIP() << path << " is absent (shared organ meshes are not committed)";
   TriangleMesh m = loadMesh(path);
   const MeshReport r = analyzeMesh(m);
-  std::printf("[ organ ] %s: %d vertices, %d triangles, boundary %d, non-manifold %d, inconsistent %d, degenerate %d,"
-              " components %d, signed volume %.6g, area %.6g, bbox (%.4g %.4g %.4g)-(%.4g %.4g %.4g), closed %s\n",
-              name, r.vertex_count, r.triangle_count, r.boundary_edges, r.non_manifold_edges, r.inconsistent_edges,
-              r.degenerate_triangles, r.components, r.signed_volume, r.area, r.bbox_min.x, r.bbox_min.y, r.bbox_min.z,
-              r.bbox_max.x, r.bbox_max.y, r.bbox_max.z, r.closed() ? "yes" : "no");
+  std::printf(
+      "[ organ ] %s: %d vertices, %d triangles, boundary %d, non-manifold %d, inconsistent %d, degenerate %d,"
+      " components %d, signed volume %.6g, area %.6g, bbox (%.4g %.4g %.4g)-(%.4g %.4g %.4g), closed %s\n",
+      name, r.vertex_count, r.triangle_count, r.boundary_edges, r.non_manifold_edges, r.inconsistent_edges,
+      r.degenerate_triangles, r.components, r.signed_volume, r.area, r.bbox_min.x, r.bbox_min.y, r.bbox_min.z,
+      r.bbox_max.x, r.bbox_max.y, r.bbox_max.z, r.closed() ? "yes" : "no");
   EXPECT_TRUE(r.closed());
   EXPECT_EQ(r.inconsistent_edges, 0);
   const std::string note = requireClosedMesh(m, path, "geometry.mesh");

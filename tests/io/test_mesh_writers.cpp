@@ -1,6 +1,7 @@
 // Tests for the PLY and legacy VTK writers: the bytes read back to exactly the values written.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
@@ -8,12 +9,11 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
-#include <unistd.h>
 #include <vector>
 
-#include "model/input_error.h"
 #include "host/io/mesh.h"
 #include "host/io/point_io.h"
+#include "model/input_error.h"
 
 using namespace inc;
 namespace fs = std::filesystem;

@@ -1,10 +1,10 @@
 // Tests for backend parsing and resolution: auto falls back, cuda without a GPU is a clear error.
 #include <gtest/gtest.h>
 
-#include "model/backend.h"
 #include "host/backends/backend_choice.h"
-#include "model/input_error.h"
 #include "kernels/device_info.h"
+#include "model/backend.h"
+#include "model/input_error.h"
 
 using namespace inc;
 

@@ -9,9 +9,9 @@
 #include <string>
 
 #include "cpu_fallback/pbd_solver_cpu.h"
+#include "host/assembly/pbd_builders.h"
 #include "model/graph_coloring.h"
 #include "model/input_error.h"
-#include "host/assembly/pbd_builders.h"
 
 using namespace inc;
 
@@ -172,7 +172,8 @@ TEST(GraphColoring, KnownCellVolumesOfUnchangedNeighbourhoodsAreExact) {
   ASSERT_EQ(built.rest_cell_volume, fresh.rest_cell_volume);
   bool some_changed = false;  // the recomputed ones differ from the base: the comparison can fail
   for (std::size_t i = 0; i < sub.size(); ++i)
-    if (lost[std::size_t(to_full[i])]) some_changed |= fresh.rest_cell_volume[i] != base.rest_cell_volume[std::size_t(to_full[i])];
+    if (lost[std::size_t(to_full[i])])
+      some_changed |= fresh.rest_cell_volume[i] != base.rest_cell_volume[std::size_t(to_full[i])];
   EXPECT_TRUE(some_changed);
   reuse.known_cell_volumes[0] = 1.25e-6;  // a given value is taken as it is
   EXPECT_EQ(buildMetaballPbdModel<float>(sub, reuse).rest_cell_volume[0], 1.25e-6f);

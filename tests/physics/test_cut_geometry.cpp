@@ -4,10 +4,10 @@
 #include <cmath>
 #include <random>
 
-#include "tests/support/cut_fixtures.h"
 #include "host/cut/cut_swept_surface.h"
 #include "model/input_error.h"
 #include "physics/cut_geometry.h"
+#include "tests/support/cut_fixtures.h"
 
 namespace inc {
 namespace {

@@ -5,13 +5,13 @@
 #include <cstdio>
 
 #include "cpu_fallback/mls_pair_sums_cpu.h"
-#include "host/backends/solver_factory.h"
 #include "cpu_fallback/mls_solver_cpu.h"
 #include "host/assembly/mls_model_build.h"
+#include "host/backends/solver_factory.h"
 #include "model/mls_model.h"
 #include "model/mls_solver.h"
-#include "tests/support/mls_test_scenes.h"
 #include "physics/mls_passes.h"
+#include "tests/support/mls_test_scenes.h"
 
 using namespace inc;
 using namespace inc::mls_test;
@@ -285,7 +285,8 @@ TEST(MlsForces, MomentumAndAngularMomentumAreConserved) {
     auto solver = makeMlsSolver(in, BackendKind::Cpu, f64 ? Precision::Float64 : Precision::Float32);
     const std::vector<Vec3d> rest = solver->restPositions();
     std::vector<Vec3d> u(rest.size());
-    for (std::size_t i = 0; i < u.size(); ++i) u[i] = Vec3d(hashSigned(i), hashSigned(i + 7777), hashSigned(i + 99999)) * 2e-3;
+    for (std::size_t i = 0; i < u.size(); ++i)
+      u[i] = Vec3d(hashSigned(i), hashSigned(i + 7777), hashSigned(i + 99999)) * 2e-3;
     solver->setDisplacements(u);
     solver->computeForces();
     std::vector<Vec3d> f, x;
@@ -323,7 +324,8 @@ TEST(MlsForces, VectorPairSumsMatchThePortableLoopBitForBit) {
     auto solver = makeMlsSolver(in, BackendKind::Cpu, Precision::Float32);
     const std::vector<Vec3d> rest = solver->restPositions();
     u.resize(rest.size());
-    for (std::size_t i = 0; i < u.size(); ++i) u[i] = Vec3d(hashSigned(i), hashSigned(i + 7777), hashSigned(i + 99999)) * 2e-3;
+    for (std::size_t i = 0; i < u.size(); ++i)
+      u[i] = Vec3d(hashSigned(i), hashSigned(i + 7777), hashSigned(i + 99999)) * 2e-3;
     solver->setDisplacements(u);
     solver->computeForces();
     solver->forces(f[portable]);

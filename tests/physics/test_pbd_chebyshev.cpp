@@ -48,18 +48,20 @@ TEST(PbdChebyshev, SameBeamEquilibriumInHalfTheIterations) {
   const double ja20 = beamTipDeflection(S::Jacobi, 20, 0.0), ch10 = beamTipDeflection(S::Jacobi, 10, rho);
   const double ja40 = beamTipDeflection(S::Jacobi, 40, 0.0), ch20 = beamTipDeflection(S::Jacobi, 20, rho);
   const double ch160 = beamTipDeflection(S::Jacobi, 160, rho);
-  std::printf("beam tip: Gauss-Seidel 80 it %.6g m; Jacobi 20 / 40 it %.6g / %.6g; Chebyshev %.2f 10 / 20 / 160 it "
-              "%.6g / %.6g / %.6g\n", ref, ja20, ja40, rho, ch10, ch20, ch160);
-  ASSERT_GT(ref, 1e-2);  // it does bend (3.4 cm on 10 cm)
+  std::printf(
+      "beam tip: Gauss-Seidel 80 it %.6g m; Jacobi 20 / 40 it %.6g / %.6g; Chebyshev %.2f 10 / 20 / 160 it "
+      "%.6g / %.6g / %.6g\n",
+      ref, ja20, ja40, rho, ch10, ch20, ch160);
+  ASSERT_GT(ref, 1e-2);              // it does bend (3.4 cm on 10 cm)
   EXPECT_GT(ja20 - ref, 0.5 * ref);  // plain Jacobi is far from converged at these counts (sags too much) ...
   EXPECT_LT(std::fabs(ch10 - ref), std::fabs(ja20 - ref));  // ... the accelerated one as near in half the iterations
   EXPECT_LT(std::fabs(ch20 - ref), std::fabs(ja40 - ref));
   EXPECT_NEAR(ch160, ref, 0.02 * ref);  // and converges to the same equilibrium
 }
 
-// The largest accepted estimate (0.9) at every iteration count from 1 to 12 at every iteration count from 1 to 12, with an infinitely stiff and a
-// nearly free material, at 60 Hz and at a 0.1 s frame in one substep: positions stay finite, above the ground, and
-// the kinetic energy below the potential energy the block started with (the test of PbdSolver's
+// The largest accepted estimate (0.9) at every iteration count from 1 to 12 at every iteration count from 1 to 12, with
+// an infinitely stiff and a nearly free material, at 60 Hz and at a 0.1 s frame in one substep: positions stay finite,
+// above the ground, and the kinetic energy below the potential energy the block started with (the test of PbdSolver's
 // NoExplosionAtExtremeComplianceAndTimeStep, which the plain solvers pass).
 TEST(PbdChebyshev, NoBlowUpAtAnyIterationCountOrExtremeMaterial) {
   for (double youngs : {1.0e12, 2.0e4, 1.0e-3})
@@ -70,8 +72,9 @@ TEST(PbdChebyshev, NoBlowUpAtAnyIterationCountOrExtremeMaterial) {
         p.substeps = 1;
         p.iterations = iterations;
         p.chebyshev_rho = pbd::kChebyshevMaxRho;
-        test::expectDropStaysBounded(youngs, p, "E " + std::to_string(youngs) + " dt " + std::to_string(frame_dt) +
-                                                    " it " + std::to_string(iterations));
+        test::expectDropStaysBounded(
+            youngs, p,
+            "E " + std::to_string(youngs) + " dt " + std::to_string(frame_dt) + " it " + std::to_string(iterations));
       }
 }
 

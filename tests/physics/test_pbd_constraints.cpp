@@ -54,14 +54,15 @@ TEST(PbdConstraints, XpbdDistanceReachesComplianceBalanceInOneLinearStep) {
 
 TEST(PbdConstraints, DihedralAngleConventionMatchesTrescaAcos) {
   const Vec3d p0(0, 0, 0), p1(1, 0, 0), p2(0.5, 1, 0);
-  EXPECT_NEAR(dihedralAngle(p0, p1, p2, Vec3d(0.5, -1, 0)), kPi, 1e-12);           // flat sheet
-  EXPECT_NEAR(dihedralAngle(p0, p1, p2, Vec3d(0.5, 0, 1)), 0.5 * kPi, 1e-12);      // folded one way
-  EXPECT_NEAR(dihedralAngle(p0, p1, p2, Vec3d(0.5, 0, -1)), 1.5 * kPi, 1e-12);     // folded the other way
+  EXPECT_NEAR(dihedralAngle(p0, p1, p2, Vec3d(0.5, -1, 0)), kPi, 1e-12);        // flat sheet
+  EXPECT_NEAR(dihedralAngle(p0, p1, p2, Vec3d(0.5, 0, 1)), 0.5 * kPi, 1e-12);   // folded one way
+  EXPECT_NEAR(dihedralAngle(p0, p1, p2, Vec3d(0.5, 0, -1)), 1.5 * kPi, 1e-12);  // folded the other way
   // The paper's acos(n1 . n2) equals min(psi, 2 pi - psi).
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-1, 1);
   for (int t = 0; t < 50; ++t) {
-    const Vec3d a(u(rng), u(rng), u(rng)), b(u(rng), u(rng), u(rng)), c(u(rng), u(rng), u(rng)), d(u(rng), u(rng), u(rng));
+    const Vec3d a(u(rng), u(rng), u(rng)), b(u(rng), u(rng), u(rng)), c(u(rng), u(rng), u(rng)),
+        d(u(rng), u(rng), u(rng));
     const Vec3d e = b - a, n1 = cross(e, c - a), n2 = cross(e, d - a);
     const double paper = std::acos(std::clamp(dot(n1, n2) / (norm(n1) * norm(n2)), -1.0, 1.0));
     const double psi = dihedralAngle(a, b, c, d);
@@ -73,7 +74,8 @@ TEST(PbdConstraints, DihedralGradientsMatchFiniteDifferences) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-1, 1);
   for (int t = 0; t < 30; ++t) {
-    Vec3d p[4] = {{u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}};
+    Vec3d p[4] = {
+        {u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}};
     Vec3d g[4];
     ASSERT_TRUE(dihedralGradients(p[0], p[1], p[2], p[3], g));
     const double h = 1e-6;
@@ -94,8 +96,8 @@ TEST(PbdConstraints, BendingHandComputedCorrection) {
   // Hinge on the x axis folded to psi = pi/2, rest flat (pi), unit inverse masses, PBD k = 1.
   // g2 = -|e| n1/|n1|^2 = (0,0,-1), g3 = |e| n2/|n2|^2 = (0,-1,0), g0 = g1 = (0, .5, .5); sum w|g|^2 = 3;
   // C = -pi/2 -> dlambda = pi/6; dp_k = g_k pi/6.
-  const BendingCorrection<double> r = projectBending(Vec3d(0, 0, 0), Vec3d(1, 0, 0), Vec3d(0.5, 1, 0), Vec3d(0.5, 0, 1), 1.0,
-                                                     1.0, 1.0, 1.0, kPi, xpbdTerm(false, 0.0, 1.0, 0.01), 0.0);
+  const BendingCorrection<double> r = projectBending(Vec3d(0, 0, 0), Vec3d(1, 0, 0), Vec3d(0.5, 1, 0), Vec3d(0.5, 0, 1),
+                                                     1.0, 1.0, 1.0, 1.0, kPi, xpbdTerm(false, 0.0, 1.0, 0.01), 0.0);
   EXPECT_NEAR(r.c, -0.5 * kPi, 1e-12);
   EXPECT_NEAR(r.dlambda, kPi / 6, 1e-12);
   expectVec(r.dp[2], Vec3d(0, 0, -kPi / 6), 1e-12);
@@ -113,7 +115,8 @@ TEST(PbdConstraints, BendingHingeOfTwoTrianglesReturnsToRestAngle) {
     double lambda = 0;
     const XpbdTerm<double> term = xpbdTerm(true, 0.0, 1.0, 0.01);
     for (int it = 0; it < 200; ++it) {
-      const BendingCorrection<double> r = projectBending(p[0], p[1], p[2], p[3], 1.0, 1.0, 1.0, 1.0, rest, term, lambda);
+      const BendingCorrection<double> r =
+          projectBending(p[0], p[1], p[2], p[3], 1.0, 1.0, 1.0, 1.0, rest, term, lambda);
       for (int k = 0; k < 4; ++k) p[k] += r.dp[k];
       lambda += r.dlambda;
     }
@@ -144,8 +147,8 @@ TEST(PbdConstraints, TetVolumeHandComputedAndRestores) {
   Vec3d q[4] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.2, 0.3, 0.05}};
   const double v0 = 1.0 / 6;
   for (int it = 0; it < 50; ++it) {
-    const TetVolumeCorrection<double> c = projectTetVolume(q[0], q[1], q[2], q[3], 1.0, 2.0, 0.5, 1.0, v0,
-                                                           xpbdTerm(true, 0.0, 1.0, 0.01), 0.0);
+    const TetVolumeCorrection<double> c =
+        projectTetVolume(q[0], q[1], q[2], q[3], 1.0, 2.0, 0.5, 1.0, v0, xpbdTerm(true, 0.0, 1.0, 0.01), 0.0);
     for (int k = 0; k < 4; ++k) q[k] += c.dp[k];
   }
   EXPECT_NEAR(tetSignedVolume(q[0], q[1], q[2], q[3]), v0, 1e-12);
@@ -202,11 +205,13 @@ TEST(PbdConstraints, ShapeMatchingGoalsOfARigidlyMovedClusterAreItsPositions) {
   const Mat3d got = quatToMatrix(qr);
   for (int k = 0; k < 5; ++k) {
     expectVec(got * q[k] + f.x_cm, x[k], 1e-9);
-    const GoalCorrection<double> g = projectGoal(x[k], 1.0 / m[k], got * q[k] + f.x_cm, xpbdTerm(true, 1e-3, 1.0, 0.01), Vec3d());
+    const GoalCorrection<double> g =
+        projectGoal(x[k], 1.0 / m[k], got * q[k] + f.x_cm, xpbdTerm(true, 1e-3, 1.0, 0.01), Vec3d());
     expectVec(g.dp, Vec3d(), 1e-9);
   }
   // A displaced member is pulled to its goal: XPBD with alpha~ = w gives half the way.
-  const GoalCorrection<double> g = projectGoal(Vec3d(1, 0, 0), 2.0, Vec3d(0, 0, 0), XpbdTerm<double>{2.0, 1.0}, Vec3d());
+  const GoalCorrection<double> g =
+      projectGoal(Vec3d(1, 0, 0), 2.0, Vec3d(0, 0, 0), XpbdTerm<double>{2.0, 1.0}, Vec3d());
   expectVec(g.dp, Vec3d(-0.5, 0, 0), 1e-15);
 }
 
@@ -215,13 +220,13 @@ TEST(PbdCollision, PlaneBoxCapsuleContacts) {
   expectVec(planeContact(Vec3d(1, 2, 0.3), 0.5, floor), Vec3d(0, 0, 0.2), 1e-15);
   expectVec(planeContact(Vec3d(1, 2, 0.6), 0.5, floor), Vec3d(), 0);
   const BoxCollider<double> box{Vec3d(0, 0, 0), Vec3d(1, 1, 1)};
-  expectVec(boxContact(Vec3d(1.2, 0.5, 0.5), 0.5, box), Vec3d(0.3, 0, 0), 1e-15);       // outside, near +x face
-  expectVec(boxContact(Vec3d(0.5, 0.5, 0.9), 0.25, box), Vec3d(0, 0, 0.35), 1e-15);      // inside, nearest +z face
+  expectVec(boxContact(Vec3d(1.2, 0.5, 0.5), 0.5, box), Vec3d(0.3, 0, 0), 1e-15);    // outside, near +x face
+  expectVec(boxContact(Vec3d(0.5, 0.5, 0.9), 0.25, box), Vec3d(0, 0, 0.35), 1e-15);  // inside, nearest +z face
   expectVec(boxContact(Vec3d(2, 2, 2), 0.25, box), Vec3d(), 0);
   const CapsuleCollider<double> tool{Vec3d(0, 0, 0), Vec3d(0, 0, 2), 0.1};
-  expectVec(capsuleContact(Vec3d(0.2, 0, 1), 0.15, tool), Vec3d(0.05, 0, 0), 1e-15);     // side
-  expectVec(capsuleContact(Vec3d(0, 0, 2.2), 0.15, tool), Vec3d(0, 0, 0.05), 1e-15);     // end cap
-  EXPECT_NEAR(norm(capsuleContact(Vec3d(0, 0, 1), 0.15, tool)), 0.25, 1e-15);           // on the axis
+  expectVec(capsuleContact(Vec3d(0.2, 0, 1), 0.15, tool), Vec3d(0.05, 0, 0), 1e-15);  // side
+  expectVec(capsuleContact(Vec3d(0, 0, 2.2), 0.15, tool), Vec3d(0, 0, 0.05), 1e-15);  // end cap
+  EXPECT_NEAR(norm(capsuleContact(Vec3d(0, 0, 1), 0.15, tool)), 0.25, 1e-15);         // on the axis
   EXPECT_NEAR(capsuleDistance(Vec3d(0.5, 0, 1), tool), 0.4, 1e-15);
 }
 
@@ -237,7 +242,8 @@ TEST(PbdVolume, PowerCellVolumesSplitTheUnionOfTwoSpheres) {
   EXPECT_NEAR(powerCellVolume(c[0], 1.0, c, r, n0, 0, samples.data(), K), 4.0 / 3 * kPi, 1e-12);
   // Two overlapping balls: V0 + V1 = |B0 u B1| = |B0| + |B1| - lens.
   const double d = 1.2, r0 = r[0], r1 = r[1];
-  const double lens = kPi * (r0 + r1 - d) * (r0 + r1 - d) * (d * d + 2 * d * r1 - 3 * r1 * r1 + 2 * d * r0 + 6 * r0 * r1 - 3 * r0 * r0) / (12 * d);
+  const double lens = kPi * (r0 + r1 - d) * (r0 + r1 - d) *
+                      (d * d + 2 * d * r1 - 3 * r1 * r1 + 2 * d * r0 + 6 * r0 * r1 - 3 * r0 * r0) / (12 * d);
   const double uni = 4.0 / 3 * kPi * (r0 * r0 * r0 + r1 * r1 * r1) - lens;
   const double v0 = powerCellVolume(c[0], r0, c, r, n0, 1, samples.data(), K);
   const double v1 = powerCellVolume(c[1], r1, c, r, n1, 1, samples.data(), K);

@@ -1,16 +1,17 @@
-// Tests for skinning: binding (exact k-nearest, partition of unity, continuity), rest and rigid-motion exactness, normals.
+// Tests for skinning: binding (exact k-nearest, partition of unity, continuity), rest and rigid-motion exactness,
+// normals.
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <vector>
 
 #include "cpu_fallback/skinning_cpu.h"
-#include "model/input_error.h"
 #include "host/assembly/metaball_packing.h"
 #include "host/assembly/organ_shapes.h"
 #include "host/assembly/skin_binding.h"
+#include "model/input_error.h"
 #include "physics/skinning.h"
 
 namespace inc {
@@ -59,9 +60,11 @@ TEST(SkinBinding, ExactNearestPartitionOfUnityAndNonNegative) {
     // Brute force: the bound spheres are the k smallest d_i = |v - c_i| - r_i, in order.
     if (v % 37 == 0) {
       std::vector<std::pair<double, int>> all;
-      for (std::size_t i = 0; i < C.size(); ++i) all.push_back({norm(mesh.vertices[std::size_t(v)] - C[i]) - R[i], int(i)});
+      for (std::size_t i = 0; i < C.size(); ++i)
+        all.push_back({norm(mesh.vertices[std::size_t(v)] - C[i]) - R[i], int(i)});
       std::sort(all.begin(), all.end());
-      for (int j = 0; j < k; ++j) EXPECT_EQ(b.sphere[std::size_t(v * k + j)], all[std::size_t(j)].second) << "vertex " << v;
+      for (int j = 0; j < k; ++j)
+        EXPECT_EQ(b.sphere[std::size_t(v * k + j)], all[std::size_t(j)].second) << "vertex " << v;
       EXPECT_GT(b.weight[std::size_t(v * k)], 0.0);
     }
   }
@@ -80,7 +83,8 @@ TEST(SkinBinding, WeightsAreContinuousInTheVertexPosition) {
       const int s = ba.sphere[std::size_t(v * 4 + j)];
       double wb = 0.0;
       for (int m = 0; m < 4; ++m)
-        if (bb.sphere[std::size_t(v * 4 + m)] == s && bb.weight[std::size_t(v * 4 + m)] > 0.0) wb = bb.weight[std::size_t(v * 4 + m)];
+        if (bb.sphere[std::size_t(v * 4 + m)] == s && bb.weight[std::size_t(v * 4 + m)] > 0.0)
+          wb = bb.weight[std::size_t(v * 4 + m)];
       worst = std::max(worst, std::fabs(ba.weight[std::size_t(v * 4 + j)] - wb));
     }
   EXPECT_LT(worst, 1e-3);
@@ -113,7 +117,8 @@ void restAndRigid(double tol_rel) {
   // Normals rotate with the surface: compare against the rest normals rotated.
   std::vector<Vec3<T>> rest_n(static_cast<std::size_t>(nv)), n(static_cast<std::size_t>(nv));
   std::vector<Vec3<T>> rest_x(arr.rest_vertices);
-  vertexNormalsCpu(nv, rest_x.data(), arr.triangles.data(), arr.tri_offsets.data(), arr.tri_of_vertex.data(), rest_n.data());
+  vertexNormalsCpu(nv, rest_x.data(), arr.triangles.data(), arr.tri_offsets.data(), arr.tri_of_vertex.data(),
+                   rest_n.data());
   vertexNormalsCpu(nv, out.data(), arr.triangles.data(), arr.tri_offsets.data(), arr.tri_of_vertex.data(), n.data());
   for (int v = 0; v < nv; ++v) {
     EXPECT_NEAR(norm(Vec3d(rest_n[std::size_t(v)])), 1.0, 1e-5);
@@ -238,13 +243,13 @@ TEST(SphereRotations, RigidMotionRecoveredExactly) {
   std::vector<pbd::Quat<double>> q(static_cast<std::size_t>(n));
   std::vector<Mat3d> rots(static_cast<std::size_t>(n));
   // A cold start from the identity converges linearly (slowly for flat neighbourhoods); frames warm-start.
-  cpu::sphereRotationsCpu(n, x.data(), nb.rest_centres.data(), nb.masses.data(), nb.offsets.data(), nb.neighbours.data(),
-                          300, q.data(), rots.data());
+  cpu::sphereRotationsCpu(n, x.data(), nb.rest_centres.data(), nb.masses.data(), nb.offsets.data(),
+                          nb.neighbours.data(), 300, q.data(), rots.data());
   for (int i = 0; i < n; ++i) EXPECT_LE(frobeniusNorm(rots[std::size_t(i)] - R), 1e-9) << "sphere " << i;
   // Warm start: one more iteration from the converged quaternions changes nothing.
   std::vector<Mat3d> again(rots);
-  cpu::sphereRotationsCpu(n, x.data(), nb.rest_centres.data(), nb.masses.data(), nb.offsets.data(), nb.neighbours.data(),
-                          1, q.data(), again.data());
+  cpu::sphereRotationsCpu(n, x.data(), nb.rest_centres.data(), nb.masses.data(), nb.offsets.data(),
+                          nb.neighbours.data(), 1, q.data(), again.data());
   for (int i = 0; i < n; ++i) EXPECT_LE(frobeniusNorm(again[std::size_t(i)] - R), 1e-9);
 }
 
@@ -269,8 +274,8 @@ TEST(SphereRotations, TwistDoesNotShrinkTheSkin) {
   const int n = int(p.model.size());
   std::vector<pbd::Quat<double>> q(static_cast<std::size_t>(n));
   std::vector<Mat3d> rots(static_cast<std::size_t>(n));
-  cpu::sphereRotationsCpu(n, x.data(), nb.rest_centres.data(), nb.masses.data(), nb.offsets.data(), nb.neighbours.data(),
-                          20, q.data(), rots.data());
+  cpu::sphereRotationsCpu(n, x.data(), nb.rest_centres.data(), nb.masses.data(), nb.offsets.data(),
+                          nb.neighbours.data(), 20, q.data(), rots.data());
   std::vector<Vec3d> with(bar.vertices.size()), without(bar.vertices.size());
   cpu::skinSurfaceCpu(arr.view(), x.data(), rots.data(), with.data());
   cpu::skinSurfaceCpu(arr.view(), x.data(), static_cast<const Mat3d*>(nullptr), without.data());
@@ -285,9 +290,10 @@ TEST(SphereRotations, TwistDoesNotShrinkTheSkin) {
   mw.vertices = with;
   mo.vertices = without;
   const double v0 = analyzeMesh(bar).signed_volume;
-  const double dv_with = analyzeMesh(mw).signed_volume / v0 - 1.0, dv_without = analyzeMesh(mo).signed_volume / v0 - 1.0;
-  std::printf("twist: mean error with rotations %.3e m, translation only %.3e m; volume change %.4f vs %.4f\n", err_with,
-              err_without, dv_with, dv_without);
+  const double dv_with = analyzeMesh(mw).signed_volume / v0 - 1.0,
+               dv_without = analyzeMesh(mo).signed_volume / v0 - 1.0;
+  std::printf("twist: mean error with rotations %.3e m, translation only %.3e m; volume change %.4f vs %.4f\n",
+              err_with, err_without, dv_with, dv_without);
   EXPECT_LT(err_with, 0.5 * err_without);
   EXPECT_LT(std::fabs(dv_with), 0.02);
   EXPECT_LT(std::fabs(dv_with), std::fabs(dv_without));

@@ -1,4 +1,5 @@
-// Unit tests of the Tresca tearing math: eq. 6 yield test, strain extrema, seeded fractions, closed-form principal stresses.
+// Unit tests of the Tresca tearing math: eq. 6 yield test, strain extrema, seeded fractions, closed-form principal
+// stresses.
 #include <gtest/gtest.h>
 
 #include <algorithm>

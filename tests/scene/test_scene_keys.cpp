@@ -76,7 +76,8 @@ std::vector<std::string> documentedKeys(const fs::path& doc) {
     std::size_t row = i + 2;  // past the header and its |---| line
     for (; row < lines.size() && lines[row].rfind("|", 0) == 0; ++row) {
       const std::string first_cell = lines[row].substr(1, lines[row].find('|', 1) - 1);
-      for (const std::string& key : backtickedWords(first_cell)) keys.push_back(section.empty() ? key : section + "." + key);
+      for (const std::string& key : backtickedWords(first_cell))
+        keys.push_back(section.empty() ? key : section + "." + key);
     }
     i = row;
   }
@@ -124,9 +125,11 @@ TEST(SceneKeys, TableAndDocsNameTheSameKeys) {
   const std::vector<std::string> table = tableKeys();
   ASSERT_GT(documented.size(), 100u);  // the parse found the tables (about 130 keys)
   EXPECT_TRUE(missingFrom(table, documented).empty())
-      << "in host/scene/scene_keys.cpp but in no key table of docs/scene-format.md:" << joined(missingFrom(table, documented));
+      << "in host/scene/scene_keys.cpp but in no key table of docs/scene-format.md:"
+      << joined(missingFrom(table, documented));
   EXPECT_TRUE(missingFrom(documented, table).empty())
-      << "documented in docs/scene-format.md but not in host/scene/scene_keys.cpp:" << joined(missingFrom(documented, table));
+      << "documented in docs/scene-format.md but not in host/scene/scene_keys.cpp:"
+      << joined(missingFrom(documented, table));
 }
 
 TEST(SceneKeys, EachKeyOnceWithItsParentAndADescription) {
@@ -149,9 +152,10 @@ TEST(SceneKeys, EachKeyOnceWithItsParentAndADescription) {
 }
 
 TEST(SceneKeys, ChildrenInReaderOrder) {
-  EXPECT_EQ(sceneKeysUnder("material"),
-            (std::vector<std::string>{"youngs_modulus_pa", "poisson_ratio", "density_kg_m3", "damping_per_s", "cutting"}));
-  EXPECT_EQ(sceneKeysUnder("colliders[]", "plane"), (std::vector<std::string>{"kind", "point_m", "normal", "friction"}));
+  EXPECT_EQ(sceneKeysUnder("material"), (std::vector<std::string>{"youngs_modulus_pa", "poisson_ratio", "density_kg_m3",
+                                                                  "damping_per_s", "cutting"}));
+  EXPECT_EQ(sceneKeysUnder("colliders[]", "plane"),
+            (std::vector<std::string>{"kind", "point_m", "normal", "friction"}));
   EXPECT_EQ(sceneKeysUnder("colliders[]", "box"), (std::vector<std::string>{"kind", "min_m", "max_m", "friction"}));
   EXPECT_EQ(sceneKeysUnder("tools[].path[]"), (std::vector<std::string>{"t_s", "position_m", "direction"}));
   EXPECT_EQ(kindSpecificKeysUnder("geometry", "sphere"), (std::vector<std::string>{"center_m", "radius_m"}));
@@ -181,9 +185,9 @@ TEST(SceneKeys, WriterUsesOnlyTableKeys) {
     collectPaths(nlohmann::ordered_json::parse(sceneToJson(s)), "", written);
     for (const std::string& path : written) {
       // The one-device form writes a device's keys in `haptics` itself (the table lists them under devices[]).
-      const bool device_key_in_place = path.rfind("haptics.", 0) == 0 &&
-                                       std::find(table.begin(), table.end(), "haptics.devices[]." + path.substr(8)) !=
-                                           table.end();
+      const bool device_key_in_place =
+          path.rfind("haptics.", 0) == 0 &&
+          std::find(table.begin(), table.end(), "haptics.devices[]." + path.substr(8)) != table.end();
       EXPECT_TRUE(device_key_in_place || std::find(table.begin(), table.end(), path) != table.end())
           << "sceneToJson writes " << path << ", which the key table does not have";
     }

@@ -1,18 +1,18 @@
 // Tests for the scene loader: every bad-input case names file, key path and reason; defaults; round trip; meshes.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
 #include <filesystem>
 #include <fstream>
 #include <string>
-#include <unistd.h>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "host/backends/backend_choice.h"
-#include "model/input_error.h"
 #include "host/scene/scene_json.h"
 #include "host/scene/scene_loader.h"
+#include "model/input_error.h"
 #include "tests/support/repo_paths.h"
 
 using namespace inc;
@@ -444,21 +444,21 @@ TEST(SceneLoaderRange, ToolPathTimesMustIncrease) {
                                                    {"t_s": 0.5, "position_m": [0, 0, 1]},
                                                    {"t_s": 0.5, "position_m": [0, 0, 2]}]}])"),
                 "tools[0].path[2].t_s", "must increase strictly (0.5 follows 0.5)");
-  expectErrorAt("/tools", json::parse(R"([{"path": [{"t_s": -1, "position_m": [0, 0, 0]}]}])"),
-                "tools[0].path[0].t_s", "must be >= 0");
+  expectErrorAt("/tools", json::parse(R"([{"path": [{"t_s": -1, "position_m": [0, 0, 0]}]}])"), "tools[0].path[0].t_s",
+                "must be >= 0");
   expectErrorAt("/tools", json::parse(R"([{"path": []}])"), "tools[0].path", "needs at least one keyframe");
   expectErrorAt("/tools", json::parse(R"([{"path": [{"t_s": 0, "position_m": [0, 0, 0], "direction": [0, 0, 0]}]}])"),
                 "tools[0].path[0].direction", "non-zero");
   expectErrorAt("/tools", json::parse(R"([{"radius_m": 0, "path": [{"t_s": 0, "position_m": [0, 0, 0]}]}])"),
                 "tools[0].radius_m", "must be > 0");
-  expectErrorAt("/tools",
-                json::parse(R"([{"name": "a", "path": [{"t_s": 0, "position_m": [0, 0, 0]}]},
+  expectErrorAt("/tools", json::parse(R"([{"name": "a", "path": [{"t_s": 0, "position_m": [0, 0, 0]}]},
                                 {"name": "a", "path": [{"t_s": 0, "position_m": [0, 0, 0]}]}])"),
                 "tools[1].name", "must be unique");
 }
 
 TEST(SceneLoaderRange, FixedRegionMinMustNotExceedMax) {
-  expectErrorAt("/fixed", json::parse(R"([{"min_m": [0, 0, 0], "max_m": [1, 1, 1]}, {"min_m": [0, 2, 0], "max_m": [1, 1, 1]}])"),
+  expectErrorAt("/fixed",
+                json::parse(R"([{"min_m": [0, 0, 0], "max_m": [1, 1, 1]}, {"min_m": [0, 2, 0], "max_m": [1, 1, 1]}])"),
                 "fixed[1].max_m", "component 1: 1 < 2");
   expectErrorAt("/fixed", json::parse(R"([{"min_m": [0, 0, 0]}])"), "fixed[0].max_m", "is required");
 }
@@ -531,10 +531,11 @@ TEST(SceneLoaderDefaults, ToolDirectionIsNormalised) {
 }
 
 TEST(SceneLoaderDefaults, PrecisionAliases) {
-  expectSceneEq(parseScene(R"({"geometry": {"kind": "box"}, "models": {"mls": true}, "solver": {"precision": "double"}})",
-                           kLabel, "."),
-                parseScene(R"({"geometry": {"kind": "box"}, "models": {"mls": true}, "solver": {"precision": "float64"}})",
-                           kLabel, "."));
+  expectSceneEq(
+      parseScene(R"({"geometry": {"kind": "box"}, "models": {"mls": true}, "solver": {"precision": "double"}})", kLabel,
+                 "."),
+      parseScene(R"({"geometry": {"kind": "box"}, "models": {"mls": true}, "solver": {"precision": "float64"}})",
+                 kLabel, "."));
   EXPECT_EQ(parseScene(R"({"geometry": {"kind": "box"}, "models": {"mls": true}, "solver": {"precision": "float"}})",
                        kLabel, ".")
                 .solver.precision,
@@ -550,8 +551,8 @@ TEST(SceneLoaderRoundTrip, FullSceneSurvivesWriteAndRead) {
 }
 
 TEST(SceneLoaderRoundTrip, EveryPrimitiveKindAndDefaults) {
-  for (const char* g : {R"({"kind": "box", "center_m": [1, 2, 3], "size_m": [0.3, 0.2, 0.1]})",
-                        R"({"kind": "beam"})", R"({"kind": "sphere", "radius_m": 0.123456789012345})",
+  for (const char* g : {R"({"kind": "box", "center_m": [1, 2, 3], "size_m": [0.3, 0.2, 0.1]})", R"({"kind": "beam"})",
+                        R"({"kind": "sphere", "radius_m": 0.123456789012345})",
                         R"({"kind": "ellipsoid", "radii_m": [0.1, 0.07, 0.03]})"}) {
     json j = minimal();
     j["geometry"] = json::parse(g);
@@ -595,8 +596,9 @@ TEST_F(SceneLoader, ClosedMeshSceneLoadsAndRoundTrips) {
 
 TEST_F(SceneLoader, InwardCubeIsAcceptedAfterReorientation) {
   // All faces reversed: closed and consistent, only inside-out; requireClosedMesh flips it.
-  std::string obj = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
-                    "f 2 3 4 1\nf 8 7 6 5\nf 5 6 2 1\nf 6 7 3 2\nf 7 8 4 3\nf 8 5 1 4\n";
+  std::string obj =
+      "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+      "f 2 3 4 1\nf 8 7 6 5\nf 5 6 2 1\nf 6 7 3 2\nf 7 8 4 3\nf 8 5 1 4\n";
   write("inward.obj", obj);
   EXPECT_NO_THROW(parseScene(meshScene("inward.obj"), kLabel, dir_.string()));
 }
@@ -677,12 +679,13 @@ TEST_F(SceneLoader, DocumentedExamplesLoad) {
       block += line + "\n";
     }
   }
-  ASSERT_EQ(blocks.size(), 4u);  // cantilever, mesh organ, haptics (udp), two hands with the BEM global model
+  ASSERT_EQ(blocks.size(), 4u);          // cantilever, mesh organ, haptics (udp), two hands with the BEM global model
   write("organs/liver.obj", cubeObj());  // stands in for the organ the second example names
   // The fourth example's BEM mesh: the block's surface (6 x 4 x 3 cm, its bottom at z = 0), 12 triangles.
   std::string block_bem = cubeObj();
-  block_bem.replace(0, block_bem.find('f'), "v -0.03 -0.02 0\nv 0.03 -0.02 0\nv 0.03 0.02 0\nv -0.03 0.02 0\n"
-                                    "v -0.03 -0.02 0.03\nv 0.03 -0.02 0.03\nv 0.03 0.02 0.03\nv -0.03 0.02 0.03\n");
+  block_bem.replace(0, block_bem.find('f'),
+                    "v -0.03 -0.02 0\nv 0.03 -0.02 0\nv 0.03 0.02 0\nv -0.03 0.02 0\n"
+                    "v -0.03 -0.02 0.03\nv 0.03 -0.02 0.03\nv 0.03 0.02 0.03\nv -0.03 0.02 0.03\n");
   write("organs/block_bem.obj", block_bem);
   for (const std::string& b : blocks) {
     SCOPED_TRACE(b);
@@ -763,9 +766,11 @@ TEST(SceneLoaderTearing, BadValuesNameTheKey) {
                 "tearing.regions[0].max_m", "must be >= min_m");
   expectErrorAt("/tearing/regions", json::parse(R"([{"min_m": [0, 0, 0], "max_m": [1, 1, 1]}])"),
                 "tearing.regions[0].k_pa", "needs k_pa or tau_f_pa");
-  expectErrorAt("/tearing/regions",
-                json::parse(R"([{"min_m": [0, 0, 0], "max_m": [1, 1, 1], "k_pa": 1}, {"min_m": [0, 0, 0], "max_m": [1, 1, 1], "tau_f_pa": -2}])"),
-                "tearing.regions[1].tau_f_pa", "must be >= 0");
+  expectErrorAt(
+      "/tearing/regions",
+      json::parse(
+          R"([{"min_m": [0, 0, 0], "max_m": [1, 1, 1], "k_pa": 1}, {"min_m": [0, 0, 0], "max_m": [1, 1, 1], "tau_f_pa": -2}])"),
+      "tearing.regions[1].tau_f_pa", "must be >= 0");
   expectErrorAt("/tearing/regions", json::parse(R"([{"min_m": [0, 0, 0], "max_m": [1, 1, 1], "k": 1}])"),
                 "tearing.regions[0].k", "k_pa");
 }

@@ -8,16 +8,16 @@
 #include <string>
 #include <vector>
 
-#include "host/scene/scene_compile.h"
-#include "host/sim/dissection_simulation.h"
+#include "cpu_fallback/pbd_solver_cpu.h"
 #include "host/backends/solver_factory.h"
-#include "model/input_error.h"
+#include "host/compiled/scene_colliders.h"
+#include "host/scene/scene_compile.h"
+#include "host/scene/scene_loader.h"
+#include "host/sim/dissection_simulation.h"
 #include "host/sim/metaball_simulation.h"
+#include "model/input_error.h"
 #include "model/mls_solver.h"
 #include "model/pbd_model.h"
-#include "cpu_fallback/pbd_solver_cpu.h"
-#include "host/compiled/scene_colliders.h"
-#include "host/scene/scene_loader.h"
 #include "physics/mls_static_contact.h"
 #include "physics/pbd_block.h"
 #include "tests/support/cut_block_scene.h"
@@ -32,7 +32,8 @@ constexpr double kDt = 1.0 / 60.0;
 // A minimal PBD metaball scene with `colliders` (a JSON array) spliced in.
 std::string sceneWith(const std::string& colliders, const std::string& models = R"({"pbd_metaballs": true})") {
   return R"({"name": "c", "geometry": {"kind": "box", "size_m": [0.04, 0.04, 0.02], "spacing_m": 0.01},
-             "models": )" + models + R"(, "colliders": )" + colliders + "}";
+             "models": )" +
+         models + R"(, "colliders": )" + colliders + "}";
 }
 
 std::string errorOf(const std::string& json) {
@@ -65,32 +66,37 @@ TEST(SceneColliders, PlanesAndBoxesParseAndRoundTrip) {
 }
 
 TEST(SceneColliders, BadCollidersNameTheirKeyAndReason) {
-  EXPECT_NE(errorOf(sceneWith(R"([{"kind": "plane", "point_m": [0, 0, 0]}])")).find("colliders[0].normal"), std::string::npos);
+  EXPECT_NE(errorOf(sceneWith(R"([{"kind": "plane", "point_m": [0, 0, 0]}])")).find("colliders[0].normal"),
+            std::string::npos);
   EXPECT_NE(errorOf(sceneWith(R"([{"kind": "plane", "point_m": [0, 0, 0], "normal": [0, 0, 0]}])")).find("non-zero"),
             std::string::npos);
   EXPECT_NE(errorOf(sceneWith(R"([{"kind": "disc"}])")).find("colliders[0].kind"), std::string::npos);
-  EXPECT_NE(errorOf(sceneWith(R"([{"point_m": [0, 0, 0], "normal": [0, 0, 1]}])")).find("colliders[0].kind: is required"),
-            std::string::npos);
+  EXPECT_NE(
+      errorOf(sceneWith(R"([{"point_m": [0, 0, 0], "normal": [0, 0, 1]}])")).find("colliders[0].kind: is required"),
+      std::string::npos);
   EXPECT_NE(errorOf(sceneWith(R"([{"kind": "box", "min_m": [0, 0, 0], "max_m": [1, 1, 1], "friction": -0.1}])"))
                 .find("colliders[0].friction"),
             std::string::npos);
-  EXPECT_NE(errorOf(sceneWith(R"([{"kind": "box", "min_m": [0, 0, 0], "max_m": [1, 0, 1]}])")).find("colliders[0].max_m"),
-            std::string::npos);
+  EXPECT_NE(
+      errorOf(sceneWith(R"([{"kind": "box", "min_m": [0, 0, 0], "max_m": [1, 0, 1]}])")).find("colliders[0].max_m"),
+      std::string::npos);
   EXPECT_NE(errorOf(sceneWith(R"([{"kind": "box", "min_m": [0, 0, 0], "max_m": [1, 1, 1], "radius_m": 1}])"))
                 .find("radius_m"),
             std::string::npos);
   std::string nine = "[";
-  for (int k = 0; k < 9; ++k) nine += std::string(k ? ", " : "") + R"({"kind": "plane", "point_m": [0, 0, -1], "normal": [0, 0, 1]})";
+  for (int k = 0; k < 9; ++k)
+    nine += std::string(k ? ", " : "") + R"({"kind": "plane", "point_m": [0, 0, -1], "normal": [0, 0, 1]})";
   EXPECT_NE(errorOf(sceneWith(nine + "]")).find("colliders[8].kind"), std::string::npos);
-  EXPECT_NE(errorOf(sceneWith(R"([{"kind": "plane", "point_m": [0, 0, -1], "normal": [0, 0, 1]}])",
-                              R"({"tearing": true})"))
-                .find("tearing"),
-            std::string::npos);
+  EXPECT_NE(
+      errorOf(sceneWith(R"([{"kind": "plane", "point_m": [0, 0, -1], "normal": [0, 0, 1]}])", R"({"tearing": true})"))
+          .find("tearing"),
+      std::string::npos);
 }
 
 // A collider through the organ is refused when the model is built (its spheres would jump out in the first substep).
 TEST(SceneColliders, AnOrganStartingInsideAColliderIsRefused) {
-  const Scene s = parseScene(sceneWith(R"([{"kind": "plane", "point_m": [0, 0, 0.001], "normal": [0, 0, 1]}])"), "c.json", ".");
+  const Scene s =
+      parseScene(sceneWith(R"([{"kind": "plane", "point_m": [0, 0, 0.001], "normal": [0, 0, 1]}])"), "c.json", ".");
   try {
     makeMetaballSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
     FAIL() << "accepted";
@@ -135,13 +141,17 @@ TEST(SceneColliders, TheContactInsetAppliesToStaticCollidersOnly) {
   pbd::CapsuleCollider<double> tool;
   tool.a = tool.b = Vec3d(-1, 0, 0.5);
   tool.radius = 0.0;
-  Vec3d x = pbd::resolveContacts(Vec3d(0, 0, -0.002), 0.01, 0.004, static_cast<const Vec3d*>(nullptr), &floor, 1, &box, 1, &tool, &tool, 1, 0.0, 0.0);
+  Vec3d x = pbd::resolveContacts(Vec3d(0, 0, -0.002), 0.01, 0.004, static_cast<const Vec3d*>(nullptr), &floor, 1, &box,
+                                 1, &tool, &tool, 1, 0.0, 0.0);
   EXPECT_NEAR(x.z, 0.006, 1e-15);
-  x = pbd::resolveContacts(Vec3d(0.999, 0, 0.5), 0.01, 0.004, static_cast<const Vec3d*>(nullptr), &floor, 1, &box, 1, &tool, &tool, 1, 0.0, 0.0);
+  x = pbd::resolveContacts(Vec3d(0.999, 0, 0.5), 0.01, 0.004, static_cast<const Vec3d*>(nullptr), &floor, 1, &box, 1,
+                           &tool, &tool, 1, 0.0, 0.0);
   EXPECT_NEAR(x.x, 0.994, 1e-12);
-  x = pbd::resolveContacts(Vec3d(-0.995, 0, 0.5), 0.01, 0.004, static_cast<const Vec3d*>(nullptr), &floor, 1, &box, 1, &tool, &tool, 1, 0.0, 0.0);
+  x = pbd::resolveContacts(Vec3d(-0.995, 0, 0.5), 0.01, 0.004, static_cast<const Vec3d*>(nullptr), &floor, 1, &box, 1,
+                           &tool, &tool, 1, 0.0, 0.0);
   EXPECT_NEAR(x.x, -0.99, 1e-12);
-  x = pbd::resolveContacts(Vec3d(0, 0, -0.002), 0.01, 0.02, static_cast<const Vec3d*>(nullptr), &floor, 1, &box, 1, &tool, &tool, 1, 0.0, 0.0);
+  x = pbd::resolveContacts(Vec3d(0, 0, -0.002), 0.01, 0.02, static_cast<const Vec3d*>(nullptr), &floor, 1, &box, 1,
+                           &tool, &tool, 1, 0.0, 0.0);
   EXPECT_NEAR(x.z, 0.0, 1e-15) << "an inset beyond the radius leaves the centre on the collider";
 }
 
@@ -165,7 +175,8 @@ TEST(SceneColliders, TheColliderLayerDrawsPlanesAroundTheOrganAndBoxesFacingOut)
   const Vec3d box_centre(0.15, 0.0, -0.005);
   for (std::size_t t = 0; t < m.triangles.size(); ++t) {
     const auto& tri = m.triangles[t];
-    const Vec3d a = m.vertices[std::size_t(tri[0])], b = m.vertices[std::size_t(tri[1])], c = m.vertices[std::size_t(tri[2])];
+    const Vec3d a = m.vertices[std::size_t(tri[0])], b = m.vertices[std::size_t(tri[1])],
+                c = m.vertices[std::size_t(tri[2])];
     const Vec3d normal = cross(b - a, c - a);
     if (t < 2)
       EXPECT_GT(dot(normal, n), 0.0) << "the plane's triangles face the free side";
@@ -210,10 +221,10 @@ TEST(SceneColliders, APbdSphereSlidesOrSticksAsCoulombSays) {
   EXPECT_GT(slideDownPbdSlope(a20, 0.3), 0.1) << "mu 0.3 < tan 20: it slides";
 }
 
-// The same for an MLS block (4 x 4 x 4 points, 5 mm lattice, E = 100 kPa) resting on a slope by its bottom face: its centroid
-// slides 0.5 g (sin a - mu cos a) t^2 in 0.5 s within 3 % (measured 0.0 and 0.1 %), and on a 20 degree slope with mu
-// 0.5 it stays within 0.2 mm (measured 0.08 mm of settling; without the drift's share in the friction it crept at
-// 2.5 mm/s, 1.3 mm by then).
+// The same for an MLS block (4 x 4 x 4 points, 5 mm lattice, E = 100 kPa) resting on a slope by its bottom face: its
+// centroid slides 0.5 g (sin a - mu cos a) t^2 in 0.5 s within 3 % (measured 0.0 and 0.1 %), and on a 20 degree slope
+// with mu 0.5 it stays within 0.2 mm (measured 0.08 mm of settling; without the drift's share in the friction it crept
+// at 2.5 mm/s, 1.3 mm by then).
 double slideDownMlsSlope(double angle, double mu) {
   MlsBuildInput in = mls_test::blockInput(4, 4, 4, 0.005);
   in.material.youngs_modulus_pa = 1.0e5;
@@ -325,9 +336,9 @@ double lowestSurface(const SimulationModel& m) {
 // it and never more than 0.2 mm below; the balls reach 2.5 mm into it. Without the floor the organ falls through.
 TEST(SceneColliders, AFallingMetaballOrgansSurfaceRestsOnTheFloor) {
   for (const bool with_floor : {false, true}) {
-    Scene s = parseScene(sceneWith(with_floor ? R"([{"kind": "plane", "point_m": [0, 0, -0.0275], "normal": [0, 0, 1]}])"
-                                              : "[]"),
-                         "c.json", ".");
+    Scene s = parseScene(
+        sceneWith(with_floor ? R"([{"kind": "plane", "point_m": [0, 0, -0.0275], "normal": [0, 0, 1]}])" : "[]"),
+        "c.json", ".");
     s.solver.gravity = Vec3d(0, 0, -9.81);
     auto m = makeMetaballSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
     double low = 1.0, low_ball = 1.0;
@@ -375,9 +386,10 @@ TEST(SceneColliders, ACutBlocksNodalPointsStayOutOfTheFloor) {
     (ended ? low_skin_after : low_skin_before) = std::min(ended ? low_skin_after : low_skin_before, lowestSurface(*m));
     low_points = std::min(low_points, lowest(layers.nodal_points));
   }
-  std::printf("[floor] lowest nodal point %.4f mm, lowest skin vertex before the stroke ends %.4f mm, after %.4f mm "
-              "(floor -15 mm), %zu frames with points\n",
-              low_points * 1e3, low_skin_before * 1e3, low_skin_after * 1e3, frames_with_points);
+  std::printf(
+      "[floor] lowest nodal point %.4f mm, lowest skin vertex before the stroke ends %.4f mm, after %.4f mm "
+      "(floor -15 mm), %zu frames with points\n",
+      low_points * 1e3, low_skin_before * 1e3, low_skin_after * 1e3, frames_with_points);
   const double reach = 0.5 * 0.005;  // half the lattice spacing (3 cells across a 7.5 mm ball's diameter)
   EXPECT_GT(frames_with_points, 10u);
   ASSERT_TRUE(ended);

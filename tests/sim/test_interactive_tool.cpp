@@ -7,10 +7,10 @@
 
 #include "host/scene/scene_compile.h"
 #include "host/sim/dissection_simulation.h"
-#include "model/input_error.h"
 #include "host/sim/interactive_tool.h"
 #include "host/sim/metaball_simulation.h"
 #include "host/sim/mls_simulation.h"
+#include "model/input_error.h"
 #include "tests/support/cut_block_scene.h"
 
 namespace inc {
@@ -202,8 +202,8 @@ TEST(InteractiveTool, MouseStrokeCutsTheDissectionModel) {
   rep = m->advance(kDt);
   EXPECT_EQ(rep.counters["cuts_applied"], 2.0);
   EXPECT_EQ(rep.counters["grasped"], 0.0);
-  EXPECT_GE(rep.counters["sphere_components"], 3.0) << rep.counters["nodal_points_last_cut"] << " nodal points, "
-                                                    << rep.counters["spheres"] << " spheres";
+  EXPECT_GE(rep.counters["sphere_components"], 3.0)
+      << rep.counters["nodal_points_last_cut"] << " nodal points, " << rep.counters["spheres"] << " spheres";
 }
 
 TEST(InteractiveTool, BadToolEventsAreInputErrors) {

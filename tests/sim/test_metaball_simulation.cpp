@@ -1,14 +1,15 @@
-// The scene-built PBD metaball organ: lattice sphere fill, grasper catch/drag/release, probe contact, checkpoints, bad input.
+// The scene-built PBD metaball organ: lattice sphere fill, grasper catch/drag/release, probe contact, checkpoints, bad
+// input.
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "host/scene/scene_compile.h"
-#include "host/sim/grasper.h"
-#include "model/input_error.h"
-#include "host/sim/metaball_simulation.h"
 #include "host/assembly/pbd_builders.h"
+#include "host/scene/scene_compile.h"
 #include "host/scene/scene_loader.h"
+#include "host/sim/grasper.h"
+#include "host/sim/metaball_simulation.h"
+#include "model/input_error.h"
 #include "tests/support/repo_paths.h"
 
 using namespace inc;
@@ -77,7 +78,7 @@ TEST(MetaballSimulation, GrasperCatchesDragsAndReleases) {
   std::vector<int> expected;
   for (std::size_t i = 0; i < at_grasp.size(); ++i)
     if (norm(at_grasp[i] - tip) <= 0.004 + 0.01 + 0.0075) expected.push_back(int(i));  // the clamped end is 5 cm away
-  for (int f = 7; f < 30; ++f) {  // to t = 0.5 s
+  for (int f = 7; f < 30; ++f) {                                                       // to t = 0.5 s
     r = sim->advance(1.0 / 60.0);
     ASSERT_TRUE(r.finite);
   }

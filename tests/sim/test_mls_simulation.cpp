@@ -4,8 +4,8 @@
 #include <cmath>
 
 #include "host/scene/scene_compile.h"
-#include "model/input_error.h"
 #include "host/sim/mls_simulation.h"
+#include "model/input_error.h"
 #if INCISION_HAVE_CUDA
 #include "kernels/device_info.h"
 #endif

@@ -10,8 +10,8 @@
 #include "host/backends/solver_factory.h"
 #include "model/mls_model.h"
 #include "model/mls_solver.h"
-#include "tests/support/mls_test_scenes.h"
 #include "physics/mls_passes.h"
+#include "tests/support/mls_test_scenes.h"
 
 using namespace inc;
 using namespace inc::mls_test;
@@ -90,7 +90,8 @@ double cantileverTipDeflection(double spacing, double length, double b, double y
   MlsBuildInput in;
   const int nx = int(std::lround(length / spacing)) + clamp_layers;
   const int nb = int(std::lround(b / spacing));
-  in.rest_positions = sampleBox(Vec3d(0, 0, 0), Vec3d(nx * spacing, nb * spacing, nb * spacing), LatticeSpec{spacing, 0.0, 1});
+  in.rest_positions =
+      sampleBox(Vec3d(0, 0, 0), Vec3d(nx * spacing, nb * spacing, nb * spacing), LatticeSpec{spacing, 0.0, 1});
   in.spacing = spacing;
   in.support_factor = support_factor;
   in.material.youngs_modulus_pa = youngs;
@@ -211,9 +212,10 @@ TEST(MlsValidation, CantileverMatchesEulerBernoulliAndConverges) {
   const double order = std::log(err_c / err_f) / std::log(hc / hf);
   const double r = (hc / hf) * (hc / hf);
   const double extrapolated = df + (df - dc) / (r - 1);
-  std::printf("[ MLS ] cantilever tip: spacing %.4f m: %.4e m (EB %.4e, err %.1f%%); spacing %.4f m: %.4e m (err "
-              "%.1f%%); observed order %.2f; Richardson (p = 2) %.4e m (err %.2f%%)\n",
-              hc, dc, eb_c, 100 * err_c, hf, df, 100 * err_f, order, extrapolated, 100 * std::abs(extrapolated / eb_f - 1));
+  std::printf(
+      "[ MLS ] cantilever tip: spacing %.4f m: %.4e m (EB %.4e, err %.1f%%); spacing %.4f m: %.4e m (err "
+      "%.1f%%); observed order %.2f; Richardson (p = 2) %.4e m (err %.2f%%)\n",
+      hc, dc, eb_c, 100 * err_c, hf, df, 100 * err_f, order, extrapolated, 100 * std::abs(extrapolated / eb_f - 1));
   EXPECT_NEAR(eb_c, eb_f, 1e-12);
   EXPECT_LT(err_f, 0.10);
   EXPECT_GT(order, 1.0);
@@ -265,7 +267,8 @@ TEST(MlsValidation, StableStepIsBelowTheDiscreteLimit) {
     MlsState<double> state;
     state.resize(model.size());
     std::vector<Vec3d> v(model.size());
-    for (std::size_t i = 0; i < v.size(); ++i) v[i] = Vec3d(hashSigned(3 * i), hashSigned(3 * i + 1), hashSigned(3 * i + 2));
+    for (std::size_t i = 0; i < v.size(); ++i)
+      v[i] = Vec3d(hashSigned(3 * i), hashSigned(3 * i + 1), hashSigned(3 * i + 2));
     double omega2 = 0;
     for (int it = 0; it < 300; ++it) {
       const double vn = std::sqrt(dotAll(v, v));
@@ -344,7 +347,8 @@ TEST(MlsValidation, ExtremeMaterialsStayFiniteAndBounded) {
       in.material.volume_preservation = true;
       in.material.damping_per_s = 5.0;
       in.kinds.resize(in.rest_positions.size());
-      for (std::size_t i = 0; i < in.kinds.size(); ++i) in.kinds[i] = in.rest_positions[i].x < -0.02 ? kMlsFixed : kMlsFree;
+      for (std::size_t i = 0; i < in.kinds.size(); ++i)
+        in.kinds[i] = in.rest_positions[i].x < -0.02 ? kMlsFixed : kMlsFree;
       auto solver = makeMlsSolver(in, BackendKind::Cpu, Precision::Float32);
       const std::vector<Vec3d> rest = solver->restPositions();
       std::vector<Vec3d> u(rest.size());
@@ -383,7 +387,8 @@ TEST(MlsValidation, SoftBlockBeyondItsStrengthHangsWithoutBlowingUp) {
   MlsFrameStats st;
   for (int k = 0; k < 8; ++k) {
     st = solver->advance(frame);
-    ASSERT_TRUE(st.totals.finite) << "frame " << k << ": " << st.totals.bad_stage << " particle " << st.totals.first_bad;
+    ASSERT_TRUE(st.totals.finite) << "frame " << k << ": " << st.totals.bad_stage << " particle "
+                                  << st.totals.first_bad;
     EXPECT_LE(st.totals.kinetic_energy + st.totals.elastic_energy, -st.totals.potential_energy * 1.01) << "frame " << k;
   }
   EXPECT_GT(st.totals.stiffening, 10.0);

@@ -1,10 +1,9 @@
 // A scene pays only for the models it switches on: a PBD-only scene builds and allocates nothing of MLS.
 #include <gtest/gtest.h>
 
-
-#include "host/scene/scene_compile.h"
-#include "host/scene/embedded_scenes.h"
 #include "host/app/runner.h"
+#include "host/scene/embedded_scenes.h"
+#include "host/scene/scene_compile.h"
 #include "host/scene/scene_loader.h"
 #include "tests/support/temp_dir.h"
 

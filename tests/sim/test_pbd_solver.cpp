@@ -5,17 +5,17 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <array>
 #include <random>
 #include <set>
 
 #include "cpu_fallback/pbd_solver_cpu.h"
+#include "physics/pbd_constraints.h"
 #include "tests/support/pbd_drop_check.h"
 #include "tests/support/pbd_fixtures.h"
-#include "physics/pbd_constraints.h"
 #include "tests/support/tolerance.h"
 
 using namespace inc;
@@ -59,10 +59,11 @@ TEST(PbdSolver, XpbdHangingChainMatchesAnalyticSagIndependentOfIterationsAndSubs
     const double s50 = settledChainSag(c, true, 1.0, solver, 4, 50);
     const double sub1 = settledChainSag(c, true, 1.0, solver, 1, 10);
     const double sub8 = settledChainSag(c, true, 1.0, solver, 8, 10);
-    std::printf("solver %d exact %.6f it5 %.6f it50 %.6f sub1 %.6f sub8 %.6f\n", int(solver), exact, s5, s50, sub1, sub8);
-    EXPECT_TRUE(test::relNear(s50, exact, 0.01));    // converged solve: within 1% of the analytic sag
-    EXPECT_TRUE(test::relNear(s5, s50, 0.02));       // issue 5: under 2% between 5 and 50 iterations
-    EXPECT_TRUE(test::relNear(sub1, sub8, 0.02));    // ... and between 1 and 8 substeps
+    std::printf("solver %d exact %.6f it5 %.6f it50 %.6f sub1 %.6f sub8 %.6f\n", int(solver), exact, s5, s50, sub1,
+                sub8);
+    EXPECT_TRUE(test::relNear(s50, exact, 0.01));  // converged solve: within 1% of the analytic sag
+    EXPECT_TRUE(test::relNear(s5, s50, 0.02));     // issue 5: under 2% between 5 and 50 iterations
+    EXPECT_TRUE(test::relNear(sub1, sub8, 0.02));  // ... and between 1 and 8 substeps
   }
 }
 
@@ -74,7 +75,7 @@ TEST(PbdSolver, PlainPbdStiffnessDependsOnIterationCount) {
   const double sub1 = settledChainSag(c, false, 0.02, PbdSolverKind::GaussSeidel, 1, 10);
   const double sub8 = settledChainSag(c, false, 0.02, PbdSolverKind::GaussSeidel, 8, 10);
   std::printf("pbd it5 %.6f it50 %.6f sub1 %.6f sub8 %.6f\n", s5, s50, sub1, sub8);
-  EXPECT_GT(s5, 1.5 * s50);    // more iterations = stiffer
+  EXPECT_GT(s5, 1.5 * s50);                                       // more iterations = stiffer
   EXPECT_GT(std::fabs(sub1 - sub8), 0.2 * std::max(sub1, sub8));  // and the substep count changes it too
 }
 
@@ -128,9 +129,10 @@ TEST(PbdSolver, XpbdBeamDeflectionIndependentOfIterationsSubstepsAndSolver) {
                ja320 = settledBeamDeflection(S::Jacobi, 4, 320);
   const double p5 = settledBeamDeflection(S::GaussSeidel, 4, 5, false, 0.05);
   const double p50 = settledBeamDeflection(S::GaussSeidel, 4, 50, false, 0.05);
-  std::printf("beam: GS 20 it %.5g, 80 it %.5g, 16 substeps %.5g; Jacobi 20/80/320 it %.5g %.5g %.5g; PBD 5/50 it %.5g %.5g\n",
-              gs20, gs80, sub16, ja20, ja80, ja320, p5, p50);
-  ASSERT_GT(gs80, 1e-3);                      // it does bend (about 7.6 mm on 5 cm)
+  std::printf(
+      "beam: GS 20 it %.5g, 80 it %.5g, 16 substeps %.5g; Jacobi 20/80/320 it %.5g %.5g %.5g; PBD 5/50 it %.5g %.5g\n",
+      gs20, gs80, sub16, ja20, ja80, ja320, p5, p50);
+  ASSERT_GT(gs80, 1e-3);                          // it does bend (about 7.6 mm on 5 cm)
   EXPECT_TRUE(test::relNear(gs20, gs80, 0.02));   // iterations 20 -> 80: under 2%
   EXPECT_TRUE(test::relNear(sub16, gs80, 0.02));  // substeps 4 -> 16: under 2%
   // Jacobi converges to the same equilibrium, more slowly (information moves one neighbourhood per iteration).
@@ -468,7 +470,10 @@ TEST(PbdSolver, CpuFrameIsIndependentOfThreadCount) {
       PbdState<float> s;
       be->getState(s);
       std::printf("%s, %d thread(s): %d of 8 frames on a team\n",
-                  variant == 0 ? "jacobi" : variant == 1 ? "jacobi + chebyshev" : "gauss-seidel", threads, team_frames);
+                  variant == 0   ? "jacobi"
+                  : variant == 1 ? "jacobi + chebyshev"
+                                 : "gauss-seidel",
+                  threads, team_frames);
       return s;
     };
     const PbdState<float> a = run(1), b = run(2), c = run(3);
@@ -484,8 +489,9 @@ TEST(PbdSolver, CpuFrameIsIndependentOfThreadCount) {
 
 // The CPU loops against the shared scalar code, whole frames: a probed, twisted metaball beam (clusters rotate, some
 // stall, batches of fewer than four at phase ends), Jacobi and Gauss-Seidel, float32 and float64: the states after
-// the frames are the same bits with the CPU's loops (pipelined shape-matching batches, rotation lanes, 3-vector member passes and Laplacians, specialised
-// distance loops) and with the shared scalar code, one constraint at a time (pbd::projectConstraint).
+// the frames are the same bits with the CPU's loops (pipelined shape-matching batches, rotation lanes, 3-vector member
+// passes and Laplacians, specialised distance loops) and with the shared scalar code, one constraint at a time
+// (pbd::projectConstraint).
 namespace {
 
 template <typename T>

@@ -70,7 +70,8 @@ TEST(RenderLayers, MetaballSpheresAndFixedSetMatchTheScene) {
   EXPECT_EQ(expected.size(), 2u * 4u * 3u);
   EXPECT_EQ(std::set<std::int32_t>(l.fixed_ids.begin(), l.fixed_ids.end()), expected);
   ASSERT_EQ(l.fixed_points.size(), l.fixed_ids.size());
-  for (std::size_t k = 0; k < l.fixed_ids.size(); ++k) EXPECT_TRUE(same(l.fixed_points[k], rest[std::size_t(l.fixed_ids[k])]));
+  for (std::size_t k = 0; k < l.fixed_ids.size(); ++k)
+    EXPECT_TRUE(same(l.fixed_points[k], rest[std::size_t(l.fixed_ids[k])]));
   EXPECT_TRUE(l.held_ids.empty());
   EXPECT_TRUE(l.forces.empty());
   EXPECT_TRUE(l.swept_surface.triangles.empty());
@@ -101,7 +102,9 @@ TEST(RenderLayers, MetaballGraspForceCarriesTheWeightAtRest) {
   const double mass = 1060.0 * 1e-6 * double(m->particleCount());  // density x spacing^3 per sphere
   const Vec3d weight = s.solver.gravity * mass;
   const Vec3d tool = sum(l.forces, ForceArrowKind::Tool), held = sum(l.forces, ForceArrowKind::Particle);
-  EXPECT_EQ(std::count_if(l.forces.begin(), l.forces.end(), [](const ForceArrow& a) { return a.kind == ForceArrowKind::Tool; }), 1);
+  EXPECT_EQ(std::count_if(l.forces.begin(), l.forces.end(),
+                          [](const ForceArrow& a) { return a.kind == ForceArrowKind::Tool; }),
+            1);
   // Measured 4e-12 of the weight (2026-11-25): the momentum argument is exact once the block is at rest.
   EXPECT_NEAR(norm(tool - weight), 0.0, 1e-6 * norm(weight)) << tool.z << " vs " << weight.z;
   EXPECT_NEAR(norm(held + tool), 0.0, 1e-12 * norm(weight));
@@ -204,7 +207,7 @@ TEST(RenderLayers, DissectionSweptSurfaceAndNodalPointsFollowTheCut) {
   }
   m->renderLayers(l);
   EXPECT_EQ(l.sphere_centres.size(), m->particleCount());  // the cut spheres left the PBD model
-  ASSERT_EQ(l.swept_surface.triangles.size(), 6u);  // 3 quads of the strip
+  ASSERT_EQ(l.swept_surface.triangles.size(), 6u);         // 3 quads of the strip
   double xmin = 1, xmax = -1;
   for (const Vec3d& v : l.swept_surface.vertices) {
     EXPECT_NEAR(v.y, 0.002, 1e-9);  // nothing moved yet: rest = current
@@ -291,6 +294,7 @@ TEST(RenderLayers, TearingSheetFixedAndHeldParticles) {
   EXPECT_EQ(fixed.size(), 11u);
   EXPECT_EQ(std::set<std::int32_t>(l.fixed_ids.begin(), l.fixed_ids.end()), fixed);
   EXPECT_EQ(std::set<std::int32_t>(l.held_ids.begin(), l.held_ids.end()), held);
-  for (std::size_t k = 0; k < l.held_ids.size(); ++k) EXPECT_TRUE(same(l.held_points[k], x[std::size_t(l.held_ids[k])]));
+  for (std::size_t k = 0; k < l.held_ids.size(); ++k)
+    EXPECT_TRUE(same(l.held_points[k], x[std::size_t(l.held_ids[k])]));
   EXPECT_TRUE(l.forces.empty());
 }

@@ -14,8 +14,12 @@ TEST(StabilityMatrix, MlsCoarseToFineSpacing) { spacingCase(BackendKind::Cpu, tr
 TEST(StabilityMatrix, PbdCoarseToFineSpacing) { spacingCase(BackendKind::Cpu, false); }
 TEST(StabilityMatrix, MlsJitteredRestPositions) { jitterCase(BackendKind::Cpu, true); }
 TEST(StabilityMatrix, PbdJitteredRestPositions) { jitterCase(BackendKind::Cpu, false); }
-TEST(StabilityMatrix, MlsCompressionUntilNeighbourhoodsInvertIsFiniteOrGuarded) { compressionCase(BackendKind::Cpu, true); }
-TEST(StabilityMatrix, PbdCompressionUntilNeighbourhoodsInvertIsFiniteOrGuarded) { compressionCase(BackendKind::Cpu, false); }
+TEST(StabilityMatrix, MlsCompressionUntilNeighbourhoodsInvertIsFiniteOrGuarded) {
+  compressionCase(BackendKind::Cpu, true);
+}
+TEST(StabilityMatrix, PbdCompressionUntilNeighbourhoodsInvertIsFiniteOrGuarded) {
+  compressionCase(BackendKind::Cpu, false);
+}
 TEST(StabilityMatrix, MlsIsolatedParticleFallsFreely) { mlsIsolatedCase(BackendKind::Cpu); }
 TEST(StabilityMatrix, PbdIsolatedSphereFallsFreely) { pbdIsolatedCase(BackendKind::Cpu); }
 // As many frames as fit in 3 s of wall time (CI); the 1e5-step soak is the DISABLED_ variant below.

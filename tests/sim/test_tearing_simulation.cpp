@@ -1,11 +1,12 @@
-// The tearing sheet as a SimulationModel: scene -> sheet, grasper pull tears it, scalpel removes tissue, bad scenes refused.
+// The tearing sheet as a SimulationModel: scene -> sheet, grasper pull tears it, scalpel removes tissue, bad scenes
+// refused.
 #include <gtest/gtest.h>
 
 #include <cstdio>
 
 #include "host/scene/scene_compile.h"
-#include "model/input_error.h"
 #include "host/sim/tearing_simulation.h"
+#include "model/input_error.h"
 
 using namespace inc;
 
@@ -30,7 +31,8 @@ Scene sheetScene() {
   g.kind = "grasper";
   g.radius = 0.004;
   g.length = 0.1;
-  g.path = {ToolKeyframe{0.0, Vec3d(0.2, 0.0, 0), Vec3d(0, 1, 0)}, ToolKeyframe{0.25, Vec3d(0.28, 0.0, 0), Vec3d(0, 1, 0)}};
+  g.path = {ToolKeyframe{0.0, Vec3d(0.2, 0.0, 0), Vec3d(0, 1, 0)},
+            ToolKeyframe{0.25, Vec3d(0.28, 0.0, 0), Vec3d(0, 1, 0)}};
   s.tools.push_back(g);
   return s;
 }
@@ -68,7 +70,8 @@ TEST(TearingSimulation, ScalpelRemovesTissueAndTubeBuilds) {
   sc.kind = "scalpel";
   sc.radius = 0.006;
   sc.length = 0.0;
-  sc.path = {ToolKeyframe{0.0, Vec3d(0.1, 0.0, 0), Vec3d(0, 1, 0)}, ToolKeyframe{0.1, Vec3d(0.1, 0.1, 0), Vec3d(0, 1, 0)}};
+  sc.path = {ToolKeyframe{0.0, Vec3d(0.1, 0.0, 0), Vec3d(0, 1, 0)},
+             ToolKeyframe{0.1, Vec3d(0.1, 0.1, 0), Vec3d(0, 1, 0)}};
   scene.tools.push_back(sc);
   auto m = makeTearingSimulation(compileScene(scene), BackendKind::Cpu, Precision::Float32);
   double removed = 0;

@@ -8,12 +8,12 @@
 #include <string>
 #include <vector>
 
-#include "host/scene/scene_compile.h"
 #include "cpu_fallback/pbd_solver_cpu.h"
-#include "model/input_error.h"
-#include "host/sim/metaball_simulation.h"
-#include "model/pbd_model.h"
+#include "host/scene/scene_compile.h"
 #include "host/scene/scene_loader.h"
+#include "host/sim/metaball_simulation.h"
+#include "model/input_error.h"
+#include "model/pbd_model.h"
 #include "physics/pbd_block.h"
 #include "tests/support/pbd_fixtures.h"
 
@@ -108,11 +108,12 @@ struct Dragged {
   double mean_dx = 0, mean_vx = 0;
 };
 Dragged dragBlock(double mu) {
-  const std::string json = R"({"name": "drag", "geometry": {"kind": "box", "size_m": [0.04, 0.04, 0.02], "spacing_m": 0.01},
+  const std::string json =
+      R"({"name": "drag", "geometry": {"kind": "box", "size_m": [0.04, 0.04, 0.02], "spacing_m": 0.01},
     "models": {"pbd_metaballs": true},
     "colliders": [{"kind": "plane", "point_m": [0, 0, -0.01], "normal": [0, 0, 1]}],
     "tools": [{"name": "probe", "kind": "probe", "radius_m": 0.005, "length_m": 0.2, "friction": )" +
-                           std::to_string(mu) + R"(,
+      std::to_string(mu) + R"(,
                "path": [{"t_s": 0, "position_m": [0.1, 0, 0.0155], "direction": [1, 0, 0]},
                         {"t_s": 0.25, "position_m": [0.1, 0, 0.0155], "direction": [1, 0, 0]},
                         {"t_s": 1.25, "position_m": [0.15, 0, 0.0155], "direction": [1, 0, 0]}]}]})";
@@ -144,7 +145,8 @@ TEST(ToolFriction, AProbeDragsTheOrganItPresses) {
 std::string toolError(const std::string& tool) {
   try {
     parseScene(R"({"name": "t", "geometry": {"kind": "box", "size_m": [0.04, 0.04, 0.02], "spacing_m": 0.01},
-                   "models": {"pbd_metaballs": true}, "tools": [)" + tool + "]}",
+                   "models": {"pbd_metaballs": true}, "tools": [)" +
+                   tool + "]}",
                "t.json", ".");
   } catch (const InputError& e) {
     return e.what();
@@ -154,13 +156,16 @@ std::string toolError(const std::string& tool) {
 
 TEST(ToolFriction, TheSceneKeyParsesRoundTripsAndRefusesBadValues) {
   const std::string path = R"("path": [{"t_s": 0, "position_m": [0, 0, 0.05]}])";
-  const Scene s = parseScene(R"({"name": "t", "geometry": {"kind": "box", "size_m": [0.04, 0.04, 0.02], "spacing_m": 0.01},
-      "models": {"pbd_metaballs": true}, "tools": [{"kind": "probe", "friction": 0.7, )" + path + "}]}",
-                             "t.json", ".");
+  const Scene s =
+      parseScene(R"({"name": "t", "geometry": {"kind": "box", "size_m": [0.04, 0.04, 0.02], "spacing_m": 0.01},
+      "models": {"pbd_metaballs": true}, "tools": [{"kind": "probe", "friction": 0.7, )" +
+                     path + "}]}",
+                 "t.json", ".");
   ASSERT_EQ(s.tools.size(), 1u);
   EXPECT_DOUBLE_EQ(s.tools[0].friction, 0.7);
   EXPECT_DOUBLE_EQ(parseScene(sceneToJson(s), "again.json", ".").tools[0].friction, 0.7);
-  EXPECT_NE(toolError(R"({"kind": "probe", "friction": -0.1, )" + path + "}").find("tools[0].friction"), std::string::npos);
+  EXPECT_NE(toolError(R"({"kind": "probe", "friction": -0.1, )" + path + "}").find("tools[0].friction"),
+            std::string::npos);
   EXPECT_NE(toolError(R"({"kind": "grasper", "friction": 2.5, )" + path + "}").find("[0, 2]"), std::string::npos);
   EXPECT_NE(toolError(R"({"kind": "scalpel", "friction": 0.5, )" + path + "}").find("cutting.blade_friction"),
             std::string::npos);

@@ -38,8 +38,8 @@ inline ToolSpec scalpel(std::vector<ToolKeyframe> path) {
 
 // The straight stroke through the block in the plane y = 2 mm: from x = -5 cm at `enter_s` to +5 cm at `leave_s`.
 inline ToolSpec straightScalpel(double enter_s, double leave_s) {
-  return scalpel({{enter_s, Vec3d(-0.05, 0.002, 0.0), Vec3d(0, 0, 1)},
-                  {leave_s, Vec3d(0.05, 0.002, 0.0), Vec3d(0, 0, 1)}});
+  return scalpel(
+      {{enter_s, Vec3d(-0.05, 0.002, 0.0), Vec3d(0, 0, 1)}, {leave_s, Vec3d(0.05, 0.002, 0.0), Vec3d(0, 0, 1)}});
 }
 
 // The scripted scalpel moved past any test's frames (100 s on): the block is cut by a mouse or device stroke.

@@ -5,8 +5,8 @@
 #include <numeric>
 #include <vector>
 
-#include "host/cut/cut_swept_surface.h"
 #include "host/assembly/metaball_model.h"
+#include "host/cut/cut_swept_surface.h"
 
 namespace inc::cuttest {
 

@@ -29,7 +29,8 @@ inline SweptSurface arcSweep(double cx, double cy, double r, double a0, double a
 // A blade from base to tip translated by `motion` in `steps` strips.
 inline SweptSurface straightBladeSweep(const Vec3d& base, const Vec3d& tip, const Vec3d& motion, int steps = 4) {
   std::vector<BladePose> poses;
-  for (int k = 0; k <= steps; ++k) poses.push_back({base + motion * (double(k) / steps), tip + motion * (double(k) / steps)});
+  for (int k = 0; k <= steps; ++k)
+    poses.push_back({base + motion * (double(k) / steps), tip + motion * (double(k) / steps)});
   return sweepSurface(poses);
 }
 

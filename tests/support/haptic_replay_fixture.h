@@ -5,10 +5,10 @@
 #include <string>
 #include <vector>
 
-#include "host/scene/scene_compile.h"
-#include "host/sim/dissection_simulation.h"
 #include "host/haptics/haptic_cut_session.h"
 #include "host/haptics/mfs_local.h"
+#include "host/scene/scene_compile.h"
+#include "host/sim/dissection_simulation.h"
 #include "tests/support/cut_block_scene.h"
 
 namespace inc::hapticreplay {

@@ -1,5 +1,5 @@
-// Test fixture: holds the dissection's idle-priority tasks (idleWorkerGate, host/cut/cut_stroke_end.h) as a busy machine
-// would starve them.
+// Test fixture: holds the dissection's idle-priority tasks (idleWorkerGate, host/cut/cut_stroke_end.h) as a busy
+// machine would starve them.
 #pragma once
 
 #include <chrono>

@@ -5,8 +5,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "model/mls_model.h"
 #include "host/assembly/particle_sampling.h"
+#include "model/mls_model.h"
 
 namespace inc::mls_test {
 

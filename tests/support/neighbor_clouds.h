@@ -111,7 +111,8 @@ CollidingCloud<T> collidingCloud() {
   bool found = false;
   for (int a = 0; a < 27 && !found; ++a)
     for (int b = a + 1; b < 27 && !found; ++b) {
-      const std::int32_t da[3] = {a % 3 - 1, (a / 3) % 3 - 1, a / 9 - 1}, db[3] = {b % 3 - 1, (b / 3) % 3 - 1, b / 9 - 1};
+      const std::int32_t da[3] = {a % 3 - 1, (a / 3) % 3 - 1, a / 9 - 1},
+                         db[3] = {b % 3 - 1, (b / 3) % 3 - 1, b / 9 - 1};
       if (neighborBucket(p, 5 + da[0], 5 + da[1], 5 + da[2]) != neighborBucket(p, 5 + db[0], 5 + db[1], 5 + db[2]))
         continue;
       for (int k = 0; k < 3; ++k) {
@@ -122,7 +123,9 @@ CollidingCloud<T> collidingCloud() {
     }
   EXPECT_TRUE(found) << "27 cells in 16 buckets always collide";
   const T c = T(5.5), s = T(0.55);  // centre of cell (5,5,5); 0.55 steps land inside the neighbour cells
-  cc.points = {lo, hi, Vec3<T>(c, c, c),
+  cc.points = {lo,
+               hi,
+               Vec3<T>(c, c, c),
                Vec3<T>(c + s * T(cc.c1[0] - 5), c + s * T(cc.c1[1] - 5), c + s * T(cc.c1[2] - 5)),
                Vec3<T>(c + s * T(cc.c2[0] - 5), c + s * T(cc.c2[1] - 5), c + s * T(cc.c2[2] - 5)),
                Vec3<T>(T(5.3), T(5.6), T(5.4))};
@@ -136,7 +139,8 @@ inline void expectSameLists(const NeighborLists& got, const NeighborLists& want,
   for (std::size_t q = 0; q + 1 < want.offsets.size(); ++q) {
     ASSERT_EQ(got.offsets[q + 1], want.offsets[q + 1]) << what << ": query " << q << " neighbour count";
   }
-  for (std::size_t e = 0; e < want.indices.size(); ++e) ASSERT_EQ(got.indices[e], want.indices[e]) << what << ": entry " << e;
+  for (std::size_t e = 0; e < want.indices.size(); ++e)
+    ASSERT_EQ(got.indices[e], want.indices[e]) << what << ": entry " << e;
 }
 
 // Lists are strictly ascending per query (no duplicates) and never contain the query itself when self.
@@ -164,7 +168,8 @@ inline NeighborLists storageListsToOriginal(const NeighborLists& storage, const 
   out.indices.resize(storage.indices.size());
   for (std::size_t s = 0; s < n; ++s) {
     std::int32_t* dst = out.indices.data() + out.offsets[std::size_t(perm[s])];
-    for (std::int64_t e = storage.offsets[s]; e < storage.offsets[s + 1]; ++e) *dst++ = perm[std::size_t(storage.indices[std::size_t(e)])];
+    for (std::int64_t e = storage.offsets[s]; e < storage.offsets[s + 1]; ++e)
+      *dst++ = perm[std::size_t(storage.indices[std::size_t(e)])];
     std::sort(out.indices.data() + out.offsets[std::size_t(perm[s])], dst);
   }
   return out;

@@ -1,4 +1,5 @@
-// The PBD robustness check shared by the solver tests: a metaball block dropped onto a floor stays finite, above it, and gains no energy.
+// The PBD robustness check shared by the solver tests: a metaball block dropped onto a floor stays finite, above it,
+// and gains no energy.
 #pragma once
 
 #include <gtest/gtest.h>

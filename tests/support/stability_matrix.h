@@ -11,17 +11,17 @@
 #include <string>
 #include <vector>
 
-#include "host/scene/scene_compile.h"
+#include "host/app/runner.h"
+#include "host/assembly/pbd_builders.h"
 #include "host/backends/solver_factory.h"
 #include "host/scene/embedded_scenes.h"
-#include "model/input_error.h"
+#include "host/scene/scene_compile.h"
+#include "host/scene/scene_loader.h"
 #include "host/sim/metaball_simulation.h"
 #include "host/sim/mls_simulation.h"
+#include "model/input_error.h"
 #include "model/mls_solver.h"
-#include "host/assembly/pbd_builders.h"
 #include "model/pbd_model.h"
-#include "host/app/runner.h"
-#include "host/scene/scene_loader.h"
 #include "tests/support/temp_dir.h"
 
 namespace inc::stability {
@@ -51,12 +51,12 @@ inline double barSagScale(const Scene& s) {
 }
 
 struct Outcome {
-  bool refused = false;          // InputError at build (key in refused_key)
+  bool refused = false;  // InputError at build (key in refused_key)
   std::string refused_key;
-  bool reported_failure = false; // finite == false with a stage and particle
+  bool reported_failure = false;  // finite == false with a stage and particle
   std::string failure;
   int frames = 0;
-  double max_total_energy = -std::numeric_limits<double>::infinity();  // J, K + elastic + gravity (0 at rest)
+  double max_total_energy = -std::numeric_limits<double>::infinity();          // J, K + elastic + gravity (0 at rest)
   double max_kinetic_plus_gravity = -std::numeric_limits<double>::infinity();  // J, K + U_grav
   double max_gravity_work = 0.0;  // J, max -U_gravity seen (work done by gravity)
   double max_displacement = 0.0;  // m
@@ -147,7 +147,8 @@ inline void materialsCase(BackendKind be, bool mls) {
       s.solver.frame_dt = 1.0e-3;
       const int frames = E >= 1e9 ? (nu > 0.45 ? 1 : 2) : 20;
       const Outcome o = runScene(s, be, frames);
-      const std::string what = std::string(mls ? "mls" : "pbd") + " E=" + std::to_string(E) + " nu=" + std::to_string(nu);
+      const std::string what =
+          std::string(mls ? "mls" : "pbd") + " E=" + std::to_string(E) + " nu=" + std::to_string(nu);
       EXPECT_FALSE(o.refused) << what << " refused (" << o.refused_key << ")";
       EXPECT_FALSE(o.reported_failure) << what << ": " << o.failure;
       expectBounded(o, s, what);
@@ -206,8 +207,8 @@ inline void pbdLongSubstepCase(BackendKind be) {
     EXPECT_EQ(refused.refused_key, "solver.substeps");
     s.solver.substeps = 0;
     const Outcome o = runScene(s, be, 10);
-    EXPECT_FALSE(o.refused || o.reported_failure) << "pbd automatic substeps, frame " << fdt << " " << o.refused_key
-                                                   << o.failure;
+    EXPECT_FALSE(o.refused || o.reported_failure)
+        << "pbd automatic substeps, frame " << fdt << " " << o.refused_key << o.failure;
     expectBounded(o, s, "pbd automatic substeps of a " + std::to_string(fdt) + " s frame");
   }
 }
@@ -349,10 +350,11 @@ inline void soakCase(BackendKind be, bool mls, double wall_s, int max_frames) {
       << *tail.second << " m";
   EXPECT_GE(o.last_displacement, 0.5 * o.max_displacement)
       << "peak " << o.max_displacement << " m more than twice the settled " << o.last_displacement << " m";
-  std::printf("[soak] %s: %d frames of %.4f s in %.1f s wall, max displacement %.3g m, last %.3g m (last %d frames "
-              "within %.2f %%)\n",
-              mls ? "mls" : "pbd", o.frames, s.solver.frame_dt, wall_s, o.max_displacement, o.last_displacement,
-              kTailFrames, 100 * (*tail.second - *tail.first) / o.last_displacement);
+  std::printf(
+      "[soak] %s: %d frames of %.4f s in %.1f s wall, max displacement %.3g m, last %.3g m (last %d frames "
+      "within %.2f %%)\n",
+      mls ? "mls" : "pbd", o.frames, s.solver.frame_dt, wall_s, o.max_displacement, o.last_displacement, kTailFrames,
+      100 * (*tail.second - *tail.first) / o.last_displacement);
 }
 
 }  // namespace inc::stability

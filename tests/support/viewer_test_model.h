@@ -93,7 +93,8 @@ class CutBall : public SaggingBall {
     out.vertices = full.vertices;
     out.triangles.clear();
     for (const auto& t : full.triangles)
-      if ((full.vertices[t[0]].y + full.vertices[t[1]].y + full.vertices[t[2]].y) / 3.0 < cut_y_) out.triangles.push_back(t);
+      if ((full.vertices[t[0]].y + full.vertices[t[1]].y + full.vertices[t[2]].y) / 3.0 < cut_y_)
+        out.triangles.push_back(t);
     return true;
   }
 

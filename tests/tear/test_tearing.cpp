@@ -1,19 +1,20 @@
-// Tearing sheet tests: yield below/above eq. 6, split placement, conservation, mesh validity over thousands of splits, reproducibility, roughness.
+// Tearing sheet tests: yield below/above eq. 6, split placement, conservation, mesh validity over thousands of splits,
+// reproducibility, roughness.
 #include <gtest/gtest.h>
 
 #include <omp.h>
 
 #include <algorithm>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <set>
 
 #include "cpu_fallback/tearing_cpu.h"
-#include "model/input_error.h"
-#include "physics/pbd_constraints.h"
 #include "host/tear/tearing_driver.h"
+#include "model/input_error.h"
 #include "model/tearing_sheet.h"
+#include "physics/pbd_constraints.h"
 #include "physics/tearing_tresca.h"
 #include "tests/support/tolerance.h"
 
@@ -129,7 +130,7 @@ double planeStressTresca(const TearSheet<double>& s, std::size_t i) {
 
 TEST(Tearing, BelowYieldNothingBreaksAndReleasedSheetReturnsToRest) {
   const PullResult probe = pullAndRelease(1e30, 0.006, 0);  // measures the shear a 6 mm pull causes
-  ASSERT_GT(probe.max_shear, 10.0);                        // the pull does stress the sheet (Pa)
+  ASSERT_GT(probe.max_shear, 10.0);                         // the pull does stress the sheet (Pa)
   const PullResult below = pullAndRelease(1.5 * probe.max_shear, 0.006, 150);
   EXPECT_EQ(below.splits, 0);
   // Released and damped (4/s over 2.5 s): back at rest within 0.1 mm.
@@ -384,8 +385,8 @@ TEST(Tearing, DebrisBoundaryRougherThanTraditional) {
     }
     EXPECT_GT(splits, 0);
     EXPECT_GT(len[0], 0.0);
-    EXPECT_GT(rough[1], 1.2 * rough[0]) << "shape " << shape << ": traditional L " << len[0] << " m, L^2/A "
-                                        << rough[0] << "; tresca L " << len[1] << " m, L^2/A " << rough[1];
+    EXPECT_GT(rough[1], 1.2 * rough[0]) << "shape " << shape << ": traditional L " << len[0] << " m, L^2/A " << rough[0]
+                                        << "; tresca L " << len[1] << " m, L^2/A " << rough[1];
     std::printf("removal shape %d: traditional L %.3f m, L^2/A %.1f; tresca L %.3f m, L^2/A %.1f (%d splits)\n", shape,
                 len[0], rough[0], len[1], rough[1], splits);
   }
@@ -552,9 +553,12 @@ TEST(Tearing, RebuiltAdjacencyMatchesSortedEdgeReference) {
   ASSERT_EQ(s.pt_offsets.size(), s.size() + 1);
   for (std::size_t i = 0; i < s.size(); ++i) {
     std::sort(partners[i].begin(), partners[i].end());
-    EXPECT_EQ(std::vector<std::int32_t>(s.pe_partner.begin() + s.pe_offsets[i], s.pe_partner.begin() + s.pe_offsets[i + 1]),
-              partners[i]) << i;
+    EXPECT_EQ(
+        std::vector<std::int32_t>(s.pe_partner.begin() + s.pe_offsets[i], s.pe_partner.begin() + s.pe_offsets[i + 1]),
+        partners[i])
+        << i;
     EXPECT_EQ(std::vector<std::int32_t>(s.pt_tris.begin() + s.pt_offsets[i], s.pt_tris.begin() + s.pt_offsets[i + 1]),
-              tris_of[i]) << i;
+              tris_of[i])
+        << i;
   }
 }

@@ -1,4 +1,5 @@
-// The device rebuild algorithms (per-particle fans and radix sorts, CPU references) equal the host adjacency + PBD model rebuild after many tearing steps.
+// The device rebuild algorithms (per-particle fans and radix sorts, CPU references) equal the host adjacency + PBD
+// model rebuild after many tearing steps.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -7,9 +8,9 @@
 #include <string>
 
 #include "cpu_fallback/tearing_cpu.h"
-#include "model/input_error.h"
 #include "host/tear/tearing_driver.h"
 #include "host/tear/tearing_rebuild.h"
+#include "model/input_error.h"
 #include "model/tearing_sheet.h"
 #include "physics/tearing_rebuild.h"
 

@@ -9,18 +9,18 @@
 
 #include <stb_image.h>
 
+#include "host/io/mesh.h"
 #include "host/scene/scene_compile.h"
 #include "host/sim/dissection_simulation.h"
 #include "host/sim/metaball_simulation.h"
 #include "model/input_error.h"
-#include "viewer/orbit_camera.h"
-#include "host/io/mesh.h"
+#include "test_paths.h"
 #include "tests/support/cut_block_scene.h"
+#include "tests/support/repo_paths.h"
 #include "tests/support/viewer_test_model.h"
 #include "viewer/gl_window.h"
+#include "viewer/orbit_camera.h"
 #include "viewer/viewer_app.h"
-#include "test_paths.h"
-#include "tests/support/repo_paths.h"
 
 namespace inc::viewer {
 namespace {
@@ -110,7 +110,8 @@ TEST_F(ViewerApp, RealCutSceneShowsCutWallColour) {
     Scene s = cuttest::dissectionBlock("<test:viewer_cut_block>", true);
     s.fixed = {{Vec3d(-1, -1, -1), Vec3d(1, 0.002, 1)}};
     s.tools = {cuttest::parkedScalpel()};  // the scene's scripted scalpel never runs here
-    std::unique_ptr<SimulationModel> m = makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float32);
+    std::unique_ptr<SimulationModel> m =
+        makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float32);
     if (cut) {
       ToolEvent e;
       e.kind = ToolKind::Cut;
@@ -565,8 +566,8 @@ TEST_F(ViewerApp, CutLiverShowsTissueAndCutWalls) {
   EXPECT_GT(tissueFraction(p), 0.05);
   EXPECT_GT(cutWallFraction(p), 0.002);
   EXPECT_TRUE(last.tool_on_surface);
-  if (const char* doc = std::getenv("INCISION_DOC_SCREENSHOT")) std::filesystem::copy_file(o.screenshot_path, doc,
-      std::filesystem::copy_options::overwrite_existing);
+  if (const char* doc = std::getenv("INCISION_DOC_SCREENSHOT"))
+    std::filesystem::copy_file(o.screenshot_path, doc, std::filesystem::copy_options::overwrite_existing);
 }
 
 TEST(ViewerAppNoDisplay, SaysSoAndReturnsOne) {
@@ -579,7 +580,10 @@ TEST(ViewerAppNoDisplay, SaysSoAndReturnsOne) {
   ::testing::internal::CaptureStderr();
   const int rc = runViewer(o);
   const std::string err = ::testing::internal::GetCapturedStderr();
-  if (old) setenv("DISPLAY", saved.c_str(), 1); else unsetenv("DISPLAY");
+  if (old)
+    setenv("DISPLAY", saved.c_str(), 1);
+  else
+    unsetenv("DISPLAY");
   EXPECT_EQ(rc, 1);
   EXPECT_NE(err.find("incision run"), std::string::npos) << err;
 }
@@ -611,4 +615,3 @@ TEST(OrbitCameraZUp, EyeAboveTheTargetAndUpAlongZ) {
   o.orbit(0.0, -1000.0);  // pitch clamped below the horizon
   EXPECT_LT(o.eye().z, 0.3);
 }
-

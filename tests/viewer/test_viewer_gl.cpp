@@ -182,11 +182,11 @@ TEST_F(ViewerGl, ZBufferCollisionMatchesCpuAndGeometry) {
   ZBufferCollider gpu;
   const Vec3d eye{0, 0, 1};
   struct Case {
-    double z;      // tip on the z axis
+    double z;  // tip on the z axis
     bool inside;
-    double pen;    // analytic penetration along the ray, m
+    double pen;  // analytic penetration along the ray, m
   };
-  const Case cases[] = {{0.12, false, 0}, {0.09, true, 0.01}, {0.0, true, 0.1},   {-0.05, true, 0.15},
+  const Case cases[] = {{0.12, false, 0}, {0.09, true, 0.01},  {0.0, true, 0.1},    {-0.05, true, 0.15},
                         {-0.2, false, 0}, {-0.27, true, 0.02}, {-0.33, true, 0.08}, {-0.4, false, 0}};
   for (const Case& c : cases) {
     const Vec3d tip{0, 0, c.z};

@@ -4,9 +4,9 @@
 #include <memory>
 #include <string>
 
-#include "host/scene/scene_compile.h"
 #include "host/haptics/haptic_scene_model.h"
 #include "host/haptics/pointer_device.h"
+#include "host/scene/scene_compile.h"
 #include "tests/support/viewer_test_model.h"
 #include "viewer/gl_window.h"
 #include "viewer/viewer_app.h"

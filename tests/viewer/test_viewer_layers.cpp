@@ -171,7 +171,8 @@ TEST_F(ViewerLayersGl, MarkedParticlesShowTheirColoursWhereTheyProject) {
   for (const Vec3d& p : l.nodal_points) {
     if (p.z < 0) continue;  // behind the front ones
     const auto* c = at(p);
-    EXPECT_TRUE(c[1] > 200 && c[0] + 50 < c[1] && c[2] + 50 < c[1]) << int(c[0]) << "," << int(c[1]) << "," << int(c[2]);
+    EXPECT_TRUE(c[1] > 200 && c[0] + 50 < c[1] && c[2] + 50 < c[1])
+        << int(c[0]) << "," << int(c[1]) << "," << int(c[2]);
   }
   EXPECT_FALSE(lit(img, kW / 2, kH - 10));  // nothing was drawn up there
   // Switched off, nothing is drawn.
@@ -297,7 +298,8 @@ TEST(ViewerLayers, ArrowGeometryAndScale) {
   arrowTriangles(cam, {0, 0, 0}, {0, 0, -0.1}, 0.002, tri);  // along the line of sight
   EXPECT_TRUE(tri.empty());
 
-  std::vector<ForceArrow> f = {{{0, 0, 0}, {0, 0, 2}, ForceArrowKind::Tool}, {{0, 0, 0}, {0.5, 0, 0}, ForceArrowKind::Particle}};
+  std::vector<ForceArrow> f = {{{0, 0, 0}, {0, 0, 2}, ForceArrowKind::Tool},
+                               {{0, 0, 0}, {0.5, 0, 0}, ForceArrowKind::Particle}};
   EXPECT_DOUBLE_EQ(forceArrowScale(f, 0.0, 0.2), 0.25 * 0.2 / 2.0);
   EXPECT_DOUBLE_EQ(forceArrowScale(f, 0.3, 0.2), 0.3);
   EXPECT_DOUBLE_EQ(forceArrowScale({}, 0.0, 0.2), 0.0);

@@ -5,8 +5,8 @@
 #include <cmath>
 #include <cstdio>
 
-#include "model/input_error.h"
 #include "host/scene/scene_loader.h"
+#include "model/input_error.h"
 #include "tests/support/repo_paths.h"
 #include "viewer/scene_knobs.h"
 #include "viewer/sim_runner.h"
@@ -62,8 +62,8 @@ double tipDeflection(SimRunner& run, const std::vector<Vec3d>& rest, int frames)
 TEST(ViewerSceneKnobs, PanelsComeFromTheScene) {
   const SceneViewerSetup setup = makeSceneViewerSetup(smallBeam());
   const auto& k = setup.knobs;
-  for (const char* label : {"Young's modulus [Pa]", "Poisson ratio", "substeps (0 = auto)", "time step [s]",
-                            "precision", "backend"})
+  for (const char* label :
+       {"Young's modulus [Pa]", "Poisson ratio", "substeps (0 = auto)", "time step [s]", "precision", "backend"})
     EXPECT_LT(knobIndex(k, label), k.size()) << label;
   EXPECT_EQ(knobIndex(k, "PBD iterations"), k.size());  // an MLS scene has no PBD iterations
   EXPECT_DOUBLE_EQ(k[knobIndex(k, "Young's modulus [Pa]")].value, 2.0e5);
@@ -147,8 +147,9 @@ TEST(ViewerSceneKnobs, CuttingKnobsReachTheModel) {
 }
 
 // Doubling E through the UI's path halves the small-deflection tip sag (Euler-Bernoulli: delta = q L^4 / 8 E I,
-// proportional to 1 / E). Tolerance 2 % (measured 0.08 %): gravity is reduced to 2 m/s^2 so that the sag is 2 % of the length
-// at E = 2e5 Pa (geometric nonlinearity well under the tolerance); both runs settle (damping 150 / s, 0.67 s: the slowest mode to e^-9).
+// proportional to 1 / E). Tolerance 2 % (measured 0.08 %): gravity is reduced to 2 m/s^2 so that the sag is 2 % of the
+// length at E = 2e5 Pa (geometric nonlinearity well under the tolerance); both runs settle (damping 150 / s, 0.67 s:
+// the slowest mode to e^-9).
 TEST(ViewerSceneKnobs, YoungsModulusChangeRebuildsAndScalesTheDeflection) {
   SceneViewerSetup setup = makeSceneViewerSetup(smallBeam());
   SimRunner run(nullptr, setup.factory, setup.knobs, 1.0 / 60.0, /*threaded=*/false);

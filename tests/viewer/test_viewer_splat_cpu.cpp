@@ -15,8 +15,8 @@ using testing::coveredFraction;
 using testing::fibonacciSphere;
 
 TEST(ViewerCamera, ProjectAndPixelRayAreInverse) {
-  const ViewCamera cam = ViewCamera::lookAlong({0.3, 0.2, 1.0}, {-0.3, -0.2, -1.0}, {0, 1, 0}, false, 0.5, 0.01,
-                                               10.0, 80, 60);
+  const ViewCamera cam =
+      ViewCamera::lookAlong({0.3, 0.2, 1.0}, {-0.3, -0.2, -1.0}, {0, 1, 0}, false, 0.5, 0.01, 10.0, 80, 60);
   const Vec3d p{0.05, -0.02, 0.1};
   double px, py, z;
   ASSERT_TRUE(cam.project(p, px, py, z));
@@ -29,8 +29,8 @@ TEST(ViewerCamera, ProjectAndPixelRayAreInverse) {
 }
 
 TEST(ViewerCamera, MatricesAgreeWithProject) {
-  const ViewCamera cam = ViewCamera::lookAlong({0.1, 0.4, 0.8}, {-0.1, -0.4, -0.8}, {0, 1, 0}, false, 0.4, 0.05,
-                                               5.0, 64, 48);
+  const ViewCamera cam =
+      ViewCamera::lookAlong({0.1, 0.4, 0.8}, {-0.1, -0.4, -0.8}, {0, 1, 0}, false, 0.4, 0.05, 5.0, 64, 48);
   const Mat4f pv = cam.projectionMatrix() * cam.viewMatrix();
   const Vec3d p{0.02, 0.01, -0.03};
   float clip[4] = {0, 0, 0, 0};

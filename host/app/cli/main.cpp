@@ -5,15 +5,15 @@
 #include <filesystem>
 #include <iostream>
 
-#include "model/backend.h"
 #include "host/app/cli/tradeoff_command.h"
 #include "host/app/cli/view_command.h"
+#include "host/app/runner.h"
 #include "host/scene/embedded_scenes.h"
 #include "host/scene/haptics_scene.h"
-#include "model/input_error.h"
-#include "host/app/runner.h"
 #include "host/scene/scene_loader.h"
 #include "kernels/device_info.h"
+#include "model/backend.h"
+#include "model/input_error.h"
 
 namespace {
 
@@ -43,9 +43,9 @@ int cmdDevices() {
   // Haptic device drivers (scene key haptics.device; docs/haptics.md).
   std::printf("haptic devices: scripted, udp (127.0.0.1), pointer (the viewer's mouse)%s\n",
               inc::openHapticsBuilt() ? ", openhaptics" : "");
-  std::printf("OpenHaptics driver: %s\n", inc::openHapticsBuilt()
-                                               ? "built (Phantom / Geomagic Touch through the HD API; untested here)"
-                                               : "not built (CMake did not find the OpenHaptics SDK: HD/hd.h and libHD)");
+  std::printf("OpenHaptics driver: %s\n",
+              inc::openHapticsBuilt() ? "built (Phantom / Geomagic Touch through the HD API; untested here)"
+                                      : "not built (CMake did not find the OpenHaptics SDK: HD/hd.h and libHD)");
   return 0;
 }
 
@@ -84,9 +84,12 @@ int cmdRun(const RunArgs& a) {
   opt.quiet = a.quiet;
   if (!a.backend.empty()) opt.backend = inc::parseBackend(a.backend);
   if (!a.precision.empty()) {
-    if (a.precision == "float32") opt.precision = inc::Precision::Float32;
-    else if (a.precision == "float64") opt.precision = inc::Precision::Float64;
-    else throw inc::InputError("", "--precision", "unknown precision '" + a.precision + "' (float32 or float64)");
+    if (a.precision == "float32")
+      opt.precision = inc::Precision::Float32;
+    else if (a.precision == "float64")
+      opt.precision = inc::Precision::Float64;
+    else
+      throw inc::InputError("", "--precision", "unknown precision '" + a.precision + "' (float32 or float64)");
   }
   const inc::RunSummary sum = inc::runScene(scene, opt);
   std::printf("incision: %s: %s\n", scene.name.c_str(), sum.line().c_str());
@@ -129,7 +132,8 @@ struct TradeoffArgs {
 };
 
 CLI::App* addTradeoffCommand(CLI::App& app, TradeoffArgs& a) {
-  auto* tradeoff = app.add_subcommand("tradeoff", "Sweep the scene's model knobs: ms per frame vs error (CSV, table, plot)");
+  auto* tradeoff =
+      app.add_subcommand("tradeoff", "Sweep the scene's model knobs: ms per frame vs error (CSV, table, plot)");
   tradeoff->add_option("scene", a.scene,
                        "Scene file (JSON) or embedded scene name; default: the embedded beam (analytic reference)");
   tradeoff->add_option("--budget-ms", a.budgets, "Comma list of frame budgets in ms for the Pareto tables");

@@ -71,10 +71,14 @@ int runTradeoffCommand(const Scene& scene_in, const TradeoffCommandOptions& opti
     std::stringstream ss(o.models);
     std::string m;
     while (std::getline(ss, m, ',')) {
-      if (m == "mls") scene.models.mls = true;
-      else if (m == "pbd") scene.models.pbd_metaballs = true;
-      else if (m == "mfs") scene.models.haptics = true;
-      else throw InputError("", "--models", "unknown model '" + m + "' (mls, pbd, mfs)");
+      if (m == "mls")
+        scene.models.mls = true;
+      else if (m == "pbd")
+        scene.models.pbd_metaballs = true;
+      else if (m == "mfs")
+        scene.models.haptics = true;
+      else
+        throw InputError("", "--models", "unknown model '" + m + "' (mls, pbd, mfs)");
     }
   }
   const TradeoffResult r = runTradeoff(scene, o.sweep);
@@ -92,8 +96,8 @@ int runTradeoffCommand(const Scene& scene_in, const TradeoffCommandOptions& opti
   std::string title = scene.name;
   for (char& c : title)
     if (c == '\'' || c == '\\') c = ' ';
-  const std::string cmd = "/usr/bin/python3 '" + py + "' '" + csv + "' '" + png + "' '" + budgets + "' '" +
-                          title + " (" + r.backend + "): error vs cost' '" + r.cost + "' 2>&1";
+  const std::string cmd = "/usr/bin/python3 '" + py + "' '" + csv + "' '" + png + "' '" + budgets + "' '" + title +
+                          " (" + r.backend + "): error vs cost' '" + r.cost + "' 2>&1";
   const int rc = std::system(cmd.c_str());
   std::fputs(report.c_str(), stdout);
   std::printf("tradeoff: %s: %zu settings, %s, %s%s\n", scene.name.c_str(), r.rows.size(), csv.c_str(), md.c_str(),

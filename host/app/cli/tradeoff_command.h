@@ -3,15 +3,16 @@
 
 #include <string>
 
-#include "host/scene/scene.h"
 #include "host/app/tradeoff.h"
+#include "host/scene/scene.h"
 
 namespace inc::cli {
 
 struct TradeoffCommandOptions {
   TradeoffOptions sweep;
   std::string out_dir = "tradeoff";
-  std::string models;  // "" = the scene's; else a comma list of "mls", "pbd", "mfs" (haptic local model) switched on instead
+  std::string
+      models;  // "" = the scene's; else a comma list of "mls", "pbd", "mfs" (haptic local model) switched on instead
   std::string cost = "wall";  // "wall" | "cpu" (sets sweep.cpu_cost; anything else: InputError(--cost))
 };
 

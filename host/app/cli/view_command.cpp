@@ -1,6 +1,6 @@
 // `incision view`: builds the scene's first model through the model factory and hands it to the viewer.
-#include "host/scene/scene_compile.h"
 #include "host/app/cli/view_command.h"
+#include "host/scene/scene_compile.h"
 
 #include <cmath>
 #include <cstdio>
@@ -69,8 +69,9 @@ int runViewCommand(const Scene& scene_in, const ViewCommandOptions& options) {
 #else
   (void)scene_in;
   (void)options;
-  std::fprintf(stderr, "incision: this build has no viewer (GLFW, Dear ImGui or OpenGL were not found); "
-                       "use `incision run` for headless runs\n");
+  std::fprintf(stderr,
+               "incision: this build has no viewer (GLFW, Dear ImGui or OpenGL were not found); "
+               "use `incision run` for headless runs\n");
   return 1;
 #endif
 }

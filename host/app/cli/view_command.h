@@ -12,9 +12,9 @@ namespace inc::cli {
 
 struct ViewCommandOptions {
   std::optional<BackendKind> backend;
-  int frames = 0;               // > 0: scripted run of N frames, then exit (with `screenshot`)
-  std::string screenshot;       // PNG written after the last scripted frame
-  bool splats = false;          // start with point splats instead of the shaded surface
+  int frames = 0;                      // > 0: scripted run of N frames, then exit (with `screenshot`)
+  std::string screenshot;              // PNG written after the last scripted frame
+  bool splats = false;                 // start with point splats instead of the shaded surface
   std::optional<CameraAngles> camera;  // --camera YAW,PITCH[,DISTANCE]; unset: the default framing
 };
 
