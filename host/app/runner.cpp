@@ -10,6 +10,7 @@
 #include <sstream>
 #include <thread>
 
+#include "base/format_number.h"
 #include "base/progress.h"
 #include "host/app/metrics_csv.h"
 #include "host/backends/backend_choice.h"
@@ -69,18 +70,25 @@ Scene sceneForRun(const Scene& scene_in, const RunOptions& opt) {
   Scene scene = scene_in;
   if (opt.backend) scene.solver.backend = *opt.backend;
   if (opt.precision) scene.solver.precision = *opt.precision;
-  if (opt.frames == 0 || (opt.frames < 0 && opt.frames != -1))
-    throw InputError("", "--steps", "must be a positive number of frames");
-  if (opt.seconds != -1.0 && !(opt.seconds > 0.0 && std::isfinite(opt.seconds)))
-    throw InputError("", "--seconds", "must be a positive, finite number of seconds");
+  if (opt.frames && !(*opt.frames >= 1 && *opt.frames <= kMaxRunFrames))
+    throw InputError("", "--steps",
+                     "must be a number of frames in [1, " + std::to_string(kMaxRunFrames) + "] (got " +
+                         std::to_string(*opt.frames) + ")");
+  if (opt.seconds && !(*opt.seconds > 0.0 && std::isfinite(*opt.seconds)))
+    throw InputError("", "--seconds",
+                     "must be a positive, finite number of seconds (got " + formatNumber(*opt.seconds) + ")");
+  if (opt.seconds && *opt.seconds / scene.solver.frame_dt > double(kMaxRunFrames))
+    throw InputError("", "--seconds",
+                     formatNumber(*opt.seconds) + " s is more than " + std::to_string(kMaxRunFrames) +
+                         " frames of solver.frame_dt_s = " + formatNumber(scene.solver.frame_dt) + " s");
   return scene;
 }
 
 // --steps, else --seconds, else the scene's duration, in frames of frame_dt (at least one).
 long framesRequested(const Scene& scene, const RunOptions& opt) {
   const double dt = scene.solver.frame_dt;
-  const double seconds = opt.seconds > 0 ? opt.seconds : scene.duration;
-  return opt.frames > 0 ? opt.frames : std::max(1L, long(std::llround(seconds / dt)));
+  const double seconds = opt.seconds ? *opt.seconds : scene.duration;
+  return opt.frames ? *opt.frames : std::max(1L, long(std::llround(seconds / dt)));
 }
 
 fs::path createOutputFolder(const std::string& dir) {
@@ -197,6 +205,29 @@ std::string RunSummary::line() const {
   if (!haptic.empty()) s << "; " << haptic;
   if (failed) s << "; " << failure;
   return s.str();
+}
+
+long parseRunSteps(const std::string& text) {
+  const std::string why =
+      "must be a number of frames in [1, " + std::to_string(kMaxRunFrames) + "] (got \"" + text + "\")";
+  if (text.empty() || text.size() > 9 || text.find_first_not_of("0123456789") != std::string::npos)
+    throw InputError("", "--steps", why);
+  const long frames = std::stol(text);
+  if (frames < 1 || frames > kMaxRunFrames) throw InputError("", "--steps", why);
+  return frames;
+}
+
+double parseRunSeconds(const std::string& text) {
+  const std::string why = "must be a positive, finite number of seconds (got \"" + text + "\")";
+  std::size_t used = 0;
+  double seconds = 0;
+  try {
+    seconds = std::stod(text, &used);
+  } catch (const std::exception&) {
+    throw InputError("", "--seconds", why);
+  }
+  if (used != text.size() || !(seconds > 0.0 && std::isfinite(seconds))) throw InputError("", "--seconds", why);
+  return seconds;
 }
 
 RunSummary runScene(const Scene& scene_in, const RunOptions& opt, const ModelFactory& factory) {

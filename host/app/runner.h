@@ -14,9 +14,13 @@
 
 namespace inc {
 
+// The longest run the runner accepts, in frames (19 days of simulated time at 60 Hz): a larger --steps, or a
+// --seconds that needs more frames, is a typing mistake, refused instead of running until killed.
+inline constexpr long kMaxRunFrames = 100000000;
+
 struct RunOptions {
-  long frames = -1;                    // --steps N: frames of scene.solver.frame_dt (default: duration)
-  double seconds = -1.0;               // --seconds T: simulated seconds
+  std::optional<long> frames;          // --steps N: frames of scene.solver.frame_dt, [1, kMaxRunFrames]
+  std::optional<double> seconds;       // --seconds T: simulated seconds, > 0 (neither: the scene's duration)
   std::optional<BackendKind> backend;  // --backend overrides the scene
   std::optional<Precision> precision;  // --precision overrides the scene
   std::string out_dir = "out";
@@ -46,7 +50,13 @@ struct RunSummary {
 // Creates the models the scene switches on (createSceneModels, host/sim/model_factory.h) or a test's own.
 using ModelFactory = std::function<std::vector<std::unique_ptr<SimulationModel>>(const CompiledScene&, BackendKind)>;
 
-// Runs the scene. Throws InputError for bad options; a numerical failure is returned in the summary
+// The text of --steps as a frame count: digits only, in [1, kMaxRunFrames]; else InputError("", "--steps", why).
+long parseRunSteps(const std::string& text);
+// The text of --seconds as simulated seconds: a finite number > 0; else InputError("", "--seconds", why).
+double parseRunSeconds(const std::string& text);
+
+// Runs the scene. Throws InputError for bad options (a frame count out of [1, kMaxRunFrames], seconds not > 0 or
+// needing more than kMaxRunFrames frames); a numerical failure is returned in the summary
 // (failed == true) after the last good state has been written to out_dir.
 RunSummary runScene(const Scene& scene, const RunOptions& opt, const ModelFactory& factory = createSceneModels);
 

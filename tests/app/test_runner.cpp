@@ -180,11 +180,43 @@ TEST(Runner, BadOptionsAreInputErrors) {
   const test::TempDir tmp("runner_bad");
   opt.out_dir = tmp.str();
   opt.quiet = true;
-  opt.seconds = -2.0;
   auto factory = [](const CompiledScene&, BackendKind) { return std::vector<std::unique_ptr<SimulationModel>>{}; };
-  EXPECT_THROW(runScene(oscillatorScene(), opt, factory), InputError);
-  opt.seconds = -1.0;
-  EXPECT_THROW(runScene(oscillatorScene(), opt, factory), InputError);  // no model switched on
+  auto keyOf = [&](const RunOptions& o) {
+    try {
+      runScene(oscillatorScene(), o, factory);
+    } catch (const InputError& e) {
+      return e.key();
+    }
+    return std::string("<no error>");
+  };
+  EXPECT_EQ(keyOf(opt), "models");  // no model switched on
+  // -1 was once the "not given" value: given, it is refused like any other negative count.
+  for (const double s : {-2.0, -1.0, 0.0, std::nan(""), HUGE_VAL}) {
+    RunOptions o = opt;
+    o.seconds = s;
+    EXPECT_EQ(keyOf(o), "--seconds") << s;
+  }
+  for (const long f : {-1L, 0L, kMaxRunFrames + 1}) {
+    RunOptions o = opt;
+    o.frames = f;
+    EXPECT_EQ(keyOf(o), "--steps") << f;
+  }
+  RunOptions longest = opt;  // a finite --seconds that needs more than kMaxRunFrames frames
+  longest.seconds = 1.0e9;
+  EXPECT_EQ(keyOf(longest), "--seconds");
+}
+
+TEST(Runner, StepsAndSecondsAreParsedStrictly) {
+  EXPECT_EQ(parseRunSteps("1"), 1);
+  EXPECT_EQ(parseRunSteps("120"), 120);
+  EXPECT_EQ(parseRunSteps(std::to_string(kMaxRunFrames)), kMaxRunFrames);
+  // Not silently clamped or wrapped: too large, negative, zero, fractional, signed or not a number.
+  for (const char* bad : {"99999999999999999999", "100000001", "-1", "0", "1.5", "+3", " 4", "", "ten"})
+    EXPECT_THROW(parseRunSteps(bad), InputError) << bad;
+  EXPECT_DOUBLE_EQ(parseRunSeconds("0.5"), 0.5);
+  EXPECT_DOUBLE_EQ(parseRunSeconds("2e-3"), 2e-3);
+  for (const char* bad : {"-1", "0", "nan", "inf", "1e400", "1s", "", "x"})
+    EXPECT_THROW(parseRunSeconds(bad), InputError) << bad;
 }
 
 TEST(NumericalGuard, FlagsEnergyGrowthPastTheBound) {

@@ -34,6 +34,12 @@ expect 2 "typo.json: solver.frame_dt: .*frame_dt_s" -- "$exe" validate "$tmp/typ
 expect 2 "mesh.json: geometry.mesh" -- "$exe" validate "$tmp/mesh.json"
 expect 2 "--backend" -- "$exe" run --backend quantum --out "$tmp/o"
 expect 2 "--precision" -- "$exe" run --precision float16 --out "$tmp/o"
+# Run lengths: -1 was the internal "not given" and ran the whole duration; a huge count was clamped and ran on.
+expect 2 "--steps: must be a number of frames" -- "$exe" run --steps -1 --out "$tmp/o"
+expect 2 "--steps: must be a number of frames" -- "$exe" run --steps 0 --out "$tmp/o"
+expect 2 "--steps: must be a number of frames" -- "$exe" run --steps 99999999999999999999 --out "$tmp/o"
+expect 2 "--seconds: must be a positive" -- "$exe" run --seconds -1 --out "$tmp/o"
+expect 2 "--seconds: .* frames of solver.frame_dt_s" -- "$exe" run --seconds 1e12 --out "$tmp/o"
 expect 2 "--cost" -- "$exe" tradeoff --cost sometimes --quick --out "$tmp/t"
 expect 2 "--models.*unknown model" -- "$exe" tradeoff --models fem --quick --out "$tmp/t"
 expect 0 "beam" -- "$exe" scenes

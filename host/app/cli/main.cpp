@@ -58,8 +58,7 @@ int cmdScenes() {
 
 struct RunArgs {
   std::string scene, backend, precision, out_dir = "out";
-  long steps = -1;
-  double seconds = -1.0;
+  std::string steps, seconds;  // parsed by parseRunSteps / parseRunSeconds (strict: no silent clamping)
   bool quiet = false;
 };
 
@@ -78,8 +77,8 @@ CLI::App* addRunCommand(CLI::App& app, RunArgs& a) {
 int cmdRun(const RunArgs& a) {
   const inc::Scene scene = resolveScene(a.scene);
   inc::RunOptions opt;
-  opt.frames = a.steps;
-  opt.seconds = a.seconds;
+  if (!a.steps.empty()) opt.frames = inc::parseRunSteps(a.steps);
+  if (!a.seconds.empty()) opt.seconds = inc::parseRunSeconds(a.seconds);
   opt.out_dir = a.out_dir;
   opt.quiet = a.quiet;
   if (!a.backend.empty()) opt.backend = inc::parseBackend(a.backend);
