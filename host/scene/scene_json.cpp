@@ -113,7 +113,7 @@ class PathSax : public nlohmann::json_sax<json> {
   bool string(string_t&) override { return scalar(); }
   bool binary(binary_t&) override { return scalar(); }
   bool start_object(std::size_t) override {
-    if (!value()) return false;
+    if (!value() || tooDeep()) return false;
     stack_.push_back(Frame{});
     return true;
   }
@@ -134,7 +134,7 @@ class PathSax : public nlohmann::json_sax<json> {
     return true;
   }
   bool start_array(std::size_t) override {
-    if (!value()) return false;
+    if (!value() || tooDeep()) return false;
     Frame f;
     f.is_array = true;
     stack_.push_back(f);
@@ -178,6 +178,15 @@ class PathSax : public nlohmann::json_sax<json> {
   std::string fail_path, fail_reason;
 
  private:
+  // A scene is a few levels deep; a document nested thousands deep would exhaust the stack of every recursive
+  // walk after the parse (copies, destruction, error messages that print a value), so it stops here.
+  bool tooDeep() {
+    if (stack_.size() < kMaxSceneJsonDepth) return false;
+    fail_path = path(false);
+    fail_reason = "objects and arrays nest deeper than " + std::to_string(kMaxSceneJsonDepth) +
+                  " levels here; a scene needs a handful";
+    return true;
+  }
   // Marks the start of a value: advances the index of an enclosing array.
   bool value() {
     if (!stack_.empty() && stack_.back().is_array) ++stack_.back().index;

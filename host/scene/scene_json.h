@@ -29,8 +29,12 @@ std::size_t editDistance(const std::string& a, const std::string& b);
 // The known key closest to `key` when it is close enough to be a likely typo, else "".
 std::string closestKey(const std::string& key, const std::vector<std::string>& known);
 
+// How deep objects and arrays may nest in a scene file (a scene needs about five levels).
+inline constexpr std::size_t kMaxSceneJsonDepth = 64;
+
 // Parses `text`; throws InputError(file, key path at the failure, reason) for invalid JSON (with line and
-// column), numbers that overflow a double, and keys repeated within one object.
+// column), numbers that overflow a double, keys repeated within one object, and nesting deeper than
+// kMaxSceneJsonDepth (checked while reading, before any recursive walk of the document).
 nlohmann::json parseChecked(const std::string& text, const std::string& file);
 
 // Short rendering of a JSON value for messages ("a string (\"abc\")", "a number (3.5)").

@@ -291,6 +291,49 @@ TEST(SceneLoaderJson, DuplicateKey) {
               "appears twice");
 }
 
+// ~80,000 levels once crashed validate and run (SIGSEGV, exit 139) in a recursive walk after the parse; the parse
+// now stops at kMaxSceneJsonDepth with the key path where the nesting went too deep.
+TEST(SceneLoaderJson, DeepNestingIsRefusedWithItsKeyPath) {
+  const std::size_t depth = 80000;
+  const std::string deep = std::string(depth, '[') + std::string(depth, ']');
+  const std::string reason = "nest deeper than " + std::to_string(scene_json::kMaxSceneJsonDepth) + " levels";
+  std::string top_path = "";
+  for (std::size_t i = 0; i < scene_json::kMaxSceneJsonDepth; ++i) top_path = scene_json::indexPath(top_path, 0);
+  expectError(deep, top_path, reason);
+  // Under a key: the path starts with it (geometry.mesh_scale[0][0]...).
+  try {
+    parseScene(R"({"geometry": {"kind": "box", "mesh_scale": )" + deep + R"(}, "models": {"mls": true}})", kLabel, ".");
+    ADD_FAILURE() << "no error for a deep geometry.mesh_scale";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.key().rfind("geometry.mesh_scale[0][0]", 0), 0u) << e.key();
+    EXPECT_NE(e.reason().find(reason), std::string::npos) << e.reason();
+  }
+  const std::string objects = [] {
+    std::string t;
+    for (int i = 0; i < 80000; ++i) t += R"({"a":)";
+    t += "1";
+    for (int i = 0; i < 80000; ++i) t += "}";
+    return t;
+  }();
+  try {
+    parseScene(R"({"geometry": {"kind": "box"}, "models": {"mls": )" + objects + "}}", kLabel, ".");
+    ADD_FAILURE() << "no error for a deep models.mls";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.key().rfind("models.mls.a.a.a", 0), 0u) << e.key();
+    EXPECT_NE(e.reason().find(reason), std::string::npos) << e.reason();
+  }
+  // As deep as allowed still parses (and then fails on the meaning, not the depth).
+  const std::size_t ok = scene_json::kMaxSceneJsonDepth - 3;  // top object, geometry object, then the arrays
+  try {
+    parseScene(R"({"geometry": {"kind": "box", "mesh_scale": )" + std::string(ok, '[') + std::string(ok, ']') +
+                   R"(}, "models": {"mls": true}})",
+               kLabel, ".");
+    ADD_FAILURE() << "a nested array is no mesh_scale";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.key(), "geometry.mesh_scale") << e.what();
+  }
+}
+
 TEST(SceneLoaderJson, TopLevelMustBeAnObject) { expectError("[1, 2]", "", "must be a JSON object"); }
 
 // ---------------------------------------------------------------------------------------------------------
