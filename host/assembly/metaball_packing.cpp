@@ -319,7 +319,7 @@ PackedOrgan packOrgan(const TriangleMesh& input, const PackingOptions& opt, cons
   const auto t0 = std::chrono::steady_clock::now();
   validateOptions(opt, file);
   TriangleMesh mesh = input;
-  const PackInputReport in = preparePackInput(mesh, file, "mesh", opt.max_self_intersecting_fraction);
+  const PackInputReport in = preparePackInput(mesh, file, opt.mesh_key, opt.max_self_intersecting_fraction);
   progress(opt, "checked mesh", 1.0);
   const pack::SurfaceDistance surface(mesh);
   const pack::Aabb bbox = surface.bvh().bounds();
@@ -331,7 +331,7 @@ PackedOrgan packOrgan(const TriangleMesh& input, const PackingOptions& opt, cons
   const pack::InteriorSamples samples = pack::collectSamples(grid, pack::interiorDepth(grid, surface));
   progress(opt, "sampled interior", 1.0);
   if (samples.count() < 8)
-    throw InputError(file, "mesh",
+    throw InputError(file, opt.mesh_key,
                      "the surface encloses fewer than 8 grid samples (spacing " + std::to_string(grid.h) +
                          "); it is too thin to pack at this resolution (raise packing.samples)");
 

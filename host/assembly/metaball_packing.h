@@ -19,6 +19,8 @@ struct PackingOptions {
   double max_protrusion = 0.01;   // farthest a sphere may reach beyond the surface, fraction of the bbox diagonal
   double density_kg_m3 = 1060.0;  // tissue density; masses = density * volume share (power cell)
   double max_self_intersecting_fraction = 0.01;  // tolerated locally folded faces (see preparePackInput)
+  // The key that errors about the mesh name (a scene's: "geometry.mesh"); not part of the cache key.
+  std::string mesh_key = "mesh";
   // Progress (stage name, fraction in [0, 1]); not part of the cache key. May be empty.
   std::function<void(const char* stage, double fraction)> progress;
 };

@@ -340,6 +340,7 @@ MetaballModel buildSceneMetaballs(const CompiledScene& scene) {
     PackingOptions o;
     o.target_spheres = scene.pbd.target_spheres;
     o.density_kg_m3 = scene.material.density_kg_m3;
+    o.mesh_key = g.kind == GeometrySpec::Kind::Mesh ? "geometry.mesh" : "geometry";
     return packOrgan(sceneSurfaceMesh(scene), o, scene.file).model;
   }
   std::vector<Vec3d> centers;

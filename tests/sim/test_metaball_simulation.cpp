@@ -4,13 +4,16 @@
 
 #include <cmath>
 
+#include "host/assembly/organ_shapes.h"
 #include "host/assembly/pbd_builders.h"
+#include "host/io/mesh.h"
 #include "host/scene/scene_compile.h"
 #include "host/scene/scene_loader.h"
 #include "host/sim/grasper.h"
 #include "host/sim/metaball_simulation.h"
 #include "model/input_error.h"
 #include "tests/support/repo_paths.h"
+#include "tests/support/temp_dir.h"
 
 using namespace inc;
 
@@ -190,4 +193,34 @@ TEST(MetaballSimulation, FixedBoxHoldingNoSphereIsAnInputError) {
   int fixed = 0;
   for (std::size_t i = 0; i < m.size(); ++i) fixed += m.inv_mass[i] == 0.0 ? 1 : 0;
   EXPECT_EQ(fixed, 9);  // the x = 0 layer: 3 x 3 spheres
+}
+
+// The packer's mesh checks name the scene key: a closed, manifold mesh of two interpenetrating boxes is
+// self-intersecting, and a scene that packs it (pbd.target_spheres > 0) is refused under geometry.mesh (it was
+// once refused under "mesh", a key no scene has).
+TEST(MetaballSimulation, PackerRefusesASelfIntersectingMeshUnderGeometryMesh) {
+  const test::TempDir tmp("packer_twin_boxes");
+  TriangleMesh twin = makeBoxMesh({0.05, 0.05, 0.05}, 2);
+  const TriangleMesh other = makeBoxMesh({0.05, 0.05, 0.05}, 2, Vec3d{0.03, 0.02, 0.01});
+  const int base = int(twin.vertices.size());
+  twin.vertices.insert(twin.vertices.end(), other.vertices.begin(), other.vertices.end());
+  for (auto t : other.triangles) twin.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+  const std::string path = tmp.str() + "/twin.obj";
+  writeObj(path, twin);
+  Scene s;
+  s.file = "twin.json";
+  s.geometry.kind = GeometrySpec::Kind::Mesh;
+  s.geometry.mesh_path = path;
+  s.geometry.spacing = 0.02;
+  s.models.pbd_metaballs = true;
+  s.pbd.target_spheres = 60;
+  s.fixed = {FixedRegion{Vec3d(-1, -1, -1), Vec3d(1, 1, -0.04)}};
+  try {
+    makeMetaballSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
+    FAIL() << "expected an InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), "twin.json") << e.what();
+    EXPECT_EQ(e.key(), "geometry.mesh") << e.what();
+    EXPECT_NE(std::string(e.reason()).find("self-intersecting"), std::string::npos) << e.what();
+  }
 }
