@@ -46,12 +46,17 @@ MetaballModel uncutSpheres(const MetaballModel& base, const std::vector<SphereRo
 }
 
 // The scripted scalpels over the frame [t0, t1]: a stroke begins at its start (ending any other first), extends to
-// the blade at the frame's end, and ends at its end.
+// the blade at the frame's end, and ends at its end. A mouse stroke that began since takes the blade: it has
+// applied the scripted stroke's cut so far (completeStroke), and the scripted stroke is over.
 template <typename T>
 void DissectionSimulation<T>::scriptedStrokes(double t0, double t1) {
   for (std::size_t k = 0; k < strokes_.size(); ++k) {
     ScriptedStroke& s = strokes_[k];
     if (s.done || t1 < s.start) continue;
+    if (s.begun && !(active_ && active_->scripted == int(k))) {
+      s.done = true;
+      continue;
+    }
     const auto c0 = std::chrono::steady_clock::now();
     if (!s.begun) {
       completeStroke();  // a mouse stroke still open, or a stroke end still in the making, is applied here

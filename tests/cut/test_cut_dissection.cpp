@@ -154,5 +154,29 @@ TEST(CutDissection, LiverCutSceneCutsACurvedPathAndTheGrasperOpensIt) {
   EXPECT_EQ(m.components, 2);
 }
 
+// A mouse stroke that begins while a scripted scalpel is mid-stroke takes the blade: the scripted stroke's cut so
+// far is applied at the press and that stroke is over; the mouse stroke then cuts on its own. (The scripted
+// stroke once went on extending a stroke that no longer existed and crashed the viewer: SIGSEGV in extendStroke.)
+TEST(CutDissection, MouseStrokeDuringAScriptedStrokeTakesTheBlade) {
+  const double dt = 1.0 / 60.0;
+  Scene s = cuttest::cutBlockScene(0.25, false, "<test:mouse_over_scripted>");  // in the tissue from 0.05 s on
+  auto sim = makeDissectionSimulation(compileScene(s), BackendKind::Cpu, Precision::Float64);
+  int frame = 0;
+  for (; frame < 9; ++frame) ASSERT_TRUE(sim->advance(dt).finite) << frame;  // 0.15 s: the blade is halfway
+  ToolEvent e = cuttest::mouseScalpel();
+  const int steps = 6;
+  for (int k = 0; k <= steps; ++k, ++frame) {
+    e.phase = k == 0 ? ToolPhase::Press : k == steps ? ToolPhase::Release : ToolPhase::Drag;
+    e.tip = Vec3d(-0.05 + 0.1 * k / steps, -0.01, 0.0);  // another plane, y = -1 cm
+    ASSERT_NO_THROW(sim->applyTool(e)) << k;
+    ASSERT_TRUE(sim->advance(dt).finite) << frame;
+  }
+  FrameReport rep;
+  for (; frame < 30; ++frame) ASSERT_TRUE((rep = sim->advance(dt)).finite) << frame;  // past the script's end
+  EXPECT_EQ(rep.counters.at("cuts_applied"), 2.0);  // the scripted stroke's part, then the mouse's stroke
+  EXPECT_EQ(rep.counters.at("nodal_points"), 0.0);
+  EXPECT_GE(rep.counters.at("sphere_components"), 2.0);  // the mouse stroke went through the block
+}
+
 }  // namespace
 }  // namespace inc

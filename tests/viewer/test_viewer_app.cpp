@@ -11,6 +11,7 @@
 
 #include "host/io/mesh.h"
 #include "host/scene/scene_compile.h"
+#include "host/scene/scene_loader.h"
 #include "host/sim/dissection_simulation.h"
 #include "host/sim/metaball_simulation.h"
 #include "model/input_error.h"
@@ -20,6 +21,7 @@
 #include "tests/support/viewer_test_model.h"
 #include "viewer/gl_window.h"
 #include "viewer/orbit_camera.h"
+#include "viewer/scene_knobs.h"
 #include "viewer/viewer_app.h"
 
 namespace inc::viewer {
@@ -615,3 +617,39 @@ TEST(OrbitCameraZUp, EyeAboveTheTargetAndUpAlongZ) {
   o.orbit(0.0, -1000.0);  // pitch clamped below the horizon
   EXPECT_LT(o.eye().z, 0.3);
 }
+
+namespace inc::viewer {
+namespace {
+
+// A mouse cut stroke across a shipped cutting scene, the path a user draws from the left of the organ towards its
+// middle (it once crashed in DissectionSimulation<float>::extendStroke).
+TEST_F(ViewerApp, MouseCutStrokeOnShippedCutScenesRunsToTheEnd) {
+  for (const char* name : {"steak_cut", "liver_cut"}) {
+    SCOPED_TRACE(name);
+    SceneViewerSetup s =
+        makeSceneViewerSetup(loadSceneFile(test::sourceDir() + "/scenes/" + name + ".json"), BackendKind::Cpu);
+    ViewerOptions o;
+    o.model = s.factory();
+    o.factory = s.factory;
+    o.knobs = s.knobs;
+    o.frame_dt_s = s.scene->solver.frame_dt;
+    o.z_up = true;
+    o.width = 640;
+    o.height = 420;
+    o.frames = 24;
+    o.show_ui = false;
+    o.tool_mode = ToolMode::Cut;
+    o.scripted_mouse = [](int frame, double& x, double& y) {
+      x = 0.35 + 0.3 * std::clamp((frame - 4) / 12.0, 0.0, 1.0);
+      y = 0.5 - 0.05 * std::clamp((frame - 4) / 12.0, 0.0, 1.0);
+      return frame >= 3 && frame <= 18;
+    };
+    ASSERT_EQ(runViewer(o), 0);
+    const FrameReport rep = o.model->advance(1.0 / 60.0);
+    EXPECT_TRUE(rep.finite);
+    EXPECT_GE(rep.counters.at("cuts_applied"), 1.0);  // the mouse's stroke (and the script's part before it)
+  }
+}
+
+}  // namespace
+}  // namespace inc::viewer
