@@ -1,6 +1,6 @@
 // The compiled scene: what every layer below the application is built from (the models, their backends, the
-// topology events, haptics). compileScene (host/scene/scene_compile.h) makes it from a validated Scene; the
-// application settings (name, description, run length, output) stay behind in the Scene.
+// topology events, haptics). The Scene (host/scene/scene.h) derives from it and adds the application settings
+// (name, description, run length, output); compileScene (host/scene/scene_compile.h) hands on this part alone.
 #pragma once
 
 #include <string>

@@ -6,9 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "host/compiled/model_specs.h"
-#include "model/material.h"
-#include "physics/cutting_force.h"
+#include "host/compiled/compiled_scene.h"
 
 namespace inc {
 
@@ -21,26 +19,13 @@ struct OutputSpec {
   bool metrics_csv = true;
 };
 
-struct Scene {
-  std::string file;  // where it came from ("<embedded:name>" for built-in scenes)
+// The scene file's model inputs (the CompiledScene it derives from, which compileScene hands to the layers below the
+// application) and what only the application reads: the name, description, run length and output settings.
+struct Scene : CompiledScene {
   std::string name;
   std::string description;
   double duration = 1.0;  // s, default run length when neither --steps nor --seconds is given
-  GeometrySpec geometry;
-  Material material;                     // material.{youngs_modulus_pa, poisson_ratio, density_kg_m3, damping_per_s}
-  CutThresholds<double> cut_thresholds;  // material.cutting: the haptic cutting force model (eqs. 15-16): F_p, F_s,
-                                         // F_d (N), friction (N/m); a haptic setting, so not part of Material
-  ModelsSpec models;
-  MlsSpec mls;
-  PbdSpec pbd;
-  SolverSpec solver;
-  std::vector<FixedRegion> fixed;
-  std::vector<ToolSpec> tools;
-  std::vector<ColliderSpec> colliders;
   OutputSpec output;
-  TearingSpec tearing;
-  CuttingSpec cutting;
-  HapticsSpec haptics;
 };
 
 }  // namespace inc

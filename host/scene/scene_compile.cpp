@@ -3,23 +3,6 @@
 
 namespace inc {
 
-CompiledScene compileScene(const Scene& scene) {
-  CompiledScene c;
-  c.file = scene.file;
-  c.geometry = scene.geometry;
-  c.material = scene.material;
-  c.cut_thresholds = scene.cut_thresholds;
-  c.models = scene.models;
-  c.mls = scene.mls;
-  c.pbd = scene.pbd;
-  c.solver = scene.solver;
-  c.fixed = scene.fixed;
-  c.tools = scene.tools;
-  c.colliders = scene.colliders;
-  c.tearing = scene.tearing;
-  c.cutting = scene.cutting;
-  c.haptics = scene.haptics;
-  return c;
-}
+CompiledScene compileScene(const Scene& scene) { return scene; }  // the model inputs: the base the Scene extends
 
 }  // namespace inc

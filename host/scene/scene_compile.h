@@ -7,7 +7,8 @@
 
 namespace inc {
 
-// The scene's model inputs, without what only the application reads (name, description, duration, output).
+// The scene's model inputs (its CompiledScene part), without what only the application reads (name, description,
+// duration, output).
 // The loader has validated `scene`; the builders check again what a scene built in code could get wrong.
 CompiledScene compileScene(const Scene& scene);
 

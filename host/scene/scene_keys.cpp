@@ -16,6 +16,13 @@ FieldRule hapticUnit() { return unitVector("must be a non-zero, finite vector", 
 
 bool frictionSet(const ToolSpec& t) { return t.friction != 0.0; }  // a scalpel has none (cutting.blade_friction)
 bool anyCollider(const Scene& s) { return !s.colliders.empty(); }
+
+// A member the Scene inherits from CompiledScene, as a member of the Scene: the top-level rows bind the Scene's
+// fields, and a member pointer to the base would name the base's type.
+template <class C>
+constexpr C Scene::*onScene(C CompiledScene::*m) {
+  return m;
+}
 bool surfacePointSet(const HapticsSpec& h) { return h.has_surface_point; }
 bool bem(const HapticsSpec& h) { return h.global_model == "bem"; }
 bool named(const HapticDeviceSpec& d) { return !d.name.empty(); }
@@ -34,20 +41,20 @@ const std::vector<SceneKey>& sceneKeys() {
       {"name", "string", "-", "any", "the file name without extension", text(&Scene::name)},
       {"description", "string", "-", "any", "\"\"", text(&Scene::description)},
       {"duration_s", "number", "s", "> 0", "1.0", number(&Scene::duration, above(0))},
-      {"geometry", "object", "-", "-", "required", object(&Scene::geometry)},
-      {"material", "object", "-", "-", "all defaults", object(&Scene::material)},
-      {"models", "object", "-", "-", "all defaults", object(&Scene::models)},
-      {"mls", "object", "-", "-", "all defaults", object(&Scene::mls)},
-      {"pbd", "object", "-", "-", "all defaults", object(&Scene::pbd)},
-      {"solver", "object", "-", "-", "all defaults", object(&Scene::solver)},
-      {"fixed", "array of objects", "-", "-", "[]", array(&Scene::fixed)},
-      {"tools", "array of objects", "-", "-", "[]", array(&Scene::tools)},
+      {"geometry", "object", "-", "-", "required", object(onScene(&Scene::geometry))},
+      {"material", "object", "-", "-", "all defaults", object(onScene(&Scene::material))},
+      {"models", "object", "-", "-", "all defaults", object(onScene(&Scene::models))},
+      {"mls", "object", "-", "-", "all defaults", object(onScene(&Scene::mls))},
+      {"pbd", "object", "-", "-", "all defaults", object(onScene(&Scene::pbd))},
+      {"solver", "object", "-", "-", "all defaults", object(onScene(&Scene::solver))},
+      {"fixed", "array of objects", "-", "-", "[]", array(onScene(&Scene::fixed))},
+      {"tools", "array of objects", "-", "-", "[]", array(onScene(&Scene::tools))},
       {"colliders", "array of objects", "-", "at most 8 planes and 8 boxes", "[]",
-       array(&Scene::colliders).when(anyCollider)},
+       array(onScene(&Scene::colliders)).when(anyCollider)},
       {"output", "object", "-", "-", "all defaults", object(&Scene::output)},
-      {"tearing", "object", "-", "-", "all defaults", object(&Scene::tearing)},
-      {"cutting", "object", "-", "-", "all defaults", object(&Scene::cutting)},
-      {"haptics", "object", "-", "-", "all defaults", object(&Scene::haptics)},
+      {"tearing", "object", "-", "-", "all defaults", object(onScene(&Scene::tearing))},
+      {"cutting", "object", "-", "-", "all defaults", object(onScene(&Scene::cutting))},
+      {"haptics", "object", "-", "-", "all defaults", object(onScene(&Scene::haptics))},
       {"geometry.kind", "string", "-", "box, beam, sphere, ellipsoid, mesh", "required",
        choiceOf(
            &G::kind,
@@ -74,7 +81,7 @@ const std::vector<SceneKey>& sceneKeys() {
       {"material.poisson_ratio", "number", "-", "(-1, 0.5)", "0.45", number(&Material::poisson_ratio)},
       {"material.density_kg_m3", "number", "kg/m^3", "> 0", "1060", number(&Material::density_kg_m3)},
       {"material.damping_per_s", "number", "1/s", ">= 0", "1.0", number(&Material::damping_per_s)},
-      {"material.cutting", "object", "-", "-", "all defaults", sceneObject(&Scene::cut_thresholds)},
+      {"material.cutting", "object", "-", "-", "all defaults", sceneObject(onScene(&Scene::cut_thresholds))},
       // The cutting force model's ranges are validateCutThresholds' (cutting_scene.h), which the haptic code shares.
       {"material.cutting.press_threshold_n", "number", "N", ">= 0", "1.0", number(&Cut::press_n)},
       {"material.cutting.static_friction_n", "number", "N", "> 0", "0.6", number(&Cut::static_n)},
