@@ -10,12 +10,6 @@
 
 namespace inc {
 
-// Pairs of triangles (a < b) that intersect other than along their shared vertices or edge: triangles with
-// no common vertex that cross or overlap, triangles sharing one vertex whose opposite edge pierces the
-// other, and coplanar neighbours across an edge that fold onto each other. Touching at a single point is
-// not reported. Found with a BVH over triangle boxes; at most `max_pairs` are returned.
-std::vector<std::array<int, 2>> findSelfIntersections(const TriangleMesh& mesh, std::size_t max_pairs = 16);
-
 struct PackInputReport {
   int welded_vertices = 0;          // vertices merged with an earlier vertex at bit-identical coordinates
   int removed_triangles = 0;        // triangles with a repeated vertex index (after welding) dropped

@@ -8,8 +8,8 @@
 #include <numeric>
 #include <vector>
 
-#include "host/assembly/metaball_pack_bvh.h"
 #include "host/assembly/metaball_packing.h"
+#include "host/io/triangle_bvh.h"
 #include "physics/vec3.h"
 
 namespace inc::pack {

@@ -17,9 +17,9 @@
 #include <vector>
 
 #include "base/parallel.h"
-#include "host/assembly/metaball_pack_bvh.h"
 #include "host/assembly/metaball_pack_checks.h"
 #include "host/assembly/metaball_pack_cover.h"
+#include "host/io/triangle_bvh.h"
 #include "model/input_error.h"
 
 namespace inc {

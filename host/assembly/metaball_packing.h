@@ -8,6 +8,7 @@
 
 #include "host/assembly/metaball_model.h"
 #include "host/io/mesh.h"
+#include "host/io/mesh_self_intersection.h"
 
 namespace inc {
 
@@ -18,7 +19,7 @@ struct PackingOptions {
   int samples = 40000;            // approximate number of interior grid samples (sets the grid spacing h)
   double max_protrusion = 0.01;   // farthest a sphere may reach beyond the surface, fraction of the bbox diagonal
   double density_kg_m3 = 1060.0;  // tissue density; masses = density * volume share (power cell)
-  double max_self_intersecting_fraction = 0.01;  // tolerated locally folded faces (see preparePackInput)
+  double max_self_intersecting_fraction = kToleratedSelfIntersectingFraction;  // see preparePackInput
   // The key that errors about the mesh name (a scene's: "geometry.mesh"); not part of the cache key.
   std::string mesh_key = "mesh";
   // Progress (stage name, fraction in [0, 1]); not part of the cache key. May be empty.

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "host/io/mesh_self_intersection.h"
 #include "model/input_error.h"
 
 namespace inc {
@@ -12,6 +13,7 @@ TriangleMesh loadGlobalOrganMesh(const std::string& path, double scale) {
   if (!(scale > 0.0) || !std::isfinite(scale)) throw InputError(path, "", "the mesh scale must be finite and > 0");
   TriangleMesh mesh = loadMesh(path);
   requireClosedMesh(mesh, path, "");
+  requireFewSelfIntersections(mesh, path, "");  // a boundary integral over a folded surface counts it twice
   const int E = int(mesh.triangles.size());
   if (E > kMaxBemElements)
     throw InputError(path, "",

@@ -13,6 +13,7 @@
 
 #include "host/compiled/material_checks.h"
 #include "host/io/mesh.h"
+#include "host/io/mesh_self_intersection.h"
 #include "host/scene/cutting_scene.h"
 #include "host/scene/haptics_scene.h"
 #include "host/scene/scene_fields.h"
@@ -31,12 +32,15 @@ using scene_json::ObjectReader;
 // Guard against a slip in spacing_m (5e-5 for 5e-3) that would ask for more particles than any machine holds.
 constexpr double kMaxEstimatedParticles = 5.0e7;
 
-// Loads and checks the mesh of a "mesh" geometry; returns its extent and volume in metres for the sampling checks.
+// Loads and checks the mesh of a "mesh" geometry (closed, manifold, not self-intersecting); returns its extent and
+// volume in metres for the sampling checks.
 void checkMeshGeometry(const ObjectReader& g, const GeometrySpec& spec, double& min_extent, double& volume) {
   TriangleMesh mesh;
   try {
     mesh = loadMesh(spec.mesh_path);
     requireClosedMesh(mesh, spec.mesh_path, "");
+    // Every model reads this mesh (lattice fill, packer, MLS sampling, cut surface), so it is checked once here.
+    requireFewSelfIntersections(mesh, spec.mesh_path, "");
   } catch (const InputError& e) {
     g.fail("mesh", e.what());
   }

@@ -7,7 +7,6 @@
 #include <vector>
 
 #include "base/background_task.h"
-#include "host/assembly/metaball_pack_bvh.h"
 #include "host/assembly/pbd_builders.h"
 #include "host/compiled/compiled_scene.h"
 #include "host/cut/cut_nodal_region.h"
@@ -15,6 +14,7 @@
 #include "host/cut/cut_surface_state.h"
 #include "host/cut/cut_swept_surface.h"
 #include "host/io/mesh.h"
+#include "host/io/triangle_bvh.h"
 #include "host/sim/dissection_conversion.h"
 #include "host/sim/dissection_render_layers.h"
 #include "host/sim/dissection_skin.h"

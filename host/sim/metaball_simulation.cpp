@@ -1,10 +1,10 @@
 // PBD metaball organ as a SimulationModel: sphere fill (lattice or packer), constraint model, skinned surface, tools,
 // frame reports.
 #include "host/sim/metaball_simulation.h"
-#include "host/assembly/metaball_pack_bvh.h"
 #include "host/backends/solver_factory.h"
 #include "host/compiled/material_checks.h"
 #include "host/compiled/scene_colliders.h"
+#include "host/io/triangle_bvh.h"
 
 #include <algorithm>
 #include <cmath>

@@ -3,8 +3,8 @@
 
 #include <cmath>
 
-#include "host/assembly/metaball_pack_checks.h"
 #include "host/assembly/organ_shapes.h"
+#include "host/io/mesh_self_intersection.h"
 #include "model/input_error.h"
 
 namespace inc {

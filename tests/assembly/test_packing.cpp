@@ -12,9 +12,9 @@
 #include <string>
 #include <vector>
 
-#include "host/assembly/metaball_pack_bvh.h"
 #include "host/assembly/metaball_packing.h"
 #include "host/assembly/organ_shapes.h"
+#include "host/io/triangle_bvh.h"
 #include "model/input_error.h"
 #include "tests/support/repo_paths.h"
 #include "tests/support/temp_dir.h"

@@ -1,5 +1,5 @@
 // Triangle BVH (median split), exact point-triangle distance and pseudonormal signed distance.
-#include "host/assembly/metaball_pack_bvh.h"
+#include "host/io/triangle_bvh.h"
 
 #include <algorithm>
 #include <cmath>
