@@ -240,11 +240,16 @@ RunSummary runScene(const Scene& scene_in, const RunOptions& opt, const ModelFac
   const BackendChoice choice = resolveBackend(scene.solver.backend);
   sum.backend_note = choice.note;
   if (!opt.quiet) std::fprintf(stderr, "%s\n", choice.note.c_str());
+  if (!opt.quiet)
+    for (const std::string& c : scene.chosen_settings) std::fprintf(stderr, "chosen: %s\n", c.c_str());
 
   const CompiledScene compiled = compileScene(scene);
   auto models = factory(compiled, choice.kind);
   if (models.empty()) throw InputError(scene.file, "models", "the scene switches on no model that can run");
-  for (const auto& m : models) sum.model_names += (sum.model_names.empty() ? "" : "+") + m->name();
+  for (const auto& m : models) {
+    sum.model_names += (sum.model_names.empty() ? "" : "+") + m->name();
+    if (!opt.quiet) std::fprintf(stderr, "model %s: %zu particles\n", m->name().c_str(), m->particleCount());
+  }
   // models.haptics: the haptic loop starts on its own thread beside this one (docs/haptics.md); none otherwise.
   SceneHapticsOptions haptic_options;
   haptic_options.record_s = std::min(600.0, 1.5 * double(sum.frames_requested) * dt + 5.0);

@@ -26,6 +26,9 @@ struct Scene : CompiledScene {
   std::string description;
   double duration = 1.0;  // s, default run length when neither --steps nor --seconds is given
   OutputSpec output;
+  // Settings the loader chose because the file left them out and a fixed default would not fit the body (e.g.
+  // geometry.spacing_m of a mesh, from its volume and thickness): "key = value (why)", printed by validate and run.
+  std::vector<std::string> chosen_settings;
 };
 
 }  // namespace inc

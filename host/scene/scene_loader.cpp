@@ -15,6 +15,7 @@
 #include "host/io/mesh.h"
 #include "host/io/mesh_self_intersection.h"
 #include "host/scene/cutting_scene.h"
+#include "host/scene/default_spacing.h"
 #include "host/scene/haptics_scene.h"
 #include "host/scene/scene_fields.h"
 #include "host/scene/scene_json.h"
@@ -32,9 +33,10 @@ using scene_json::ObjectReader;
 // Guard against a slip in spacing_m (5e-5 for 5e-3) that would ask for more particles than any machine holds.
 constexpr double kMaxEstimatedParticles = 5.0e7;
 
-// Loads and checks the mesh of a "mesh" geometry (closed, manifold, not self-intersecting); returns its extent and
-// volume in metres for the sampling checks.
-void checkMeshGeometry(const ObjectReader& g, const GeometrySpec& spec, double& min_extent, double& volume) {
+// Loads and checks the mesh of a "mesh" geometry (closed, manifold, not self-intersecting); returns its extent, volume
+// and area in metres for the sampling checks and the spacing rule.
+void checkMeshGeometry(const ObjectReader& g, const GeometrySpec& spec, double& min_extent, double& volume,
+                       double& area) {
   TriangleMesh mesh;
   try {
     mesh = loadMesh(spec.mesh_path);
@@ -48,9 +50,11 @@ void checkMeshGeometry(const ObjectReader& g, const GeometrySpec& spec, double& 
   const Vec3d ext = (rep.bbox_max - rep.bbox_min) * spec.mesh_scale;
   min_extent = std::min({ext.x, ext.y, ext.z});
   volume = rep.signed_volume * spec.mesh_scale * spec.mesh_scale * spec.mesh_scale;
+  area = rep.area * spec.mesh_scale * spec.mesh_scale;
 }
 
-GeometrySpec readGeometry(const ObjectReader& top, const std::string& base_dir) {
+// Reads geometry.*; a mesh body without spacing_m gets the spacing of chooseMeshSpacing, noted in `chosen`.
+GeometrySpec readGeometry(const ObjectReader& top, const std::string& base_dir, std::vector<std::string>& chosen) {
   const ObjectReader g = top.object("geometry");
   g.allowOnly(sceneKeysUnder("geometry"));
   GeometrySpec s;
@@ -64,7 +68,7 @@ GeometrySpec readGeometry(const ObjectReader& top, const std::string& base_dir) 
     }
   });
 
-  double min_extent = 0, volume = 0;
+  double min_extent = 0, volume = 0, area = 0;
   const double pi = 3.14159265358979323846;
   switch (s.kind) {
     case GeometrySpec::Kind::Box:
@@ -85,7 +89,13 @@ GeometrySpec readGeometry(const ObjectReader& top, const std::string& base_dir) 
       const std::string rel = g.string("mesh", "");
       if (rel.empty()) g.fail("mesh", "must name a mesh file");
       s.mesh_path = scene_json::resolvePath(rel, base_dir);
-      checkMeshGeometry(g, s, min_extent, volume);
+      checkMeshGeometry(g, s, min_extent, volume, area);
+      // A user's mesh may be a 2 cm kidney or a 25 cm liver: no fixed default spacing fits both.
+      if (!g.has("spacing_m")) {
+        const ChosenSpacing c = chooseMeshSpacing(volume, area);
+        s.spacing = c.spacing_m;
+        chosen.push_back("geometry.spacing_m = " + formatNumber(c.spacing_m) + " m (" + c.why + ")");
+      }
       break;
     }
   }
@@ -341,7 +351,7 @@ Scene parseScene(const std::string& json_text, const std::string& file_label, co
   s.name = std::filesystem::path(file_label).stem().string();  // the default name
   readSceneKeys(top, "", s);  // name, description, duration_s; each section below reads its own keys
   // Sections in the order a reader of the file expects the first error to be reported.
-  s.geometry = readGeometry(top, base_dir);
+  s.geometry = readGeometry(top, base_dir, s.chosen_settings);
   readMaterial(top, s.material, s.cut_thresholds);
   s.models = readModels(top);
   s.mls = readMls(top);

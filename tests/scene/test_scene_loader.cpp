@@ -2,8 +2,11 @@
 #include <gtest/gtest.h>
 
 #include <unistd.h>
+
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -635,6 +638,47 @@ TEST_F(SceneLoader, ClosedMeshSceneLoadsAndRoundTrips) {
   EXPECT_TRUE(fs::equivalent(a.geometry.mesh_path, dir_ / "cube.obj"));
   // The written scene holds the resolved path, so it reads back the same from any folder.
   expectSceneEq(a, parseScene(sceneToJson(a), kLabel, "/"));
+}
+
+// A mesh scene without spacing_m gets a spacing from the body's volume and area (docs/scene-format.md): about 1000
+// spheres for a compact body, two layers across a thin one, whatever the mesh's units. The choice is said and the
+// written scene keeps it.
+TEST_F(SceneLoader, MeshWithoutSpacingGetsOneFromItsSize) {
+  write("cube.obj", cubeObj());
+  auto spacingFor = [&](const Vec3d& scale_xyz) {
+    std::string obj = cubeObj();
+    // Scale the unit cube's vertices per axis (the 8 "v x y z" lines).
+    std::string scaled;
+    std::istringstream in(obj);
+    for (std::string line; std::getline(in, line);) {
+      if (line.rfind("v ", 0) == 0) {
+        double x, y, z;
+        std::sscanf(line.c_str(), "v %lf %lf %lf", &x, &y, &z);
+        line = "v " + std::to_string(x * scale_xyz.x) + " " + std::to_string(y * scale_xyz.y) + " " +
+               std::to_string(z * scale_xyz.z);
+      }
+      scaled += line + "\n";
+    }
+    write("body.obj", scaled);
+    json j = minimal();
+    j["geometry"] = {{"kind", "mesh"}, {"mesh", "body.obj"}, {"mesh_scale", 0.001}};  // file in millimetres
+    return parseScene(j.dump(), kLabel, dir_.string());
+  };
+  // A 100 mm cube: V = 1e-3 m^3, A = 0.06 m^2; cbrt(V / 1000) = 10 mm < V / A = 16.7 mm.
+  const Scene cube = spacingFor({100, 100, 100});
+  EXPECT_NEAR(cube.geometry.spacing, 0.010, 1e-12);
+  ASSERT_EQ(cube.chosen_settings.size(), 1u);
+  EXPECT_NE(cube.chosen_settings[0].find("geometry.spacing_m = 0.01 m"), std::string::npos) << cube.chosen_settings[0];
+  // A 100 x 100 x 4 mm sheet: V / A = 1.85 mm is below cbrt(V / 1000) = 3.4 mm: two layers across its 4 mm.
+  const Scene sheet = spacingFor({100, 100, 4});
+  EXPECT_NEAR(sheet.geometry.spacing, 0.0018, 1e-12);
+  EXPECT_NE(sheet.chosen_settings[0].find("two layers"), std::string::npos) << sheet.chosen_settings[0];
+  // The written scene holds the chosen value, so it reads back the same with nothing chosen.
+  const Scene again = parseScene(sceneToJson(sheet), kLabel, dir_.string());
+  EXPECT_EQ(again.geometry.spacing, sheet.geometry.spacing);
+  EXPECT_TRUE(again.chosen_settings.empty());
+  // A given spacing is kept as given.
+  EXPECT_TRUE(parseScene(meshScene("cube.obj"), kLabel, dir_.string()).chosen_settings.empty());
 }
 
 TEST_F(SceneLoader, InwardCubeIsAcceptedAfterReorientation) {

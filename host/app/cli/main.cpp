@@ -158,6 +158,7 @@ int cmdTradeoff(const TradeoffArgs& a) {
 int cmdValidate(const std::string& path) {
   const inc::Scene s = inc::loadSceneFile(path);
   std::printf("%s: ok (%s)\n", path.c_str(), s.name.c_str());
+  for (const std::string& c : s.chosen_settings) std::printf("chosen: %s\n", c.c_str());
   return 0;
 }
 
