@@ -197,11 +197,11 @@ std::string RunSummary::line() const {
   s.precision(3);
   s << (failed ? "FAILED " : "done ") << frames_done << "/" << frames_requested << " frames (" << simulated_s
     << " s simulated, " << total_substeps << " substeps) in " << wall_s << " s wall, "
-    << (wall_s > 0 ? double(frames_done) / wall_s : 0.0) << " frames/s; models: " << model_names << "; " << backend_note
-    << "; max displacement " << std::scientific << std::setprecision(3) << max_displacement << " m; energy "
-    << final_total_energy << " J; memory host " << std::fixed << std::setprecision(1)
-    << double(memory.host_bytes) / 1048576.0 << " MiB, device " << double(memory.device_bytes) / 1048576.0
-    << " MiB; retries " << retries;
+    << (wall_s > 0 ? double(frames_done) / wall_s : 0.0) << " frames/s; models: " << model_names
+    << (build_notes.empty() ? "" : "; built: " + build_notes) << "; " << backend_note << "; max displacement "
+    << std::scientific << std::setprecision(3) << max_displacement << " m; energy " << final_total_energy
+    << " J; memory host " << std::fixed << std::setprecision(1) << double(memory.host_bytes) / 1048576.0
+    << " MiB, device " << double(memory.device_bytes) / 1048576.0 << " MiB; retries " << retries;
   if (!haptic.empty()) s << "; " << haptic;
   if (failed) s << "; " << failure;
   return s.str();
@@ -248,7 +248,13 @@ RunSummary runScene(const Scene& scene_in, const RunOptions& opt, const ModelFac
   if (models.empty()) throw InputError(scene.file, "models", "the scene switches on no model that can run");
   for (const auto& m : models) {
     sum.model_names += (sum.model_names.empty() ? "" : "+") + m->name();
-    if (!opt.quiet) std::fprintf(stderr, "model %s: %zu particles\n", m->name().c_str(), m->particleCount());
+    // How each model was built that a user should know of: its sphere fill, stragglers linked or dropped.
+    if (const std::string note = m->buildNote(); !note.empty()) {
+      sum.build_notes += (sum.build_notes.empty() ? "" : "; ") + m->name() + ": " + note;
+      if (!opt.quiet) std::fprintf(stderr, "%s: %s\n", m->name().c_str(), note.c_str());
+    } else if (!opt.quiet) {
+      std::fprintf(stderr, "%s: %zu particles\n", m->name().c_str(), m->particleCount());
+    }
   }
   // models.haptics: the haptic loop starts on its own thread beside this one (docs/haptics.md); none otherwise.
   SceneHapticsOptions haptic_options;

@@ -39,6 +39,7 @@ struct RunSummary {
   std::string failure;  // which frame, stage, particle, why
   std::string backend_note;
   std::string model_names;
+  std::string build_notes;  // each model's SimulationModel::buildNote, "name: note; ..." (empty: none had one)
   double max_displacement = 0.0;
   double final_total_energy = 0.0;
   MemoryReport memory;

@@ -19,6 +19,7 @@
 #include "base/parallel.h"
 #include "host/assembly/metaball_pack_checks.h"
 #include "host/assembly/metaball_pack_cover.h"
+#include "host/assembly/sphere_graph_repair.h"
 #include "host/io/triangle_bvh.h"
 #include "model/input_error.h"
 
@@ -26,7 +27,9 @@ namespace inc {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr std::uint64_t kFormatVersion = 1;
+constexpr std::uint64_t kFormatVersion = 2;  // 2: stragglers linked or dropped, their counts in the report
+// Widest gap between two balls, in mean sphere radii, that a link joining a straggler group may cross.
+constexpr double kStragglerReach = 2.0;
 constexpr char kMagic[8] = {'I', 'N', 'C', 'P', 'A', 'C', 'K', '1'};
 
 void progress(const PackingOptions& o, const char* stage, double f) {
@@ -110,6 +113,10 @@ class SphereHash {
   int n_[3] = {1, 1, 1};
   std::vector<int> start_, items_;
 };
+
+double meanRadius(const std::vector<double>& radius) {
+  return radius.empty() ? 0.0 : std::accumulate(radius.begin(), radius.end(), 0.0) / double(radius.size());
+}
 
 // Points on the unit sphere (Fibonacci spiral), deterministic.
 std::vector<Vec3d> fibonacciSphere(int n) {
@@ -339,7 +346,6 @@ PackedOrgan packOrgan(const TriangleMesh& input, const PackingOptions& opt, cons
   const pack::GreedyCover cover(samples, protrusion, opt.stop_coverage);
   pack::SphereCover best = pack::coverNearTarget(cover, in.volume, opt);
   const std::vector<int> chosen = std::move(best.chosen);
-  const int N = int(chosen.size());
 
   // 3. Radius tightening (the boundary-matching step; replaces the paper's electrostatic attraction, see
   // docs/packing.md): protrusion survives only where it buys coverage.
@@ -355,29 +361,34 @@ PackedOrgan packOrgan(const TriangleMesh& input, const PackingOptions& opt, cons
   MetaballModel& mb = out.model;
   mb.rest_centers = std::move(centre);
   mb.rest_radii = std::move(radius);
-  const SphereHash hash(mb.rest_centers, mb.rest_radii, diag / 64.0);
+  const double protruding = maxProtrusion(mb.rest_radii, samples, chosen);  // before a drop renumbers the spheres
 
-  // 4. Links and 5. masses.
-  const LinkFigures links = linkOverlappingSpheres(mb, hash);
+  // 4. Links; groups that a wider gap still separates are linked inside the mesh or dropped (sphere_graph_repair.h),
+  // so that every sphere of a piece holds constraints to the rest of it; then 5. masses over the spheres kept.
+  const LinkFigures links = linkOverlappingSpheres(mb, SphereHash(mb.rest_centers, mb.rest_radii, diag / 64.0));
+  const SphereGraphRepair joined = connectSphereGraph(mb, mesh, kStragglerReach * meanRadius(mb.rest_radii));
+  const SphereHash hash(mb.rest_centers, mb.rest_radii, diag / 64.0);
   weighSpheres(mb, samples, hash, opt.density_kg_m3, in.volume);
   progress(opt, "linked and weighed", 1.0);
 
   // 6. Report.
   PackReport& rep = out.report;
-  rep.spheres = N;
+  rep.spheres = int(mb.size());
   rep.links = int(mb.links.size());
-  rep.components = links.components;
+  rep.components = joined.components_after;
+  rep.stragglers_linked = joined.linked;
+  rep.dropped = joined.dropped;
   rep.mesh_volume = in.volume;
   rep.sample_spacing = grid.h;
   rep.mean_overlap = links.mean_overlap;
-  rep.mean_degree = N ? 2.0 * double(mb.links.size()) / N : 0.0;
+  rep.mean_degree = mb.size() ? 2.0 * double(mb.links.size()) / double(mb.size()) : 0.0;
   rep.repairs = in.repairs;
   rep.bridged = bridged;
   rep.coverage = staggeredCoverage(grid, surface, hash);
   progress(opt, "measured coverage", 1.0);
   measureSurfaceToUnion(mesh, hash, rep);
   measureUnionToSurface(mb, hash, surface, rep);
-  rep.max_protrusion = maxProtrusion(mb.rest_radii, samples, chosen);
+  rep.max_protrusion = protruding;
   rep.key = packCacheKey(input, opt);
   rep.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   progress(opt, "done", 1.0);
@@ -417,6 +428,8 @@ void writePack(const std::string& path, const PackedOrgan& p) {
     put(s, m.link_rest_lengths[i]);
   }
   put(s, r.components);
+  put(s, r.stragglers_linked);
+  put(s, r.dropped);
   for (double v : {r.mesh_volume, r.sample_spacing, r.coverage, r.surface_mean, r.surface_max, r.union_mean,
                    r.union_max, r.max_protrusion, r.mean_overlap, r.mean_degree})
     put(s, v);
@@ -453,7 +466,7 @@ bool readPack(const std::string& path, std::uint64_t key, PackedOrgan& p) {
   }
   auto& r = p.report;
   r = PackReport{};
-  if (!get(s, r.components)) return false;
+  if (!get(s, r.components) || !get(s, r.stragglers_linked) || !get(s, r.dropped)) return false;
   for (double* v : {&r.mesh_volume, &r.sample_spacing, &r.coverage, &r.surface_mean, &r.surface_max, &r.union_mean,
                     &r.union_max, &r.max_protrusion, &r.mean_overlap, &r.mean_degree})
     if (!get(s, *v)) return false;
@@ -495,6 +508,9 @@ std::string describePack(const PackReport& r) {
                 r.surface_mean, r.surface_max, r.union_mean, r.union_max, r.max_protrusion,
                 r.from_cache ? "from cache" : (std::to_string(r.seconds).substr(0, 5) + " s").c_str());
   std::string s = buf;
+  if (r.stragglers_linked > 0 || r.dropped > 0)
+    s += "; " + std::to_string(r.stragglers_linked) + " straggler" + (r.stragglers_linked == 1 ? "" : "s") +
+         " linked, " + std::to_string(r.dropped) + " dropped";
   if (!r.repairs.empty()) s += "; input: " + r.repairs;
   return s;
 }

@@ -32,6 +32,9 @@ struct PackReport {
   int components = 0;           // connected components of the overlap graph (1 for a connected organ; one per
                                 // separate shell of a multi-shell mesh)
   int bridged = 0;              // spheres grown to join a detached group to the rest
+  int stragglers_linked = 0;    // spheres of groups still detached after that, joined by links inside the mesh
+  int dropped = 0;              // spheres of detached groups no link could join, removed (their interior is
+                                // weighed to the spheres kept)
   double mesh_volume = 0.0;     // enclosed volume, mesh units^3
   double sample_spacing = 0.0;  // grid spacing h, mesh units
   double coverage = 0.0;        // fraction of interior points (grid staggered by h/2 against the packing grid)

@@ -75,7 +75,7 @@ void DissectionSimulation<T>::setPbdParams() {
 // The organ's spheres, its surface and the colliders drawn around it.
 template <typename T>
 void DissectionSimulation<T>::buildOrgan() {
-  spheres_ = buildSceneMetaballs(scene_);
+  spheres_ = buildSceneMetaballs(scene_, &fill_note_);
   checkCollidersClear(scene_, spheres_.rest_centers, "sphere centres");
   collider_mesh_ = colliderMeshAround(scene_.colliders, spheres_.rest_centers);
   rest_surface_ = sceneSurfaceMesh(scene_);

@@ -43,6 +43,7 @@ class DissectionSimulation final : public SimulationModel {
   std::string name() const override { return "dissection"; }
   BackendKind backend() const override { return backend_->kind(); }
   std::size_t particleCount() const override { return model_.size(); }
+  std::string buildNote() const override { return fill_note_; }
   FrameReport advance(double frame_dt) override;
   void saveCheckpoint() override;
   void restoreCheckpoint() override;
@@ -183,6 +184,7 @@ class DissectionSimulation final : public SimulationModel {
   NodalRegionSettings region_;
   double reference_mass_ = 0.0, reference_radius_ = 0.0;  // kg, m: the organ's mean sphere before any cut
   std::shared_ptr<const pack::SurfaceDistance> tissue_;   // the organ's rest surface (inside test)
+  std::string fill_note_;       // how the organ's spheres were filled and joined (buildSceneMetaballs)
   MetaballModel spheres_;       // the spheres of the PBD model (during a stroke: the base minus the cut ones)
   TriangleMesh rest_surface_;   // the surface after every cut so far (rest configuration) = surface_.mesh
   TriangleMesh collider_mesh_;  // the scene's colliders drawn around the organ (RenderLayers::colliders)

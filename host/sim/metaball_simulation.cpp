@@ -16,6 +16,7 @@
 #include "host/assembly/pbd_builders.h"
 #include "host/assembly/scene_surface.h"
 #include "host/assembly/skin_binding.h"
+#include "host/assembly/sphere_graph_repair.h"
 #include "host/io/mesh.h"
 #include "host/sim/grasper.h"
 #include "host/sim/interactive_tool.h"
@@ -30,11 +31,28 @@ namespace inc {
 namespace {
 
 constexpr double kRadiusFactor = 0.75;  // sphere radius / lattice spacing
+// Widest gap between two balls (fraction of the spacing) that a straggler's link may cross: corner neighbours
+// (gap 0.23) and next-but-one cells along an axis (0.5) qualify.
+constexpr double kStragglerReach = 1.0;
 constexpr int kDefaultSubsteps = 4;
 // Longest PBD substep h allowed: gravity moves a free sphere by |g| h^2 per substep before projection; past a
 // tenth of the lattice spacing the projection's corrections turn into large velocities (v = dx / h) and
 // one-substep frames were measured to fling a 40 mm bar by 0.11-1.5 m (tests/support/stability_matrix.h).
 constexpr double kMaxSagPerSubstep = 0.1;  // fraction of geometry.spacing
+
+// Spheres the fill could not join to the rest of their mesh piece are dropped (their mass moved to neighbours); past
+// this fraction of the fill the body the model simulates is no longer the mesh the user gave.
+constexpr double kMaxDroppedFraction = 0.05;
+
+void refuseLargeDrops(int dropped, int filled, const std::string& file, const std::string& key,
+                      const std::string& remedy) {
+  if (dropped <= kMaxDroppedFraction * filled) return;
+  throw InputError(file, key,
+                   std::to_string(dropped) + " of the " + std::to_string(filled) +
+                       " spheres filled lie in parts of the mesh too thin for them to be joined to the rest (a sphere "
+                       "without constraints would fall away); " +
+                       remedy);
+}
 
 double maxPbdSubstep(const CompiledScene& scene) {
   const double g = norm(scene.solver.gravity);
@@ -103,7 +121,7 @@ class MetaballSimulation final : public SimulationModel {
     base_substeps_ = scene.solver.substeps > 0 ? scene.solver.substeps : kDefaultSubsteps;
     auto_substeps_ = scene.solver.substeps == 0;
 
-    const MetaballModel mb = buildSceneMetaballs(scene);
+    const MetaballModel mb = buildSceneMetaballs(scene, &fill_note_);
     checkCollidersClear(scene, mb.rest_centers, "sphere centres");
     collider_mesh_ = colliderMeshAround(scene.colliders, mb.rest_centers);
     MetaballPbdOptions opt = pbdOrganOptions(scene);
@@ -135,6 +153,7 @@ class MetaballSimulation final : public SimulationModel {
   std::string name() const override { return "pbd_metaballs"; }
   BackendKind backend() const override { return backend_->kind(); }
   std::size_t particleCount() const override { return model_.size(); }
+  std::string buildNote() const override { return fill_note_; }
 
   FrameReport advance(double frame_dt) override {
     FrameReport rep;
@@ -307,6 +326,7 @@ class MetaballSimulation final : public SimulationModel {
   }
 
   CompiledScene scene_;
+  std::string fill_note_;  // how the spheres were filled and joined (buildSceneMetaballs)
   PbdModel<T> model_;
   std::unique_ptr<PbdBackend<T>> backend_;
   PbdStepParams<T> params_;
@@ -329,7 +349,7 @@ class MetaballSimulation final : public SimulationModel {
 
 }  // namespace
 
-MetaballModel buildSceneMetaballs(const CompiledScene& scene) {
+MetaballModel buildSceneMetaballs(const CompiledScene& scene, std::string* fill_note) {
   const GeometrySpec& g = scene.geometry;
   const std::string& f = scene.file;
   if (!(std::isfinite(g.spacing) && g.spacing > 0))
@@ -341,13 +361,18 @@ MetaballModel buildSceneMetaballs(const CompiledScene& scene) {
     o.target_spheres = scene.pbd.target_spheres;
     o.density_kg_m3 = scene.material.density_kg_m3;
     o.mesh_key = g.kind == GeometrySpec::Kind::Mesh ? "geometry.mesh" : "geometry";
-    return packOrgan(sceneSurfaceMesh(scene), o, scene.file).model;
+    PackedOrgan packed = packOrgan(sceneSurfaceMesh(scene), o, scene.file);
+    refuseLargeDrops(packed.report.dropped, packed.report.spheres + packed.report.dropped, f, "pbd.target_spheres",
+                     "raise it or smooth the mesh's thin parts");
+    if (fill_note) *fill_note = "packed: " + describePack(packed.report);
+    return std::move(packed.model);
   }
   std::vector<Vec3d> centers;
+  TriangleMesh mesh;  // stays empty for the convex primitives (sphere_graph_repair.h)
   if (g.kind == GeometrySpec::Kind::Mesh) {
     if (!(std::isfinite(g.mesh_scale) && g.mesh_scale > 0))
       throw InputError(f, "geometry.mesh_scale", "must be a positive number");
-    TriangleMesh mesh = loadMesh(g.mesh_path);
+    mesh = loadMesh(g.mesh_path);
     for (auto& v : mesh.vertices) v = v * g.mesh_scale;
     requireClosedMesh(mesh, g.mesh_path, "geometry.mesh");
     centers = sampleMesh(mesh, LatticeSpec{g.spacing, g.jitter, g.seed});
@@ -361,6 +386,11 @@ MetaballModel buildSceneMetaballs(const CompiledScene& scene) {
   mb.rest_radii.assign(mb.size(), kRadiusFactor * g.spacing);
   mb.masses.assign(mb.size(), scene.material.density_kg_m3 * g.spacing * g.spacing * g.spacing);
   linkOverlapping(mb);
+  // Cells of a thin part that meet the rest only at a corner (or not at all, with jitter) overlap nothing: link them
+  // across gaps of up to one spacing inside the body, or drop them, so that no sphere is left without a constraint.
+  const SphereGraphRepair repair = connectSphereGraph(mb, mesh, kStragglerReach * g.spacing);
+  refuseLargeDrops(repair.dropped, int(mb.size()) + repair.dropped, f, "geometry.spacing_m", "lower it");
+  if (fill_note) *fill_note = "lattice: " + describeSphereGraphRepair(repair, mb.size());
   return mb;
 }
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <memory>
+#include <string>
 
 #include "host/assembly/metaball_model.h"
 #include "host/compiled/compiled_scene.h"
@@ -16,8 +17,11 @@ namespace inc {
 // primitive (box, beam, sphere, ellipsoid; a closed mesh by winding number) at geometry.spacing, one sphere per lattice
 // cell centre inside the body, radius 0.75 * spacing (face and edge neighbours overlap, corner ones do not),
 // mass density * spacing^3 (so the total mass is the density times the sampled cell volume); spheres are
-// linked when they overlap (|c_i - c_j| < r_i + r_j). Throws InputError(scene.file, key, reason).
-MetaballModel buildSceneMetaballs(const CompiledScene& scene);
+// linked when they overlap (|c_i - c_j| < r_i + r_j). Either way the sphere graph is then made one component per
+// piece of the body (connectSphereGraph: stragglers linked inside the body, or dropped), so no sphere is left
+// without a constraint; `fill_note`, when given, receives one line saying what was filled and repaired.
+// Throws InputError(scene.file, key, reason).
+MetaballModel buildSceneMetaballs(const CompiledScene& scene, std::string* fill_note = nullptr);
 
 // The PBD metaball organ of `scene` on `backend` (Auto resolves like resolveBackend) in `precision`.
 // Settings: pbd.iterations, pbd.xpbd, pbd.solver, pbd.stretch_compliance / laplacian_compliance (0: from

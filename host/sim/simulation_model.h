@@ -94,6 +94,9 @@ class SimulationModel {
   virtual std::string name() const = 0;
   virtual BackendKind backend() const = 0;
   virtual std::size_t particleCount() const = 0;
+  // One line on how the model was built that a user should see (e.g. stragglers linked in its sphere fill);
+  // empty when there is nothing to say.
+  virtual std::string buildNote() const { return {}; }
   // Advances one frame of frame_dt seconds, substepping as stability requires. Must not throw on bad
   // physics: report finite == false with the stage and particle instead.
   virtual FrameReport advance(double frame_dt) = 0;
