@@ -23,6 +23,8 @@ RealtimeHapticCutSession::RealtimeHapticCutSession(HapticDevice& device, Cutting
     throw InputError(f, "frame_dt_s", "must be > 0");
   if (!(config_.max_wait_s >= 0.0) || !std::isfinite(config_.max_wait_s))
     throw InputError(f, "max_wait_s", "must be >= 0");
+  if (!(config_.max_lag_s >= 0.0) || !std::isfinite(config_.max_lag_s))
+    throw InputError(f, "max_lag_s", "must be >= 0");
   config_.blade_axis_device = config_.blade_axis_device * (1.0 / norm(config_.blade_axis_device));
   samples_ = std::make_unique<SampleQueue>();
   // The tool's decisions of a tick are queued before its pose: a frame that has the pose has the decisions.
@@ -56,6 +58,18 @@ void RealtimeHapticCutSession::stop() { loop_->stop(); }
 const HapticStatus& RealtimeHapticCutSession::newestStatus() {
   loop_->status().update();
   return loop_->status().front();
+}
+
+// max_lag_s > 0: when the loop's newest tick is more than max_lag_s past end_tick, the frame ends at the last frame
+// boundary before it instead (the ticks in between are still applied in order, by this frame).
+std::uint64_t RealtimeHapticCutSession::skipAheadWhenLagging(std::uint64_t end_tick) {
+  if (!(config_.max_lag_s > 0.0)) return end_tick;
+  const std::uint64_t newest_end = newestStatus().tick + 1;
+  const auto max_lag = std::uint64_t(std::llround(config_.max_lag_s / loop_->period_s()));
+  if (newest_end <= end_tick + max_lag) return end_tick;
+  frames_ = newest_end / ticks_per_frame_;
+  ++frames_skipped_ahead_;
+  return frames_ * ticks_per_frame_;
 }
 
 // Takes the blade poses of the ticks before end_tick (the newest becomes frame_pose_), waiting while the loop runs
@@ -103,7 +117,7 @@ CutFeed RealtimeHapticCutSession::applyDecisions(SimulationModel& sim) {
   if (last_sim_ != &sim) cut_open_ = false;  // a rebuilt model has no open stroke
   last_sim_ = &sim;
   // This frame's device time: the ticks [frames_, frames_ + 1) * ticks per frame, as in HapticCutSession.
-  const std::uint64_t end_tick = (++frames_) * ticks_per_frame_;
+  const std::uint64_t end_tick = skipAheadWhenLagging((++frames_) * ticks_per_frame_);
   takeSamplesBefore(end_tick);
   CutFeed feed;
   CutEvent e;

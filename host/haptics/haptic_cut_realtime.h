@@ -21,6 +21,9 @@ struct RealtimeCutConfig {
   Vec3d blade_axis_device{0, 0, 1};  // its direction in the device frame (turned by the sample's orientation)
   double frame_dt_s = 0.02;          // the simulation frame: ticks per frame = round(frame_dt_s * loop.rate_hz)
   double max_wait_s = 1.0;           // longest a frame waits for the loop to reach the frame's last tick
+  // > 0 (interactive use): a frame whose device time lags the loop's newest tick by more than this skips ahead to
+  // it, so that the cut keeps up with the hand (the frames' ticks then depend on timing again); 0: never skips.
+  double max_lag_s = 0.0;
   HapticLoopConfig loop;
 };
 
@@ -79,9 +82,11 @@ class RealtimeHapticCutSession {
   // waiting for their last tick (max_wait_s): both 0 unless the timing reached the tool events.
   std::uint64_t droppedSamples() const { return dropped_samples_.load(std::memory_order_relaxed); }
   int framesNotWaitedFor() const { return frames_not_waited_for_; }
+  int framesSkippedAhead() const { return frames_skipped_ahead_; }  // max_lag_s catch-ups
 
  private:
   using SampleQueue = SpscRing<BladeSample, 8192>;
+  std::uint64_t skipAheadWhenLagging(std::uint64_t end_tick);
   void takeSamplesBefore(std::uint64_t end_tick);
   bool popDecisionBefore(std::uint64_t end_tick, CutEvent& e);
   CuttingTool& tool_;
@@ -95,7 +100,7 @@ class RealtimeHapticCutSession {
   std::optional<CutEvent> next_decision_;                // a decision popped for a later frame
   bool cut_open_ = false;
   const SimulationModel* last_sim_ = nullptr;
-  int decisions_ = 0, cuts_applied_ = 0, frames_not_waited_for_ = 0;
+  int decisions_ = 0, cuts_applied_ = 0, frames_not_waited_for_ = 0, frames_skipped_ahead_ = 0;
   std::vector<std::string> messages_;
 };
 

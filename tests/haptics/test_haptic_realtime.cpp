@@ -200,6 +200,34 @@ TEST(HapticRealtime, ThroughCutGivesTheSameTwoPiecesOnEveryRunUnderLoad) {
   EXPECT_EQ(same, runs) << "runs whose topology differs from the lockstep session's: " << runs - same;
 }
 
+// Interactive use (the viewer): with max_lag_s a frame that lags the loop by more than that takes every tick up to
+// the newest, so the cut keeps up with the hand after a pause; without it (incision run, the default) the frame
+// takes its own ticks only, however far behind it is.
+TEST(HapticRealtime, CutSkipsAheadOnlyWhenAskedTo) {
+  const Scene scene = blockScene();
+  for (const double max_lag_s : {0.1, 0.0}) {
+    auto sim = makeDissectionSimulation(compileScene(scene), BackendKind::Cpu, Precision::Float32);
+    CuttingTool tool([](const TipContact&) { return ForceResult{}; }, scene.cut_thresholds, Vec3d{0, 0, 0.015},
+                     Vec3d{0, 0, 1});
+    ScriptedDevice device(throughStroke(), ScriptedDevice::Mode::kByTime, 3.3);
+    RealtimeCutConfig cfg;
+    cfg.max_lag_s = max_lag_s;
+    cfg.loop.realtime = false;
+    cfg.loop.record_capacity = 20000;
+    RealtimeHapticCutSession session(device, tool, cfg);
+    session.start();
+    // The simulation paused while the loop runs 300 ticks (15 frames of device time, 0.3 s > max_lag_s).
+    const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+    while (session.newestStatus().tick < 300 && std::chrono::steady_clock::now() < give_up)
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    ASSERT_GE(session.newestStatus().tick, 300u);
+    session.applyDecisions(*sim);
+    session.stop();
+    EXPECT_EQ(session.framesSkippedAhead(), max_lag_s > 0.0 ? 1 : 0) << "max_lag_s " << max_lag_s;
+    EXPECT_EQ(session.framesNotWaitedFor(), 0);
+  }
+}
+
 // A model without a cutting pipeline cannot take the decisions.
 TEST(HapticRealtime, DecisionsNeedAModelThatCuts) {
   Scene scene = blockScene();
