@@ -17,6 +17,8 @@ HapticHand::HapticHand(std::shared_ptr<HapticDevice> device, HapticHandConfig co
     RealtimeCutConfig rc;
     rc.blade_length_m = config_.blade_length_m;
     rc.blade_axis_device = config_.blade_axis_device;
+    rc.frame_dt_s = config_.frame_dt_s;
+    rc.max_lag_s = config_.max_cut_lag_s;
     rc.loop = config_.loop;
     cut_session_ = std::make_unique<RealtimeHapticCutSession>(*device_, *cut_tool_, rc, clock);
   } else {

@@ -28,6 +28,8 @@ struct HapticHandConfig {
   CutThresholds<double> cut;         // scalpel: eqs. 15-16 thresholds (material.cutting)
   double blade_length_m = 0.05;      // scalpel
   Vec3d blade_axis_device{0, 0, 1};  // scalpel
+  double frame_dt_s = 0.02;          // scalpel: the simulation frame its cut decisions are grouped by (device time)
+  double max_cut_lag_s = 0.0;        // scalpel: RealtimeCutConfig::max_lag_s (0: the cut never skips ahead)
   HapticLoopConfig loop;
 };
 

@@ -181,6 +181,8 @@ SceneHaptics::SceneHaptics(const CompiledScene& scene, const SimulationModel& mo
     c.cut = scene.cut_thresholds;
     c.blade_length_m = d.blade_length_m;
     c.blade_axis_device = d.blade_axis;
+    c.frame_dt_s = scene.solver.frame_dt;
+    c.max_cut_lag_s = options.max_cut_lag_s;
     c.loop = loopConfig(scene, d, options.record_s);
     hands_.push_back(std::make_unique<HapticHand>(devices[k], c, options.clock));
   }

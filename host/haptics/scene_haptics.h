@@ -29,6 +29,7 @@ struct SceneHapticsOptions {
   HapticClock* clock = nullptr;          // nullptr: each loop's SteadyClock (a FakeClock serves one hand only)
   double record_s = 600.0;               // seconds of ticks recorded for stats() and the recorded trajectories
   bool quiet = false;                    // no progress bar (the global model's precompute)
+  double max_cut_lag_s = 0.0;            // the scalpel's RealtimeCutConfig::max_lag_s: > 0 in the viewer only
 };
 
 // Built for the model the haptic tools touch. Each device is a HapticHand on its own thread at its own rate; its

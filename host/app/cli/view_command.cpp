@@ -37,6 +37,8 @@ int runViewCommand(const Scene& scene_in, const ViewCommandOptions& options) {
         SceneHapticsOptions ho;
         ho.device = pointer;
         ho.record_s = 10.0;  // the viewer plots the loop through the model counters, not the records
+        // Interactive: the cut may lag the hand by five frames at most (a pause, frames slower than real time).
+        ho.max_cut_lag_s = 5.0 * sc->solver.frame_dt;
         auto m = std::make_unique<HapticSceneModel>(base(), compileScene(*sc), ho);
         *last = m.get();
         return m;
