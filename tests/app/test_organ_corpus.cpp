@@ -1,13 +1,13 @@
 // The bring-your-own-organ corpus on the CPU (issue 31): every corpus mesh, with the scene a user would write and
 // every other key at its default, is grasped, cut straight and cut along a curve through `incision run`'s runner;
-// the run must end and keep a closed, right-side-out surface of nearly its rest volume. Open meshes are refused.
+// the run must end and keep a closed, right-side-out surface of nearly its rest volume. Its own binary and ctest
+// label `corpus` (not in CI yet: it takes tens of minutes on two cores and does not pass; docs/bring-your-own-organ.md).
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <string>
 #include <tuple>
 
-#include "model/input_error.h"
 #include "tests/support/organ_corpus.h"
 #include "tests/support/repo_paths.h"
 
@@ -27,7 +27,9 @@ TEST_P(OrganCorpus, RunsToTheEndWithAClosedSurfaceOfItsVolume) {
   const test::CorpusResult r = test::runCorpusCase(cm, action, BackendKind::Cpu);
   if (r.skipped) GTEST_SKIP() << r.skip_reason;
   const std::vector<std::string> failures = test::corpusFailures(r, action, kVolumeTolerance);
-  std::printf("[ corpus ] %s\n", test::corpusRow(cm, action, r, failures.empty() ? "ok" : failures.front()).c_str());
+  std::string verdict = failures.empty() ? "ok" : "";
+  for (const std::string& f : failures) verdict += (verdict.empty() ? "" : "; ") + f;
+  std::printf("[ corpus ] %s\n", test::corpusRow(cm, action, r, verdict).c_str());
   for (const std::string& f : failures) ADD_FAILURE() << cm.name << " " << test::actionName(action) << ": " << f;
 }
 
@@ -41,26 +43,6 @@ INSTANTIATE_TEST_SUITE_P(Meshes, OrganCorpus,
                                                               test::CorpusAction::StraightCut,
                                                               test::CorpusAction::CurvedCut)),
                          caseName);
-
-// The shared open meshes (SOURCES.md: "must be refused clearly") are refused at load under geometry.mesh, naming
-// the mesh file and what is wrong.
-TEST(OrganCorpusOpenMeshes, AreRefusedNamingTheKeyAndTheDefect) {
-  for (const char* name : {"frog_body.obj", "c_open.obj"}) {
-    const std::string path = test::sharedPath(std::string("organs/") + name);
-    if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " is absent (shared organ meshes are not committed)";
-    const std::string scene = R"({"geometry": {"kind": "mesh", "mesh": ")" + path +
-                              R"(", "mesh_scale": 0.01}, "models": {"pbd_metaballs": true}})";
-    try {
-      parseScene(scene, "user.json", ".");
-      ADD_FAILURE() << name << " was accepted";
-    } catch (const InputError& e) {
-      EXPECT_EQ(e.key(), "geometry.mesh") << e.what();
-      EXPECT_NE(e.reason().find(name), std::string::npos) << e.what();
-      EXPECT_NE(e.reason().find("closed, manifold, consistently oriented surface is needed"), std::string::npos)
-          << e.what();
-    }
-  }
-}
 
 }  // namespace
 }  // namespace inc
