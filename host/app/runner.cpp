@@ -12,6 +12,7 @@
 
 #include "base/format_number.h"
 #include "base/progress.h"
+#include "host/app/memory_estimate.h"
 #include "host/app/metrics_csv.h"
 #include "host/backends/backend_choice.h"
 #include "host/haptics/haptic_scene_model.h"
@@ -258,6 +259,8 @@ RunSummary runScene(const Scene& scene_in, const RunOptions& opt, const ModelFac
   sum.backend_note = choice.note;
   if (!opt.quiet) std::fprintf(stderr, "%s\n", choice.note.c_str());
 
+  // Before anything is sampled or allocated: refuse a scene that will not fit (host/app/memory_estimate.h).
+  checkSceneMemory(scene, choice.kind, opt.memory_budget ? *opt.memory_budget : machineMemoryBudget(choice));
   const CompiledScene compiled = compileScene(scene);
   auto models = factory(compiled, choice.kind);
   if (models.empty()) throw InputError(scene.file, "models", "the scene switches on no model that can run");

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "host/app/memory_estimate.h"
 #include "host/haptics/haptic_loop.h"
 #include "host/scene/scene.h"
 #include "host/sim/model_factory.h"
@@ -30,6 +31,7 @@ struct RunOptions {
   std::optional<Precision> precision;  // --precision overrides the scene
   std::string out_dir = "out";
   bool quiet = false;
+  std::optional<MemoryBudget> memory_budget;  // the memory check's budget (tests); default: machineMemoryBudget
   bool retry_once = true;  // guard: roll back and retry a failed frame once with half the step (kMaxGuardRetries)
 };
 
