@@ -1,6 +1,7 @@
 // The backend-agnostic MLS elasticity solver interface (CPU and CUDA implementations) and its factory.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -44,6 +45,8 @@ struct MlsFrameStats {
   // substeps replay as one CUDA graph); the per-stage fields above are then zero.
   double ms_substeps = 0.0;
   MlsReduction totals;
+  // A frame refused without stepping (totals.bad_stage "timestep"): the substeps it would have needed (0 otherwise).
+  double substeps_needed = 0.0;
 };
 
 // Coupling groups of the dissection model (section 5.2, physics/cut_coupling.h): group g is one sphere converted
@@ -146,6 +149,10 @@ class MlsSolver {
   }
   double safety() const { return safety_; }
   void setSafety(double s) { safety_ = s; }
+  // The most substeps advance() takes per call (default kMlsMaxSubsteps); a call that needs more, automatic or fixed,
+  // is refused without stepping (see planFrame). The simulations set the frame budget's limit (model/frame_budget.h).
+  int maxSubsteps() const { return max_substeps_; }
+  void setMaxSubsteps(int n) { max_substeps_ = std::max(1, std::min(n, int(kMlsMaxSubsteps))); }
   // Per-stage timing of advance() (default on). The CUDA solver then launches each substep's kernels one by
   // one between timing events; off, it replays the frame's substeps as one CUDA graph and reports only their
   // total (ms_substeps): small models (a cut's nodal points) are launch-bound. The CPU always times stages.
@@ -239,14 +246,24 @@ class MlsSolver {
 
  protected:
   // Substeps for a frame: fixed as given (checked against the rest limit: bad input throws), else automatic
-  // at the current limit. Returns 0 when the deformed body would need more than kMlsMaxSubsteps (a physics
-  // failure, not bad input: advance() then reports finite == false, stage "timestep", without stepping).
+  // at the current limit. Returns 0 when the frame would need more than maxSubsteps() (a physics or budget
+  // failure, not bad input: advance() then reports finite == false, stage "timestep", without stepping, and the
+  // count it needed in substeps_needed).
   int planFrame(double frame_dt, int fixed_substeps, const std::string& file) {
-    if (fixed_substeps > 0) return planMlsSubsteps(frame_dt, stableTimeStep(), safety_, fixed_substeps, file);
+    substeps_needed_ = 0.0;
+    if (fixed_substeps > 0) {
+      const int n = planMlsSubsteps(frame_dt, stableTimeStep(), safety_, fixed_substeps, file);
+      if (n <= max_substeps_) return n;
+      substeps_needed_ = double(n);
+      return 0;
+    }
     planMlsSubsteps(frame_dt, stableTimeStep(), safety_, 0, file);  // bad input (frame_dt, safety) throws here
     if (!stiffening_known_) stiffening_ = reduce().stiffening;
     const double n = std::ceil(frame_dt / (safety_ * currentStableTimeStep()) * (1.0 - 1e-12));
-    if (!(n <= double(kMlsMaxSubsteps))) return 0;
+    if (!(n <= double(max_substeps_))) {
+      substeps_needed_ = n;
+      return 0;
+    }
     return planMlsSubsteps(frame_dt, currentStableTimeStep(), safety_, 0, file);
   }
   // The report of a frame that could not be planned (see planFrame).
@@ -256,6 +273,7 @@ class MlsSolver {
     st.totals.finite = false;
     st.totals.bad_stage = "timestep";
     st.totals.first_bad = -1;
+    st.substeps_needed = substeps_needed_;
     return st;
   }
   // The blade for n substeps of dt in precision T, relative to the model origin (radius 0: none).
@@ -319,6 +337,8 @@ class MlsSolver {
   std::uint64_t statics_version_ = 0;
   double statics_radius_ = 0.0;
   double safety_ = 0.5;
+  int max_substeps_ = int(kMlsMaxSubsteps);  // kept across replaceModel, as the stage-timing setting
+  double substeps_needed_ = 0.0;             // the last planFrame's need when it refused (0: it did not)
   double coupling_dt_ = std::numeric_limits<double>::infinity();
   double stiffening_ = 1.0;
   bool stiffening_known_ = false;

@@ -268,8 +268,10 @@ void SimRunner::advanceFrame() {
     std::lock_guard<std::mutex> lock(mutex_);
     paused_ = true;
     snapshot_.failed = true;
-    snapshot_.failure = "non-finite state in stage '" + report.failure_stage + "' at particle " +
-                        std::to_string(report.failure_particle) + "; rolled back and paused";
+    // A frame refused for the frame budget (model/frame_budget.h) says what to change; it never ran.
+    snapshot_.failure = report.refused ? "frame refused, paused: " + report.failure_reason
+                                       : "non-finite state in stage '" + report.failure_stage + "' at particle " +
+                                             std::to_string(report.failure_particle) + "; rolled back and paused";
     snapshot_.report = report;
     ++version_;
     cv_.notify_all();

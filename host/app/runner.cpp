@@ -12,6 +12,7 @@
 
 #include "base/format_number.h"
 #include "base/progress.h"
+#include "host/app/memory_estimate.h"
 #include "host/app/metrics_csv.h"
 #include "host/backends/backend_choice.h"
 #include "host/haptics/haptic_scene_model.h"
@@ -81,6 +82,11 @@ Scene sceneForRun(const Scene& scene_in, const RunOptions& opt) {
     throw InputError("", "--seconds",
                      formatNumber(*opt.seconds) + " s is more than " + std::to_string(kMaxRunFrames) +
                          " frames of solver.frame_dt_s = " + formatNumber(scene.solver.frame_dt) + " s");
+  if (!opt.frames && !opt.seconds && !(scene.duration / scene.solver.frame_dt <= double(kMaxRunFrames)))
+    throw InputError(scene.file, "duration_s",
+                     formatNumber(scene.duration) + " s is more than " + std::to_string(kMaxRunFrames) +
+                         " frames of solver.frame_dt_s = " + formatNumber(scene.solver.frame_dt) +
+                         " s: a run that long does not end");
   return scene;
 }
 
@@ -110,15 +116,26 @@ double energyFloorAndCheckpoint(const std::vector<std::unique_ptr<SimulationMode
   return floor;
 }
 
-// Advances model k by one frame under its guard. A failed check rolls back and retries once with half the step;
-// a model that still fails is restored to its last good state and the failure goes into `sum`. Metrics are
-// written for the first model, and for a failing one.
+// Why a failed frame is not retried ("" when it is): the model refused it, or the run's retries are spent.
+std::string noRetryReason(const GuardVerdict& v, const RunOptions& opt, const RunSummary& sum) {
+  if (!opt.retry_once) return "";
+  if (!v.retryable) return " (not retried: a smaller step needs more substeps)";
+  if (sum.retries >= kMaxGuardRetries)
+    return " (not retried: the guard already halved the step " + std::to_string(sum.retries) +
+           " times in this run, the most it does)";
+  return "";
+}
+
+// Advances model k by one frame under its guard. A failed check rolls back and retries once with half the step
+// (at most kMaxGuardRetries times a run, never a refused frame); a model that still fails is restored to its last
+// good state and the failure goes into `sum`. Metrics are written for the first model, and for a failing one.
 void advanceGuarded(SimulationModel& m, NumericalGuard& guard, std::size_t k, long f, double dt, const RunOptions& opt,
                     MetricsCsv* csv, RunSummary& sum) {
   const auto fs0 = std::chrono::steady_clock::now();
   FrameReport r = m.advance(dt);
   GuardVerdict v = guard.check(r);
-  if (!v.ok && opt.retry_once) {
+  std::string not_retried = v.ok ? "" : noRetryReason(v, opt, sum);
+  if (!v.ok && opt.retry_once && not_retried.empty()) {
     // Roll back to the last good state and retry once with half the step.
     if (!opt.quiet)
       std::fprintf(stderr, "\nguard: %s; rolling back and retrying with half the step\n", describe(f, v).c_str());
@@ -127,11 +144,12 @@ void advanceGuarded(SimulationModel& m, NumericalGuard& guard, std::size_t k, lo
     ++sum.retries;
     r = m.advance(dt);
     v = guard.check(r);
+    if (!v.ok && !v.retryable) not_retried = " (after one retry at half the step)";
   }
   const double wall_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - fs0).count();
   if (!v.ok) {
     sum.failed = true;
-    sum.failure = "model " + m.name() + ", " + describe(f, v);
+    sum.failure = "model " + m.name() + ", " + describe(f, v) + not_retried;
     m.restoreCheckpoint();  // the last good state is what goes to disk
     if (csv) csv->write(f, double(f) * dt, wall_ms, r);
     return;
@@ -243,6 +261,8 @@ RunSummary runScene(const Scene& scene_in, const RunOptions& opt, const ModelFac
   if (!opt.quiet)
     for (const std::string& c : scene.chosen_settings) std::fprintf(stderr, "chosen: %s\n", c.c_str());
 
+  // Before anything is sampled or allocated: refuse a scene that will not fit (host/app/memory_estimate.h).
+  checkSceneMemory(scene, choice.kind, opt.memory_budget ? *opt.memory_budget : machineMemoryBudget(choice));
   const CompiledScene compiled = compileScene(scene);
   auto models = factory(compiled, choice.kind);
   if (models.empty()) throw InputError(scene.file, "models", "the scene switches on no model that can run");

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "host/app/memory_estimate.h"
 #include "host/haptics/haptic_loop.h"
 #include "host/scene/scene.h"
 #include "host/sim/model_factory.h"
@@ -18,6 +19,11 @@ namespace inc {
 // --seconds that needs more frames, is a typing mistake, refused instead of running until killed.
 inline constexpr long kMaxRunFrames = 100000000;
 
+// The guard's retries per run: each rolls a failed frame back and halves the time step for the rest of the run, so
+// the step ends at 1/8 of the scene's at most; the next failure ends the run (exit 3). Together with the frame
+// budget (model/frame_budget.h) and the frame count this bounds a run's work.
+inline constexpr int kMaxGuardRetries = 3;
+
 struct RunOptions {
   std::optional<long> frames;          // --steps N: frames of scene.solver.frame_dt, [1, kMaxRunFrames]
   std::optional<double> seconds;       // --seconds T: simulated seconds, > 0 (neither: the scene's duration)
@@ -25,7 +31,8 @@ struct RunOptions {
   std::optional<Precision> precision;  // --precision overrides the scene
   std::string out_dir = "out";
   bool quiet = false;
-  bool retry_once = true;  // guard: roll back and retry a failed frame once with half the step
+  std::optional<MemoryBudget> memory_budget;  // the memory check's budget (tests); default: machineMemoryBudget
+  bool retry_once = true;  // guard: roll back and retry a failed frame once with half the step (kMaxGuardRetries)
 };
 
 struct RunSummary {

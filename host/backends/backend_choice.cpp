@@ -20,6 +20,7 @@ BackendChoice resolveBackend(BackendKind requested) {
   if (usable) {
     c.kind = BackendKind::Cuda;
     c.note = "backend: cuda on " + dev.name;
+    c.device_memory_bytes = dev.global_memory_bytes;
     return c;
   }
   if (requested == BackendKind::Cuda)

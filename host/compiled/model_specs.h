@@ -56,6 +56,7 @@ struct SolverSpec {
   double frame_dt = 1.0 / 60.0;  // s, > 0: one frame of output/rendering
   int substeps = 0;              // 0: as many as stability needs; > 0: exactly this many (refused if unstable)
   double safety = 0.5;           // fraction of the stable explicit step to use, (0, 1]
+  int max_substeps = 0;  // substeps a frame may take (refused beyond); 0: from the frame budget (frame_budget.h)
   Precision precision = Precision::Float32;
   BackendKind backend = BackendKind::Auto;
   Vec3d gravity{0, 0, -9.81};   // m/s^2

@@ -16,6 +16,7 @@
 #include "host/compiled/material_checks.h"
 #include "host/cut/cut_nodal_points.h"
 #include "model/device_capture_lock.h"
+#include "model/frame_budget.h"
 #include "model/input_error.h"
 #include "physics/cut_coupling.h"
 
@@ -386,11 +387,13 @@ MlsFrameStats NodalRegion::advance(double dt, int fixed_substeps,
   if (!solver_) return st;
   for (std::size_t s = 0; s < anchors_.size(); ++s) anchors_[s] = pbd_position(r_.spring_other[s]);
   solver_->setCouplingAnchors(anchors_);
+  solver_->setMaxSubsteps(substepLimit());
   int n = 0;
   if (fixed_substeps > 0) {
-    // At least the fixed count, more when the current stable step (deformation, springs) needs them.
+    // At least the fixed count, more when the current stable step (deformation, springs) needs them; beyond the
+    // limit the solver refuses the exchange.
     const double need = std::ceil(dt / (solver_->safety() * solver_->currentStableTimeStep()) * (1.0 - 1e-12));
-    n = std::max(fixed_substeps, int(std::min(need, double(kMlsMaxSubsteps))));
+    n = std::max(fixed_substeps, int(std::min(need, 2.0e9)));
   }
   solver_->setBladeContact(blade_from_.base, blade_from_.tip, blade_to_.base, blade_to_.tip, blade_radius_,
                            blade_friction_);
@@ -451,6 +454,19 @@ void NodalRegion::restoreCheckpoint() {
     solver_->couplingDisplacements(group_u_);
   }
 }
+int NodalRegion::substepLimit() const {
+  const int frame = frameSubstepLimit(r_.rest.size(), settings_.max_substeps);
+  const int k = std::max(1, settings_.exchanges_per_frame);
+  return std::max(1, (frame + k - 1) / k);
+}
+
+std::string NodalRegion::substepLimitRule() const {
+  std::string rule = frameSubstepLimitRule(r_.rest.size(), settings_.max_substeps);
+  if (settings_.exchanges_per_frame > 1)
+    rule += "; shared by cutting.exchanges_per_frame = " + std::to_string(settings_.exchanges_per_frame) + " exchanges";
+  return rule;
+}
+
 void NodalRegion::scaleSafety(double factor) {
   if (!(factor > 0) || !std::isfinite(factor)) return;
   safety_scale_ *= factor;

@@ -8,6 +8,7 @@
 #include <functional>
 #include <memory>
 #include <set>
+#include <string>
 #include <vector>
 
 #include "host/assembly/metaball_model.h"
@@ -38,6 +39,10 @@ struct NodalRegionSettings {
   double stretch_compliance = 0.0;           // m/N; 0: alpha = d / (E pi rbar^2) (host/assembly/pbd_builders.h)
   std::function<bool(const Vec3d&)> inside;  // the tissue: points are sampled only inside it (empty: everywhere)
   StaticColliders colliders;                 // the scene's planes and boxes: the points stay out of them
+  // The frame budget (model/frame_budget.h): solver.max_substeps (0: automatic for the points' count), shared by
+  // the frame's exchanges_per_frame advance() calls.
+  int max_substeps = 0;
+  int exchanges_per_frame = 1;
 };
 
 // A sphere's state when it is converted: its points start rigidly attached, x = x_b + R_b (X - C_b), v = v_b.
@@ -156,6 +161,8 @@ class NodalRegion {
   // One coupling exchange: the springs' anchors from the PBD spheres' current positions (`pbd_position(j)` for
   // base index j), then `dt` of MLS (eqs. 4-10 with the springs of eqs. 11-12 every substep). `fixed_substeps`
   // > 0 takes at least that many (more when the stable step needs them). Updates the groups' eq. 13 state.
+  // An exchange that needs more substeps than its share of the frame's limit (substepLimit()) is refused without
+  // stepping: finite false, stage "timestep", the count in substeps_needed.
   MlsFrameStats advance(double dt, int fixed_substeps, const std::function<Vec3d(std::int32_t)>& pbd_position);
   // The scalpel as a contact for the points over the next advance (world = the points' frame, m): its blade moves
   // from `from` to `to`; points within `radius` of it are put on its surface, sliding with Coulomb friction
@@ -180,6 +187,9 @@ class NodalRegion {
   void saveCheckpoint();
   void restoreCheckpoint();
   void scaleSafety(double factor);
+  // The substeps one advance() may take: the frame's limit for the current points over exchanges_per_frame.
+  int substepLimit() const;
+  std::string substepLimitRule() const;  // how that limit follows from the settings, for messages
 
   // The points a re-pack takes (rest configuration: the cut spheres' points, the interface spheres' as context, and
   // the supports among them all). Depends on nothing that moves: fixed once the stroke stops converting.

@@ -100,7 +100,8 @@ const std::vector<SceneKey>& sceneKeys() {
        number(&MlsSpec::volume_stiffness, atLeast(0))},
       {"mls.condition_limit", "number", "-", "> 1", "1e6",
        number(&MlsSpec::condition_limit, above(1, " (a condition number is >= 1)"))},
-      {"pbd.iterations", "integer", "-", ">= 1", "10", integer(&PbdSpec::iterations, atLeast(1))},
+      // Bounded so that a frame's work is (model/frame_budget.h), as cutting.pbd_iterations.
+      {"pbd.iterations", "integer", "-", "[1, 1000]", "10", integer(&PbdSpec::iterations, interval("[1, 1000]"))},
       {"pbd.xpbd", "boolean", "-", "-", "true", boolean(&PbdSpec::xpbd)},
       {"pbd.solver", "string", "-", "jacobi, gauss_seidel", "jacobi",
        choice(&PbdSpec::solver, {"jacobi", "gauss_seidel"})},
@@ -113,6 +114,9 @@ const std::vector<SceneKey>& sceneKeys() {
       {"solver.frame_dt_s", "number", "s", "> 0", "1/60", number(&SolverSpec::frame_dt, above(0))},
       {"solver.substeps", "integer", "-", ">= 0", "0", integer(&SolverSpec::substeps, atLeast(0))},
       {"solver.safety", "number", "-", "(0, 1]", "0.5", number(&SolverSpec::safety, interval("(0, 1]"))},
+      // 0: the frame budget's limit for the model's size (model/frame_budget.h); the top is kMlsMaxSubsteps.
+      {"solver.max_substeps", "integer", "-", "[0, 10000000]", "0",
+       integer(&SolverSpec::max_substeps, interval("[0, 10000000]"))},
       // "float"/"double" are accepted as the C++ names of the same two precisions.
       {"solver.precision", "string", "-", "float32, float64 (also float, double)", "float32",
        choiceOf(&SolverSpec::precision, {{"float32", Precision::Float32},

@@ -32,6 +32,7 @@ void addMlsStats(MlsFrameStats& into, const MlsFrameStats& ms) {
   into.ms_reduce += ms.ms_reduce;
   into.ms_substeps += ms.ms_substeps;
   into.totals = ms.totals;
+  into.substeps_needed = ms.substeps_needed;
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 #include <algorithm>
 
 #include "host/sim/dissection_simulation_impl.h"
+#include "model/frame_budget.h"
 
 namespace inc::dissection {
 
@@ -47,6 +48,17 @@ void DissectionSimulation<T>::reportFailure(FrameReport& rep, const FrameOutcome
   if (!out.pbd.finite) {
     rep.failure_stage = "pbd";
     rep.failure_particle = out.pbd.failure_particle;
+  } else if (!out.mls_finite && out.mls.substeps_needed > 0 && coupled()) {
+    // The nodal points' exchange was refused for the frame budget: the need and the limit per frame.
+    const NodalRegion& region = *active_->region;
+    const int k = scene_.cutting.exchanges_per_frame;
+    refuseFrame(rep,
+                substepLimitReason("MLS substeps of the cut's " + std::to_string(region.pointCount()) + " nodal points",
+                                   out.mls.substeps_needed * k, region.substepLimit() * k, region.substepLimitRule(),
+                                   "the material (material.youngs_modulus_pa: softer), the points' spacing "
+                                   "(cutting.samples_per_diameter: fewer; geometry.spacing_m or "
+                                   "pbd.target_spheres: larger spheres), solver.frame_dt_s (shorter), "
+                                   "cutting.mls_substeps_per_exchange"));
   } else if (!out.mls_finite) {
     rep.failure_stage = "mls_" + out.mls.totals.bad_stage;
     rep.failure_particle = out.mls.totals.first_bad;

@@ -20,6 +20,7 @@
 #include "host/sim/pbd_organ_settings.h"
 #include "host/sim/pbd_render_layers.h"
 #include "model/device_capture_lock.h"
+#include "model/frame_budget.h"
 #include "model/input_error.h"
 
 namespace inc::dissection {
@@ -32,6 +33,7 @@ DissectionSimulation<T>::DissectionSimulation(const CompiledScene& scene, Backen
   readTools();
   setPbdParams();
   buildOrgan();
+  checkFixedSubstepsFit(scene_.solver.substeps, spheres_.size(), scene_.solver.max_substeps, scene_.file);
   backend_ = makePbdBackend<T>(backend);
   setRegionSettings();
   checkFixedMlsSubsteps(scene_, spheres_, region_.mls.material);
@@ -94,6 +96,8 @@ void DissectionSimulation<T>::setRegionSettings() {
   region_.colliders = staticColliders(scene_.colliders);
   region_.stretch_compliance = scene_.pbd.stretch_compliance;
   region_.mls = mlsSolverSettings(scene_);
+  region_.max_substeps = scene_.solver.max_substeps;
+  region_.exchanges_per_frame = scene_.cutting.exchanges_per_frame;
 }
 
 // The organ as first packed: its typical sphere sets the re-packing's budget and radius cap for every cut (a mean
@@ -131,13 +135,18 @@ FrameReport DissectionSimulation<T>::advance(double frame_dt) {
   updateGraspers(t0);
   const PbdFrameInput<T> in = frameInput(t0, t1);
   FrameOutcome out;
+  FrameReport rep;
+  // The frame budget (model/frame_budget.h): the spheres' substeps this frame, refused beyond the limit.
+  if (std::string why = pbdRefusal(frame_dt); !why.empty()) {
+    refuseFrame(rep, std::move(why));
+    return rep;
+  }
   if (coupled())
     coupledFrame(frame_dt, in, out);
   else
     pbdFrame(frame_dt, in, out);
   mouse_.frameDone();
   time_ = t1;
-  FrameReport rep;
   rep.substeps = out.pbd_substeps;
   rep.dt = frame_dt / std::max(1, out.pbd_substeps);
   reportStages(rep, out);
@@ -195,6 +204,15 @@ PbdFrameInput<T> DissectionSimulation<T>::frameInput(double t0, double t1) const
   appendBladeInput(in);
   appendMouseAttachments(mouse_, in);
   return in;
+}
+
+// Why this frame's PBD substeps exceed the frame's limit ("" when they fit): all exchanges' during a stroke.
+template <typename T>
+std::string DissectionSimulation<T>::pbdRefusal(double frame_dt) const {
+  const int per_frame = coupled() ? scene_.cutting.exchanges_per_frame * exchangeParams(frame_dt).substeps
+                                  : std::max(1, int(std::ceil(base_substeps_ * substep_scale_ - 1e-9)));
+  return pbdSubstepRefusal(per_frame, model_.size(), scene_.solver.max_substeps,
+                           std::string(kPbdSubstepKeys) + ", cutting.pbd_substeps_per_exchange");
 }
 
 // A frame without nodal points: the PBD spheres alone.

@@ -108,6 +108,7 @@ class DissectionSimulation final : public SimulationModel {
   void applyDueWork(double t0);
   void takeMouseBlade();
   PbdFrameInput<T> frameInput(double t0, double t1) const;
+  std::string pbdRefusal(double frame_dt) const;
   void pbdFrame(double frame_dt, const PbdFrameInput<T>& in, FrameOutcome& out);
   void updateGraspers(double t0);
   bool coupled() const { return active_ && active_->region && active_->region->active(); }

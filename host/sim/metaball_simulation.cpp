@@ -22,6 +22,7 @@
 #include "host/sim/interactive_tool.h"
 #include "host/sim/pbd_organ_settings.h"
 #include "host/sim/pbd_render_layers.h"
+#include "model/frame_budget.h"
 #include "model/input_error.h"
 #include "model/pbd_model.h"
 #include "physics/pbd_rotation.h"
@@ -120,6 +121,7 @@ class MetaballSimulation final : public SimulationModel {
     }
     base_substeps_ = scene.solver.substeps > 0 ? scene.solver.substeps : kDefaultSubsteps;
     auto_substeps_ = scene.solver.substeps == 0;
+    max_substeps_ = scene.solver.max_substeps;
 
     const MetaballModel mb = buildSceneMetaballs(scene, &fill_note_);
     checkCollidersClear(scene, mb.rest_centers, "sphere centres");
@@ -132,6 +134,7 @@ class MetaballSimulation final : public SimulationModel {
       opt.surface_depth = [depth](const Vec3d& x) { return -depth->signedDistance(x).distance; };
     }
     model_ = buildMetaballPbdModel<T>(mb, opt);
+    checkFixedSubstepsFit(scene.solver.substeps, model_.size(), max_substeps_, f);
     // The organ's surface rides on the spheres (linear-blend skinning, k = 4 nearest spheres).
     skin_ = skinArrays<T>(bindSkin(rest_surface_, mb, std::min<int>(4, int(mb.size())), f));
     backend_ = makePbdBackend<T>(backend);
@@ -178,7 +181,13 @@ class MetaballSimulation final : public SimulationModel {
     p.frame_dt = T(frame_dt);
     p.substeps = substeps();
     // Automatic substepping also covers frames longer than the scene's (a slowed-down viewer, a retry).
-    if (auto_substeps_) p.substeps = std::max(p.substeps, int(std::ceil(frame_dt / max_substep_s_ - 1e-9)));
+    if (auto_substeps_)
+      p.substeps = std::max(p.substeps, int(std::min(std::ceil(frame_dt / max_substep_s_ - 1e-9), 2e9)));
+    // The frame budget (model/frame_budget.h): a frame of more substeps is refused, not run for minutes.
+    if (std::string why = pbdSubstepRefusal(p.substeps, model_.size(), max_substeps_); !why.empty()) {
+      refuseFrame(rep, std::move(why));
+      return rep;
+    }
     const PbdFrameStats st = backend_->advanceFrame(p, in);
     backend_->getState(state_);
     mouse_.frameDone();
@@ -342,6 +351,7 @@ class MetaballSimulation final : public SimulationModel {
   mutable std::vector<Vec3<T>> skinned_;
   int base_substeps_ = kDefaultSubsteps;
   bool auto_substeps_ = true;
+  int max_substeps_ = 0;  // solver.max_substeps (0: the frame budget's automatic limit)
   double max_substep_s_ = 1.0e300;
   double substep_scale_ = 1.0;
   double time_ = 0, saved_time_ = 0;

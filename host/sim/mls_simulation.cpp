@@ -9,6 +9,7 @@
 
 #include "host/assembly/particle_sampling.h"
 #include "host/io/mesh.h"
+#include "model/frame_budget.h"
 #include "model/input_error.h"
 #include "model/mls_solver.h"
 
@@ -55,6 +56,11 @@ class MlsSimulation final : public SimulationModel {
     // Refuse an unstable fixed substep count now (bad input), not in the middle of a run.
     planMlsSubsteps(scene.solver.frame_dt, solver_->stableTimeStep(), solver_->safety(), fixed_substeps_, scene.file,
                     "solver.substeps");
+    // The frame budget: a frame that would need more substeps is refused (advance() reports why), so that no frame
+    // runs for minutes; a fixed count above it is a contradiction in the scene.
+    max_substeps_ = scene.solver.max_substeps;
+    solver_->setMaxSubsteps(frameSubstepLimit(solver_->size(), max_substeps_));
+    checkFixedSubstepsFit(fixed_substeps_, solver_->size(), max_substeps_, scene.file);
     const std::vector<Vec3d> rest = solver_->restPositions();
     for (std::size_t k = 0; k < tools_.size(); ++k) {
       const ToolSpec& tool = tools_[k];
@@ -110,6 +116,7 @@ class MlsSimulation final : public SimulationModel {
     r.finite = st.totals.finite;
     r.failure_stage = st.totals.bad_stage;
     r.failure_particle = st.totals.first_bad;
+    if (st.substeps_needed > 0) refuse(r, st.substeps_needed);
     const MlsModelStats& m = solver_->modelStats();
     r.counters["stable_dt_s"] = solver_->stableTimeStep();                 // rest state, safety 1
     r.counters["current_stable_dt_s"] = solver_->currentStableTimeStep();  // at the frame's end deformation
@@ -128,6 +135,13 @@ class MlsSimulation final : public SimulationModel {
     grasped += double(mouse_ids_.size());
     r.counters["grasped_particles"] = grasped;
     return r;
+  }
+
+  // A frame the solver refused for the frame budget: what it needed, the limit and the keys to change.
+  void refuse(FrameReport& r, double needed) const {
+    refuseFrame(r, substepLimitReason("MLS substeps", needed, solver_->maxSubsteps(),
+                                      frameSubstepLimitRule(solver_->size(), max_substeps_),
+                                      std::string(kMlsSubstepKeys) + (fixed_substeps_ > 0 ? ", solver.substeps" : "")));
   }
 
   void saveCheckpoint() override {
@@ -230,6 +244,7 @@ class MlsSimulation final : public SimulationModel {
   Vec3d mouse_tip0_, mouse_tip_;         // tip at the grasp and now (m)
   std::unique_ptr<MlsSolver> solver_;
   int fixed_substeps_ = 0;
+  int max_substeps_ = 0;  // solver.max_substeps (0: the frame budget's automatic limit)
   std::vector<ToolSpec> tools_;
   std::vector<Grasp> grasps_;
   double time_ = 0.0, saved_time_ = 0.0;  // s, simulated time (tool paths are functions of it)

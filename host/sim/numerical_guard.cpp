@@ -17,7 +17,8 @@ GuardVerdict NumericalGuard::check(const FrameReport& r) {
     v.ok = false;
     v.stage = r.failure_stage.empty() ? "unknown" : r.failure_stage;
     v.particle = r.failure_particle;
-    v.reason = "non-finite value";
+    v.reason = r.failure_reason.empty() ? "non-finite value" : r.failure_reason;
+    v.retryable = !r.refused;
     return v;
   }
   if (!std::isfinite(total) || !std::isfinite(r.max_displacement)) {

@@ -12,6 +12,9 @@ struct GuardVerdict {
   std::string stage;           // where it went wrong ("forces", "energy", ...)
   std::int64_t particle = -1;  // which particle, when known
   std::string reason;
+  // false: a retry at a smaller step cannot help (a frame the model refused for the frame budget needs more
+  // substeps at half the step, not fewer).
+  bool retryable = true;
 };
 
 class NumericalGuard {

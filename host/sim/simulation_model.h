@@ -5,6 +5,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "host/io/mesh.h"
@@ -26,10 +27,23 @@ struct FrameReport {
   bool finite = true;             // false: a NaN/Inf appeared; failure_* say where
   std::string failure_stage;
   std::int64_t failure_particle = -1;
+  // A frame the model refused without stepping (finite false, stage "substep_limit"): it would cost more than the
+  // frame budget (model/frame_budget.h). A retry at a smaller step cannot help; failure_reason says what to change.
+  bool refused = false;
+  std::string failure_reason;
   std::map<std::string, double> counters;  // model-specific ("degenerate_neighbourhoods", "broken_bonds", ...)
   // A model that runs a haptic loop reports its rate and period p99 as counters "haptic_hz" and
   // "haptic_p99_ms" (the viewer's Haptics plots).
 };
+
+// Marks `r` as a frame the model refused without stepping, for `reason` (model/frame_budget.h's texts).
+inline void refuseFrame(FrameReport& r, std::string reason) {
+  r.finite = false;
+  r.refused = true;
+  r.failure_stage = "substep_limit";
+  r.failure_particle = -1;
+  r.failure_reason = std::move(reason);
+}
 
 // The interactive tool (the viewer's mouse): what a model can do with it.
 struct ToolSupport {

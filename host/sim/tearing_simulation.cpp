@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "host/tear/tearing_driver.h"
+#include "model/frame_budget.h"
 #include "model/input_error.h"
 
 namespace inc {
@@ -143,6 +144,7 @@ class TearingSimulation final : public SimulationModel {
         driver_(convert(setup.sheet), convertParams(setup.tear), setup.model, stepParams(scene, setup), backend) {
     grabTools();
     checkpoint_ = driver_.sheet();
+    checkFixedSubstepsFit(scene.solver.substeps, driver_.particleCount(), scene.solver.max_substeps, scene.file);
   }
 
   std::string name() const override { return "tearing_sheet"; }
@@ -151,6 +153,13 @@ class TearingSimulation final : public SimulationModel {
 
   FrameReport advance(double frame_dt) override {
     FrameReport r;
+    // The frame budget (model/frame_budget.h): the guard's retries double the substeps; beyond the limit, refused.
+    if (std::string why =
+            pbdSubstepRefusal(driver_.stepParams().substeps, driver_.particleCount(), scene_.solver.max_substeps);
+        !why.empty()) {
+      refuseFrame(r, std::move(why));
+      return r;
+    }
     driver_.stepParams().frame_dt = T(frame_dt);
     const double t1 = time_ + frame_dt;
     int removed = scalpels(t1);

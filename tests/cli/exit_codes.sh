@@ -36,6 +36,16 @@ expect 2 "nu.json: material.poisson_ratio: must lie" -- "$exe" validate "$tmp/nu
 expect 2 "syntax.json.*line 2" -- "$exe" validate "$tmp/syntax.json"
 expect 2 "typo.json: solver.frame_dt: .*frame_dt_s" -- "$exe" validate "$tmp/typo.json"
 expect 2 "mesh.json: geometry.mesh" -- "$exe" validate "$tmp/mesh.json"
+# 3.9e7 particles (under the loader's 5e7 cap) passed validate, then ran out of memory minutes into the build with a
+# message naming neither file nor key: validate and run now refuse it before building, naming the key (a 16 GiB
+# budget, as on a small host, so the check does not depend on this machine's memory).
+printf '{"geometry":{"kind":"box","size_m":[0.34,0.34,0.34],"spacing_m":0.001},"models":{"mls":true},"fixed":[{"min_m":[-1,-1,-1],"max_m":[1,1,-0.16]}]}' >"$tmp/huge.json"
+expect 2 "huge.json: geometry.spacing_m: the scene needs about .* GiB of host memory" -- env INCISION_MEMORY_LIMIT_MIB=16384 "$exe" validate "$tmp/huge.json"
+expect 2 "huge.json: geometry.spacing_m: the scene needs about" -- env INCISION_MEMORY_LIMIT_MIB=16384 "$exe" run "$tmp/huge.json" --backend cpu --out "$tmp/o"
+# A body far stiffer than its spacing and frame allow (~9e4 substeps a frame, limit 20000): refused at its first
+# frame with exit 3 and the keys to change, instead of running for minutes per frame.
+printf '{"geometry":{"kind":"box","size_m":[0.04,0.04,0.04],"spacing_m":0.01},"material":{"youngs_modulus_pa":1e11},"models":{"mls":true},"fixed":[{"min_m":[-1,-1,-1],"max_m":[1,1,-0.012]}]}' >"$tmp/stiff.json"
+expect 3 "substep_limit.*geometry.spacing_m.*solver.max_substeps" -- "$exe" run "$tmp/stiff.json" --backend cpu --steps 3 --quiet --out "$tmp/o"
 expect 2 "--backend" -- "$exe" run --backend quantum --out "$tmp/o"
 expect 2 "--precision" -- "$exe" run --precision float16 --out "$tmp/o"
 # Run lengths: -1 was the internal "not given" and ran the whole duration; a huge count was clamped and ran on.

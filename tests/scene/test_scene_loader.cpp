@@ -464,7 +464,9 @@ TEST(SceneLoaderRange, TimeStepSubstepsIterations) {
   expectErrorAt("/solver/substeps", -1, "solver.substeps", "must be >= 0");  // 0 means "as many as needed"
   expectErrorAt("/solver/safety", 1.5, "solver.safety", "(0, 1]");
   expectErrorAt("/solver/energy_bound", 1, "solver.energy_bound", "must be > 1");
-  expectErrorAt("/pbd/iterations", 0, "pbd.iterations", "must be >= 1");
+  expectErrorAt("/pbd/iterations", 0, "pbd.iterations", "must lie in [1, 1000]");
+  expectErrorAt("/pbd/iterations", 1001, "pbd.iterations", "must lie in [1, 1000]");  // a frame's work is bounded
+  expectErrorAt("/solver/max_substeps", -1, "solver.max_substeps", "must lie in [0, 10000000]");
   expectErrorAt("/duration_s", 0, "duration_s", "must be > 0");
 }
 

@@ -7,6 +7,7 @@
 
 #include "host/app/cli/tradeoff_command.h"
 #include "host/app/cli/view_command.h"
+#include "host/app/memory_estimate.h"
 #include "host/app/runner.h"
 #include "host/scene/embedded_scenes.h"
 #include "host/scene/haptics_scene.h"
@@ -157,8 +158,21 @@ int cmdTradeoff(const TradeoffArgs& a) {
 
 int cmdValidate(const std::string& path) {
   const inc::Scene s = inc::loadSceneFile(path);
+  // The memory check `run` makes before it builds anything, against the backend the scene asks for (a GPU that is
+  // not there leaves the host check alone: `run` says so).
+  inc::BackendChoice choice;
+  if (s.solver.backend != inc::BackendKind::Cpu) {
+    try {
+      choice = inc::resolveBackend(s.solver.backend);
+    } catch (const inc::InputError&) {
+    }
+  }
+  inc::checkSceneMemory(s, choice.kind, inc::machineMemoryBudget(choice));
+  const inc::SceneMemoryEstimate e = inc::estimateSceneMemory(s, choice.kind);
   std::printf("%s: ok (%s)\n", path.c_str(), s.name.c_str());
   for (const std::string& c : s.chosen_settings) std::printf("chosen: %s\n", c.c_str());
+  std::printf("memory estimate: %.1f MiB host, %.1f MiB device (%s)\n", double(e.bytes.host_bytes) / 1048576.0,
+              double(e.bytes.device_bytes) / 1048576.0, e.detail.c_str());
   return 0;
 }
 
