@@ -110,12 +110,12 @@ struct CorpusResult {
   std::size_t spheres = 0;
   double spacing_m = 0;
   double rest_volume_m3 = 0;
-  double final_volume_m3 = 0;   // signed, all pieces
-  int pieces = 0;               // of kDebrisVertices vertices or more
-  int fragments = 0;            // smaller pieces
-  int open_edges = 0;           // boundary + non-manifold edges of the final surface (0: every piece closed)
-  int inverted_pieces = 0;      // pieces of negative signed volume (an inside-out skin)
-  int mesh_components = 0;      // connected pieces of the input mesh
+  double final_volume_m3 = 0;  // signed, all pieces
+  int pieces = 0;              // of kDebrisVertices vertices or more
+  int fragments = 0;           // smaller pieces
+  int open_edges = 0;          // boundary + non-manifold edges of the final surface (0: every piece closed)
+  int inverted_pieces = 0;     // pieces of negative signed volume (an inside-out skin)
+  int mesh_components = 0;     // connected pieces of the input mesh
   double ms_per_frame = 0;
 };
 
@@ -172,8 +172,8 @@ inline nlohmann::json corpusScene(const std::string& mesh_file, double scale, co
   s["models"] = {{"pbd_metaballs", true}};
   const double slab = lo.z + 0.15 * ext.z;
   const double pad = 0.05 * std::max({ext.x, ext.y, ext.z});
-  s["fixed"] = json::array(
-      {{{"min_m", {lo.x - pad, lo.y - pad, lo.z - pad}}, {"max_m", {hi.x + pad, hi.y + pad, slab}}}});
+  s["fixed"] =
+      json::array({{{"min_m", {lo.x - pad, lo.y - pad, lo.z - pad}}, {"max_m", {hi.x + pad, hi.y + pad, slab}}}});
   auto key = [](double t, const Vec3d& p, const Vec3d& d) {
     return json{{"t_s", t}, {"position_m", {p.x, p.y, p.z}}, {"direction", {d.x, d.y, d.z}}};
   };
@@ -181,12 +181,12 @@ inline nlohmann::json corpusScene(const std::string& mesh_file, double scale, co
   if (action == CorpusAction::Grasp) {
     // Close on the top near the middle at 0.1 s, lift by a fifth of the height by 0.6 s, hold.
     const Vec3d top(c.x, c.y, hi.z - 0.1 * ext.z);
-    s["tools"] = json::array({{{"name", "grasper"},
-                               {"kind", "grasper"},
-                               {"radius_m", 0.004},
-                               {"path",
-                                {key(0.1, top, -up), key(0.6, top + up * (0.2 * ext.z), -up),
-                                 key(0.8, top + up * (0.2 * ext.z), -up)}}}});
+    s["tools"] = json::array(
+        {{{"name", "grasper"},
+          {"kind", "grasper"},
+          {"radius_m", 0.004},
+          {"path",
+           {key(0.1, top, -up), key(0.6, top + up * (0.2 * ext.z), -up), key(0.8, top + up * (0.2 * ext.z), -up)}}}});
     return s;
   }
   s["models"]["cutting"] = true;
