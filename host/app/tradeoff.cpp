@@ -122,8 +122,9 @@ Measured measure(const Scene& s, BackendKind backend, const SettleRule& rule, co
                               ? std::abs(history[k - 1] - history[k - 1 - std::size_t(rule.window)]) /
                                     std::max(std::abs(history[k - 1]), 1e-300)
                               : 1.0;
-    m.note = "not settled after " + std::to_string(m.frames) + " frames (still moving " + std::to_string(100.0 * change) +
-             " % per " + std::to_string(rule.window) + " frames): the error is of a moving body";
+    m.note = "not settled after " + std::to_string(m.frames) + " frames (still moving " +
+             std::to_string(100.0 * change) + " % per " + std::to_string(rule.window) +
+             " frames): the error is of a moving body";
   }
   // The first frame pays one-off costs (neighbour build, allocation): leave it out when there are others.
   if (ms.size() > 1) {

@@ -13,8 +13,8 @@
 #include <utility>
 #include <vector>
 
-#include "host/io/triangle_bvh.h"
 #include "host/assembly/metaball_pack_cover.h"
+#include "host/io/triangle_bvh.h"
 
 namespace inc {
 namespace {
