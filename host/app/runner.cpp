@@ -260,6 +260,8 @@ RunSummary runScene(const Scene& scene_in, const RunOptions& opt, const ModelFac
   if (!opt.quiet) std::fprintf(stderr, "%s\n", choice.note.c_str());
   if (!opt.quiet)
     for (const std::string& c : scene.chosen_settings) std::fprintf(stderr, "chosen: %s\n", c.c_str());
+  if (!opt.quiet)
+    for (const std::string& n : scene.notes) std::fprintf(stderr, "note: %s\n", n.c_str());
 
   // Before anything is sampled or allocated: refuse a scene that will not fit (host/app/memory_estimate.h).
   checkSceneMemory(scene, choice.kind, opt.memory_budget ? *opt.memory_budget : machineMemoryBudget(choice));

@@ -29,6 +29,9 @@ struct Scene : CompiledScene {
   // Settings the loader chose because the file left them out and a fixed default would not fit the body (e.g.
   // geometry.spacing_m of a mesh, from its volume and thickness): "key = value (why)", printed by validate and run.
   std::vector<std::string> chosen_settings;
+  // What a valid scene will do that its author may not expect (e.g. nothing holds the body, so it falls), one line
+  // each, printed as "note: ..." by validate and run.
+  std::vector<std::string> notes;
 };
 
 }  // namespace inc

@@ -364,6 +364,13 @@ Scene parseScene(const std::string& json_text, const std::string& file_label, co
   s.tearing = readTearing(top);
   s.cutting = readCutting(top);
   s.haptics = readHapticsSpec(top, base_dir, s.models, s.fixed);  // host/scene/haptics_scene.h
+  // A body with no fixed box and nothing to rest on falls for the whole run: valid (a drop test), but issue 31's first
+  // user expected an organ that stays in view. Said, not refused.
+  const bool held_elsewhere = s.models.tearing || s.models.haptics;  // clamps and supports of their own
+  if (s.fixed.empty() && s.colliders.empty() && !held_elsewhere && norm(s.solver.gravity) > 0.0)
+    s.notes.push_back(
+        "no fixed region and no collider: nothing holds the body, so it falls under gravity for the "
+        "whole run (add a `fixed` box or a `colliders` plane; docs/bring-your-own-organ.md)");
   return s;
 }
 

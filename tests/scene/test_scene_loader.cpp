@@ -683,6 +683,24 @@ TEST_F(SceneLoader, MeshWithoutSpacingGetsOneFromItsSize) {
   EXPECT_TRUE(parseScene(meshScene("cube.obj"), kLabel, dir_.string()).chosen_settings.empty());
 }
 
+// Issue 31's first user ran a mesh with no fixed region: the organ fell out of view without a word. A scene whose
+// body nothing holds is valid (a drop test) but says so; a fixed box, a collider or zero gravity silence the note.
+TEST_F(SceneLoader, ABodyNothingHoldsIsNoted) {
+  json j = minimal();
+  const Scene free_fall = parseScene(j.dump(), kLabel, ".");
+  ASSERT_EQ(free_fall.notes.size(), 1u);
+  EXPECT_NE(free_fall.notes[0].find("nothing holds the body"), std::string::npos) << free_fall.notes[0];
+  json fixed = j;
+  fixed["fixed"] = json::array({{{"min_m", {-1, -1, -1}}, {"max_m", {1, 1, -0.005}}}});
+  EXPECT_TRUE(parseScene(fixed.dump(), kLabel, ".").notes.empty());
+  json table = j;
+  table["colliders"] = json::array({{{"kind", "plane"}, {"point_m", {0, 0, -0.02}}, {"normal", {0, 0, 1}}}});
+  EXPECT_TRUE(parseScene(table.dump(), kLabel, ".").notes.empty());
+  json weightless = j;
+  weightless["solver"] = {{"gravity_m_s2", {0, 0, 0}}};
+  EXPECT_TRUE(parseScene(weightless.dump(), kLabel, ".").notes.empty());
+}
+
 TEST_F(SceneLoader, InwardCubeIsAcceptedAfterReorientation) {
   // All faces reversed: closed and consistent, only inside-out; requireClosedMesh flips it.
   std::string obj =

@@ -171,6 +171,7 @@ int cmdValidate(const std::string& path) {
   const inc::SceneMemoryEstimate e = inc::estimateSceneMemory(s, choice.kind);
   std::printf("%s: ok (%s)\n", path.c_str(), s.name.c_str());
   for (const std::string& c : s.chosen_settings) std::printf("chosen: %s\n", c.c_str());
+  for (const std::string& n : s.notes) std::printf("note: %s\n", n.c_str());
   std::printf("memory estimate: %.1f MiB host, %.1f MiB device (%s)\n", double(e.bytes.host_bytes) / 1048576.0,
               double(e.bytes.device_bytes) / 1048576.0, e.detail.c_str());
   return 0;
