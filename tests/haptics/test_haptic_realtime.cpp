@@ -17,6 +17,18 @@
 namespace inc {
 namespace {
 
+#if defined(__SANITIZE_THREAD__)
+constexpr bool kThreadSanitizer = true;
+#elif defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+constexpr bool kThreadSanitizer = true;
+#else
+constexpr bool kThreadSanitizer = false;
+#endif
+#else
+constexpr bool kThreadSanitizer = false;
+#endif
+
 using namespace hapticreplay;
 
 // A scalpel stroke from outside the -x end of the block (the contact model's tissue plane is the top face's
@@ -149,7 +161,12 @@ CutOutcome realtimeCut(const Trajectory& stroke, int frames) {
   }
   session.stop();
   EXPECT_TRUE(session.messages().empty()) << session.messages().front();
-  EXPECT_EQ(session.droppedSamples(), 0u);
+  // ThreadSanitizer slows the frame loop about tenfold, so it falls further behind the 1 kHz loop than the queue's
+  // 8192 ticks and the loop drops (counts) poses: what is checked there is the topology, not the queue's reach.
+  if (!kThreadSanitizer) {
+    EXPECT_EQ(session.droppedSamples(), 0u);
+  }
+  if (session.droppedSamples() > 0) std::printf("%zu device poses dropped\n", std::size_t(session.droppedSamples()));
   if (session.framesNotWaitedFor() > 0)
     std::printf("%d frames gave up waiting for the haptic loop\n", session.framesNotWaitedFor());
   CutOutcome out;
@@ -184,7 +201,7 @@ TEST(HapticRealtime, ThroughCutGivesTheSameTwoPiecesOnEveryRunUnderLoad) {
   const TopologySummary expected = lockstepCut(stroke, frames);
   ASSERT_EQ(expected.cuts_applied, 1);
   const BusyThreads load(std::max(2u, std::thread::hardware_concurrency()));
-  const int runs = 12;
+  const int runs = kThreadSanitizer ? 3 : 12;  // 12 runs take ~6 minutes under TSan (CI's limit is 25)
   int same = 0;
   for (int run = 0; run < runs; ++run) {
     const CutOutcome got = realtimeCut(stroke, frames);
