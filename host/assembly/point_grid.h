@@ -1,4 +1,4 @@
-// Dense uniform grid over a subset of points, for the re-packing's nearest-member and any-within-r queries.
+// Dense uniform grid over a subset of points: nearest member, any or every member within r (re-packing, graph repair).
 #pragma once
 
 #include <algorithm>
@@ -70,7 +70,18 @@ class PointGrid {
 
   // True when a member lies within r of p.
   bool anyWithin(const Vec3d& p, double r) const {
-    if (members_ == 0) return false;
+    bool any = false;
+    forEachWithin(p, r, [&](std::int32_t) {
+      any = true;
+      return false;
+    });
+    return any;
+  }
+
+  // Calls visit(i) for the members within r of p, cell by cell, until visit returns false.
+  template <typename Visit>
+  void forEachWithin(const Vec3d& p, double r, Visit&& visit) const {
+    if (members_ == 0) return;
     const std::int64_t reach = std::int64_t(std::ceil((r + outside(p)) / cell_));
     const Coord c = coord(p);
     const std::int64_t a0 = std::max<std::int64_t>(c.k[0] - reach, 0), a1 = std::min(c.k[0] + reach, dim_[0] - 1);
@@ -80,8 +91,7 @@ class PointGrid {
       for (std::int64_t b = b0; b <= b1; ++b)
         for (std::int64_t d = d0; d <= d1; ++d)
           for (std::int32_t i = head_[std::size_t(cellIndex({{a, b, d}}))]; i >= 0; i = next_[std::size_t(i)])
-            if (norm(x_[std::size_t(i)] - p) <= r) return true;
-    return false;
+            if (norm(x_[std::size_t(i)] - p) <= r && !visit(i)) return;
   }
 
  private:

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "host/assembly/metaball_pack_cover.h"
+#include "host/assembly/point_grid.h"
 #include "host/io/triangle_bvh.h"
 
 namespace inc {
@@ -77,39 +78,6 @@ double enclosedVolume(const TriangleMesh& m) {
   return std::fabs(v) / 6.0;
 }
 
-// Buckets of sphere centres, cell edge `cell`; visits every sphere within one cell in each direction.
-class CentreBuckets {
- public:
-  CentreBuckets(const std::vector<Vec3d>& centre, double cell) : cell_(cell) {
-    for (std::size_t i = 0; i < centre.size(); ++i) cells_[key(centre[i])].push_back(int(i));
-  }
-  template <typename F>
-  void forNear(const Vec3d& p, F&& f) const {
-    const Key k = key(p);
-    for (long long a = -1; a <= 1; ++a)
-      for (long long b = -1; b <= 1; ++b)
-        for (long long c = -1; c <= 1; ++c) {
-          const auto it = cells_.find(Key{std::get<0>(k) + a, std::get<1>(k) + b, std::get<2>(k) + c});
-          if (it != cells_.end())
-            for (int j : it->second) f(j);
-        }
-  }
-
- private:
-  using Key = std::tuple<long long, long long, long long>;
-  struct Hash {
-    std::size_t operator()(const Key& t) const {
-      return std::size_t(std::get<0>(t) * 73856093LL ^ std::get<1>(t) * 19349663LL ^ std::get<2>(t) * 83492791LL);
-    }
-  };
-  Key key(const Vec3d& p) const {
-    return Key{(long long)std::floor(p.x / cell_), (long long)std::floor(p.y / cell_),
-               (long long)std::floor(p.z / cell_)};
-  }
-  double cell_;
-  std::unordered_map<Key, std::vector<int>, Hash> cells_;
-};
-
 // The sphere graph during the repair: groups (union-find over links), the mesh piece and anchor group of each.
 struct Groups {
   pack::UnionFind uf;
@@ -169,7 +137,8 @@ struct NewLink {
 
 // Links from the spheres of one group to their nearest spheres of other groups of the same piece.
 std::vector<NewLink> linksOutOf(const std::vector<int>& group, const MetaballModel& mb, Groups& g,
-                                const CentreBuckets& buckets, const pack::SurfaceDistance* surface, double max_gap) {
+                                const PointGrid& centres, double reach, const pack::SurfaceDistance* surface,
+                                double max_gap) {
   std::vector<NewLink> out;
   const int root = g.uf.find(group.front());
   std::vector<std::pair<double, int>> near;
@@ -177,10 +146,11 @@ std::vector<NewLink> linksOutOf(const std::vector<int>& group, const MetaballMod
     const Vec3d& ci = mb.rest_centers[std::size_t(i)];
     const double ri = mb.rest_radii[std::size_t(i)];
     near.clear();
-    buckets.forNear(ci, [&](int j) {
-      if (g.piece[std::size_t(j)] != g.piece[std::size_t(i)] || g.uf.find(j) == root) return;
+    centres.forEachWithin(ci, reach, [&](std::int32_t j) {
+      if (g.piece[std::size_t(j)] != g.piece[std::size_t(i)] || g.uf.find(j) == root) return true;
       const double gap = norm(ci - mb.rest_centers[std::size_t(j)]) - ri - mb.rest_radii[std::size_t(j)];
       if (gap <= max_gap) near.emplace_back(gap, j);
+      return true;
     });
     std::sort(near.begin(), near.end());
     int taken = 0;
@@ -200,7 +170,16 @@ int linkStragglers(MetaballModel& mb, Groups& g, const pack::SurfaceDistance* su
   const int n = int(mb.size());
   double r_max = 0.0;
   for (double r : mb.rest_radii) r_max = std::max(r_max, r);
-  const CentreBuckets buckets(mb.rest_centers, 2.0 * r_max + max_gap);
+  // Every sphere a link may reach lies within 2 r_max + max_gap of the centre (gap = distance - r_i - r_j).
+  const double reach = 2.0 * r_max + max_gap;
+  Vec3d lo = mb.rest_centers.empty() ? Vec3d() : mb.rest_centers.front(), hi = lo;
+  for (const Vec3d& c : mb.rest_centers)
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], c[a]);
+      hi[a] = std::max(hi[a], c[a]);
+    }
+  PointGrid centres(mb.rest_centers, lo, hi, reach, mb.rest_centers.size() * 4 + 1);
+  for (int i = 0; i < n; ++i) centres.insert(i);
   int added = 0;
   for (bool progress = true; progress;) {
     progress = false;
@@ -214,7 +193,7 @@ int linkStragglers(MetaballModel& mb, Groups& g, const pack::SurfaceDistance* su
     });
     for (const std::vector<int>& group : order) {
       if (g.anchored(group.front())) continue;  // joined through a group linked earlier in this pass
-      const std::vector<NewLink> links = linksOutOf(group, mb, g, buckets, surface, max_gap);
+      const std::vector<NewLink> links = linksOutOf(group, mb, g, centres, reach, surface, max_gap);
       for (const NewLink& l : links) {
         mb.links.push_back({std::int32_t(l.i), std::int32_t(l.j)});
         mb.link_rest_lengths.push_back(norm(mb.rest_centers[std::size_t(l.i)] - mb.rest_centers[std::size_t(l.j)]));

@@ -1,7 +1,8 @@
-// PointGrid (host/assembly/point_grid.h) against brute force: nearest member and any-within-r, queries inside and
-// outside the grid's box, a grown cell.
+// PointGrid (host/assembly/point_grid.h) against brute force: nearest member, any and every member within r, queries
+// inside and outside the grid's box, a grown cell.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -46,6 +47,15 @@ TEST(PointGrid, QueriesEqualBruteForceInsideAndOutsideTheBox) {
         bool any = false;
         for (std::int32_t i : members) any = any || norm(x[std::size_t(i)] - p) <= r;
         ASSERT_EQ(g.anyWithin(p, r), any) << "query " << q << " r " << r;
+        std::vector<std::int32_t> within, visited;
+        for (std::int32_t i : members)
+          if (norm(x[std::size_t(i)] - p) <= r && (within.empty() || within.back() != i)) within.push_back(i);
+        g.forEachWithin(p, r, [&](std::int32_t i) {
+          visited.push_back(i);
+          return true;
+        });
+        std::sort(visited.begin(), visited.end());
+        ASSERT_EQ(visited, within) << "query " << q << " r " << r;
       }
     }
   }
