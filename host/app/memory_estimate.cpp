@@ -192,7 +192,7 @@ MemoryBudget machineMemoryBudget(const BackendChoice& backend) {
   return b;
 }
 
-void checkSceneMemory(const Scene& scene, BackendKind backend, const MemoryBudget& budget) {
+SceneMemoryEstimate checkSceneMemory(const Scene& scene, BackendKind backend, const MemoryBudget& budget) {
   const SceneMemoryEstimate e = estimateSceneMemory(scene, backend);
   const auto refuse = [&](std::size_t need, std::size_t have, const std::string& where) {
     throw InputError(scene.file, e.size_key,
@@ -203,6 +203,7 @@ void checkSceneMemory(const Scene& scene, BackendKind backend, const MemoryBudge
   if (e.bytes.host_bytes > budget.host_bytes) refuse(e.bytes.host_bytes, budget.host_bytes, "host");
   if (budget.device_bytes > 0 && e.bytes.device_bytes > budget.device_bytes)
     refuse(e.bytes.device_bytes, budget.device_bytes, "device");
+  return e;
 }
 
 }  // namespace inc

@@ -33,7 +33,8 @@ inline constexpr std::size_t kDefaultHostMemoryCap = std::size_t(16) << 30;  // 
 MemoryBudget machineMemoryBudget(const BackendChoice& backend);
 
 // Throws InputError(scene.file, estimate.size_key, ...) when the estimate exceeds the budget: the bytes needed and
-// offered, per model, and what to change. `validate` and `run` call it before building anything.
-void checkSceneMemory(const Scene& scene, BackendKind backend, const MemoryBudget& budget);
+// offered, per model, and what to change; else returns the estimate (validate prints it: a mesh is read once).
+// `validate` and `run` call it before building anything.
+SceneMemoryEstimate checkSceneMemory(const Scene& scene, BackendKind backend, const MemoryBudget& budget);
 
 }  // namespace inc

@@ -167,8 +167,7 @@ int cmdValidate(const std::string& path) {
     } catch (const inc::InputError&) {
     }
   }
-  inc::checkSceneMemory(s, choice.kind, inc::machineMemoryBudget(choice));
-  const inc::SceneMemoryEstimate e = inc::estimateSceneMemory(s, choice.kind);
+  const inc::SceneMemoryEstimate e = inc::checkSceneMemory(s, choice.kind, inc::machineMemoryBudget(choice));
   std::printf("%s: ok (%s)\n", path.c_str(), s.name.c_str());
   for (const std::string& c : s.chosen_settings) std::printf("chosen: %s\n", c.c_str());
   for (const std::string& n : s.notes) std::printf("note: %s\n", n.c_str());
