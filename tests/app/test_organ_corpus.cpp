@@ -35,10 +35,9 @@ TEST_P(OrganCorpus, RunsToTheEndWithAClosedSurfaceOfItsVolume) {
   const test::CorpusResult r = test::runCorpusCase(cm, action, corpusBackend());
   if (r.skipped) GTEST_SKIP() << r.skip_reason;
   const std::vector<std::string> failures = test::corpusFailures(r, action, kVolumeTolerance);
-  std::string verdict = failures.empty() ? "ok" : "";
-  for (const std::string& f : failures) verdict += (verdict.empty() ? "" : "; ") + f;
+  const std::string verdict = failures.empty() ? "ok" : test::joinedFailures(failures);
   std::printf("[ corpus ] %s\n", test::corpusRow(cm, action, r, verdict).c_str());
-  for (const std::string& f : failures) ADD_FAILURE() << cm.name << " " << test::actionName(action) << ": " << f;
+  EXPECT_TRUE(failures.empty()) << cm.name << " " << test::actionName(action) << ": " << verdict;
 }
 
 std::string caseName(const ::testing::TestParamInfo<CorpusCase>& p) {

@@ -143,6 +143,13 @@ inline ShippedSceneRecord runShippedScene(const ShippedSceneBounds& row, Backend
   return rec;
 }
 
+// Failures as one message, "; " between them ("" when none).
+inline std::string joinedFailures(const std::vector<std::string>& failures) {
+  std::string all;
+  for (const std::string& f : failures) all += (all.empty() ? "" : "; ") + f;
+  return all;
+}
+
 // Every bound of `row` the run broke, one sentence each (empty: it met them all).
 inline std::vector<std::string> shippedSceneFailures(const ShippedSceneBounds& row, const ShippedSceneRecord& r) {
   std::vector<std::string> f;
